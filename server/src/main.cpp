@@ -1,0 +1,24 @@
+// The `pintag` command: one executable, one subcommand per job.
+
+#include <exception>
+#include <iostream>
+
+#include "commands/commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"PinTag: colour fiducial markers that carry Indian pincodes", "pintag"};
+  app.require_subcommand(1);
+  pintag::cli::AddRenderCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const pintag::cli::UsageError& e) {
+    std::cerr << "pintag: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "pintag: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
