@@ -8,7 +8,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"PinTag: colour fiducial markers that carry Indian pincodes", "pintag"};
   app.require_subcommand(1);
-  pintag::cli::AddRenderCommand(app);
+  pintag::cli::AddRegisteredCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

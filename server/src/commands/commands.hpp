@@ -1,7 +1,11 @@
 #pragma once
-// One function per `pintag` subcommand: each adds its subcommand, options and action to the app.
+// Subcommands of `pintag`. Each lives in its own file in this folder and registers itself with a
+// file-scope `const CommandRegistration registration{"name", &AddNameCommand};`; main adds them
+// to the app in name order.
 
 #include <CLI/CLI.hpp>
+#include <stdexcept>
+#include <string_view>
 
 namespace pintag::cli {
 
@@ -10,6 +14,13 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-void AddRenderCommand(CLI::App& app);
+using AddCommand = void (*)(CLI::App& app);
+
+struct CommandRegistration {
+  CommandRegistration(std::string_view name, AddCommand add);
+};
+
+/// Adds every registered subcommand to `app`, sorted by name.
+void AddRegisteredCommands(CLI::App& app);
 
 }  // namespace pintag::cli

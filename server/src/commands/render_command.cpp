@@ -65,8 +65,6 @@ void Run(const RenderArgs& args) {
   std::cout << "wrote key " << args.key << " to " << args.output << "\n";
 }
 
-}  // namespace
-
 void AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render one tag as PNG or SVG");
@@ -83,5 +81,9 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("-o,--output", args->output, "output file, .png or .svg")->required();
   cmd->callback([args] { Run(*args); });
 }
+
+const CommandRegistration registration{"render", &AddRenderCommand};
+
+}  // namespace
 
 }  // namespace pintag::cli
