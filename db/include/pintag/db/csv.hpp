@@ -1,0 +1,39 @@
+#pragma once
+// RFC 4180 CSV reading: comma-separated, fields optionally in double quotes ("" inside quotes is
+// one quote; quoted fields may hold commas and line breaks), CRLF or LF line ends, a leading
+// UTF-8 byte-order mark skipped.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pintag::db {
+
+struct CsvRecord {
+  std::int64_t line = 0;  ///< 1-based line on which the record starts
+  std::vector<std::string> fields;
+};
+
+class CsvReader {
+ public:
+  explicit CsvReader(std::string_view text);
+
+  /// The next record; nothing at the end. A malformed record (a quote inside an unquoted field,
+  /// text after a closing quote, an unterminated quote) sets `error` and is returned as far as
+  /// it was read; reading continues on the next line.
+  std::optional<CsvRecord> next(std::string* error);
+  std::size_t position() const { return position_; }  ///< bytes consumed so far
+
+ private:
+  std::string_view text_;
+  std::size_t position_ = 0;
+  std::int64_t line_ = 1;
+};
+
+/// Quotes a field when it holds a comma, quote, CR or LF.
+std::string CsvField(std::string_view text);
+
+}  // namespace pintag::db

@@ -1,0 +1,67 @@
+#pragma once
+// Importing India Post's "All India Pincode Directory" CSV. Both published layouts, told apart by
+// the header (column names compared case-insensitively, in any order):
+//   newer:  circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,
+//           statename,latitude,longitude
+//   older:  officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,
+//           Taluk,Districtname,statename
+// An office is identified by (pincode, office name); re-importing a file changes nothing. A
+// trailing " B.O"/" S.O"/" H.O" (or "BO"...) matching the office type is dropped from the name,
+// so India Post rows match the seed's names and fill in their branch type. New pincodes get new
+// keys (probing past every key ever allocated, retired ones included); existing keys never
+// change; a retired pincode stays retired. The whole import is one transaction.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "pintag/codec/pincode.hpp"
+#include "pintag/codec/tag_key.hpp"
+#include "pintag/db/result.hpp"
+#include "pintag/db/sqlite.hpp"
+
+namespace pintag::db {
+
+enum class CsvLayout { kNewer, kOlder };
+const char* ToString(
+    CsvLayout layout);  ///< "newer (with latitude/longitude)", "older (with taluk)"
+
+/// Called now and then while importing: the phase ("parse" or "write"), units done and total
+/// (bytes while parsing, rows while writing).
+using ImportProgress =
+    std::function<void(std::string_view phase, std::uint64_t done, std::uint64_t total)>;
+
+struct ImportOptions {
+  bool strict = false;      ///< any bad row refuses the whole import (default: skip bad rows)
+  std::string source;       ///< recorded in rows' `source` column; default "import:<layout>"
+  ImportProgress progress;  ///< may be empty
+};
+
+struct RowProblem {
+  std::int64_t line = 0;  ///< 1-based line where the CSV record starts (the header is line 1)
+  std::string message;
+};
+
+struct ImportReport {
+  CsvLayout layout = CsvLayout::kNewer;
+  bool applied = false;   ///< false when --strict refused it (the database is unchanged)
+  std::int64_t rows = 0;  ///< data records read
+  std::int64_t offices_added = 0;
+  std::int64_t offices_updated = 0;
+  std::int64_t offices_unchanged = 0;
+  std::vector<std::pair<Pincode, TagKey>> pincodes_added;  ///< with their new keys
+  std::vector<RowProblem> problems;                        ///< bad rows, skipped or refusing
+};
+
+/// Imports CSV text. Errors (nothing applied): kInvalid for an unrecognised header, kFull when
+/// the keys run out, kBusy/kStorage from SQLite. Bad rows are reported in the report instead.
+Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
+                                        const ImportOptions& options = {});
+/// Reads the file and imports it; kNotFound when it cannot be read.
+Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
+                                            const ImportOptions& options = {});
+
+}  // namespace pintag::db

@@ -1,0 +1,65 @@
+#pragma once
+// Sort plans: which bin of a sorting facility each pincode goes to. A plan is a set of rules
+// `prefix (1–6 digits) → bin` and a fallback bin; the longest matching prefix wins, and a pincode
+// no rule matches goes to the fallback (explicitly: the result says no rule matched).
+//
+// The seed ships the plan "default": one bin per first two digits of the pincode (bins "11" …
+// "85", fallback "manual"), because two digits are the postal circle's sub-region and the rules
+// say exactly that, while postal circles do not follow prefix boundaries (24x and 26x are split
+// between Uttar Pradesh and Uttarakhand, 81x–82x between Bihar and Jharkhand).
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pintag/codec/pincode.hpp"
+#include "pintag/db/result.hpp"
+#include "pintag/db/sqlite.hpp"
+
+namespace pintag::db {
+
+inline constexpr std::string_view kDefaultPlanName = "default";
+
+struct SortRule {
+  std::string prefix;  ///< 1–6 ASCII digits
+  std::string bin;     ///< 1–64 bytes of text
+  bool operator==(const SortRule&) const = default;
+};
+
+struct SortPlan {
+  std::string name;             ///< 1–64 bytes of text, unique
+  std::string fallback_bin;     ///< where pincodes no rule matches go
+  std::string description;      ///< free text, may be empty
+  std::vector<SortRule> rules;  ///< ascending by prefix when read back; prefixes unique
+};
+
+struct Routing {
+  std::string bin;
+  std::optional<SortRule> rule;  ///< the rule that matched; nothing when the fallback was used
+};
+
+/// Nothing when the plan is well formed, else kInvalid saying what is wrong.
+std::optional<Error> CheckPlan(const SortPlan& plan);
+
+/// Routes with a plan already in memory (no database); longest prefix wins.
+Routing RouteWith(const SortPlan& plan, Pincode pincode);
+
+/// Plan CSV: a `prefix,bin` header, then one rule per row; the row with prefix `*` gives the
+/// fallback bin and must appear exactly once. RFC 4180 quoting. Errors name the line.
+Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv);
+/// The inverse: header, `*` row, then rules in ascending prefix order.
+std::string PlanToCsv(const SortPlan& plan);
+
+/// Creates the plan, or replaces the one with the same name (rules and all), in one transaction.
+Result<void> SavePlan(Connection& connection, const SortPlan& plan);
+/// kNotFound for an unknown plan.
+Result<SortPlan> GetPlan(Connection& connection, std::string_view name);
+Result<std::vector<std::string>> ListPlans(Connection& connection);  ///< names, ascending
+Result<void> DeletePlan(Connection& connection, std::string_view name);
+
+/// The bin for `pincode` under the named plan, and the rule that matched; kNotFound for an
+/// unknown plan. The pincode need not be in the registry (routing is by prefix only).
+Result<Routing> Route(Connection& connection, Pincode pincode, std::string_view plan);
+
+}  // namespace pintag::db

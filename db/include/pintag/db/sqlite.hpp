@@ -1,0 +1,141 @@
+#pragma once
+// A small RAII layer over the SQLite C API: Connection, Statement, Transaction and one exception
+// type. It is the only code in PinTag that calls sqlite3_*; <sqlite3.h> stays in db/src.
+//
+// Thread-safety: a Connection and its Statements belong to one thread at a time (SQLite is built
+// serialized on Debian, but statements share the connection's error state and transaction). Use
+// one Connection per thread; WAL lets readers run while one writer writes.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace pintag::db {
+
+/// An SQLite failure: the message, and SQLite's primary and extended result codes.
+class SqliteError : public std::runtime_error {
+ public:
+  SqliteError(const std::string& message, int code, int extended_code)
+      : std::runtime_error(message), code_(code), extended_code_(extended_code) {}
+  int code() const { return code_; }  ///< primary result code, e.g. 5 = SQLITE_BUSY
+  int extendedCode() const { return extended_code_; }
+  bool isBusy() const { return code_ == 5 || code_ == 6; }  ///< SQLITE_BUSY or SQLITE_LOCKED
+  bool isConstraint() const { return code_ == 19; }         ///< SQLITE_CONSTRAINT
+
+ private:
+  int code_;
+  int extended_code_;
+};
+
+class Connection;
+
+/// A prepared statement. Move-only; finalized in its destructor. Parameters are numbered from 1,
+/// columns from 0. Text is bound and read with its length, so embedded NULs survive.
+class Statement {
+ public:
+  Statement(Connection& connection, std::string_view sql);
+  Statement(Statement&&) noexcept = default;
+  Statement& operator=(Statement&&) noexcept = default;
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+  ~Statement() = default;
+
+  Statement& bind(int index, std::int64_t value);
+  Statement& bind(int index, int value) { return bind(index, std::int64_t{value}); }
+  Statement& bind(int index, double value);
+  Statement& bind(int index, std::string_view text);  ///< copied by SQLite (SQLITE_TRANSIENT)
+  Statement& bind(int index, const char* text) { return bind(index, std::string_view(text)); }
+  Statement& bindBlob(int index, const void* data, std::size_t size);
+  Statement& bindNull(int index);
+  template <typename T>
+  Statement& bind(int index, const std::optional<T>& value) {
+    return value ? bind(index, *value) : bindNull(index);
+  }
+
+  /// Runs one step: true when a row is available, false when done. Throws SqliteError.
+  bool step();
+  /// Steps to completion, expecting no rows to matter; returns sqlite3_changes afterwards.
+  int run();
+  /// Rewinds so the statement can run again; bindings are kept.
+  void reset();
+  void clearBindings();
+
+  bool isNull(int column) const;
+  std::int64_t getInt64(int column) const;
+  int getInt(int column) const { return static_cast<int>(getInt64(column)); }
+  double getDouble(int column) const;
+  std::string getText(int column) const;  ///< NULL reads as ""
+  std::optional<std::string> getOptionalText(int column) const;
+  std::string getBlob(int column) const;
+
+ private:
+  struct Finalizer {
+    void operator()(sqlite3_stmt* statement) const;
+  };
+  sqlite3* db_;
+  std::unique_ptr<sqlite3_stmt, Finalizer> statement_;
+  std::string sql_;
+};
+
+/// How to open a Connection.
+struct ConnectionOptions {
+  bool create = true;          ///< create the file when missing (else fail)
+  bool read_only = false;      ///< open read-only
+  int busy_timeout_ms = 5000;  ///< how long a statement waits for a lock before SQLITE_BUSY
+};
+
+/// One open database file. Move-only; closed in its destructor. Opening sets WAL (unless
+/// read-only), synchronous=NORMAL, busy_timeout and foreign_keys=ON.
+class Connection {
+ public:
+  explicit Connection(const std::string& path, const ConnectionOptions& options = {});
+  Connection(Connection&&) noexcept = default;
+  Connection& operator=(Connection&&) noexcept = default;
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+  ~Connection() = default;
+
+  /// Runs one or more SQL statements without parameters (schema, pragmas). Never user input.
+  void execute(std::string_view sql);
+  Statement prepare(std::string_view sql) { return Statement(*this, sql); }
+  /// The single integer a query such as `SELECT count(*) ...` or `PRAGMA user_version` yields.
+  std::int64_t queryInt64(std::string_view sql);
+
+  std::int64_t lastInsertRowid() const;
+  int changes() const;
+  bool inTransaction() const;
+  const std::string& path() const { return path_; }
+
+  /// The raw handle, for db/src only (public headers never include <sqlite3.h>).
+  sqlite3* handle() const { return db_.get(); }
+
+ private:
+  struct Closer {
+    void operator()(sqlite3* db) const;
+  };
+  std::unique_ptr<sqlite3, Closer> db_;
+  std::string path_;
+};
+
+/// BEGIN IMMEDIATE in the constructor (takes the write lock up front, so a transaction never
+/// fails half-way with SQLITE_BUSY on upgrade); ROLLBACK in the destructor unless commit() ran.
+class Transaction {
+ public:
+  explicit Transaction(Connection& connection);
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  ~Transaction();
+  void commit();
+
+ private:
+  Connection& connection_;
+  bool done_ = false;
+};
+
+}  // namespace pintag::db

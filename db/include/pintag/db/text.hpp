@@ -1,0 +1,23 @@
+#pragma once
+// What text the registry accepts. Quotes, SQL, any language: stored and returned verbatim (every
+// query binds parameters). NUL and other control characters, invalid UTF-8 and over-long text:
+// rejected with kInvalid, naming the field.
+
+#include <cstddef>
+#include <optional>
+#include <string_view>
+
+#include "pintag/db/result.hpp"
+
+namespace pintag::db {
+
+inline constexpr std::size_t kMaxNameBytes = 200;      ///< office, district, state, ... names
+inline constexpr std::size_t kMaxLabelBytes = 200;     ///< token labels, plan descriptions
+inline constexpr std::size_t kMaxBinBytes = 64;        ///< sort plan and bin names
+inline constexpr std::size_t kMaxJsonBytes = 1 << 20;  ///< a scan log entry's JSON text
+
+/// Nothing when `value` is acceptable for `field`; else the kInvalid error saying why.
+std::optional<Error> CheckText(std::string_view field, std::string_view value,
+                               std::size_t max_bytes, bool allow_empty = false);
+
+}  // namespace pintag::db

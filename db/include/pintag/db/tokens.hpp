@@ -1,0 +1,43 @@
+#pragma once
+// API tokens. A token's secret is shown once, at creation; the database keeps only a random
+// 16-byte salt and SHA-256(salt ‖ secret). Secrets are `pt_<id>_<43 base64url characters>`
+// (256 random bits from getrandom), so verifying looks up one row by id and compares hashes in
+// constant time.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pintag/db/result.hpp"
+#include "pintag/db/sqlite.hpp"
+
+namespace pintag::db {
+
+enum class Role { kAdmin, kCounter, kScanner };
+const char* ToString(Role role);                       ///< "admin", "counter", "scanner"
+std::optional<Role> ParseRole(std::string_view text);  ///< exact lower-case names
+
+struct TokenInfo {
+  std::int64_t id = 0;
+  Role role = Role::kScanner;
+  std::string label;                      ///< free text given at creation, may be empty
+  std::string created_at;                 ///< ISO 8601 UTC
+  std::optional<std::string> revoked_at;  ///< set once revoked
+};
+
+struct NewToken {
+  TokenInfo info;
+  std::string secret;  ///< the only copy: give it to the user now
+};
+
+Result<NewToken> CreateToken(Connection& connection, Role role, std::string_view label = "");
+Result<std::vector<TokenInfo>> ListTokens(Connection& connection);  ///< by id, revoked included
+/// kNotFound for an unknown id; revoking a revoked token is a no-op.
+Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id);
+/// The token the secret belongs to; kUnauthorized (one message for every cause) when it is
+/// malformed, unknown, wrong or revoked.
+Result<TokenInfo> VerifyToken(Connection& connection, std::string_view secret);
+
+}  // namespace pintag::db

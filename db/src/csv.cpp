@@ -1,0 +1,77 @@
+#include "pintag/db/csv.hpp"
+
+namespace pintag::db {
+
+CsvReader::CsvReader(std::string_view text) : text_(text) {
+  if (text_.starts_with("\xEF\xBB\xBF")) position_ = 3;
+}
+
+std::optional<CsvRecord> CsvReader::next(std::string* error) {
+  error->clear();
+  // Blank lines between records are skipped (a trailing newline must not make an empty record).
+  while (position_ < text_.size() && (text_[position_] == '\n' || text_[position_] == '\r')) {
+    if (text_[position_] == '\n') ++line_;
+    ++position_;
+  }
+  if (position_ >= text_.size()) return std::nullopt;
+  CsvRecord record;
+  record.line = line_;
+  std::string field;
+  bool quoted = false;      // inside a quoted field
+  bool was_quoted = false;  // the current field started with a quote
+  const auto fail = [&](const std::string& why) {
+    if (error->empty()) *error = why;
+  };
+  while (position_ < text_.size()) {
+    const char c = text_[position_++];
+    if (quoted) {
+      if (c == '"') {
+        if (position_ < text_.size() && text_[position_] == '"') {
+          field += '"';
+          ++position_;
+        } else {
+          quoted = false;
+        }
+      } else {
+        if (c == '\n') ++line_;
+        field += c;
+      }
+      continue;
+    }
+    if (c == ',') {
+      record.fields.push_back(std::move(field));
+      field.clear();
+      was_quoted = false;
+    } else if (c == '\n' || c == '\r') {
+      if (c == '\r' && position_ < text_.size() && text_[position_] == '\n') ++position_;
+      ++line_;
+      record.fields.push_back(std::move(field));
+      return record;
+    } else if (c == '"') {
+      if (field.empty() && !was_quoted) {
+        quoted = was_quoted = true;
+      } else {
+        fail("stray double quote");
+        field += c;
+      }
+    } else {
+      if (was_quoted) fail("text after a closing quote");
+      field += c;
+    }
+  }
+  if (quoted) fail("unterminated quoted field");
+  record.fields.push_back(std::move(field));
+  return record;
+}
+
+std::string CsvField(std::string_view text) {
+  if (text.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(text);
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace pintag::db

@@ -1,0 +1,280 @@
+#include "pintag/db/importer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <unordered_set>
+
+#include "guard.hpp"
+#include "pintag/db/csv.hpp"
+#include "registry_internal.hpp"
+
+namespace pintag::db {
+namespace {
+
+enum Column {
+  kOffice,
+  kPincode,
+  kType,
+  kDelivery,
+  kDivision,
+  kRegion,
+  kCircle,
+  kDistrict,
+  kState,
+  kTaluk,
+  kLatitude,
+  kLongitude,
+  kColumnCount
+};
+
+struct LayoutSpec {
+  CsvLayout layout;
+  std::array<const char*, kColumnCount> names;  ///< lower-case header name, nullptr: absent
+};
+
+constexpr LayoutSpec kLayouts[] = {
+    {CsvLayout::kNewer,
+     {"officename", "pincode", "officetype", "delivery", "divisionname", "regionname", "circlename",
+      "district", "statename", nullptr, "latitude", "longitude"}},
+    {CsvLayout::kOlder,
+     {"officename", "pincode", "officetype", "deliverystatus", "divisionname", "regionname",
+      "circlename", "districtname", "statename", "taluk", nullptr, nullptr}},
+};
+
+std::string Lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string_view Trim(std::string_view text) {
+  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+  return text;
+}
+
+struct Mapping {
+  CsvLayout layout;
+  std::array<int, kColumnCount> index;  ///< field index per column, -1 when absent
+  std::size_t width;
+};
+
+std::optional<Mapping> Detect(const std::vector<std::string>& header) {
+  std::map<std::string, int> positions;
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    positions.emplace(Lower(Trim(header[i])), static_cast<int>(i));
+  }
+  for (const LayoutSpec& spec : kLayouts) {
+    Mapping mapping{spec.layout, {}, header.size()};
+    bool all = true;
+    for (int c = 0; c < kColumnCount; ++c) {
+      mapping.index[c] = -1;
+      if (spec.names[c] == nullptr) continue;
+      const auto found = positions.find(spec.names[c]);
+      if (found == positions.end()) {
+        all = false;
+        break;
+      }
+      mapping.index[c] = found->second;
+    }
+    if (all) return mapping;
+  }
+  return std::nullopt;
+}
+
+/// "NA", "" and similar mean unknown.
+bool IsUnknown(std::string_view text) {
+  const std::string lower = Lower(text);
+  return lower.empty() || lower == "na" || lower == "n/a" || lower == "null";
+}
+
+std::optional<double> ParseNumber(std::string_view text) {
+  double value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+    return std::nullopt;
+  }
+  return value;
+}
+
+/// Drops " B.O", " S.O.", " HO" and the like when they repeat the office type's letter.
+std::string StripTypeSuffix(std::string name, const std::optional<std::string>& type) {
+  if (!type || type->size() != 2 || (type->back() != 'O' && type->back() != 'o')) return name;
+  const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(type->front())));
+  std::string upper = name;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  // Longest first: " X.O.", " X.O", " XO".
+  for (const std::string_view pattern :
+       {std::string_view(" ?.O."), std::string_view(" ?.O"), std::string_view(" ?O")}) {
+    if (upper.size() <= pattern.size()) continue;
+    const std::string_view tail = std::string_view(upper).substr(upper.size() - pattern.size());
+    bool match = true;
+    for (std::size_t i = 0; i < pattern.size(); ++i) {
+      match = match && (pattern[i] == '?' ? tail[i] == letter : tail[i] == pattern[i]);
+    }
+    if (match) {
+      name.resize(name.size() - pattern.size());
+      return std::string(Trim(name));
+    }
+  }
+  return name;
+}
+
+struct ParsedRow {
+  std::int64_t line;
+  Pincode pincode;
+  PostOffice office;
+};
+
+/// One data record into a row, or the reason it is bad.
+Result<ParsedRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
+  if (record.fields.size() != mapping.width) {
+    return Error{ErrorCode::kInvalid, "expected " + std::to_string(mapping.width) +
+                                          " fields, got " + std::to_string(record.fields.size())};
+  }
+  const auto field = [&](Column c) -> std::string {
+    return mapping.index[c] < 0 ? std::string()
+                                : std::string(Trim(record.fields[mapping.index[c]]));
+  };
+  const auto optional = [&](Column c) -> std::optional<std::string> {
+    if (mapping.index[c] < 0) return std::nullopt;
+    std::string value = field(c);
+    if (IsUnknown(value)) return std::nullopt;
+    return value;
+  };
+  const ParsedPincode pincode = ParsePincode(field(kPincode));
+  if (!pincode) return Error{ErrorCode::kInvalid, "pincode: " + pincode.error};
+  ParsedRow row{record.line, *pincode.pincode, {}};
+  PostOffice& office = row.office;
+  office.branch_type = optional(kType);
+  office.name = StripTypeSuffix(field(kOffice), office.branch_type);
+  office.delivery = optional(kDelivery);
+  office.division = field(kDivision);
+  office.region = field(kRegion);
+  office.circle = field(kCircle);
+  office.district = field(kDistrict);
+  office.state = field(kState);
+  office.taluk = optional(kTaluk);
+  for (const auto& [column, target, name] :
+       {std::tuple{kLatitude, &office.latitude, "latitude"},
+        std::tuple{kLongitude, &office.longitude, "longitude"}}) {
+    if (const auto text = optional(column)) {
+      *target = ParseNumber(*text);
+      if (!*target)
+        return Error{ErrorCode::kInvalid, std::string(name) + " '" + *text + "' is not a number"};
+    }
+  }
+  if (auto error = detail::CheckOffice(office)) return *error;
+  return row;
+}
+
+}  // namespace
+
+const char* ToString(CsvLayout layout) {
+  return layout == CsvLayout::kNewer ? "newer (with latitude/longitude)" : "older (with taluk)";
+}
+
+Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
+                                        const ImportOptions& options) {
+  const auto progress = [&](std::string_view phase, std::uint64_t done, std::uint64_t total) {
+    if (options.progress) options.progress(phase, done, total);
+  };
+  CsvReader reader(csv);
+  std::string error;
+  const auto header = reader.next(&error);
+  if (!header) return Error{ErrorCode::kInvalid, "the file is empty"};
+  const auto mapping = Detect(header->fields);
+  if (!mapping || !error.empty()) {
+    return Error{ErrorCode::kInvalid,
+                 "line 1: not an All India Pincode Directory header (expected the columns "
+                 "circlename,regionname,divisionname,officename,pincode,officetype,delivery,"
+                 "district,statename,latitude,longitude or officename,pincode,officeType,"
+                 "Deliverystatus,divisionname,regionname,circlename,Taluk,Districtname,statename)"};
+  }
+
+  // Parse and check everything before touching the database.
+  ImportReport report;
+  report.layout = mapping->layout;
+  std::vector<ParsedRow> rows;
+  constexpr std::int64_t kProgressEvery = 4096;
+  while (const auto record = reader.next(&error)) {
+    ++report.rows;
+    if (!error.empty()) {
+      report.problems.push_back({record->line, error});
+      continue;
+    }
+    Result<ParsedRow> row = ParseRow(*mapping, *record);
+    if (!row) {
+      report.problems.push_back({record->line, row.error().message});
+      continue;
+    }
+    rows.push_back(std::move(row).value());
+    if (report.rows % kProgressEvery == 0) progress("parse", reader.position(), csv.size());
+  }
+  progress("parse", csv.size(), csv.size());
+  if (options.strict && !report.problems.empty()) return report;  // applied stays false
+
+  const std::string source =
+      options.source.empty()
+          ? std::string(mapping->layout == CsvLayout::kNewer ? "import:india-post-newer"
+                                                             : "import:india-post-older")
+          : options.source;
+  return detail::Guard([&]() -> Result<ImportReport> {
+    Transaction transaction(connection);
+    KeyAllocator allocator = detail::LoadKeyAllocator(connection);
+    std::unordered_set<std::uint32_t> known;
+    {
+      Statement all = connection.prepare("SELECT pincode FROM pincodes");
+      while (all.step()) known.insert(static_cast<std::uint32_t>(all.getInt64(0)));
+    }
+    Statement find = connection.prepare("SELECT 1 FROM offices WHERE pincode = ?1 AND name = ?2");
+    Statement upsert = connection.prepare(detail::UpsertOfficeSql());
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const ParsedRow& row = rows[i];
+      if (known.insert(row.pincode.value()).second) {
+        const auto key = detail::InsertPincode(connection, allocator, row.pincode, source);
+        if (!key) {
+          return Error{ErrorCode::kFull, "line " + std::to_string(row.line) + ": no key left for " +
+                                             row.pincode.str() + "; nothing was imported"};
+        }
+        report.pincodes_added.emplace_back(row.pincode, *key);
+      }
+      find.bind(1, std::int64_t{row.pincode.value()}).bind(2, row.office.name);
+      const bool existed = find.step();
+      find.reset();
+      detail::BindOffice(upsert, row.pincode, row.office, source);
+      const int changed = upsert.run();
+      upsert.reset();
+      if (!existed) {
+        ++report.offices_added;
+      } else if (changed > 0) {
+        ++report.offices_updated;
+      } else {
+        ++report.offices_unchanged;
+      }
+      if (i % kProgressEvery == 0) progress("write", i, rows.size());
+    }
+    progress("write", rows.size(), rows.size());
+    transaction.commit();
+    report.applied = true;
+    return report;
+  });
+}
+
+Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
+                                            const ImportOptions& options) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{ErrorCode::kNotFound, "cannot read " + path};
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{ErrorCode::kStorage, "error reading " + path};
+  return ImportDirectoryCsv(connection, text.str(), options);
+}
+
+}  // namespace pintag::db

@@ -1,0 +1,199 @@
+#include "pintag/db/sort_plan.hpp"
+
+#include <algorithm>
+#include <set>
+
+#include "guard.hpp"
+#include "pintag/db/csv.hpp"
+#include "pintag/db/text.hpp"
+#include "sort_plan_internal.hpp"
+
+namespace pintag::db {
+namespace {
+
+using detail::Guard;
+
+bool IsPrefix(std::string_view prefix) {
+  return !prefix.empty() && prefix.size() <= 6 &&
+         std::all_of(prefix.begin(), prefix.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+Error UnknownPlan(std::string_view name) {
+  return {ErrorCode::kNotFound, "no sort plan named '" + std::string(name) + "'"};
+}
+
+/// Writes the plan in the caller's transaction.
+void WritePlan(Connection& connection, const SortPlan& plan) {
+  connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, plan.name).run();
+  connection
+      .prepare(std::string("INSERT INTO sort_plans (name, fallback_bin, description, updated_at) "
+                           "VALUES (?1, ?2, ?3, ") +
+               detail::kNowSql + ")")
+      .bind(1, plan.name)
+      .bind(2, plan.fallback_bin)
+      .bind(3, plan.description)
+      .run();
+  const std::int64_t id = connection.lastInsertRowid();
+  Statement insert =
+      connection.prepare("INSERT INTO sort_rules (plan_id, prefix, bin) VALUES (?1, ?2, ?3)");
+  for (const SortRule& rule : plan.rules) {
+    insert.bind(1, id).bind(2, rule.prefix).bind(3, rule.bin).run();
+    insert.reset();
+  }
+}
+
+}  // namespace
+
+std::optional<Error> CheckPlan(const SortPlan& plan) {
+  if (auto error = CheckText("plan name", plan.name, kMaxBinBytes)) return error;
+  if (auto error = CheckText("fallback bin", plan.fallback_bin, kMaxBinBytes)) return error;
+  if (auto error = CheckText("description", plan.description, kMaxLabelBytes, true)) return error;
+  std::set<std::string_view> prefixes;
+  for (const SortRule& rule : plan.rules) {
+    if (!IsPrefix(rule.prefix)) {
+      return Error{ErrorCode::kInvalid, "rule prefix '" + rule.prefix + "' is not 1 to 6 digits"};
+    }
+    if (!prefixes.insert(rule.prefix).second) {
+      return Error{ErrorCode::kInvalid, "prefix " + rule.prefix + " appears twice"};
+    }
+    if (auto error = CheckText("bin for prefix " + rule.prefix, rule.bin, kMaxBinBytes)) {
+      return error;
+    }
+  }
+  return std::nullopt;
+}
+
+Routing RouteWith(const SortPlan& plan, Pincode pincode) {
+  const std::string digits = pincode.str();
+  const SortRule* best = nullptr;
+  for (const SortRule& rule : plan.rules) {
+    if (digits.starts_with(rule.prefix) && (!best || rule.prefix.size() > best->prefix.size())) {
+      best = &rule;
+    }
+  }
+  if (!best) return {plan.fallback_bin, std::nullopt};
+  return {best->bin, *best};
+}
+
+Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv) {
+  SortPlan plan;
+  plan.name = std::string(name);
+  CsvReader reader(csv);
+  std::string error;
+  const auto header = reader.next(&error);
+  if (!header || !error.empty() || header->fields.size() != 2 || header->fields[0] != "prefix" ||
+      header->fields[1] != "bin") {
+    return Error{ErrorCode::kInvalid, "line 1: expected the header 'prefix,bin'"};
+  }
+  bool have_fallback = false;
+  while (const auto record = reader.next(&error)) {
+    const std::string at = "line " + std::to_string(record->line) + ": ";
+    if (!error.empty()) return Error{ErrorCode::kInvalid, at + error};
+    if (record->fields.size() != 2) {
+      return Error{ErrorCode::kInvalid,
+                   at + "expected 2 fields, got " + std::to_string(record->fields.size())};
+    }
+    if (record->fields[0] == "*") {
+      if (have_fallback) return Error{ErrorCode::kInvalid, at + "a second fallback row '*'"};
+      have_fallback = true;
+      plan.fallback_bin = record->fields[1];
+    } else {
+      plan.rules.push_back({record->fields[0], record->fields[1]});
+    }
+  }
+  if (!have_fallback) {
+    return Error{ErrorCode::kInvalid, "no fallback row: add '*,<bin>' for unmatched pincodes"};
+  }
+  if (auto problem = CheckPlan(plan)) return *problem;
+  std::sort(plan.rules.begin(), plan.rules.end(),
+            [](const SortRule& a, const SortRule& b) { return a.prefix < b.prefix; });
+  return plan;
+}
+
+std::string PlanToCsv(const SortPlan& plan) {
+  std::string out = "prefix,bin\n*," + CsvField(plan.fallback_bin) + "\n";
+  std::vector<SortRule> rules = plan.rules;
+  std::sort(rules.begin(), rules.end(),
+            [](const SortRule& a, const SortRule& b) { return a.prefix < b.prefix; });
+  for (const SortRule& rule : rules) out += rule.prefix + "," + CsvField(rule.bin) + "\n";
+  return out;
+}
+
+Result<void> SavePlan(Connection& connection, const SortPlan& plan) {
+  if (auto error = CheckPlan(plan)) return *error;
+  return Guard([&]() -> Result<void> {
+    Transaction transaction(connection);
+    WritePlan(connection, plan);
+    transaction.commit();
+    return {};
+  });
+}
+
+Result<SortPlan> GetPlan(Connection& connection, std::string_view name) {
+  return Guard([&]() -> Result<SortPlan> {
+    Statement head = connection.prepare(
+        "SELECT id, name, fallback_bin, description FROM sort_plans WHERE name = ?1");
+    head.bind(1, name);
+    if (!head.step()) return UnknownPlan(name);
+    SortPlan plan{head.getText(1), head.getText(2), head.getText(3), {}};
+    Statement rules =
+        connection.prepare("SELECT prefix, bin FROM sort_rules WHERE plan_id = ?1 ORDER BY prefix");
+    rules.bind(1, head.getInt64(0));
+    while (rules.step()) plan.rules.push_back({rules.getText(0), rules.getText(1)});
+    return plan;
+  });
+}
+
+Result<std::vector<std::string>> ListPlans(Connection& connection) {
+  return Guard([&]() -> Result<std::vector<std::string>> {
+    Statement s = connection.prepare("SELECT name FROM sort_plans ORDER BY name");
+    std::vector<std::string> names;
+    while (s.step()) names.push_back(s.getText(0));
+    return names;
+  });
+}
+
+Result<void> DeletePlan(Connection& connection, std::string_view name) {
+  return Guard([&]() -> Result<void> {
+    if (connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, name).run() == 0) {
+      return UnknownPlan(name);
+    }
+    return {};
+  });
+}
+
+Result<Routing> Route(Connection& connection, Pincode pincode, std::string_view plan) {
+  return Guard([&]() -> Result<Routing> {
+    Statement head = connection.prepare("SELECT id, fallback_bin FROM sort_plans WHERE name = ?1");
+    head.bind(1, plan);
+    if (!head.step()) return UnknownPlan(plan);
+    // The six prefixes of the pincode; the primary key (plan_id, prefix) finds each directly.
+    const std::string digits = pincode.str();
+    Statement rule = connection.prepare(
+        "SELECT prefix, bin FROM sort_rules WHERE plan_id = ?1 AND prefix IN (?2, ?3, ?4, ?5, "
+        "?6, ?7) ORDER BY length(prefix) DESC LIMIT 1");
+    rule.bind(1, head.getInt64(0));
+    for (int length = 1; length <= 6; ++length) {
+      rule.bind(1 + length, std::string_view(digits).substr(0, length));
+    }
+    if (!rule.step()) return Routing{head.getText(1), std::nullopt};
+    SortRule matched{rule.getText(0), rule.getText(1)};
+    return Routing{matched.bin, matched};
+  });
+}
+
+namespace detail {
+
+void InsertDefaultPlan(Connection& connection) {
+  SortPlan plan{std::string(kDefaultPlanName),
+                "manual",
+                "one bin per first two digits of the pincode (shipped with the seed)",
+                {}};
+  Statement s = connection.prepare(
+      "SELECT DISTINCT substr(CAST(pincode AS TEXT), 1, 2) FROM pincodes ORDER BY 1");
+  while (s.step()) plan.rules.push_back({s.getText(0), s.getText(0)});
+  WritePlan(connection, plan);
+}
+
+}  // namespace detail
+}  // namespace pintag::db

@@ -1,0 +1,179 @@
+#include "pintag/db/sqlite.hpp"
+
+#include <sqlite3.h>
+
+namespace pintag::db {
+namespace {
+
+[[noreturn]] void Throw(sqlite3* db, int code, std::string_view context) {
+  std::string message(context);
+  message += ": ";
+  message += db != nullptr ? sqlite3_errmsg(db) : sqlite3_errstr(code);
+  const int extended = db != nullptr ? sqlite3_extended_errcode(db) : code;
+  throw SqliteError(message, code & 0xff, extended);
+}
+
+void Check(sqlite3* db, int code, std::string_view context) {
+  if (code != SQLITE_OK) Throw(db, code, context);
+}
+
+}  // namespace
+
+void Statement::Finalizer::operator()(sqlite3_stmt* statement) const {
+  sqlite3_finalize(statement);
+}
+
+Statement::Statement(Connection& connection, std::string_view sql)
+    : db_(connection.handle()), sql_(sql) {
+  sqlite3_stmt* raw = nullptr;
+  const int code = sqlite3_prepare_v2(db_, sql.data(), static_cast<int>(sql.size()), &raw, nullptr);
+  statement_.reset(raw);
+  Check(db_, code, "prepare");
+}
+
+Statement& Statement::bind(int index, std::int64_t value) {
+  Check(db_, sqlite3_bind_int64(statement_.get(), index, value), "bind");
+  return *this;
+}
+
+Statement& Statement::bind(int index, double value) {
+  Check(db_, sqlite3_bind_double(statement_.get(), index, value), "bind");
+  return *this;
+}
+
+Statement& Statement::bind(int index, std::string_view text) {
+  // A non-null pointer even for "", so an empty string binds as '' and not as NULL.
+  Check(db_,
+        sqlite3_bind_text64(statement_.get(), index, text.empty() ? "" : text.data(), text.size(),
+                            SQLITE_TRANSIENT, SQLITE_UTF8),
+        "bind");
+  return *this;
+}
+
+Statement& Statement::bindBlob(int index, const void* data, std::size_t size) {
+  Check(db_,
+        sqlite3_bind_blob64(statement_.get(), index, size == 0 ? "" : data, size, SQLITE_TRANSIENT),
+        "bind");
+  return *this;
+}
+
+Statement& Statement::bindNull(int index) {
+  Check(db_, sqlite3_bind_null(statement_.get(), index), "bind");
+  return *this;
+}
+
+bool Statement::step() {
+  const int code = sqlite3_step(statement_.get());
+  if (code == SQLITE_ROW) return true;
+  if (code == SQLITE_DONE) return false;
+  Throw(db_, code, "step");
+}
+
+int Statement::run() {
+  while (step()) {
+  }
+  return sqlite3_changes(db_);
+}
+
+void Statement::reset() {
+  // sqlite3_reset repeats the last step's error; step() already reported it.
+  sqlite3_reset(statement_.get());
+}
+
+void Statement::clearBindings() {
+  sqlite3_clear_bindings(statement_.get());
+}
+
+bool Statement::isNull(int column) const {
+  return sqlite3_column_type(statement_.get(), column) == SQLITE_NULL;
+}
+
+std::int64_t Statement::getInt64(int column) const {
+  return sqlite3_column_int64(statement_.get(), column);
+}
+
+double Statement::getDouble(int column) const {
+  return sqlite3_column_double(statement_.get(), column);
+}
+
+std::string Statement::getText(int column) const {
+  const auto* text = sqlite3_column_text(statement_.get(), column);
+  const int size = sqlite3_column_bytes(statement_.get(), column);
+  return text == nullptr ? std::string() : std::string(reinterpret_cast<const char*>(text), size);
+}
+
+std::optional<std::string> Statement::getOptionalText(int column) const {
+  if (isNull(column)) return std::nullopt;
+  return getText(column);
+}
+
+std::string Statement::getBlob(int column) const {
+  const void* data = sqlite3_column_blob(statement_.get(), column);
+  const int size = sqlite3_column_bytes(statement_.get(), column);
+  return data == nullptr ? std::string() : std::string(static_cast<const char*>(data), size);
+}
+
+void Connection::Closer::operator()(sqlite3* db) const {
+  sqlite3_close_v2(db);
+}
+
+Connection::Connection(const std::string& path, const ConnectionOptions& options) : path_(path) {
+  int flags = options.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
+  if (options.create && !options.read_only) flags |= SQLITE_OPEN_CREATE;
+  // Each Connection is used by one thread at a time (see the header), so SQLite's own
+  // per-connection mutex is not needed.
+  flags |= SQLITE_OPEN_NOMUTEX | SQLITE_OPEN_EXRESCODE;
+  sqlite3* raw = nullptr;
+  const int code = sqlite3_open_v2(path.c_str(), &raw, flags, nullptr);
+  db_.reset(raw);
+  if (code != SQLITE_OK) Throw(raw, code, "cannot open database " + path);
+  sqlite3_busy_timeout(raw, options.busy_timeout_ms);
+  if (!options.read_only) execute("PRAGMA journal_mode=WAL");
+  execute("PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+}
+
+void Connection::execute(std::string_view sql) {
+  const std::string text(sql);
+  char* error = nullptr;
+  const int code = sqlite3_exec(db_.get(), text.c_str(), nullptr, nullptr, &error);
+  if (code != SQLITE_OK) {
+    std::string message = error != nullptr ? error : sqlite3_errstr(code);
+    sqlite3_free(error);
+    throw SqliteError("execute: " + message, code & 0xff, sqlite3_extended_errcode(db_.get()));
+  }
+}
+
+std::int64_t Connection::queryInt64(std::string_view sql) {
+  Statement statement(*this, sql);
+  return statement.step() ? statement.getInt64(0) : 0;
+}
+
+std::int64_t Connection::lastInsertRowid() const {
+  return sqlite3_last_insert_rowid(db_.get());
+}
+int Connection::changes() const {
+  return sqlite3_changes(db_.get());
+}
+bool Connection::inTransaction() const {
+  return sqlite3_get_autocommit(db_.get()) == 0;
+}
+
+Transaction::Transaction(Connection& connection) : connection_(connection) {
+  connection_.execute("BEGIN IMMEDIATE");
+}
+
+Transaction::~Transaction() {
+  if (done_) return;
+  try {
+    connection_.execute("ROLLBACK");
+  } catch (...) {
+    // A failed statement may already have rolled the transaction back; nothing else to do.
+  }
+}
+
+void Transaction::commit() {
+  connection_.execute("COMMIT");
+  done_ = true;
+}
+
+}  // namespace pintag::db

@@ -1,0 +1,107 @@
+// `pintag import FILE`: India Post "All India Pincode Directory" CSV into the registry.
+
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands/commands.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/importer.hpp"
+
+namespace pintag::cli {
+namespace {
+
+struct ImportArgs {
+  std::string file;
+  std::string db = "pintag.db";
+  bool strict = false;
+};
+
+constexpr std::size_t kProblemsShown = 50;
+
+db::Connection OpenDb(const std::string& path) {
+  auto opened = db::OpenDatabase(path);
+  if (!opened) throw std::runtime_error(opened.error().message);
+  if (opened->created)
+    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
+  return std::move(opened).value().connection;
+}
+
+/// A one-line bar on stderr, redrawn at most ten times a second.
+class ProgressBar {
+ public:
+  void operator()(std::string_view phase, std::uint64_t done, std::uint64_t total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done < total && now - last_ < std::chrono::milliseconds(100)) return;
+    last_ = now;
+    constexpr int kWidth = 40;
+    const double fraction = total == 0 ? 1.0 : static_cast<double>(done) / total;
+    const int filled = static_cast<int>(fraction * kWidth);
+    std::cerr << "\r" << phase << " [" << std::string(filled, '#')
+              << std::string(kWidth - filled, ' ') << "] " << static_cast<int>(fraction * 100)
+              << "%" << std::flush;
+    drawn_ = true;
+  }
+  ~ProgressBar() {
+    if (drawn_) std::cerr << "\r\033[K" << std::flush;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_{};
+  bool drawn_ = false;
+};
+
+void Run(const ImportArgs& args) {
+  db::Connection connection = OpenDb(args.db);
+  db::ImportOptions options;
+  options.strict = args.strict;
+  auto bar = std::make_shared<ProgressBar>();
+  if (isatty(STDERR_FILENO)) {
+    options.progress = [bar](std::string_view phase, std::uint64_t done, std::uint64_t total) {
+      (*bar)(phase, done, total);
+    };
+  }
+  auto result = db::ImportDirectoryCsvFile(connection, args.file, options);
+  bar.reset();
+  options.progress = nullptr;
+  if (!result) throw std::runtime_error(result.error().message);
+  const db::ImportReport& report = *result;
+  for (std::size_t i = 0; i < report.problems.size() && i < kProblemsShown; ++i) {
+    std::cerr << args.file << ":" << report.problems[i].line << ": " << report.problems[i].message
+              << "\n";
+  }
+  if (report.problems.size() > kProblemsShown) {
+    std::cerr << "... and " << report.problems.size() - kProblemsShown << " more bad rows\n";
+  }
+  if (!report.applied) {
+    throw std::runtime_error("--strict: " + std::to_string(report.problems.size()) +
+                             " bad rows, nothing imported");
+  }
+  std::cout << "imported " << args.file << " (" << db::ToString(report.layout)
+            << " layout): " << report.rows << " rows, " << report.offices_added
+            << " offices added, " << report.offices_updated << " updated, "
+            << report.offices_unchanged << " unchanged, " << report.pincodes_added.size()
+            << " new pincodes, " << report.problems.size() << " bad rows skipped\n";
+  for (const auto& [pincode, key] : report.pincodes_added) {
+    std::cout << "new pincode " << pincode.str() << " key " << key.value() << "\n";
+  }
+}
+
+void AddImportCommand(CLI::App& app) {
+  auto args = std::make_shared<ImportArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "import", "Import India Post's All India Pincode Directory CSV (either layout)");
+  cmd->add_option("file", args->file, "CSV file")->required();
+  cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->capture_default_str();
+  cmd->add_flag("--strict", args->strict, "refuse the whole file if any row is bad");
+  cmd->callback([args] { Run(*args); });
+}
+
+const CommandRegistration registration{"import", &AddImportCommand};
+
+}  // namespace
+}  // namespace pintag::cli

@@ -1,0 +1,92 @@
+// `pintag keys export` and `pintag keys lookup`: the pincode ↔ key table.
+
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "commands/commands.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/registry.hpp"
+
+namespace pintag::cli {
+namespace {
+
+struct KeysArgs {
+  std::string db = "pintag.db";
+  std::string pincode;
+  std::optional<int> key;
+};
+
+db::Connection OpenDb(const std::string& path) {
+  auto opened = db::OpenDatabase(path);
+  if (!opened) throw std::runtime_error(opened.error().message);
+  if (opened->created) {
+    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
+  }
+  return std::move(opened).value().connection;
+}
+
+void Export(const KeysArgs& args) {
+  db::Connection connection = OpenDb(args.db);
+  auto rows = db::ListKeys(connection);
+  if (!rows) throw std::runtime_error(rows.error().message);
+  std::string out = "pincode,key,status\n";
+  for (const db::KeyRow& row : *rows) {
+    out += row.pincode.str() + "," + std::to_string(row.key.value()) + "," +
+           db::ToString(row.status) + "\n";
+  }
+  std::cout << out << std::flush;
+}
+
+void Lookup(const KeysArgs& args) {
+  if (args.pincode.empty() == !args.key.has_value()) {
+    throw UsageError("give a pincode or --key, not both");
+  }
+  db::Connection connection = OpenDb(args.db);
+  std::optional<db::Result<db::PincodeRecord>> record;
+  if (args.key) {
+    record.emplace(db::LookupKey(connection, TagKey(static_cast<std::uint16_t>(*args.key))));
+  } else {
+    const ParsedPincode pincode = ParsePincode(args.pincode);
+    if (!pincode) throw UsageError("'" + args.pincode + "': " + pincode.error);
+    record.emplace(db::LookupPincode(connection, *pincode.pincode));
+  }
+  if (!*record) throw std::runtime_error(record->error().message);
+  const db::PincodeRecord& r = record->value();
+  std::cout << "pincode  " << r.pincode.str() << "\nkey      " << r.key.value() << "\nstatus   "
+            << db::ToString(r.status) << "\ndistrict " << r.district << "\nstate    " << r.state
+            << "\ncircle   " << r.circle << "\nregion   " << r.region << "\ndivision " << r.division
+            << "\noffices  " << r.offices.size() << "\n";
+  for (const db::PostOffice& office : r.offices) {
+    std::cout << "  " << office.name;
+    if (office.branch_type) std::cout << " (" << *office.branch_type << ")";
+    if (office.district != r.district) std::cout << ", " << office.district;
+    std::cout << "\n";
+  }
+}
+
+void AddKeysCommand(CLI::App& app) {
+  auto args = std::make_shared<KeysArgs>();
+  CLI::App* keys = app.add_subcommand("keys", "The pincode-key table");
+  keys->require_subcommand(1);
+
+  CLI::App* export_cmd =
+      keys->add_subcommand("export", "Print the key table as CSV: pincode,key,status");
+  export_cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->capture_default_str();
+  export_cmd->callback([args] { Export(*args); });
+
+  CLI::App* lookup =
+      keys->add_subcommand("lookup", "Show a pincode's key and offices, or a key's pincode");
+  lookup->add_option("pincode", args->pincode, "six-digit pincode");
+  lookup->add_option("--key", args->key, "tag key, 0-32767")->check(CLI::Range(0, kKeyCount - 1));
+  lookup->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->capture_default_str();
+  lookup->callback([args] { Lookup(*args); });
+}
+
+const CommandRegistration registration{"keys", &AddKeysCommand};
+
+}  // namespace
+}  // namespace pintag::cli

@@ -1,0 +1,87 @@
+// `pintag token create|list|revoke`: API tokens for the HTTP server.
+
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands/commands.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/tokens.hpp"
+
+namespace pintag::cli {
+namespace {
+
+struct TokenArgs {
+  std::string db = "pintag.db";
+  std::string role;
+  std::string label;
+  std::int64_t id = 0;
+};
+
+db::Connection OpenDb(const std::string& path) {
+  auto opened = db::OpenDatabase(path);
+  if (!opened) throw std::runtime_error(opened.error().message);
+  if (opened->created) {
+    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
+  }
+  return std::move(opened).value().connection;
+}
+
+void Create(const TokenArgs& args) {
+  const auto role = db::ParseRole(args.role);
+  if (!role) throw UsageError("--role must be admin, counter or scanner");
+  db::Connection connection = OpenDb(args.db);
+  auto token = db::CreateToken(connection, *role, args.label);
+  if (!token) throw std::runtime_error(token.error().message);
+  std::cerr << "token " << token->info.id << " (" << db::ToString(*role)
+            << "); the secret below is shown only now:\n";
+  std::cout << token->secret << "\n";
+}
+
+void List(const TokenArgs& args) {
+  db::Connection connection = OpenDb(args.db);
+  auto tokens = db::ListTokens(connection);
+  if (!tokens) throw std::runtime_error(tokens.error().message);
+  std::cout << "id,role,label,created_at,revoked_at\n";
+  for (const db::TokenInfo& t : *tokens) {
+    std::cout << t.id << "," << db::ToString(t.role) << "," << t.label << "," << t.created_at << ","
+              << t.revoked_at.value_or("") << "\n";
+  }
+}
+
+void Revoke(const TokenArgs& args) {
+  db::Connection connection = OpenDb(args.db);
+  auto token = db::RevokeToken(connection, args.id);
+  if (!token) throw std::runtime_error(token.error().message);
+  std::cout << "token " << token->id << " revoked at " << token->revoked_at.value_or("?") << "\n";
+}
+
+void AddTokenCommand(CLI::App& app) {
+  auto args = std::make_shared<TokenArgs>();
+  CLI::App* token = app.add_subcommand("token", "API tokens for the HTTP server");
+  token->require_subcommand(1);
+  const auto add_db = [&](CLI::App* cmd) {
+    cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+        ->capture_default_str();
+  };
+
+  CLI::App* create = token->add_subcommand("create", "Create a token and print its secret once");
+  create->add_option("--role", args->role, "admin, counter or scanner")->required();
+  create->add_option("--label", args->label, "a note on who or what uses it");
+  add_db(create);
+  create->callback([args] { Create(*args); });
+
+  CLI::App* list = token->add_subcommand("list", "List tokens (never their secrets) as CSV");
+  add_db(list);
+  list->callback([args] { List(*args); });
+
+  CLI::App* revoke = token->add_subcommand("revoke", "Revoke a token by id");
+  revoke->add_option("id", args->id, "token id")->required();
+  add_db(revoke);
+  revoke->callback([args] { Revoke(*args); });
+}
+
+const CommandRegistration registration{"token", &AddTokenCommand};
+
+}  // namespace
+}  // namespace pintag::cli
