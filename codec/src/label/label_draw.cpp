@@ -1,0 +1,255 @@
+#include "label/label_draw.hpp"
+
+#include <algorithm>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "label/label_text.hpp"
+#include "pintag/codec/cells.hpp"
+#include "pintag/codec/geometry.hpp"
+#include "pintag/codec/palette.hpp"
+
+namespace pintag::label {
+namespace {
+
+constexpr double kPadMm = 2.0;         // text inset from the rules
+constexpr double kCaptionMm = 2.4;     // font size of "PIN CODE", "SORT BIN"
+constexpr double kSmallPrintMm = 2.2;  // font size of the key line
+constexpr double kMinNameMm = 2.2;     // names shrink to this, then ellipsize
+
+void SetColour(cairo_t* cr, PaletteColour colour) {
+  const Rgb8 c = SrgbFor(colour);
+  cairo_set_source_rgb(cr, c.r / 255.0, c.g / 255.0, c.b / 255.0);
+}
+
+// Cairo measures angles from +x towards +y (clockwise on a y-down page); the format measures them
+// clockwise from up.
+double CairoAngle(double degrees_from_up) {
+  return (degrees_from_up - 90.0) * std::numbers::pi / 180.0;
+}
+
+void Rule(cairo_t* cr, double x0, double y0, double x1, double y1) {
+  cairo_move_to(cr, x0, y0);
+  cairo_line_to(cr, x1, y1);
+  cairo_stroke(cr);
+}
+
+// Ink height of a digit at font size 1: scales the pincode to its box.
+double DigitHeightPerSize(cairo_t* cr) {
+  SelectFont(cr, true, 1.0);
+  cairo_text_extents_t e;
+  cairo_text_extents(cr, "0", &e);
+  return e.height;
+}
+
+void DrawPin(cairo_t* cr, const LabelContent& label, const Box& box) {
+  SelectFont(cr, true, kCaptionMm);
+  cairo_move_to(cr, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
+  cairo_show_text(cr, "PIN CODE");
+
+  // Written as India Post prints it, "110 001"; the digits fill the box below the caption.
+  const std::string digits = label.pincode.str();
+  const std::string text = digits.substr(0, 3) + " " + digits.substr(3);
+  const double top = box.y + kPadMm + kCaptionMm + 1.0;
+  const double height = box.bottom() - kPadMm - top;
+  const double width = box.w - 4 * kPadMm;
+  double size = height * 0.88 / DigitHeightPerSize(cr);
+  SelectFont(cr, true, size);
+  cairo_text_extents_t e;
+  cairo_text_extents(cr, text.c_str(), &e);
+  if (e.width > width) {
+    size *= width / e.width;
+    SelectFont(cr, true, size);
+    cairo_text_extents(cr, text.c_str(), &e);
+  }
+  // Centre the ink, not the advance box, so the digits sit visually centred.
+  const double x = box.x + (box.w - e.width) / 2 - e.x_bearing;
+  const double y = top + (height - e.height) / 2 - e.y_bearing;
+  cairo_move_to(cr, x, y);
+  cairo_show_text(cr, text.c_str());
+}
+
+// Advance of `text` at font size 1; advances scale linearly since metrics hinting is off.
+double AdvancePerSize(cairo_t* cr, const std::string& text, bool bold) {
+  SelectFont(cr, bold, 1.0);
+  cairo_text_extents_t e;
+  cairo_text_extents(cr, text.c_str(), &e);
+  return e.x_advance;
+}
+
+struct TextLine {
+  std::string text;
+  double size;
+  bool bold;
+};
+
+// The office on one line when it fits at 3/4 of the preferred size or more, else wrapped at a word
+// boundary onto two lines (the second shrinks, then ellipsizes, if still too long).
+void AddOfficeLines(cairo_t* cr, const std::string& office, double width, double size,
+                    double two_line_size, std::vector<TextLine>& lines) {
+  const double fit = width / std::max(AdvancePerSize(cr, office, true), 1e-9);
+  if (fit >= 0.75 * size || office.find(' ') == std::string::npos) {
+    lines.push_back({office, size, true});
+    return;
+  }
+  std::size_t cut = office.find(' ');
+  for (std::size_t next = cut; next != std::string::npos; next = office.find(' ', next + 1)) {
+    if (AdvancePerSize(cr, office.substr(0, next), true) * two_line_size > width) break;
+    cut = next;
+  }
+  lines.push_back({office.substr(0, cut), two_line_size, true});
+  lines.push_back({office.substr(cut + 1), two_line_size, true});
+}
+
+void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
+  const double width = box.w - 2 * kPadMm;
+  const double office_size = std::min(box.h * 0.36, 7.0);
+  const double line2_size = std::min(box.h * 0.24, 4.6);
+  const double two_line_size =
+      std::min(0.75 * office_size, (box.h - 1.2 * line2_size - 2 * kPadMm) / 2.4);
+
+  std::vector<TextLine> lines;
+  const std::string office = SanitizeUtf8(label.office);
+  AddOfficeLines(cr, office.empty() ? std::string("\u2014") : office, width, office_size,
+                 two_line_size, lines);
+  const std::string district = SanitizeUtf8(label.district);
+  const std::string state = SanitizeUtf8(label.state);
+  std::string place = district;
+  if (!district.empty() && !state.empty()) place += ", ";
+  place += state;
+  if (!place.empty()) lines.push_back({place, line2_size, false});
+
+  // Spread the lines evenly; each takes its size in height (cap height plus descender, roughly).
+  double total = 0;
+  for (const TextLine& line : lines) total += line.size;
+  const double gap = (box.h - total) / static_cast<double>(lines.size() + 1);
+  double top = box.y + gap;
+  for (const TextLine& line : lines) {
+    DrawLine(cr, line.text, box.x + kPadMm, width, top + line.size * 0.76,
+             {.bold = line.bold, .size = line.size, .min_size = kMinNameMm, .align = Align::kLeft});
+    top += line.size + gap;
+  }
+}
+
+void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
+  SelectFont(cr, true, kCaptionMm);
+  cairo_move_to(cr, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
+  cairo_show_text(cr, "SORT BIN");
+
+  // The bin value big on the left half; the plan and the key in small print on the right.
+  const double value_top = box.y + kPadMm + kCaptionMm + 0.8;
+  const double value_h = box.bottom() - kPadMm - value_top;
+  const double value_size = std::min(value_h * 1.05, 14.0);
+  const double left_w = box.w * 0.58 - kPadMm;
+  const std::string bin = label.bin ? SanitizeUtf8(*label.bin) : std::string();
+  if (bin.empty()) {
+    // No plan chosen (or the plan has no bin for this pincode): say so quietly.
+    DrawLine(cr, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
+             {.bold = false, .size = std::min(value_size, 5.0), .min_size = 2.0});
+  } else {
+    DrawLine(cr, bin, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
+             {.bold = true, .size = value_size, .min_size = 3.0, .align = Align::kLeft});
+  }
+
+  const double right_x = box.x + box.w * 0.58;
+  const double right_w = box.right() - kPadMm - right_x;
+  if (label.plan) {
+    const std::string plan = SanitizeUtf8(*label.plan);
+    if (!plan.empty()) {
+      DrawLine(cr, "plan " + plan, right_x, right_w, box.y + kPadMm + kCaptionMm * 0.75,
+               {.bold = false, .size = kCaptionMm, .min_size = 1.8, .align = Align::kRight});
+    }
+  }
+  DrawLine(cr, "key " + std::to_string(label.key.value()), right_x, right_w,
+           box.bottom() - kPadMm - kSmallPrintMm * 1.2,
+           {.bold = false, .size = kSmallPrintMm, .min_size = 1.6, .align = Align::kRight});
+  DrawLine(cr, "PinTag v1", right_x, right_w, box.bottom() - kPadMm,
+           {.bold = false, .size = kSmallPrintMm * 0.85, .min_size = 1.4, .align = Align::kRight});
+}
+
+}  // namespace
+
+void DrawTagVector(cairo_t* cr, TagKey key, const LabelTagPlacement& placement) {
+  const TagCells cells = EncodeCells(key);
+  const double s = placement.square_side_mm;
+  const double x0 = placement.square_x_mm;
+  const double y0 = placement.square_y_mm;
+  const double quiet = geometry::kQuietZone * s;
+
+  cairo_save(cr);
+  cairo_new_path(cr);
+  SetColour(cr, PaletteColour::kWhite);
+  cairo_rectangle(cr, x0 - quiet, y0 - quiet, s + 2 * quiet, s + 2 * quiet);
+  cairo_fill(cr);
+  SetColour(cr, PaletteColour::kBlack);
+  cairo_rectangle(cr, x0, y0, s, s);
+  cairo_fill(cr);
+
+  const double r_red = geometry::kRedRadius * s;
+  const double r_green = geometry::kGreenOuterRadius * s;
+  for (int e = 0; e < kElements; ++e) {
+    const double cx = x0 + geometry::kElementCentres[e].x * s;
+    const double cy = y0 + geometry::kElementCentres[e].y * s;
+    // An underlay in the bit-0 colours, exactly the ring's and disk's outlines: where a viewer
+    // anti-aliases the seams between adjacent cells, it blends with a palette colour instead of
+    // showing the black square through as hairlines. Printers do not anti-alias; nothing changes.
+    cairo_new_path(cr);
+    cairo_arc(cr, cx, cy, r_green, 0, 2 * std::numbers::pi);
+    cairo_new_sub_path(cr);
+    cairo_arc_negative(cr, cx, cy, r_red, 2 * std::numbers::pi, 0);
+    SetColour(cr, PaletteColour::kGreenZero);
+    cairo_fill(cr);
+    cairo_arc(cr, cx, cy, r_red, 0, 2 * std::numbers::pi);
+    SetColour(cr, PaletteColour::kRedZero);
+    cairo_fill(cr);
+    for (int sector = 0; sector < kGreenSectors; ++sector) {
+      const double from = CairoAngle(45.0 * sector);
+      const double to = CairoAngle(45.0 * (sector + 1));
+      cairo_new_path(cr);
+      cairo_arc(cr, cx, cy, r_green, from, to);
+      cairo_arc_negative(cr, cx, cy, r_red, to, from);
+      cairo_close_path(cr);
+      SetColour(cr, cells.green[e][sector] ? PaletteColour::kGreenOne : PaletteColour::kGreenZero);
+      cairo_fill(cr);
+    }
+    for (int quadrant = 0; quadrant < kRedQuadrants; ++quadrant) {
+      cairo_new_path(cr);
+      cairo_move_to(cr, cx, cy);
+      cairo_arc(cr, cx, cy, r_red, CairoAngle(90.0 * quadrant), CairoAngle(90.0 * (quadrant + 1)));
+      cairo_close_path(cr);
+      SetColour(cr, cells.red[e][quadrant] ? PaletteColour::kRedOne : PaletteColour::kRedZero);
+      cairo_fill(cr);
+    }
+  }
+  cairo_restore(cr);
+}
+
+void DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout, bool with_tag) {
+  cairo_save(cr);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_set_line_width(cr, layout.rule_mm);
+  const Box& f = layout.frame;
+  cairo_rectangle(cr, f.x, f.y, f.w, f.h);
+  cairo_stroke(cr);
+  Rule(cr, layout.pin.x, layout.pin.bottom(), layout.pin.right(), layout.pin.bottom());
+  Rule(cr, layout.address.x, layout.address.bottom(), layout.address.right(),
+       layout.address.bottom());
+  if (layout.landscape) {
+    Rule(cr, layout.tag.right(), f.y, layout.tag.right(), f.bottom());
+  } else {
+    Rule(cr, layout.bin.x, layout.bin.y, layout.bin.right(), layout.bin.y);
+  }
+
+  DrawPin(cr, label, layout.pin);
+  DrawAddress(cr, label, layout.address);
+  DrawBin(cr, label, layout.bin);
+  cairo_restore(cr);
+
+  if (with_tag) DrawTagVector(cr, label.key, layout.placement);
+}
+
+}  // namespace pintag::label

@@ -1,0 +1,19 @@
+#pragma once
+// Draws a label onto any cairo surface whose user space is millimetres from the page's top-left.
+
+#include <cairo.h>
+
+#include "label/label_layout.hpp"
+#include "pintag/codec/label.hpp"
+
+namespace pintag::label {
+
+/// The tag as vector paths at `placement`: white quiet zone, black square, 32 green sectors and
+/// 16 red quadrants, from codec geometry and palette.
+void DrawTagVector(cairo_t* cr, TagKey key, const LabelTagPlacement& placement);
+
+/// Everything but the tag when `with_tag` is false (the raster renderer pastes the codec's own
+/// anti-aliased tag raster instead).
+void DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout, bool with_tag);
+
+}  // namespace pintag::label

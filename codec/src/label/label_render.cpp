@@ -1,0 +1,248 @@
+#include <cairo-pdf.h>
+#include <cairo-svg.h>
+#include <cairo.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <utility>
+
+#include "label/label_draw.hpp"
+#include "label/label_layout.hpp"
+#include "pintag/codec/label.hpp"
+#include "pintag/codec/png_io.hpp"
+#include "pintag/codec/tag_raster.hpp"
+
+namespace pintag {
+namespace {
+
+constexpr double kPointsPerMm = kPointsPerInch / kMmPerInch;
+
+struct SurfaceDeleter {
+  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
+};
+struct ContextDeleter {
+  void operator()(cairo_t* c) const { cairo_destroy(c); }
+};
+using Surface = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
+using Context = std::unique_ptr<cairo_t, ContextDeleter>;
+
+cairo_status_t AppendBytes(void* closure, const unsigned char* data, unsigned int length) {
+  auto* bytes = static_cast<std::vector<std::uint8_t>*>(closure);
+  bytes->insert(bytes->end(), data, data + length);
+  return CAIRO_STATUS_SUCCESS;
+}
+
+// The same glyph advances on every surface, so a line fits identically in PDF, SVG and PNG.
+void SetFontOptions(cairo_t* cr) {
+  cairo_font_options_t* options = cairo_font_options_create();
+  cairo_font_options_set_hint_metrics(options, CAIRO_HINT_METRICS_OFF);
+  cairo_font_options_set_hint_style(options, CAIRO_HINT_STYLE_NONE);
+  cairo_font_options_set_antialias(options, CAIRO_ANTIALIAS_GRAY);
+  cairo_set_font_options(cr, options);
+  cairo_font_options_destroy(options);
+}
+
+std::string CairoError(const char* what, cairo_status_t status) {
+  return std::string(what) + ": " + cairo_status_to_string(status);
+}
+
+RenderedLabel Fail(std::string error) {
+  return {{}, std::move(error)};
+}
+
+// Draws each label on its own page of a vector surface, then finishes the surface.
+std::string DrawPages(cairo_surface_t* surface, std::span<const LabelContent> labels,
+                      const label::LabelLayout& layout) {
+  Context cr(cairo_create(surface));
+  cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
+  SetFontOptions(cr.get());
+  for (const LabelContent& content : labels) {
+    label::DrawLabel(cr.get(), content, layout, true);
+    cairo_show_page(cr.get());
+  }
+  if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
+    return CairoError("cannot draw label", cairo_status(cr.get()));
+  }
+  cr.reset();
+  cairo_surface_finish(surface);
+  if (cairo_surface_status(surface) != CAIRO_STATUS_SUCCESS) {
+    return CairoError("cannot write label", cairo_surface_status(surface));
+  }
+  return {};
+}
+
+// Cairo 1.16 sizes the document in points ("283.464567pt"), which is exact but reads oddly; its
+// millimetre document unit is broken (it writes the point value with "mm"). So the root element's
+// width and height are rewritten in millimetres, with the viewBox (points) untouched.
+void SizeSvgInMillimetres(std::vector<std::uint8_t>& bytes, const LabelSize& size) {
+  std::string text(bytes.begin(), bytes.end());
+  const std::size_t svg = text.find("<svg ");
+  const std::size_t end = text.find('>', svg);
+  if (svg == std::string::npos || end == std::string::npos) return;
+  for (const auto& [name, mm] :
+       {std::pair{"width=\"", size.width_mm}, {"height=\"", size.height_mm}}) {
+    const std::size_t at = text.find(name, svg);
+    if (at == std::string::npos || at > end) return;
+    const std::size_t from = at + std::strlen(name);
+    const std::size_t to = text.find('"', from);
+    if (to == std::string::npos || to > end) return;
+    char value[32];
+    std::snprintf(value, sizeof value, "%.4fmm", mm);
+    text.replace(from, to - from, value);
+  }
+  bytes.assign(text.begin(), text.end());
+}
+
+}  // namespace
+
+std::string ValidateLabelOptions(const LabelOptions& options, bool raster) {
+  std::string error = ValidateLabelSize(options.size);
+  if (!error.empty() || !raster) return error;
+  if (!std::isfinite(options.dpi) || options.dpi < kMinLabelDpi || options.dpi > kMaxLabelDpi) {
+    return "dpi must be " + std::to_string(static_cast<int>(kMinLabelDpi)) + " to " +
+           std::to_string(static_cast<int>(kMaxLabelDpi));
+  }
+  const PixelSize px = LabelPixelSize(options);
+  if (static_cast<long long>(px.width) * px.height > kMaxLabelPixels) {
+    return "a " + ToString(options.size) + " label at " +
+           std::to_string(static_cast<int>(options.dpi)) + " dpi would be " +
+           std::to_string(px.width) + " x " + std::to_string(px.height) + " pixels; the limit is " +
+           std::to_string(kMaxLabelPixels / 1'000'000) + " megapixels, lower the dpi";
+  }
+  return {};
+}
+
+PixelSize LabelPixelSize(const LabelOptions& options) {
+  const double scale = options.dpi / kMmPerInch;
+  return {static_cast<int>(std::lround(options.size.width_mm * scale)),
+          static_cast<int>(std::lround(options.size.height_mm * scale))};
+}
+
+LabelTagPlacement TagPlacement(const LabelSize& size) {
+  return label::ComputeLayout(size).placement;
+}
+
+LabelTagPixels TagPlacementPixels(const LabelOptions& options) {
+  const LabelTagPlacement p = TagPlacement(options.size);
+  const double scale = options.dpi / kMmPerInch;
+  return {static_cast<int>(std::lround(p.square_x_mm * scale)),
+          static_cast<int>(std::lround(p.square_y_mm * scale)),
+          static_cast<int>(std::lround(p.square_side_mm * scale))};
+}
+
+RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& options,
+                           std::string* error) {
+  if (std::string why = ValidateLabelOptions(options, true); !why.empty()) {
+    *error = std::move(why);
+    return {};
+  }
+  const PixelSize px = LabelPixelSize(options);
+  const LabelTagPixels tag = TagPlacementPixels(options);
+  // The codec's tag raster (exact coverage, averaged in linear light) is pasted onto the label
+  // with its square snapped to whole pixels; below its minimum size cairo draws the tag instead.
+  const bool paste_tag = tag.square_side >= kMinTagSquarePx;
+
+  Surface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, px.width, px.height));
+  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
+    *error = CairoError("cannot create label raster", cairo_surface_status(surface.get()));
+    return {};
+  }
+  {
+    Context cr(cairo_create(surface.get()));
+    const double scale = options.dpi / kMmPerInch;
+    cairo_scale(cr.get(), scale, scale);
+    SetFontOptions(cr.get());
+    label::LabelLayout layout = label::ComputeLayout(options.size);
+    if (paste_tag) {
+      layout.placement = {tag.square_x / scale, tag.square_y / scale, tag.square_side / scale};
+    }
+    label::DrawLabel(cr.get(), label, layout, !paste_tag);
+    if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
+      *error = CairoError("cannot draw label", cairo_status(cr.get()));
+      return {};
+    }
+  }
+  cairo_surface_flush(surface.get());
+
+  RgbImage image(px.width, px.height);
+  const unsigned char* data = cairo_image_surface_get_data(surface.get());
+  const int stride = cairo_image_surface_get_stride(surface.get());
+  for (int y = 0; y < px.height; ++y) {
+    const auto* row =
+        reinterpret_cast<const std::uint32_t*>(data + static_cast<std::size_t>(y) * stride);
+    for (int x = 0; x < px.width; ++x) {
+      const std::uint32_t v = row[x];  // RGB24: 0xXXRRGGBB in native endianness
+      image.set(x, y,
+                {static_cast<std::uint8_t>(v >> 16), static_cast<std::uint8_t>(v >> 8),
+                 static_cast<std::uint8_t>(v)});
+    }
+  }
+
+  if (paste_tag) {
+    const int supersample = tag.square_side <= 1500 ? 4 : 2;
+    const TagRaster raster = RenderTagRaster(label.key, {tag.square_side, supersample});
+    const int x0 = tag.square_x - raster.square_origin_px;
+    const int y0 = tag.square_y - raster.square_origin_px;
+    for (int y = 0; y < raster.image.height; ++y) {
+      for (int x = 0; x < raster.image.width; ++x) {
+        const int tx = x0 + x;
+        const int ty = y0 + y;
+        if (tx >= 0 && ty >= 0 && tx < image.width && ty < image.height) {
+          image.set(tx, ty, raster.image.at(x, y));
+        }
+      }
+    }
+  }
+  return image;
+}
+
+RenderedLabel RenderLabelPng(const LabelContent& label, const LabelOptions& options) {
+  std::string error;
+  const RgbImage image = RenderLabelRaster(label, options, &error);
+  if (!error.empty()) return Fail(std::move(error));
+  std::vector<std::uint8_t> bytes = EncodePng(image, options.dpi, &error);
+  if (!error.empty()) return Fail(std::move(error));
+  return {std::move(bytes), {}};
+}
+
+RenderedLabel RenderLabelsPdf(std::span<const LabelContent> labels, const LabelOptions& options) {
+  if (labels.empty()) return Fail("no labels to render");
+  if (std::string why = ValidateLabelOptions(options, false); !why.empty()) return Fail(why);
+  std::vector<std::uint8_t> bytes;
+  Surface surface(cairo_pdf_surface_create_for_stream(AppendBytes, &bytes,
+                                                      options.size.width_mm * kPointsPerMm,
+                                                      options.size.height_mm * kPointsPerMm));
+  const std::string title = labels.size() == 1
+                                ? "PinTag label " + labels.front().pincode.str()
+                                : "PinTag labels (" + std::to_string(labels.size()) + ")";
+  cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, title.c_str());
+  cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR, "PinTag");
+  if (std::string why = DrawPages(surface.get(), labels, label::ComputeLayout(options.size));
+      !why.empty()) {
+    return Fail(why);
+  }
+  return {std::move(bytes), {}};
+}
+
+RenderedLabel RenderLabelPdf(const LabelContent& label, const LabelOptions& options) {
+  return RenderLabelsPdf(std::span<const LabelContent>(&label, 1), options);
+}
+
+RenderedLabel RenderLabelSvg(const LabelContent& label, const LabelOptions& options) {
+  if (std::string why = ValidateLabelOptions(options, false); !why.empty()) return Fail(why);
+  std::vector<std::uint8_t> bytes;
+  Surface surface(cairo_svg_surface_create_for_stream(AppendBytes, &bytes,
+                                                      options.size.width_mm * kPointsPerMm,
+                                                      options.size.height_mm * kPointsPerMm));
+  if (std::string why = DrawPages(surface.get(), std::span<const LabelContent>(&label, 1),
+                                  label::ComputeLayout(options.size));
+      !why.empty()) {
+    return Fail(why);
+  }
+  SizeSvgInMillimetres(bytes, options.size);
+  return {std::move(bytes), {}};
+}
+
+}  // namespace pintag

@@ -1,0 +1,164 @@
+#include "label/label_text.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace pintag::label {
+namespace {
+
+constexpr char32_t kReplacement = 0xFFFD;
+
+void Append(std::string& out, char32_t c) {
+  if (c < 0x80) {
+    out += static_cast<char>(c);
+  } else if (c < 0x800) {
+    out += static_cast<char>(0xC0 | (c >> 6));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  } else if (c < 0x10000) {
+    out += static_cast<char>(0xE0 | (c >> 12));
+    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  } else {
+    out += static_cast<char>(0xF0 | (c >> 18));
+    out += static_cast<char>(0x80 | ((c >> 12) & 0x3F));
+    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (c & 0x3F));
+  }
+}
+
+// Decodes one code point at text[i], advancing i; malformed input yields U+FFFD and skips one byte.
+char32_t Next(std::string_view text, std::size_t& i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char lead = byte(i);
+  if (lead < 0x80) {
+    ++i;
+    return lead;
+  }
+  int extra = 0;
+  char32_t c = 0;
+  char32_t min = 0;
+  if ((lead & 0xE0) == 0xC0) {
+    extra = 1, c = lead & 0x1F, min = 0x80;
+  } else if ((lead & 0xF0) == 0xE0) {
+    extra = 2, c = lead & 0x0F, min = 0x800;
+  } else if ((lead & 0xF8) == 0xF0) {
+    extra = 3, c = lead & 0x07, min = 0x10000;
+  } else {
+    ++i;
+    return kReplacement;
+  }
+  if (i + extra >= text.size()) {
+    ++i;
+    return kReplacement;
+  }
+  for (int k = 1; k <= extra; ++k) {
+    if ((byte(i + k) & 0xC0) != 0x80) {
+      ++i;
+      return kReplacement;
+    }
+    c = (c << 6) | (byte(i + k) & 0x3F);
+  }
+  i += extra + 1;
+  if (c < min || c > 0x10FFFF || (c >= 0xD800 && c <= 0xDFFF)) return kReplacement;
+  return c;
+}
+
+bool IsSpace(char32_t c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == 0xA0 || c == 0x2007 ||
+         c == 0x202F || c == 0x3000;
+}
+
+bool IsControl(char32_t c) {
+  return c < 0x20 || (c >= 0x7F && c < 0xA0) || c == 0x2028 || c == 0x2029 ||
+         (c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069) || c == 0xFEFF;
+}
+
+// Byte offsets where each code point of valid UTF-8 starts, plus the end.
+std::vector<std::size_t> Boundaries(std::string_view text) {
+  std::vector<std::size_t> at;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) at.push_back(i);
+  }
+  at.push_back(text.size());
+  return at;
+}
+
+double Advance(cairo_t* cr, const std::string& text) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, text.c_str(), &extents);
+  return extents.x_advance;
+}
+
+}  // namespace
+
+std::string SanitizeUtf8(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  std::size_t count = 0;
+  bool pending_space = false;
+  for (std::size_t i = 0; i < text.size() && count < kMaxDrawnCodePoints;) {
+    const char32_t c = Next(text, i);
+    if (IsSpace(c)) {
+      pending_space = !out.empty();
+      continue;
+    }
+    if (IsControl(c)) continue;
+    if (pending_space) {
+      out += ' ';
+      ++count;
+      pending_space = false;
+    }
+    Append(out, c);
+    ++count;
+  }
+  return out;
+}
+
+void SelectFont(cairo_t* cr, bool bold, double size) {
+  cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL,
+                         bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, size);
+}
+
+double DrawLine(cairo_t* cr, std::string_view text, double x, double width, double baseline,
+                const LineStyle& style) {
+  std::string line(text);
+  SelectFont(cr, style.bold, style.size);
+  double size = style.size;
+  double advance = Advance(cr, line);
+  if (advance > width && advance > 0) {
+    // Advances scale linearly with the size (metrics hinting is off), so one step suffices.
+    size = std::max(style.min_size, style.size * width / advance * 0.999);
+    cairo_set_font_size(cr, size);
+    advance = Advance(cr, line);
+  }
+  if (advance > width) {
+    // Still too wide at the smallest size: keep the longest prefix that fits with an ellipsis.
+    const std::vector<std::size_t> at = Boundaries(line);
+    std::size_t lo = 0;
+    std::size_t hi = at.size() - 1;
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi + 1) / 2;
+      std::string candidate = line.substr(0, at[mid]);
+      while (!candidate.empty() && candidate.back() == ' ') candidate.pop_back();
+      if (Advance(cr, candidate + "\u2026") <= width) {
+        lo = mid;
+      } else {
+        hi = mid - 1;
+      }
+    }
+    line = line.substr(0, at[lo]);
+    while (!line.empty() && (line.back() == ' ' || line.back() == ',')) line.pop_back();
+    line += "\u2026";
+    advance = Advance(cr, line);
+  }
+  double left = x;
+  if (style.align == Align::kCentre) left = x + (width - advance) / 2;
+  if (style.align == Align::kRight) left = x + width - advance;
+  cairo_move_to(cr, left, baseline);
+  cairo_show_text(cr, line.c_str());
+  return size;
+}
+
+}  // namespace pintag::label

@@ -1,0 +1,192 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "label_test_util.hpp"
+#include "pintag/codec/label.hpp"
+
+namespace pintag {
+namespace {
+
+constexpr double kPointsPerMm = 72.0 / 25.4;
+
+std::string AsText(const std::vector<std::uint8_t>& bytes) {
+  return {bytes.begin(), bytes.end()};
+}
+
+// Every page's MediaBox (cairo writes them uncompressed in the page objects).
+std::vector<std::pair<double, double>> MediaBoxes(const std::string& pdf) {
+  static const std::regex kBox(R"(/MediaBox\s*\[\s*0\s+0\s+([0-9.]+)\s+([0-9.]+)\s*\])");
+  std::vector<std::pair<double, double>> boxes;
+  for (auto it = std::sregex_iterator(pdf.begin(), pdf.end(), kBox); it != std::sregex_iterator();
+       ++it) {
+    boxes.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  }
+  return boxes;
+}
+
+TEST(LabelPdf, PageIsExactlyTheLabelSizeInPoints) {
+  for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In, LabelSize{150, 100}}) {
+    const RenderedLabel pdf = RenderLabelPdf(test::SampleLabel(), {size, 300});
+    ASSERT_TRUE(pdf) << pdf.error;
+    const std::string text = AsText(pdf.bytes);
+    EXPECT_EQ(text.rfind("%PDF-", 0), 0U);
+    const auto boxes = MediaBoxes(text);
+    ASSERT_EQ(boxes.size(), 1U) << ToString(size);
+    // cairo prints six decimals: exact to a millionth of a point.
+    EXPECT_NEAR(boxes[0].first, size.width_mm * kPointsPerMm, 1e-5) << ToString(size);
+    EXPECT_NEAR(boxes[0].second, size.height_mm * kPointsPerMm, 1e-5) << ToString(size);
+  }
+  // The numbers DESIGN.md quotes for the default label.
+  const auto boxes = MediaBoxes(AsText(RenderLabelPdf(test::SampleLabel()).bytes));
+  ASSERT_EQ(boxes.size(), 1U);
+  EXPECT_NEAR(boxes[0].first, 283.465, 5e-4);
+  EXPECT_NEAR(boxes[0].second, 425.197, 5e-4);
+}
+
+TEST(LabelPdf, PdfinfoReadsSizeAndPagesOfABatch) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  std::vector<LabelContent> labels;
+  for (int i = 0; i < 50; ++i) {
+    labels.push_back(test::SampleLabel(110001 + static_cast<std::uint32_t>(i),
+                                       static_cast<std::uint16_t>(1000 + 7 * i)));
+  }
+  const RenderedLabel pdf = RenderLabelsPdf(labels, {kLabel4x6In, 300});
+  ASSERT_TRUE(pdf) << pdf.error;
+  EXPECT_EQ(MediaBoxes(AsText(pdf.bytes)).size(), 50U);
+
+  test::TempDir dir;
+  const auto path = dir.path() / "batch.pdf";
+  test::WriteFile(path, pdf.bytes);
+  const auto info = test::Run("pdfinfo '" + path.string() + "'");
+  ASSERT_TRUE(info.has_value());
+  EXPECT_NE(info->find("Pages:           50\n"), std::string::npos) << *info;
+  EXPECT_NE(info->find("Page size:       288 x 432 pts"), std::string::npos) << *info;
+  EXPECT_NE(info->find("Title:           PinTag labels (50)"), std::string::npos) << *info;
+}
+
+TEST(LabelPdf, FontsAreEmbeddedSubsets) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  LabelContent label = test::SampleLabel();
+  label.office = "K\u0101raikk\u0101l \u041C\u043E\u0441\u043A\u0432\u0430 B.O";
+  const RenderedLabel pdf = RenderLabelPdf(label);
+  ASSERT_TRUE(pdf) << pdf.error;
+  test::TempDir dir;
+  const auto path = dir.path() / "label.pdf";
+  test::WriteFile(path, pdf.bytes);
+  const auto fonts = test::Run("pdffonts '" + path.string() + "'");
+  ASSERT_TRUE(fonts.has_value());
+  // Header, rule, then one row per font: "name type encoding emb sub uni object id".
+  std::istringstream rows(*fonts);
+  std::string row;
+  int listed = 0;
+  std::getline(rows, row);
+  std::getline(rows, row);
+  while (std::getline(rows, row)) {
+    ++listed;
+    EXPECT_NE(row.find("DejaVuSans"), std::string::npos) << row;
+    EXPECT_TRUE(std::regex_search(row, std::regex(R"(\syes\s+yes\s)"))) << "not embedded: " << row;
+  }
+  EXPECT_GE(listed, 2) << *fonts;  // regular and bold
+}
+
+TEST(LabelPdf, RefusesAnEmptyBatchAndBadSizes) {
+  const RenderedLabel empty = RenderLabelsPdf({}, {});
+  EXPECT_FALSE(empty);
+  EXPECT_TRUE(empty.bytes.empty());
+  EXPECT_NE(empty.error.find("no labels"), std::string::npos);
+  const RenderedLabel tiny = RenderLabelPdf(test::SampleLabel(), {LabelSize{20, 30}, 300});
+  EXPECT_FALSE(tiny);
+  EXPECT_NE(tiny.error.find("50 to 300 mm"), std::string::npos) << tiny.error;
+}
+
+TEST(LabelPng, RecordsDpiAndHasThePixelSizeOfSizeTimesDpi) {
+  struct Case {
+    LabelSize size;
+    double dpi;
+    int width;
+    int height;
+  };
+  for (const Case& c :
+       {Case{kLabel100x150, 300, 1181, 1772}, Case{kLabel4x6In, 203, 812, 1218},
+        Case{kLabelA6, 150, 620, 874}, Case{LabelSize{150, 100}, 600, 3543, 2362}}) {
+    const RenderedLabel png = RenderLabelPng(test::SampleLabel(), {c.size, c.dpi});
+    ASSERT_TRUE(png) << png.error;
+    const auto decoded = test::ReadPng(png.bytes);
+    ASSERT_TRUE(decoded.has_value());
+    EXPECT_EQ(decoded->spec.width, c.width) << ToString(c.size) << " @ " << c.dpi;
+    EXPECT_EQ(decoded->spec.height, c.height) << ToString(c.size) << " @ " << c.dpi;
+    const PixelSize expected = LabelPixelSize({c.size, c.dpi});
+    EXPECT_EQ(expected.width, c.width);
+    EXPECT_EQ(expected.height, c.height);
+    // PNG stores whole pixels per metre: 1 px/m is 0.0254 dpi.
+    EXPECT_NEAR(decoded->spec.get_float_attribute("XResolution"), c.dpi, 0.0254);
+    EXPECT_NEAR(decoded->spec.get_float_attribute("YResolution"), c.dpi, 0.0254);
+    EXPECT_EQ(decoded->spec.get_string_attribute("ResolutionUnit"), "inch");
+  }
+}
+
+TEST(LabelPng, RefusesOutOfRangeDpiAndPixelBombs) {
+  for (double dpi : {0.0, 71.0, 1201.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    const RenderedLabel png = RenderLabelPng(test::SampleLabel(), {kLabel100x150, dpi});
+    EXPECT_FALSE(png) << dpi;
+    EXPECT_NE(png.error.find("dpi must be 72 to 1200"), std::string::npos) << png.error;
+  }
+  const RenderedLabel huge = RenderLabelPng(test::SampleLabel(), {LabelSize{300, 300}, 1200});
+  EXPECT_FALSE(huge);
+  EXPECT_NE(huge.error.find("megapixels"), std::string::npos) << huge.error;
+  // The vector formats ignore dpi.
+  EXPECT_TRUE(RenderLabelPdf(test::SampleLabel(), {kLabel100x150, 0}));
+}
+
+TEST(LabelSvg, IsSizedInMillimetresWithAPointViewBox) {
+  const RenderedLabel svg = RenderLabelSvg(test::SampleLabel(), {kLabel4x6In, 300});
+  ASSERT_TRUE(svg) << svg.error;
+  const std::string text = AsText(svg.bytes);
+  EXPECT_NE(text.find("<svg"), std::string::npos);
+  EXPECT_NE(text.find("width=\"101.6000mm\" height=\"152.4000mm\""), std::string::npos)
+      << text.substr(0, 400);
+  EXPECT_NE(text.find("viewBox=\"0 0 288 432\""), std::string::npos) << text.substr(0, 400);
+  EXPECT_NE(text.find("</svg>"), std::string::npos);
+}
+
+TEST(LabelText, HostileNamesStillRender) {
+  LabelContent label = test::SampleLabel();
+  label.office = std::string(5000, 'W') + "\xff\xfe\x01\x02 \u202E evil";
+  label.district = "\xe0\xa4";  // truncated Devanagari lead bytes
+  label.state = "";
+  label.bin = std::string(300, '9');
+  label.plan = "\n\t";
+  EXPECT_TRUE(RenderLabelPdf(label));
+  EXPECT_TRUE(RenderLabelSvg(label));
+  EXPECT_TRUE(RenderLabelPng(label, {kLabelA6, 96}));
+  label.office.clear();
+  label.district.clear();
+  label.bin.reset();
+  label.plan.reset();
+  EXPECT_TRUE(RenderLabelPdf(label));
+  EXPECT_TRUE(RenderLabelPng(label, {kLabelA6, 96}));
+}
+
+TEST(LabelLayout, TagIsLargeAndItsQuietZoneStaysOnTheLabel) {
+  for (const LabelSize& size :
+       {kLabel100x150, kLabelA6, kLabel4x6In, LabelSize{150, 100}, LabelSize{50, 50},
+        LabelSize{150, 300}, LabelSize{300, 150}, LabelSize{100, 100}}) {
+    const LabelTagPlacement p = TagPlacement(size);
+    const double quiet = 0.15 * p.square_side_mm;
+    EXPECT_GE(p.square_side_mm, 0.32 * std::min(size.width_mm, size.height_mm)) << ToString(size);
+    EXPECT_GE(p.square_x_mm - quiet, 3.0) << ToString(size);
+    EXPECT_GE(p.square_y_mm - quiet, 3.0) << ToString(size);
+    EXPECT_LE(p.square_x_mm + p.square_side_mm + quiet, size.width_mm - 3.0) << ToString(size);
+    EXPECT_LE(p.square_y_mm + p.square_side_mm + quiet, size.height_mm - 3.0) << ToString(size);
+  }
+  EXPECT_GT(TagPlacement(kLabel100x150).square_side_mm, 50.0);
+}
+
+}  // namespace
+}  // namespace pintag
