@@ -9,23 +9,28 @@
 
 #include <array>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
 namespace pintag::scene {
 
-/// Pinhole camera without distortion, pixels.
+/// Pinhole camera without distortion, pixels. Pixel centres are at integer coordinates (as in
+/// OpenCV): the top-left pixel covers [−0.5, 0.5]².
 struct Camera {
   double fx = 1400, fy = 1400, cx = 960, cy = 540;
   int width = 1920, height = 1080;
 };
 
+/// The 3×3 intrinsic matrix K of `camera`.
+cv::Matx33d CameraMatrix(const Camera& camera);
+
 /// A marker image and where its black square (the part whose side is `square_side_m`) lies in it:
 /// the square's four corners in texture pixels, C0 top-left then clockwise. The rest of the
 /// texture (quiet zone) is drawn too.
+/// Texture coordinates follow the same convention as images: pixel centres at integers, so a
+/// square spanning pixels [o, o + n) has its outer corners at o − 0.5 and o + n − 0.5.
 struct MarkerTexture {
   cv::Mat bgr;  ///< CV_8UC3
   std::array<cv::Point2d, 4> square_corners_px;
@@ -41,44 +46,71 @@ struct Pose {
 /// Pose from viewing parameters: distance (m) of the square's centre along the ray through
 /// image point `centre_px`, tilt (degrees, 0 = facing the camera) about an axis in the square's
 /// plane at `tilt_axis_deg`, and in-plane rotation `roll_deg`.
+/// Tilt 0 means the square's normal points along that ray (a frontal view, wherever in the frame
+/// the square is); the tilt axis is measured in the image, 0° = image x axis, clockwise (towards
+/// +y); roll turns the square about its own normal, clockwise as seen by the camera.
 Pose MakePose(const Camera& camera, cv::Point2d centre_px, double distance_m, double tilt_deg,
               double tilt_axis_deg, double roll_deg);
+
+/// Viewing angle in degrees between the square's normal and the ray to its centre (0 = frontal).
+double ViewTiltDeg(const Pose& pose);
+
+/// Projects a point given in the square's model frame (metres) to image pixels.
+cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, cv::Vec3d model_point_m);
 
 enum class Cast { kNone, kTungsten, kFluorescent, kShade };
 
 struct Photometry {
-  double gradient = 0;         ///< brightness falloff across the frame, 0 … 0.6
+  double gradient = 0;  ///< brightness falloff across the frame, 0 … 0.6
   Cast cast = Cast::kNone;
-  double defocus_sigma_px = 0;  ///< Gaussian blur sigma
-  double motion_px = 0;         ///< motion blur length
-  double noise_sigma = 0;       ///< sensor noise, 8-bit code values
-  int jpeg_quality = 0;         ///< 0 = no JPEG round trip, else 1 … 100
-  double exposure = 1.0;        ///< overall gain
+  double defocus_sigma_px = 0;    ///< Gaussian blur sigma
+  double motion_px = 0;           ///< motion blur length
+  double noise_sigma = 0;         ///< sensor noise, 8-bit code values
+  int jpeg_quality = 0;           ///< 0 = no JPEG round trip, else 1 … 100
+  double exposure = 1.0;          ///< overall gain
+  double gradient_angle_deg = 0;  ///< direction in which the light falls off (image, clockwise)
+  double motion_angle_deg = 0;    ///< direction of the motion blur (image, clockwise)
   static Photometry Moderate(std::uint64_t seed);  ///< random mild settings
   static Photometry Hard(std::uint64_t seed);      ///< random harsh settings
 };
+
+/// Something stuck on or held over a marker (tape, a finger): a filled disk drawn on the marker's
+/// surface. Coordinates in square units: x right, y down, origin at the square's top-left corner,
+/// side 1 (the PinTag element centres are at 0.25 / 0.75).
+struct Occluder {
+  cv::Point2d centre{0.25, 0.25};
+  double radius = 0.23;
+  cv::Scalar bgr{150, 190, 225};  ///< default: skin / masking-tape beige
+};
+
+/// An occluder that fully covers PinTag element `element` (0 … 3, C0 … C3: its green ring has
+/// radius 0.20) without touching the black square's outline.
+Occluder CoverElement(int element);
 
 struct PlacedMarker {
   MarkerTexture texture;
   double square_side_m = 0.05;
   Pose pose;
   int id = -1;  ///< the truth this marker carries (PinTag key, ArUco / AprilTag id)
+  std::vector<Occluder> occluders;  ///< drawn over the texture; marks the truth not fully visible
 };
 
 struct SceneSpec {
   Camera camera;
   std::vector<PlacedMarker> markers;
   Photometry photometry;
-  std::uint64_t seed = 1;  ///< background choice and noise
+  std::uint64_t seed = 1;       ///< background choice and noise
   bool real_background = true;  ///< use a photograph where one is installed
+  int supersample = 0;  ///< sub-samples per pixel side for markers; 0 = automatic (2 … 4 by size)
 };
 
 struct MarkerTruth {
   int id = -1;
   std::array<cv::Point2d, 4> corners_px;  ///< projected square corners, C0 … C3
   Pose pose;
-  double square_px = 0;  ///< mean projected side length
-  bool fully_visible = true;
+  double square_px = 0;       ///< mean projected side length
+  bool fully_visible = true;  ///< all of the square inside the frame and no occluder on it
+  cv::Matx33d homography = cv::Matx33d::eye();  ///< square units (0 … 1, as Occluder) → image px
 };
 
 struct Scene {
@@ -91,6 +123,18 @@ Scene RenderScene(const SceneSpec& spec);
 
 /// A PinTag texture for `key` from the project's renderer (square `square_px` pixels).
 MarkerTexture PinTagTexture(int key, int square_px = 512);
+
+/// An ArUco DICT_5X5_1000 marker (id 0 … 999) with one-cell black border, its black square about
+/// `square_px` pixels (rounded to a multiple of 7 cells), the palette's black, a white quiet zone
+/// of 0.15 of the square as for PinTag. cv::aruco reports corners in C0 … C3 order, pixel centres
+/// at integers (same convention as the truth).
+MarkerTexture ArucoTexture(int id, int square_px = 511);
+
+/// An AprilTag tag36h10 marker (id 0 … 2319), its black square (the 8-cell border) about
+/// `square_px` pixels (rounded to a multiple of 8), palette black, white quiet zone as above.
+/// Comparing with libapriltag's detections: its p[0 … 3] are C3, C2, C1, C0 (counter-clockwise in
+/// the image from the tag's bottom-left) and its pixel centres are at +0.5 (subtract 0.5).
+MarkerTexture AprilTagTexture(int id, int square_px = 512);
 
 /// Real photographs found on this machine (Debian packages), possibly empty.
 const std::vector<std::string>& BackgroundPhotos();

@@ -1,0 +1,205 @@
+#include "photometry.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "srgb.hpp"
+
+namespace pintag::scene {
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+/// Channel gains (B, G, R) in linear light: a white-balance left set for daylight under other
+/// light.
+cv::Vec3d CastGains(Cast cast) {
+  switch (cast) {
+    case Cast::kNone:
+      return {1, 1, 1};
+    case Cast::kTungsten:  // warm: blue well down
+      return {0.55, 0.80, 1.0};
+    case Cast::kFluorescent:  // green spike
+      return {0.85, 1.0, 0.80};
+    case Cast::kShade:  // cool: open sky
+      return {1.0, 0.90, 0.75};
+  }
+  return {1, 1, 1};
+}
+
+Cast RandomCast(Rng& rng, bool allow_none) {
+  const int pick = allow_none ? rng.below(4) : 1 + rng.below(3);
+  return static_cast<Cast>(pick);
+}
+
+/// Standard normal values for the noise, drawn once from a fixed seed and indexed with 16 random
+/// bits per sample (4 samples per 64-bit draw): Box–Muller per pixel would dominate a frame.
+const std::vector<float>& NormalTable() {
+  static const std::vector<float> table = [] {
+    Rng rng(0x5EED5EED);
+    std::vector<float> t(1 << 16);
+    for (float& v : t) v = static_cast<float>(rng.normal());
+    return t;
+  }();
+  return table;
+}
+
+/// Per-pixel gain from exposure, gradient and cast, applied through banded lookup tables: the gain
+/// is exposure · cast · (1 − gradient · t), t going 0 → 1 across the frame along the gradient's
+/// direction, quantised into 128 bands (steps under 0.5 %). `Out` is std::uint8_t (sRGB out) or
+/// std::uint16_t (linear light out, for blurring).
+template <typename Out>
+cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
+  const cv::Vec3d cast = CastGains(p.cast);
+  const bool flat = p.gradient <= 0;
+  constexpr bool kLinearOut = sizeof(Out) == 2;
+  const int bands = flat ? 1 : 128;
+  const auto& to_linear = detail::SrgbToLinearTable();
+  std::vector<std::array<Out, 256 * 3>> luts(bands);
+  for (int b = 0; b < bands; ++b) {
+    const double t = flat ? 0.0 : (b + 0.5) / bands;
+    const double gain = p.exposure * (1.0 - std::clamp(p.gradient, 0.0, 1.0) * t);
+    for (int c = 0; c < 3; ++c) {
+      for (int v = 0; v < 256; ++v) {
+        const double linear = gain * cast[c] * to_linear[v];
+        if constexpr (kLinearOut) {
+          luts[b][c * 256 + v] = static_cast<Out>(std::clamp(linear, 0.0, 1.0) * 65535 + 0.5);
+        } else {
+          luts[b][c * 256 + v] = detail::LinearToSrgb8(static_cast<float>(linear));
+        }
+      }
+    }
+  }
+  const double dx = std::cos(p.gradient_angle_deg * kDegToRad);
+  const double dy = std::sin(p.gradient_angle_deg * kDegToRad);
+  // t(x, y) = (dx·x + dy·y − lowest) / span over the frame's corners.
+  const double w = frame.cols - 1, h = frame.rows - 1;
+  const double corners[4] = {0, dx * w, dy * h, dx * w + dy * h};
+  const double lowest = *std::min_element(corners, corners + 4);
+  const double span = std::max(1e-9, *std::max_element(corners, corners + 4) - lowest);
+  cv::Mat out(frame.size(), CV_MAKETYPE(cv::DataType<Out>::depth, 3));
+  for (int y = 0; y < frame.rows; ++y) {
+    const auto* src = frame.ptr<std::uint8_t>(y);
+    auto* dst = out.ptr<Out>(y);
+    for (int x = 0; x < frame.cols; ++x) {
+      int band = 0;
+      if (!flat) {
+        const double t = (dx * x + dy * y - lowest) / span;
+        band = std::min(bands - 1, static_cast<int>(t * bands));
+      }
+      const auto& lut = luts[band];
+      for (int c = 0; c < 3; ++c) dst[x * 3 + c] = lut[c * 256 + src[x * 3 + c]];
+    }
+  }
+  return out;
+}
+
+void ApplyMotionBlur(cv::Mat& frame, double length_px, double angle_deg) {
+  const int half = static_cast<int>(std::ceil(length_px / 2)) + 1;
+  const int size = 2 * half + 1;
+  cv::Mat kernel = cv::Mat::zeros(size, size, CV_32F);
+  const double dx = std::cos(angle_deg * kDegToRad), dy = std::sin(angle_deg * kDegToRad);
+  // Splat many points along a centred segment bilinearly: a smooth, sub-pixel line kernel.
+  const int steps = 16 * size;
+  for (int i = 0; i <= steps; ++i) {
+    const double s = (static_cast<double>(i) / steps - 0.5) * length_px;
+    const double x = half + s * dx, y = half + s * dy;
+    const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+    const double ax = x - ix, ay = y - iy;
+    kernel.at<float>(iy, ix) += static_cast<float>((1 - ax) * (1 - ay));
+    kernel.at<float>(iy, ix + 1) += static_cast<float>(ax * (1 - ay));
+    kernel.at<float>(iy + 1, ix) += static_cast<float>((1 - ax) * ay);
+    kernel.at<float>(iy + 1, ix + 1) += static_cast<float>(ax * ay);
+  }
+  kernel /= cv::sum(kernel)[0];
+  cv::filter2D(frame, frame, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+}
+
+void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
+  // Rounding the noise before adding it to an integer is the same as rounding the sum.
+  const auto& normal = NormalTable();
+  std::vector<std::int16_t> table(normal.size());
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    table[i] = static_cast<std::int16_t>(std::clamp(std::lround(sigma * normal[i]), -255L, 255L));
+  }
+  for (int y = 0; y < frame.rows; ++y) {
+    auto* row = frame.ptr<std::uint8_t>(y);
+    const int n = frame.cols * frame.channels();
+    std::uint64_t bits = 0;
+    for (int i = 0; i < n; ++i) {
+      if ((i & 3) == 0) bits = rng.next();
+      const int noisy = row[i] + table[bits & 0xFFFF];
+      bits >>= 16;
+      row[i] = static_cast<std::uint8_t>(noisy < 0 ? 0 : noisy > 255 ? 255 : noisy);
+    }
+  }
+}
+
+}  // namespace
+
+Photometry Photometry::Moderate(std::uint64_t seed) {
+  Rng rng(seed ^ 0x4D6F646572617465ULL);
+  Photometry p;
+  p.gradient = rng.uniform(0, 0.3);
+  p.gradient_angle_deg = rng.uniform(0, 360);
+  p.cast = RandomCast(rng, true);
+  p.defocus_sigma_px = rng.uniform(0, 1.0);
+  p.motion_px = rng.chance(0.5) ? rng.uniform(0, 2.0) : 0;
+  p.motion_angle_deg = rng.uniform(0, 180);
+  p.noise_sigma = rng.uniform(1, 4);
+  p.jpeg_quality = 75 + rng.below(21);
+  p.exposure = rng.uniform(0.8, 1.15);
+  return p;
+}
+
+Photometry Photometry::Hard(std::uint64_t seed) {
+  Rng rng(seed ^ 0x48617264ULL);
+  Photometry p;
+  p.gradient = rng.uniform(0.3, 0.6);
+  p.gradient_angle_deg = rng.uniform(0, 360);
+  p.cast = RandomCast(rng, false);
+  p.defocus_sigma_px = rng.uniform(0.8, 2.0);
+  p.motion_px = rng.uniform(1.5, 5.0);
+  p.motion_angle_deg = rng.uniform(0, 180);
+  p.noise_sigma = rng.uniform(4, 9);
+  p.jpeg_quality = 40 + rng.below(31);
+  p.exposure = rng.uniform(0.55, 1.3);
+  return p;
+}
+
+namespace detail {
+
+void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
+  const bool defocus = p.defocus_sigma_px > 0.05, motion = p.motion_px >= 0.25;
+  if (defocus || motion) {
+    // Light and optics act on linear light, before the camera's tone curve: 16-bit linear here.
+    cv::Mat linear = ApplyLight<std::uint16_t>(frame, p);
+    if (defocus) {
+      cv::GaussianBlur(linear, linear, cv::Size(), p.defocus_sigma_px, p.defocus_sigma_px,
+                       cv::BORDER_REFLECT);
+    }
+    if (motion) ApplyMotionBlur(linear, p.motion_px, p.motion_angle_deg);
+    const std::uint8_t* to_srgb = Linear16ToSrgbTable();
+    for (int y = 0; y < frame.rows; ++y) {
+      const auto* src = linear.ptr<std::uint16_t>(y);
+      auto* dst = frame.ptr<std::uint8_t>(y);
+      for (int i = 0; i < frame.cols * 3; ++i) dst[i] = to_srgb[src[i]];
+    }
+  } else if (p.gradient > 0 || p.exposure != 1.0 || p.cast != Cast::kNone) {
+    frame = ApplyLight<std::uint8_t>(frame, p);
+  }
+  if (p.noise_sigma > 0) ApplyNoise(frame, p.noise_sigma, rng);
+  if (p.jpeg_quality > 0) {
+    std::vector<std::uint8_t> bytes;
+    cv::imencode(".jpg", frame, bytes,
+                 {cv::IMWRITE_JPEG_QUALITY, std::clamp(p.jpeg_quality, 1, 100)});
+    frame = cv::imdecode(bytes, cv::IMREAD_COLOR);
+  }
+}
+
+}  // namespace detail
+}  // namespace pintag::scene

@@ -1,0 +1,16 @@
+#pragma once
+// Camera degradations applied to a composed frame: light, optics, sensor, codec.
+
+#include <opencv2/core.hpp>
+
+#include "pintag/scene/rng.hpp"
+#include "pintag/scene/scene.hpp"
+
+namespace pintag::scene::detail {
+
+/// In place, in this order: exposure, lighting gradient and colour cast, defocus (Gaussian) and
+/// motion blur (a line kernel), all in 16-bit linear light; then the sRGB tone curve, Gaussian
+/// sensor noise in 8-bit code values, and the JPEG round trip.
+void ApplyPhotometry(cv::Mat& frame_bgr, const Photometry& photometry, Rng& rng);
+
+}  // namespace pintag::scene::detail
