@@ -30,13 +30,13 @@ std::string Num(double value) {
 struct Frame {
   double origin;  // the square's top-left corner in document units
   double side;    // the square's side in document units
-  double X(double u) const { return origin + u * side; }
-  double Y(double v) const { return origin + v * side; }
+  double x(double u) const { return origin + u * side; }
+  double y(double v) const { return origin + v * side; }
 };
 
 std::string PointAt(const Frame& f, geometry::Point centre, double radius, double degrees) {
   const geometry::Point d = geometry::Direction(degrees);
-  return Num(f.X(centre.x + radius * d.x)) + "," + Num(f.Y(centre.y + radius * d.y));
+  return Num(f.x(centre.x + radius * d.x)) + "," + Num(f.y(centre.y + radius * d.y));
 }
 
 // An annular wedge (green sector) between two angles; the sweep runs clockwise on screen.
@@ -52,7 +52,7 @@ std::string SectorPath(const Frame& f, geometry::Point c, double inner, double o
 // A pie wedge (red quadrant) from the element's centre.
 std::string QuadrantPath(const Frame& f, geometry::Point c, double radius, double from, double to) {
   const std::string r = Num(radius * f.side);
-  return "M" + Num(f.X(c.x)) + "," + Num(f.Y(c.y)) + " L" + PointAt(f, c, radius, from) + " A" + r +
+  return "M" + Num(f.x(c.x)) + "," + Num(f.y(c.y)) + " L" + PointAt(f, c, radius, from) + " A" + r +
          "," + r + " 0 0 1 " + PointAt(f, c, radius, to) + " Z";
 }
 

@@ -5,7 +5,7 @@
 
 #include "commands/commands.hpp"
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's exit() only prints
   CLI::App app{"PinTag: colour fiducial markers that carry Indian pincodes", "pintag"};
   app.require_subcommand(1);
   pintag::cli::AddRegisteredCommands(app);

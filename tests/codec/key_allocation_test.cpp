@@ -52,6 +52,7 @@ TEST(KeyAllocation, LargeSyntheticSetIsCollisionFreeAndDeterministic) {
   std::set<std::uint32_t> values;
   while (values.size() < 30000) values.insert(100000 + random() % 900000);
   std::vector<Pincode> pincodes;
+  pincodes.reserve(values.size());
   for (const std::uint32_t v : values) pincodes.emplace_back(v);
   std::vector<Pincode> shuffled = pincodes;
   std::shuffle(shuffled.begin(), shuffled.end(), random);
@@ -70,6 +71,7 @@ TEST(KeyAllocation, FullTableRefusesMore) {
   for (int i = 0; i < kKeyCount; ++i) ASSERT_TRUE(allocator.allocate(Pincode(100000 + i)));
   EXPECT_FALSE(allocator.allocate(Pincode(999999)).has_value());
   std::vector<Pincode> too_many;
+  too_many.reserve(kKeyCount + 1);
   for (int i = 0; i <= kKeyCount; ++i) too_many.emplace_back(100000 + i);
   EXPECT_FALSE(SeedKeyTable(too_many).has_value());
 }

@@ -15,9 +15,9 @@ struct TagRasterOptions {
 };
 
 struct TagRaster {
-  RgbImage image;        ///< square, quiet zone included
-  int square_origin_px;  ///< the black square spans [origin, origin + square_px) in x and y
-  int square_px;
+  RgbImage image;            ///< square, quiet zone included
+  int square_origin_px = 0;  ///< the black square spans [origin, origin + square_px) in x and y
+  int square_px = 0;
 };
 
 /// The quiet zone in whole pixels for a square of `square_px`: ceil(0.15 × square_px).
