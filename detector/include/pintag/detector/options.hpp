@@ -1,0 +1,63 @@
+#pragma once
+// Everything that tunes the detector, in one struct. Every field states its default and unit;
+// sizes are ratios of the image where that lets one set of options work at any resolution.
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pintag {
+
+/// Pinhole camera in pixels of the (orientation-corrected) image, with OpenCV's distortion model.
+struct CameraIntrinsics {
+  double fx = 0;                   ///< focal length along x, px
+  double fy = 0;                   ///< focal length along y, px
+  double cx = 0;                   ///< principal point x, px
+  double cy = 0;                   ///< principal point y, px
+  std::vector<double> distortion;  ///< k1 k2 p1 p2 [k3 …] (OpenCV order); empty = none
+};
+
+/// Where the intrinsics used for pose came from.
+enum class IntrinsicsSource : std::uint8_t {
+  kGiven,    ///< DetectorOptions::intrinsics
+  kExif,     ///< the photo's EXIF focal length
+  kAssumed,  ///< DetectorOptions::assumed_hfov_deg: pose is approximate
+};
+
+/// The focal-length facts a photo's EXIF may carry (DESIGN.md §6 attribute names).
+struct ExifCamera {
+  std::optional<double> focal_length_35mm;         ///< Exif:FocalLengthIn35mmFilm, mm
+  std::optional<double> focal_length_mm;           ///< Exif:FocalLength, mm
+  std::optional<double> focal_plane_x_resolution;  ///< Exif:FocalPlaneXResolution, px per unit
+  std::optional<int>
+      focal_plane_resolution_unit;  ///< Exif:FocalPlaneResolutionUnit 2 in, 3 cm, 4 mm
+};
+
+struct DetectorOptions {
+  // --- camera and tag ---
+  std::optional<CameraIntrinsics>
+      intrinsics;                ///< explicit intrinsics; default none (EXIF, else assumed)
+  double assumed_hfov_deg = 65;  ///< horizontal field of view when neither given nor EXIF, degrees
+  double tag_size_m = 0.050;     ///< side of the black square, metres (default 50 mm)
+
+  // --- colour (CIELAB units, computed with integer stand-ins; see DESIGN.md §2) ---
+  double red_min_a = 30;         ///< a pixel is red when a* >= this …
+  double red_min_b = -30;        ///< … and b* >= this (keeps saturated blues, a* ~ +79, out)
+  double min_bit_span_b = 20;    ///< least b* difference between a tag's 1 and 0 levels
+  double min_bit_margin = 0.30;  ///< |b* − mid| / half-span below this: the bit is read as unknown
+
+  // --- sizes, relative to the image unless stated ---
+  int min_element_area_px = 6;           ///< smallest red blob kept, pixels
+  double max_element_area_ratio = 0.02;  ///< largest red blob, fraction of the image area
+  int min_square_px = 20;                ///< smallest black-square side accepted, pixels
+  int max_blobs = 4000;                  ///< red blobs beyond this (by area) are ignored
+
+  // --- execution and diagnostics ---
+  int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread
+  std::string debug_dir;  ///< when set, each stage writes an image here (debug only; slow)
+  bool return_rejected = false;  ///< also report candidates that did not decode (key unset)
+};
+
+}  // namespace pintag

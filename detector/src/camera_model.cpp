@@ -1,0 +1,59 @@
+#include "camera_model.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace pintag::stage {
+namespace {
+
+constexpr double kFullFrameDiagonalMm = 43.2666;  // hypot(36, 24)
+
+std::optional<double> PixelsPerMm(double resolution, int unit) {
+  if (!(resolution > 0)) return std::nullopt;
+  switch (unit) {
+    case 2:
+      return resolution / 25.4;
+    case 3:
+      return resolution / 10.0;
+    case 4:
+      return resolution;
+    default:
+      return std::nullopt;
+  }
+}
+
+}  // namespace
+
+ResolvedCamera ResolveCamera(const DetectorOptions& options, const ExifCamera* exif, int width,
+                             int height) {
+  ResolvedCamera out;
+  if (options.intrinsics && options.intrinsics->fx > 0 && options.intrinsics->fy > 0) {
+    out.intrinsics = *options.intrinsics;
+    out.source = IntrinsicsSource::kGiven;
+    return out;
+  }
+  out.intrinsics.cx = (width - 1) / 2.0;
+  out.intrinsics.cy = (height - 1) / 2.0;
+  std::optional<double> focal_px;
+  if (exif) {
+    if (exif->focal_length_35mm && *exif->focal_length_35mm > 0) {
+      focal_px = *exif->focal_length_35mm * std::hypot(width, height) / kFullFrameDiagonalMm;
+    } else if (exif->focal_length_mm && *exif->focal_length_mm > 0 &&
+               exif->focal_plane_x_resolution) {
+      const auto per_mm = PixelsPerMm(*exif->focal_plane_x_resolution,
+                                      exif->focal_plane_resolution_unit.value_or(2));
+      if (per_mm) focal_px = *exif->focal_length_mm * *per_mm;
+    }
+  }
+  if (focal_px && std::isfinite(*focal_px) && *focal_px > 1) {
+    out.source = IntrinsicsSource::kExif;
+  } else {
+    const double hfov = options.assumed_hfov_deg * std::numbers::pi / 180.0;
+    focal_px = (width / 2.0) / std::tan(hfov / 2);
+    out.source = IntrinsicsSource::kAssumed;
+  }
+  out.intrinsics.fx = out.intrinsics.fy = *focal_px;
+  return out;
+}
+
+}  // namespace pintag::stage

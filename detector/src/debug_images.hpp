@@ -1,0 +1,31 @@
+#pragma once
+// DetectorOptions::debug_dir: each stage writes an image there, numbered in pipeline order.
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "grouping.hpp"
+#include "pintag/detector/detection.hpp"
+#include "quads.hpp"
+#include "red_blobs.hpp"
+
+namespace pintag::stage {
+
+class DebugImages {
+ public:
+  explicit DebugImages(std::string dir) : dir_(std::move(dir)) {}
+  bool enabled() const { return !dir_.empty(); }
+
+  void redness(const cv::Mat& mask) const;
+  void blobs(const cv::Mat& bgr, const std::vector<RedBlob>& blobs,
+             const std::vector<BlobCluster>& clusters) const;
+  void quads(const cv::Mat& bgr, const std::vector<Quad>& quads) const;
+  void detections(const cv::Mat& bgr, const std::vector<Detection>& detections) const;
+
+ private:
+  void write(const std::string& name, const cv::Mat& image) const;
+  std::string dir_;
+};
+
+}  // namespace pintag::stage

@@ -1,0 +1,235 @@
+// The pipeline of DESIGN.md §3, top to bottom. Full-frame work is one integer redness pass and
+// one connected-components pass; everything else runs in small regions around red blob clusters.
+
+#include "pintag/detector/detector.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+#include "camera_model.hpp"
+#include "debug_images.hpp"
+#include "grouping.hpp"
+#include "homography.hpp"
+#include "orientation.hpp"
+#include "payload.hpp"
+#include "pintag/codec/geometry.hpp"
+#include "pose.hpp"
+#include "quads.hpp"
+#include "red_blobs.hpp"
+#include "redness.hpp"
+#include "sampling.hpp"
+
+namespace pintag {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
+}
+
+struct ClusterOutput {
+  std::vector<Detection> detections;
+  std::vector<stage::Quad> quads;  // for the debug image
+  double quads_ms = 0;
+  double decode_ms = 0;
+};
+
+Point2 ToPoint(cv::Point2d p) {
+  return {p.x, p.y};
+}
+
+void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs,
+                    const stage::BlobCluster& cluster, const DetectorOptions& options,
+                    ClusterOutput* out) {
+  const auto t0 = Clock::now();
+  const cv::Mat dark = stage::MinChannel(bgr, cluster.roi);
+  const std::vector<stage::Quad> quads =
+      stage::FindQuads(dark, cluster.roi.tl(), options.min_square_px);
+  out->quads.insert(out->quads.end(), quads.begin(), quads.end());
+  auto t1 = Clock::now();
+  out->quads_ms += Ms(t0, t1);
+
+  const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
+  for (stage::Quad quad : quads) {
+    t1 = Clock::now();
+    const stage::ElementAssignment rough =
+        stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs);
+    if (rough.found < 3) continue;
+    Detection d;
+    const bool refined = stage::RefineCorners(dark, cluster.roi.tl(), &quad);
+    cv::Matx33d h = stage::HomographyFromQuad(quad);
+    const stage::ElementAssignment assignment = stage::AssignElements(h, blobs, cluster.blobs);
+    const auto t2 = Clock::now();
+    out->quads_ms += Ms(t1, t2);
+    const auto reject = [&](std::string reason) {
+      if (!options.return_rejected) return;
+      d.reject_reason = std::move(reason);
+      for (int i = 0; i < 4; ++i) d.corners[i] = ToPoint(quad[i]);
+      out->detections.push_back(d);
+    };
+    if (!refined) {
+      reject("square edges not found");
+      continue;
+    }
+    if (assignment.found < 3 || assignment.conflict) {
+      reject("red blobs do not match the elements");
+      continue;
+    }
+    const stage::CellSamples samples = stage::SampleCells(bgr, h);
+    const stage::OrientationResult orientation = stage::ReadOrientation(samples, thresholds);
+    out->decode_ms += Ms(t2, Clock::now());
+    if (!orientation.ok) {
+      reject(orientation.error);
+      continue;
+    }
+    const stage::PayloadResult payload = stage::DecodePayload(orientation.reading);
+    if (!payload.key) {
+      reject(payload.error);
+      continue;
+    }
+    const int r = orientation.quarter_turns;
+    quad = stage::RotateQuad(quad, r);
+    h = stage::HomographyFromQuad(quad);
+    d.key = payload.key;
+    double perimeter = 0;
+    for (int i = 0; i < 4; ++i) {
+      d.corners[i] = ToPoint(quad[i]);
+      const geometry::Point c = geometry::kElementCentres[i];
+      d.element_centres[i] = ToPoint(stage::Apply(h, c.x, c.y));
+      d.element_seen[i] = assignment.blob[(i + r) % 4] >= 0;
+      perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
+    }
+    for (int i = 0; i < 9; ++i) d.homography[i] = h.val[i];
+    d.square_px = perimeter / 4;
+    d.cells = orientation.reading;
+    d.margins = orientation.margins;
+    d.unknown_bits = orientation.unknown;
+    d.min_known_margin = orientation.min_known_margin;
+    d.bits_from_second_copy = payload.bits_from_second_copy;
+    d.bit_from_parity = payload.bit_from_parity;
+    out->detections.push_back(d);
+  }
+}
+
+// The same tag reached twice (overlapping regions): keep the first.
+void RemoveDuplicates(std::vector<Detection>* detections) {
+  std::vector<Detection> kept;
+  for (Detection& d : *detections) {
+    const auto centre = [](const Detection& x) {
+      double cx = 0, cy = 0;
+      for (const Point2& p : x.corners) cx += p.x / 4, cy += p.y / 4;
+      return cv::Point2d(cx, cy);
+    };
+    const bool dup = std::any_of(kept.begin(), kept.end(), [&](const Detection& k) {
+      return cv::norm(centre(k) - centre(d)) < 0.25 * std::max(k.square_px, d.square_px);
+    });
+    if (!dup) kept.push_back(std::move(d));
+  }
+  *detections = std::move(kept);
+}
+
+}  // namespace
+
+std::string_view ToString(IntrinsicsSource source) {
+  switch (source) {
+    case IntrinsicsSource::kGiven:
+      return "given";
+    case IntrinsicsSource::kExif:
+      return "exif";
+    case IntrinsicsSource::kAssumed:
+      return "assumed";
+  }
+  return "assumed";
+}
+
+Detector::Detector(DetectorOptions options) : options_(std::move(options)) {}
+
+DetectResult Detector::detect(const LoadedImage& image) const {
+  return detect(image.bgr, &image.exif);
+}
+
+DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const {
+  DetectResult result;
+  if (bgr.empty()) {
+    result.error = "empty image";
+    return result;
+  }
+  if (bgr.type() != CV_8UC3) {
+    result.error = "image must be 8-bit BGR (CV_8UC3)";
+    return result;
+  }
+  const auto start = Clock::now();
+  const stage::ResolvedCamera camera = stage::ResolveCamera(options_, exif, bgr.cols, bgr.rows);
+  result.intrinsics = camera.intrinsics;
+  result.intrinsics_source = camera.source;
+  const stage::DebugImages debug(options_.debug_dir);
+
+  const cv::Mat mask = stage::RednessMask(bgr, {options_.red_min_a, options_.red_min_b});
+  const auto t_red = Clock::now();
+  result.timings.redness_ms = Ms(start, t_red);
+  debug.redness(mask);
+
+  stage::BlobLimits limits;
+  limits.min_area = options_.min_element_area_px;
+  limits.max_area = std::max<int>(limits.min_area,
+                                  static_cast<int>(options_.max_element_area_ratio * bgr.total()));
+  limits.max_blobs = options_.max_blobs;
+  const std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(mask, limits);
+  const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
+  const auto t_blobs = Clock::now();
+  result.timings.blobs_ms = Ms(t_red, t_blobs);
+  debug.blobs(bgr, blobs, clusters);
+
+  std::vector<ClusterOutput> outputs(clusters.size());
+  const int threads = std::clamp(options_.threads, 1, 64);
+  if (threads == 1 || clusters.size() < 2) {
+    for (std::size_t i = 0; i < clusters.size(); ++i) {
+      ProcessCluster(bgr, blobs, clusters[i], options_, &outputs[i]);
+    }
+  } else {
+    std::atomic<std::size_t> next{0};
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t) {
+      pool.emplace_back([&] {
+        for (std::size_t i; (i = next++) < clusters.size();) {
+          ProcessCluster(bgr, blobs, clusters[i], options_, &outputs[i]);
+        }
+      });
+    }
+    for (std::thread& t : pool) t.join();
+  }
+  std::vector<stage::Quad> all_quads;
+  for (ClusterOutput& o : outputs) {
+    result.timings.quads_ms += o.quads_ms;
+    result.timings.decode_ms += o.decode_ms;
+    for (Detection& d : o.detections) result.detections.push_back(std::move(d));
+    all_quads.insert(all_quads.end(), o.quads.begin(), o.quads.end());
+  }
+  debug.quads(bgr, all_quads);
+  RemoveDuplicates(&result.detections);
+
+  const auto t_pose = Clock::now();
+  for (Detection& d : result.detections) {
+    d.intrinsics_source = camera.source;
+    if (!d.key) continue;
+    std::array<cv::Point2d, 4> corners;
+    for (int i = 0; i < 4; ++i) corners[i] = {d.corners[i].x, d.corners[i].y};
+    const stage::PoseResult pose =
+        stage::EstimatePose(corners, camera.intrinsics, options_.tag_size_m);
+    if (!pose.ok) continue;
+    d.pose = pose.best;
+    d.alternative_pose = pose.alternative;
+    d.pose_ambiguous = pose.ambiguous;
+  }
+  const auto end = Clock::now();
+  result.timings.pose_ms = Ms(t_pose, end);
+  result.timings.total_ms = Ms(start, end);
+  debug.detections(bgr, result.detections);
+  return result;
+}
+
+}  // namespace pintag

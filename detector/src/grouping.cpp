@@ -1,0 +1,112 @@
+#include "grouping.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "pintag/codec/geometry.hpp"
+
+namespace pintag::stage {
+namespace {
+
+constexpr double kLinkDiameters = 3.2;   // neighbouring elements: 2.5 disk diameters apart
+constexpr double kMaxAreaRatio = 8;      // perspective can shrink a far element
+constexpr double kRoiDiameters = 2.6;    // element centre -> square edge + quiet zone: 2.0
+constexpr double kSlotTolerance = 0.08;  // tag units
+
+int Find(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+}  // namespace
+
+std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Size image,
+                                      int min_blobs) {
+  const int n = static_cast<int>(blobs.size());
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return blobs[a].centroid.x < blobs[b].centroid.x; });
+  double max_major = 0;
+  for (const RedBlob& b : blobs) max_major = std::max(max_major, b.major);
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (int oi = 0; oi < n; ++oi) {
+    const RedBlob& a = blobs[order[oi]];
+    for (int oj = oi + 1; oj < n; ++oj) {
+      const RedBlob& b = blobs[order[oj]];
+      if (b.centroid.x - a.centroid.x > kLinkDiameters * max_major) break;
+      const double reach = kLinkDiameters * std::max(a.major, b.major);
+      const cv::Point2d d = b.centroid - a.centroid;
+      if (d.dot(d) > reach * reach) continue;
+      const double ratio = static_cast<double>(std::max(a.area, b.area)) / std::min(a.area, b.area);
+      if (ratio > kMaxAreaRatio) continue;
+      parent[Find(parent, order[oi])] = Find(parent, order[oj]);
+    }
+  }
+  std::vector<std::vector<int>> groups(n);
+  for (int i = 0; i < n; ++i) groups[Find(parent, i)].push_back(i);
+
+  std::vector<BlobCluster> clusters;
+  const cv::Rect frame(0, 0, image.width, image.height);
+  for (auto& group : groups) {
+    if (static_cast<int>(group.size()) < min_blobs) continue;
+    double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18, major = 0;
+    const auto include = [&](cv::Point2d p) {
+      x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
+      y1 = std::max(y1, p.y);
+    };
+    for (int i : group) {
+      include(blobs[i].centroid);
+      major = std::max(major, blobs[i].major);
+    }
+    if (group.size() <= 6) {
+      // One element may be missing: add the fourth corner of the parallelogram of every three.
+      for (std::size_t i = 0; i < group.size(); ++i) {
+        for (std::size_t j = i + 1; j < group.size(); ++j) {
+          for (std::size_t k = j + 1; k < group.size(); ++k) {
+            const cv::Point2d p0 = blobs[group[i]].centroid, p1 = blobs[group[j]].centroid,
+                              p2 = blobs[group[k]].centroid;
+            include(p0 + p1 - p2);
+            include(p1 + p2 - p0);
+            include(p2 + p0 - p1);
+          }
+        }
+      }
+    }
+    const double m = kRoiDiameters * major;
+    const cv::Rect roi(cv::Point(static_cast<int>(x0 - m), static_cast<int>(y0 - m)),
+                       cv::Point(static_cast<int>(x1 + m) + 1, static_cast<int>(y1 + m) + 1));
+    BlobCluster cluster{std::move(group), roi & frame};
+    if (cluster.roi.area() > 0) clusters.push_back(std::move(cluster));
+  }
+  return clusters;
+}
+
+ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vector<RedBlob>& blobs,
+                                 const std::vector<int>& candidates) {
+  ElementAssignment result;
+  const cv::Matx33d inverse = tag_to_image.inv();
+  for (int i : candidates) {
+    const cv::Vec3d p = inverse * cv::Vec3d(blobs[i].centroid.x, blobs[i].centroid.y, 1);
+    if (std::abs(p[2]) < 1e-12) continue;
+    const double u = p[0] / p[2], v = p[1] / p[2];
+    if (u < 0 || u > 1 || v < 0 || v > 1) continue;
+    bool placed = false;
+    for (int e = 0; e < 4; ++e) {
+      const geometry::Point c = geometry::kElementCentres[e];
+      if (std::abs(u - c.x) > kSlotTolerance || std::abs(v - c.y) > kSlotTolerance) continue;
+      placed = true;
+      if (result.blob[e] >= 0) {
+        result.conflict = true;
+      } else {
+        result.blob[e] = i;
+        ++result.found;
+      }
+    }
+    if (!placed) result.conflict = true;  // red inside the square where the format has none
+  }
+  return result;
+}
+
+}  // namespace pintag::stage

@@ -1,0 +1,34 @@
+#pragma once
+// Stage 3b, grouping: which red blobs may belong to one tag (clusters, each giving a region of
+// interest for the quad search), and which blob sits at which element of a found quad.
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "red_blobs.hpp"
+
+namespace pintag::stage {
+
+struct BlobCluster {
+  std::vector<int> blobs;  ///< indices into the blob list
+  cv::Rect roi;            ///< where the tag's square and quiet zone can be, clipped to the image
+};
+
+/// Links blobs whose distance fits elements of one tag (neighbouring elements are 2.5 disk
+/// diameters apart) and returns the groups of at least `min_blobs` with their regions.
+std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Size image,
+                                      int min_blobs = 3);
+
+struct ElementAssignment {
+  std::array<int, 4> blob{-1, -1, -1, -1};  ///< blob index at element slot e, or −1
+  int found = 0;
+  bool conflict = false;  ///< two blobs at one slot, or a red blob elsewhere inside the square
+};
+
+/// Maps blobs through `tag_to_image` (unit square -> px) and assigns each to the element whose
+/// nominal centre it lies near (within 0.08 tag units).
+ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vector<RedBlob>& blobs,
+                                 const std::vector<int>& candidates);
+
+}  // namespace pintag::stage

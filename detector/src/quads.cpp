@@ -1,0 +1,76 @@
+#include "quads.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace pintag::stage {
+namespace {
+
+bool ToQuad(const std::vector<cv::Point>& polygon, Quad* quad) {
+  if (polygon.size() != 4 || !cv::isContourConvex(polygon)) return false;
+  for (int i = 0; i < 4; ++i) (*quad)[i] = cv::Point2d(polygon[i].x, polygon[i].y);
+  if (SignedArea2(*quad) < 0) std::reverse(quad->begin(), quad->end());
+  return true;
+}
+
+double MinSide(const Quad& q) {
+  double side = 1e18;
+  for (int i = 0; i < 4; ++i) side = std::min(side, cv::norm(q[(i + 1) % 4] - q[i]));
+  return side;
+}
+
+}  // namespace
+
+double SignedArea2(const Quad& q) {
+  double s = 0;
+  for (int i = 0; i < 4; ++i) s += q[i].x * q[(i + 1) % 4].y - q[(i + 1) % 4].x * q[i].y;
+  return s;
+}
+
+cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi) {
+  cv::Mat out(roi.size(), CV_8U);
+  for (int y = 0; y < roi.height; ++y) {
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(roi.y + y) + 3 * roi.x;
+    std::uint8_t* o = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < roi.width; ++x, p += 3) o[x] = std::min({p[0], p[1], p[2]});
+  }
+  return out;
+}
+
+std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
+                            cv::Mat* binary_out) {
+  cv::Mat binary;
+  cv::threshold(dark, binary, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
+  if (binary_out) *binary_out = binary.clone();
+  // Outer boundaries of every dark component, including those inside holes of others (a tag on
+  // dark ground sits inside the hole its quiet zone makes).
+  std::vector<std::vector<cv::Point>> contours;
+  std::vector<cv::Vec4i> hierarchy;
+  cv::findContours(binary, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
+  std::vector<Quad> quads;
+  const double min_area = min_side_px * min_side_px * 0.25;
+  for (std::size_t c = 0; c < contours.size(); ++c) {
+    const auto& contour = contours[c];
+    if (hierarchy[c][3] >= 0 || contour.size() < 8) continue;
+    const double area = cv::contourArea(contour);
+    if (area < min_area) continue;
+    const double perimeter = cv::arcLength(contour, true);
+    // The hull: a light cover over an element can notch the square's outline, and the tag's
+    // outline is convex anyway.
+    std::vector<cv::Point> hull, polygon;
+    cv::convexHull(contour, hull);
+    Quad quad;
+    bool found = false;
+    for (double eps : {0.02, 0.035, 0.05}) {
+      cv::approxPolyDP(hull, polygon, eps * perimeter, true);
+      if ((found = ToQuad(polygon, &quad))) break;
+    }
+    if (!found || MinSide(quad) < min_side_px * 0.3) continue;
+    for (cv::Point2d& p : quad) p += cv::Point2d(origin);
+    quads.push_back(quad);
+  }
+  return quads;
+}
+
+}  // namespace pintag::stage

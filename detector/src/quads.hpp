@@ -1,0 +1,26 @@
+#pragma once
+// Stage 3a, quads: in a region around a blob cluster, the tag (black square with its elements) is
+// one dark shape in min(R, G, B) — every printed colour has a low channel, the quiet zone has none
+// — ringed by the white quiet zone. Otsu separates the two; dark contours with four corners are
+// quads.
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace pintag::stage {
+
+using Quad = std::array<cv::Point2d, 4>;  ///< clockwise on screen (x right, y down), px
+
+/// min(R, G, B) of `bgr` inside `roi` (CV_8U, roi-sized).
+cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
+
+/// Quads in `dark` (MinChannel of the region at `origin`), returned in image coordinates.
+/// `min_side_px`: shorter quads are dropped.
+std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
+                            cv::Mat* binary_out = nullptr);
+
+/// Twice the signed area; positive when clockwise on screen.
+double SignedArea2(const Quad& quad);
+
+}  // namespace pintag::stage

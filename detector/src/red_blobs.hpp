@@ -1,0 +1,29 @@
+#pragma once
+// Stage 2, red blobs: connected components of the redness mask, kept when their size fits an
+// element and their shape is an ellipse (a disk seen at any angle).
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace pintag::stage {
+
+struct RedBlob {
+  cv::Point2d centroid;  ///< px
+  int area = 0;          ///< px
+  double major = 0;      ///< full axis lengths of the ellipse with the same second moments, px
+  double minor = 0;
+  double fill = 0;  ///< area / that ellipse's area; about 1 for a filled ellipse
+  cv::Rect box;
+};
+
+struct BlobLimits {
+  int min_area = 6;        ///< px
+  int max_area = 1 << 20;  ///< px
+  double min_fill = 0.55;
+  double max_elongation = 8;  ///< major / minor (a disk tilted 80° is ~5.8)
+  int max_blobs = 4000;       ///< keep the largest this many
+};
+
+std::vector<RedBlob> FindRedBlobs(const cv::Mat& mask, const BlobLimits& limits);
+
+}  // namespace pintag::stage
