@@ -301,6 +301,21 @@ TEST(RenderScene, SeveralMarkersKeepTheirOrderAndPartlyOutsideIsFlagged) {
   EXPECT_TRUE(scene.truth[1].fully_visible);
   EXPECT_FALSE(scene.truth[2].fully_visible);      // centred 5 px from the left edge
   EXPECT_NEAR(scene.truth[0].square_px, 80, 1.5);  // at the principal point, nearly frontal
+
+  // A nearer marker over part of another: the far one is flagged, the near one drawn on top.
+  SceneSpec overlap;
+  overlap.real_background = false;
+  overlap.markers.push_back(
+      Place(PinTagTexture(4), 4, camera, {900, 500}, DistanceFor(camera, 150), 0, 0, 0));
+  overlap.markers.push_back(
+      Place(ArucoTexture(5), 5, camera, {1000, 560}, DistanceFor(camera, 150) * 0.8, 0, 0, 0));
+  const Scene both = RenderScene(overlap);
+  EXPECT_FALSE(both.truth[0].fully_visible);
+  EXPECT_TRUE(both.truth[1].fully_visible);
+  // The ArUco marker's top-left corner lies inside the PinTag's square and is drawn on top of it.
+  const cv::Point2d c0 = both.truth[1].corners_px[0];
+  EXPECT_LT(PixelAt(both.bgr, c0 + cv::Point2d(2, 2))[1], 40);     // ArUco's black
+  EXPECT_GT(PixelAt(both.bgr, c0 + cv::Point2d(-2, -2))[1], 240);  // ArUco's quiet zone
 }
 
 // The benchmark renders the same pose with three markers; ArUco must find its own at the truth.

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <type_traits>
 #include <vector>
 
 #include "srgb.hpp"
@@ -51,12 +52,12 @@ const std::vector<float>& NormalTable() {
 /// Per-pixel gain from exposure, gradient and cast, applied through banded lookup tables: the gain
 /// is exposure · cast · (1 − gradient · t), t going 0 → 1 across the frame along the gradient's
 /// direction, quantised into 128 bands (steps under 0.5 %). `Out` is std::uint8_t (sRGB out) or
-/// std::uint16_t (linear light out, for blurring).
+/// float (linear light out, for blurring).
 template <typename Out>
 cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
   const cv::Vec3d cast = CastGains(p.cast);
   const bool flat = p.gradient <= 0;
-  constexpr bool kLinearOut = sizeof(Out) == 2;
+  constexpr bool kLinearOut = std::is_same_v<Out, float>;
   const int bands = flat ? 1 : 128;
   const auto& to_linear = detail::SrgbToLinearTable();
   std::vector<std::array<Out, 256 * 3>> luts(bands);
@@ -67,7 +68,7 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
       for (int v = 0; v < 256; ++v) {
         const double linear = gain * cast[c] * to_linear[v];
         if constexpr (kLinearOut) {
-          luts[b][c * 256 + v] = static_cast<Out>(std::clamp(linear, 0.0, 1.0) * 65535 + 0.5);
+          luts[b][c * 256 + v] = static_cast<float>(std::min(linear, 1.0));  // sensor saturates
         } else {
           luts[b][c * 256 + v] = detail::LinearToSrgb8(static_cast<float>(linear));
         }
@@ -99,15 +100,17 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
 }
 
 void ApplyMotionBlur(cv::Mat& frame, double length_px, double angle_deg) {
-  const int half = static_cast<int>(std::ceil(length_px / 2)) + 1;
-  const int size = 2 * half + 1;
-  cv::Mat kernel = cv::Mat::zeros(size, size, CV_32F);
   const double dx = std::cos(angle_deg * kDegToRad), dy = std::sin(angle_deg * kDegToRad);
+  // The kernel's box fits the segment (plus a pixel for the bilinear splat): a nearly horizontal
+  // blur gets a wide, short kernel, which filter2D runs much faster than a square one.
+  const int half_x = static_cast<int>(std::ceil(std::abs(dx) * length_px / 2)) + 1;
+  const int half_y = static_cast<int>(std::ceil(std::abs(dy) * length_px / 2)) + 1;
+  cv::Mat kernel = cv::Mat::zeros(2 * half_y + 1, 2 * half_x + 1, CV_32F);
   // Splat many points along a centred segment bilinearly: a smooth, sub-pixel line kernel.
-  const int steps = 16 * size;
+  const int steps = 32 * (static_cast<int>(length_px) + 1);
   for (int i = 0; i <= steps; ++i) {
     const double s = (static_cast<double>(i) / steps - 0.5) * length_px;
-    const double x = half + s * dx, y = half + s * dy;
+    const double x = half_x + s * dx, y = half_y + s * dy;
     const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
     const double ax = x - ix, ay = y - iy;
     kernel.at<float>(iy, ix) += static_cast<float>((1 - ax) * (1 - ay));
@@ -176,18 +179,17 @@ namespace detail {
 void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
   const bool defocus = p.defocus_sigma_px > 0.05, motion = p.motion_px >= 0.25;
   if (defocus || motion) {
-    // Light and optics act on linear light, before the camera's tone curve: 16-bit linear here.
-    cv::Mat linear = ApplyLight<std::uint16_t>(frame, p);
+    // Light and optics act on linear light, before the camera's tone curve.
+    cv::Mat linear = ApplyLight<float>(frame, p);
     if (defocus) {
       cv::GaussianBlur(linear, linear, cv::Size(), p.defocus_sigma_px, p.defocus_sigma_px,
                        cv::BORDER_REFLECT);
     }
     if (motion) ApplyMotionBlur(linear, p.motion_px, p.motion_angle_deg);
-    const std::uint8_t* to_srgb = Linear16ToSrgbTable();
     for (int y = 0; y < frame.rows; ++y) {
-      const auto* src = linear.ptr<std::uint16_t>(y);
+      const auto* src = linear.ptr<float>(y);
       auto* dst = frame.ptr<std::uint8_t>(y);
-      for (int i = 0; i < frame.cols * 3; ++i) dst[i] = to_srgb[src[i]];
+      for (int i = 0; i < frame.cols * 3; ++i) dst[i] = LinearToSrgb8(src[i]);
     }
   } else if (p.gradient > 0 || p.exposure != 1.0 || p.cast != Cast::kNone) {
     frame = ApplyLight<std::uint8_t>(frame, p);

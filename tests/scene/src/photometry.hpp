@@ -9,7 +9,7 @@
 namespace pintag::scene::detail {
 
 /// In place, in this order: exposure, lighting gradient and colour cast, defocus (Gaussian) and
-/// motion blur (a line kernel), all in 16-bit linear light; then the sRGB tone curve, Gaussian
+/// motion blur (a line kernel), all in linear light (float); then the sRGB tone curve, Gaussian
 /// sensor noise in 8-bit code values, and the JPEG round trip.
 void ApplyPhotometry(cv::Mat& frame_bgr, const Photometry& photometry, Rng& rng);
 

@@ -48,6 +48,10 @@ Pose MakePose(const Camera& camera, cv::Point2d centre_px, double distance_m, do
   return pose;
 }
 
+double DistanceForSquarePx(const Camera& camera, double square_px, double side_m) {
+  return camera.fx * side_m / square_px;
+}
+
 double ViewTiltDeg(const Pose& pose) {
   const cv::Vec3d normal(pose.rotation(0, 2), pose.rotation(1, 2), pose.rotation(2, 2));
   const double t = cv::norm(pose.translation);

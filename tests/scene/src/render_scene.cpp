@@ -1,6 +1,7 @@
 // RenderScene: background, markers far to near, then the camera's degradations.
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
@@ -32,10 +33,58 @@ cv::Matx33d TextureToSquare(const MarkerTexture& texture) {
   return cv::Matx33d(h);
 }
 
+/// Sub-samples per pixel side: 4 (17 coverage levels) for the sizes where sub-pixel accuracy
+/// matters, fewer for large markers, whose area would make a 1080p frame slow.
 int AutoSupersample(double square_px) {
-  if (square_px <= 200) return 4;
-  if (square_px <= 500) return 3;
-  return 2;
+  if (square_px <= 160) return 4;
+  if (square_px <= 320) return 3;
+  if (square_px <= 640) return 2;
+  return 1;
+}
+
+/// Where the marker's whole texture (quiet zone included) lands in the image.
+std::vector<cv::Point2f> TextureOutline(const MarkerTexture& texture,
+                                        const cv::Matx33d& image_from_square) {
+  const cv::Matx33d h = image_from_square * TextureToSquare(texture);
+  const double w = texture.bgr.cols - 0.5, ht = texture.bgr.rows - 0.5;
+  std::vector<cv::Point2f> outline;
+  for (const cv::Point2d p :
+       {cv::Point2d(-0.5, -0.5), cv::Point2d(w, -0.5), cv::Point2d(w, ht), cv::Point2d(-0.5, ht)}) {
+    const cv::Vec3d q = h * cv::Vec3d(p.x, p.y, 1);
+    outline.emplace_back(static_cast<float>(q[0] / q[2]), static_cast<float>(q[1] / q[2]));
+  }
+  return outline;
+}
+
+bool InFront(const PlacedMarker& marker) {
+  const double h = marker.square_side_m / 2;
+  for (const cv::Vec3d& m :
+       {cv::Vec3d(-h, -h, 0), cv::Vec3d(h, -h, 0), cv::Vec3d(h, h, 0), cv::Vec3d(-h, h, 0)}) {
+    if ((marker.pose.rotation * m + marker.pose.translation)[2] <= 0) return false;
+  }
+  return true;
+}
+
+/// Corners, size, homography; fully_visible from the frame and occluders only.
+MarkerTruth MakeTruth(const Camera& camera, const PlacedMarker& marker) {
+  MarkerTruth truth;
+  truth.id = marker.id;
+  truth.pose = marker.pose;
+  truth.homography = SquareToImage(camera, marker.pose, marker.square_side_m);
+  const double h = marker.square_side_m / 2;
+  const cv::Vec3d model[4] = {{-h, -h, 0}, {h, -h, 0}, {h, h, 0}, {-h, h, 0}};
+  bool in_frame = true;
+  for (int i = 0; i < 4; ++i) {
+    const cv::Point2d c = ProjectPoint(camera, marker.pose, model[i]);
+    truth.corners_px[i] = c;
+    in_frame = in_frame && c.x >= -0.5 && c.y >= -0.5 && c.x <= camera.width - 0.5 &&
+               c.y <= camera.height - 0.5;
+  }
+  for (int i = 0; i < 4; ++i) {
+    truth.square_px += cv::norm(truth.corners_px[(i + 1) % 4] - truth.corners_px[i]) / 4;
+  }
+  truth.fully_visible = in_frame && marker.occluders.empty();
+  return truth;
 }
 
 }  // namespace
@@ -50,44 +99,45 @@ Scene RenderScene(const SceneSpec& spec) {
   scene.bgr =
       detail::MakeBackground(camera, spec.real_background, background_rng, scene.background);
 
-  // Far markers first, so that a nearer one covers them.
+  // Truth near to far, so that each marker is checked against the nearer ones' outlines; then
+  // drawing far to near, so that a nearer marker covers a farther one.
   std::vector<std::size_t> order(spec.markers.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return spec.markers[a].pose.translation[2] > spec.markers[b].pose.translation[2];
+    return spec.markers[a].pose.translation[2] < spec.markers[b].pose.translation[2];
   });
-
   scene.truth.resize(spec.markers.size());
+  std::vector<std::vector<cv::Point2f>> nearer_outlines;
+  std::vector<bool> drawable(spec.markers.size(), false);
   for (const std::size_t index : order) {
     const PlacedMarker& marker = spec.markers[index];
     MarkerTruth& truth = scene.truth[index];
-    truth.id = marker.id;
-    truth.pose = marker.pose;
-    truth.homography = SquareToImage(camera, marker.pose, marker.square_side_m);
-    const double h = marker.square_side_m / 2;
-    const cv::Vec3d model[4] = {{-h, -h, 0}, {h, -h, 0}, {h, h, 0}, {-h, h, 0}};
-    bool in_front = true, in_frame = true;
-    for (int i = 0; i < 4; ++i) {
-      const cv::Vec3d p = marker.pose.rotation * model[i] + marker.pose.translation;
-      in_front = in_front && p[2] > 0;
-      truth.corners_px[i] = ProjectPoint(camera, marker.pose, model[i]);
-      const cv::Point2d& c = truth.corners_px[i];
-      in_frame = in_frame && c.x >= -0.5 && c.y >= -0.5 && c.x <= camera.width - 0.5 &&
-                 c.y <= camera.height - 0.5;
-    }
-    for (int i = 0; i < 4; ++i) {
-      truth.square_px += cv::norm(truth.corners_px[(i + 1) % 4] - truth.corners_px[i]) / 4;
-    }
-    truth.fully_visible = in_front && in_frame && marker.occluders.empty();
-    if (!in_front || marker.texture.bgr.empty()) {
+    truth = MakeTruth(camera, marker);
+    drawable[index] = InFront(marker) && !marker.texture.bgr.empty();
+    if (!drawable[index]) {
       truth.fully_visible = false;
       continue;
     }
+    const std::vector<cv::Point2f> square(truth.corners_px.begin(), truth.corners_px.end());
+    for (const std::vector<cv::Point2f>& outline : nearer_outlines) {
+      std::vector<cv::Point2f> overlap;
+      if (cv::intersectConvexConvex(square, outline, overlap, true) > 0) {
+        truth.fully_visible = false;
+        break;
+      }
+    }
+    nearer_outlines.push_back(TextureOutline(marker.texture, truth.homography));
+  }
+  for (auto it = order.rbegin(); it != order.rend(); ++it) {
+    if (!drawable[*it]) continue;
+    const PlacedMarker& marker = spec.markers[*it];
+    MarkerTruth& truth = scene.truth[*it];
     const int ss = spec.supersample > 0 ? spec.supersample : AutoSupersample(truth.square_px);
     const detail::LinearTexture texture = detail::PrepareTexture(marker.texture, marker.occluders);
-    const bool drawn = detail::CompositeMarker(
-        scene.bgr, texture, truth.homography * TextureToSquare(marker.texture), ss);
-    if (!drawn) truth.fully_visible = false;
+    if (!detail::CompositeMarker(scene.bgr, texture,
+                                 truth.homography * TextureToSquare(marker.texture), ss)) {
+      truth.fully_visible = false;  // part of the texture behind the camera: nothing drawn
+    }
   }
 
   detail::ApplyPhotometry(scene.bgr, spec.photometry, noise_rng);

@@ -12,7 +12,4 @@ const std::array<float, 256>& SrgbToLinearTable();
 /// Linear light → 8-bit sRGB code value (clamped), through a 65,536-entry table.
 std::uint8_t LinearToSrgb8(float linear);
 
-/// The same table indexed by 16-bit linear light (0 … 65535 for 0 … 1).
-const std::uint8_t* Linear16ToSrgbTable();
-
 }  // namespace pintag::scene::detail

@@ -52,6 +52,11 @@ struct Pose {
 Pose MakePose(const Camera& camera, cv::Point2d centre_px, double distance_m, double tilt_deg,
               double tilt_axis_deg, double roll_deg);
 
+/// Distance (m) at which a frontal square of side `side_m` at the principal point spans
+/// `square_px` pixels: fx · side / square_px. (Off-axis and tilted squares project differently;
+/// MarkerTruth::square_px has what was rendered.)
+double DistanceForSquarePx(const Camera& camera, double square_px, double side_m = 0.05);
+
 /// Viewing angle in degrees between the square's normal and the ray to its centre (0 = frontal).
 double ViewTiltDeg(const Pose& pose);
 
@@ -101,15 +106,19 @@ struct SceneSpec {
   Photometry photometry;
   std::uint64_t seed = 1;       ///< background choice and noise
   bool real_background = true;  ///< use a photograph where one is installed
-  int supersample = 0;  ///< sub-samples per pixel side for markers; 0 = automatic (2 … 4 by size)
+  /// Sub-samples per pixel side for markers; 0 = automatic: 4 up to a 160 px square, 3 to 320,
+  /// 2 to 640, else 1 (the texture is always sampled bilinearly from a suitable mip level).
+  int supersample = 0;
 };
 
 struct MarkerTruth {
   int id = -1;
   std::array<cv::Point2d, 4> corners_px;  ///< projected square corners, C0 … C3
   Pose pose;
-  double square_px = 0;       ///< mean projected side length
-  bool fully_visible = true;  ///< all of the square inside the frame and no occluder on it
+  double square_px = 0;  ///< mean projected side length
+  /// All of the square inside the frame, in front of the camera, no occluder on it and no nearer
+  /// marker (quiet zone included) overlapping it.
+  bool fully_visible = true;
   cv::Matx33d homography = cv::Matx33d::eye();  ///< square units (0 … 1, as Occluder) → image px
 };
 
@@ -121,7 +130,8 @@ struct Scene {
 
 Scene RenderScene(const SceneSpec& spec);
 
-/// A PinTag texture for `key` from the project's renderer (square `square_px` pixels).
+/// A PinTag texture for `key` from the project's renderer (square `square_px` pixels, at least
+/// 64). The last 64 textures made are cached (the renderer takes ~20 ms at 512 px).
 MarkerTexture PinTagTexture(int key, int square_px = 512);
 
 /// An ArUco DICT_5X5_1000 marker (id 0 … 999) with one-cell black border, its black square about
