@@ -166,6 +166,40 @@ TEST(RenderScene, TaglessScenesHaveNoTruth) {
   std::printf("background photographs installed: %zu\n", BackgroundPhotos().size());
 }
 
+TEST(RenderScene, ChosenPhotographAndCollages) {
+  if (BackgroundPhotos().empty()) GTEST_SKIP() << "no photographs installed";
+  SceneSpec spec;
+  spec.background_photo = 0;
+  const Scene one = RenderScene(spec);
+  EXPECT_EQ(one.background, BackgroundPhotos()[0].substr(BackgroundPhotos()[0].rfind('/') + 1));
+  spec.background_photo = -1;
+  int collages = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    spec.seed = seed;
+    collages += RenderScene(spec).background.find('+') != std::string::npos;
+  }
+  EXPECT_GT(collages, 0);
+  EXPECT_LT(collages, 12);
+}
+
+TEST(RenderScene, BayerKeepsFlatColoursAndFringesEdges) {
+  // A frontal PinTag on a flat procedural background, with and without the colour filter array.
+  const Camera camera;
+  SceneSpec spec;
+  spec.real_background = false;
+  spec.markers.push_back(
+      Place(PinTagTexture(9), 9, camera, {960, 540}, DistanceFor(camera, 200), 0, 0, 0));
+  const Scene plain = RenderScene(spec);
+  spec.photometry.bayer = true;
+  const Scene bayer = RenderScene(spec);
+  const MarkerTruth& truth = plain.truth[0];
+  // Inside a red disk the colour survives (the pattern's phase is right: red stays red).
+  const cv::Point2d red = Apply(truth.homography, {0.25, 0.25});
+  const cv::Vec3b a = PixelAt(plain.bgr, red), b = PixelAt(bayer.bgr, red);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 3) << "channel " << c;
+  EXPECT_GT(cv::norm(plain.bgr, bayer.bgr, cv::NORM_INF), 20.0);  // edges do change
+}
+
 // The truth corners are where the black square is: just inside each edge is dark, just outside is
 // the white quiet zone, and a corner detector run on the image settles on the truth corners.
 TEST(RenderScene, TruthCornersAreWhereTheBlackSquareIs) {

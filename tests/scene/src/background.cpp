@@ -45,7 +45,6 @@ const std::vector<PhotoSource>& PhotoSources() {
         "pca_test1.jpg",
         "graf1.png",
         "cards.png",
-        "HappyFish.jpg",
         "licenseplate_motion.jpg"}},
       // Debian package python3-skimage, where installed: scikit-image's sample data.
       {"/usr/lib/python3/dist-packages/skimage/data",
@@ -156,31 +155,56 @@ cv::Mat ProceduralBackground(cv::Size size, Rng& rng) {
   return out;
 }
 
-cv::Mat MakeBackground(const Camera& camera, bool real, Rng& rng, std::string& name) {
+/// A random crop of `photo` with the aspect ratio of `size` (0.5 … 1 of the largest such crop),
+/// scaled to `size`, mirrored half the time.
+cv::Mat CropPhoto(const cv::Mat& photo, cv::Size size, Rng& rng) {
+  const double aspect = static_cast<double>(size.width) / size.height;
+  double w = photo.cols, h = photo.rows;
+  if (w / h > aspect) {
+    w = h * aspect;
+  } else {
+    h = w / aspect;
+  }
+  const double f = rng.uniform(0.5, 1.0);
+  const int cw = std::max(2, static_cast<int>(w * f)), ch = std::max(2, static_cast<int>(h * f));
+  const int x0 = rng.below(photo.cols - cw + 1), y0 = rng.below(photo.rows - ch + 1);
+  cv::Mat out;
+  cv::resize(photo(cv::Rect(x0, y0, cw, ch)), out, size, 0, 0, cv::INTER_LINEAR);
+  if (rng.chance(0.5)) cv::flip(out, out, 1);
+  return out;
+}
+
+cv::Mat MakeBackground(const Camera& camera, bool real, int photo, Rng& rng, std::string& name) {
   const cv::Size size(camera.width, camera.height);
   const auto& photos = BackgroundPhotos();
   if (real && !photos.empty()) {
-    const std::string& path = photos[rng.below(static_cast<int>(photos.size()))];
-    const cv::Mat& photo = LoadPhoto(path);
-    if (!photo.empty()) {
-      // The largest crop of the frame's aspect ratio, scaled by 0.5 … 1, anywhere in the photo.
-      const double aspect = static_cast<double>(size.width) / size.height;
-      double w = photo.cols, h = photo.rows;
-      if (w / h > aspect) {
-        w = h * aspect;
-      } else {
-        h = w / aspect;
-      }
-      const double f = rng.uniform(0.5, 1.0);
-      const int cw = std::max(2, static_cast<int>(w * f)),
-                ch = std::max(2, static_cast<int>(h * f));
-      const int x0 = rng.below(photo.cols - cw + 1), y0 = rng.below(photo.rows - ch + 1);
-      cv::Mat out;
-      cv::resize(photo(cv::Rect(x0, y0, cw, ch)), out, size, 0, 0, cv::INTER_LINEAR);
-      if (rng.chance(0.5)) cv::flip(out, out, 1);
-      name = std::filesystem::path(path).filename().string();
-      return out;
+    // The photographs are small (about 0.3 Mpx), so a whole 1080p frame of one is soft; a collage
+    // of crops keeps more of their detail and packs more red, round things into a frame.
+    int tiles = 1;
+    if (photo < 0) {
+      const double pick = rng.uniform();
+      tiles = pick < 0.5 ? 1 : pick < 0.85 ? 2 : 3;
     }
+    cv::Mat out(size, CV_8UC3);
+    name.clear();
+    for (int ty = 0; ty < tiles; ++ty) {
+      for (int tx = 0; tx < tiles; ++tx) {
+        const int index = photo >= 0 ? photo % static_cast<int>(photos.size())
+                                     : rng.below(static_cast<int>(photos.size()));
+        const cv::Mat& source = LoadPhoto(photos[index]);
+        const cv::Rect cell(tx * size.width / tiles, ty * size.height / tiles,
+                            (tx + 1) * size.width / tiles - tx * size.width / tiles,
+                            (ty + 1) * size.height / tiles - ty * size.height / tiles);
+        if (source.empty()) {
+          out(cell).setTo(cv::Scalar(128, 128, 128));
+          continue;
+        }
+        CropPhoto(source, cell.size(), rng).copyTo(out(cell));
+        if (!name.empty()) name += '+';
+        name += std::filesystem::path(photos[index]).filename().string();
+      }
+    }
+    return out;
   }
   name = "procedural";
   return ProceduralBackground(size, rng);

@@ -83,17 +83,17 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
   const double lowest = *std::min_element(corners, corners + 4);
   const double span = std::max(1e-9, *std::max_element(corners, corners + 4) - lowest);
   cv::Mat out(frame.size(), CV_MAKETYPE(cv::DataType<Out>::depth, 3));
+  const double band_step_x = flat ? 0.0 : dx * bands / span;
   for (int y = 0; y < frame.rows; ++y) {
     const auto* src = frame.ptr<std::uint8_t>(y);
     auto* dst = out.ptr<Out>(y);
-    for (int x = 0; x < frame.cols; ++x) {
-      int band = 0;
-      if (!flat) {
-        const double t = (dx * x + dy * y - lowest) / span;
-        band = std::min(bands - 1, static_cast<int>(t * bands));
-      }
-      const auto& lut = luts[band];
-      for (int c = 0; c < 3; ++c) dst[x * 3 + c] = lut[c * 256 + src[x * 3 + c]];
+    double band_at = flat ? 0.0 : (dy * y - lowest) * bands / span;  // band position at x = 0
+    for (int x = 0; x < frame.cols; ++x, band_at += band_step_x) {
+      const int band = std::clamp(static_cast<int>(band_at), 0, bands - 1);
+      const Out* lut = luts[band].data();
+      dst[x * 3] = lut[src[x * 3]];
+      dst[x * 3 + 1] = lut[256 + src[x * 3 + 1]];
+      dst[x * 3 + 2] = lut[512 + src[x * 3 + 2]];
     }
   }
   return out;
@@ -142,6 +142,21 @@ void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
   }
 }
 
+/// Keeps one colour per pixel in an RGGB pattern (R at even rows and columns), then demosaics.
+void ApplyBayer(cv::Mat& frame) {
+  cv::Mat mosaic(frame.size(), CV_8UC1);
+  for (int y = 0; y < frame.rows; ++y) {
+    const auto* src = frame.ptr<std::uint8_t>(y);
+    auto* dst = mosaic.ptr<std::uint8_t>(y);
+    for (int x = 0; x < frame.cols; ++x) {
+      const int channel = (y & 1) == 0 ? ((x & 1) == 0 ? 2 : 1) : ((x & 1) == 0 ? 1 : 0);  // BGR
+      dst[x] = src[3 * x + channel];
+    }
+  }
+  // OpenCV names Bayer patterns by the second row's first two pixels: RGGB is "BayerBG".
+  cv::demosaicing(mosaic, frame, cv::COLOR_BayerBG2BGR);
+}
+
 }  // namespace
 
 Photometry Photometry::Moderate(std::uint64_t seed) {
@@ -171,6 +186,7 @@ Photometry Photometry::Hard(std::uint64_t seed) {
   p.noise_sigma = rng.uniform(4, 9);
   p.jpeg_quality = 40 + rng.below(31);
   p.exposure = rng.uniform(0.55, 1.3);
+  p.bayer = rng.chance(0.5);
   return p;
 }
 
@@ -195,6 +211,7 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
     frame = ApplyLight<std::uint8_t>(frame, p);
   }
   if (p.noise_sigma > 0) ApplyNoise(frame, p.noise_sigma, rng);
+  if (p.bayer) ApplyBayer(frame);
   if (p.jpeg_quality > 0) {
     std::vector<std::uint8_t> bytes;
     cv::imencode(".jpg", frame, bytes,

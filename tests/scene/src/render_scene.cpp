@@ -96,8 +96,8 @@ Scene RenderScene(const SceneSpec& spec) {
   Rng noise_rng(rng.fork());
 
   Scene scene;
-  scene.bgr =
-      detail::MakeBackground(camera, spec.real_background, background_rng, scene.background);
+  scene.bgr = detail::MakeBackground(camera, spec.real_background, spec.background_photo,
+                                     background_rng, scene.background);
 
   // Truth near to far, so that each marker is checked against the nearer ones' outlines; then
   // drawing far to near, so that a nearer marker covers a farther one.

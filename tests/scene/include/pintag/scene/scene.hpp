@@ -75,8 +75,15 @@ struct Photometry {
   double exposure = 1.0;          ///< overall gain
   double gradient_angle_deg = 0;  ///< direction in which the light falls off (image, clockwise)
   double motion_angle_deg = 0;    ///< direction of the motion blur (image, clockwise)
-  static Photometry Moderate(std::uint64_t seed);  ///< random mild settings
-  static Photometry Hard(std::uint64_t seed);      ///< random harsh settings
+  /// Sample through an RGGB colour filter array and demosaic bilinearly, as a cheap camera does:
+  /// colour fringes along sharp edges, colour noise.
+  bool bayer = false;
+  /// Random mild settings: gradient 0 … 0.3, any cast or none, defocus σ 0 … 1 px, motion blur
+  /// 0 … 2 px half the time, noise σ 1 … 4, JPEG quality 75 … 95, exposure 0.8 … 1.15.
+  static Photometry Moderate(std::uint64_t seed);
+  /// Random harsh settings: gradient 0.3 … 0.6, a cast, defocus σ 0.8 … 2 px, motion blur
+  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer half the time.
+  static Photometry Hard(std::uint64_t seed);
 };
 
 /// Something stuck on or held over a marker (tape, a finger): a filled disk drawn on the marker's
@@ -106,6 +113,9 @@ struct SceneSpec {
   Photometry photometry;
   std::uint64_t seed = 1;       ///< background choice and noise
   bool real_background = true;  ///< use a photograph where one is installed
+  /// With real_background: the index into BackgroundPhotos() of the one photograph to crop;
+  /// −1 = chosen by the seed, sometimes as a collage of 2 × 2 or 3 × 3 crops of several photos.
+  int background_photo = -1;
   /// Sub-samples per pixel side for markers; 0 = automatic: 4 up to a 160 px square, 3 to 320,
   /// 2 to 640, else 1 (the texture is always sampled bilinearly from a suitable mip level).
   int supersample = 0;
@@ -125,7 +135,7 @@ struct MarkerTruth {
 struct Scene {
   cv::Mat bgr;  ///< CV_8UC3, camera.width × camera.height
   std::vector<MarkerTruth> truth;
-  std::string background;  ///< which background was used (file name or "procedural")
+  std::string background;  ///< which background: file name(s) joined by '+', or "procedural"
 };
 
 Scene RenderScene(const SceneSpec& spec);
