@@ -17,6 +17,16 @@ double Bilinear(const cv::Mat& img, double x, double y) {
   return (r0[0] * (1 - fx) + r0[1] * fx) * (1 - fy) + (r1[0] * (1 - fx) + r1[1] * fx) * fy;
 }
 
+double CodeToLinear(double code) {
+  const double v = code / 255.0;
+  return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
+double LinearToCode(double linear) {
+  const double v = linear <= 0.0031308 ? linear * 12.92 : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
+  return v * 255.0;
+}
+
 // Edge points along the side from a to b (clockwise, so the tag is on the right-hand side, the
 // outward normal on the left), in region coordinates.
 std::vector<cv::Point2f> EdgePoints(const cv::Mat& dark, cv::Point2d a, cv::Point2d b,
@@ -49,7 +59,9 @@ std::vector<cv::Point2f> EdgePoints(const cv::Mat& dark, cv::Point2d a, cv::Poin
     lo /= quarter;
     hi /= quarter;
     if (hi - lo < 20) continue;
-    const double level = (lo + hi) / 2;
+    // Blur happens in linear light, before the camera's tone curve: the edge is where the profile
+    // is halfway in linear light, which in sRGB codes lies well above the codes' midpoint.
+    const double level = LinearToCode((CodeToLinear(lo) + CodeToLinear(hi)) / 2);
     // The crossing nearest the expected edge (the middle of the profile).
     double best = 1e9;
     for (int s = 0; s < 2 * steps; ++s) {

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "pintag/codec/cielab.hpp"
 #include "pintag/codec/tag_raster.hpp"
 
 namespace pintag::testing {
@@ -111,8 +112,22 @@ SyntheticScene MakeScene(const std::vector<SyntheticTag>& tags, const SyntheticO
     truth.translation = t;
     scene.truth.push_back(truth);
   }
-  cv::resize(canvas, scene.bgr, {o.camera.width, o.camera.height}, 0, 0, cv::INTER_AREA);
-  if (o.blur_sigma > 0) cv::GaussianBlur(scene.bgr, scene.bgr, {0, 0}, o.blur_sigma);
+  // Pixels integrate light, and optics blur it, in linear light; the tone curve comes last.
+  cv::Mat lut(1, 256, CV_32F);
+  for (int c = 0; c < 256; ++c) lut.at<float>(c) = static_cast<float>(SrgbToLinear(c));
+  cv::Mat linear(canvas.size(), CV_32FC3);
+  canvas.forEach<cv::Vec3b>([&](const cv::Vec3b& p, const int* pos) {
+    linear.at<cv::Vec3f>(pos[0], pos[1]) = {lut.at<float>(p[0]), lut.at<float>(p[1]),
+                                            lut.at<float>(p[2])};
+  });
+  cv::Mat small;
+  cv::resize(linear, small, {o.camera.width, o.camera.height}, 0, 0, cv::INTER_AREA);
+  if (o.blur_sigma > 0) cv::GaussianBlur(small, small, {0, 0}, o.blur_sigma);
+  scene.bgr.create(small.size(), CV_8UC3);
+  small.forEach<cv::Vec3f>([&](const cv::Vec3f& p, const int* pos) {
+    scene.bgr.at<cv::Vec3b>(pos[0], pos[1]) = {LinearToSrgb(p[0]), LinearToSrgb(p[1]),
+                                               LinearToSrgb(p[2])};
+  });
   if (o.noise_sigma > 0) {
     cv::Mat noise(scene.bgr.size(), CV_16SC3);
     cv::theRNG().state = o.seed;
