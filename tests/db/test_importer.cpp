@@ -1,0 +1,249 @@
+// The India Post CSV importer: both layouts, idempotence, bad rows, --strict, the CLI.
+
+#include <gtest/gtest.h>
+
+#include "db_test_util.hpp"
+#include "pintag/codec/key_allocation.hpp"
+#include "pintag/db/importer.hpp"
+#include "pintag/db/registry.hpp"
+
+namespace pintag::db {
+namespace {
+
+using test::TempDir;
+
+// The newer layout, with CRLF line ends, a BOM, quoting (a comma and a doubled quote inside
+// quotes), an office of a seeded pincode (its " S.O" suffix dropped, it matches the seed's name
+// and fills in the branch type) and two new pincodes.
+const std::string kNewerCsv =
+    "\xEF\xBB\xBF"
+    "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,statename,"
+    "latitude,longitude\r\n"
+    "Delhi Circle,Delhi,New Delhi Central,Connaught Place S.O,110001,SO,Delivery,Central Delhi,"
+    "Delhi,28.6315,77.2167\r\n"
+    "Army Postal Service,APS,APS,\"Camp \"\"Alpha\"\", North\",999011,BO,Non Delivery,APS,APS,NA,"
+    "NA\r\n"
+    "Army Postal Service,APS,APS,Camp Beta B.O,999012,BO,Delivery,APS,APS,,\r\n"
+    "Army Postal Service,APS,APS,Camp Gamma H.O,999012,HO,Delivery,APS,APS,12.5,-77.25\r\n";
+
+// The older layout: column names in their published capitalisation.
+const std::string kOlderCsv =
+    "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+    "Districtname,statename\n"
+    "Bengali Market S.O,110001,SO,Delivery,New Delhi Central,Delhi,Delhi,New Delhi,Central "
+    "Delhi,Delhi\n"
+    "Zeta Camp B.O,999021,BO,Delivery,APS,APS,Army Postal Service,Zeta Taluk,APS,APS\n";
+
+class Importer : public ::testing::Test {
+ protected:
+  std::vector<KeyRow> keys() { return ListKeys(db_).value(); }
+  RegistryCounts counts() { return CountRegistry(db_).value(); }
+
+  TempDir dir_;
+  std::string path_ = test::CopyOfSeeded(dir_);
+  Connection db_ = test::OpenExisting(path_);
+};
+
+TEST_F(Importer, ReadsTheNewerLayoutAndIsIdempotent) {
+  const auto keys_before = keys();
+  const auto report = ImportDirectoryCsv(db_, kNewerCsv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->layout, CsvLayout::kNewer);
+  EXPECT_TRUE(report->applied);
+  EXPECT_EQ(report->rows, 4);
+  ASSERT_TRUE(report->problems.empty()) << report->problems.front().message;
+  EXPECT_EQ(report->offices_added, 3);
+  EXPECT_EQ(report->offices_updated, 1);  // Connaught Place gains type, delivery, position
+  ASSERT_EQ(report->pincodes_added.size(), 2u);
+
+  // New pincodes get the keys probing finds past every existing key.
+  std::vector<TagKey> taken;
+  for (const KeyRow& row : keys_before) taken.push_back(row.key);
+  KeyAllocator allocator(taken);
+  EXPECT_EQ(report->pincodes_added[0].first, Pincode(999011));
+  EXPECT_EQ(report->pincodes_added[0].second, *allocator.allocate(Pincode(999011)));
+  EXPECT_EQ(report->pincodes_added[1].first, Pincode(999012));
+  EXPECT_EQ(report->pincodes_added[1].second, *allocator.allocate(Pincode(999012)));
+
+  const auto delhi = LookupPincode(db_, Pincode(110001)).value();
+  EXPECT_EQ(delhi.offices.size(), 21u);  // updated in place, not duplicated
+  bool found = false;
+  for (const PostOffice& office : delhi.offices) {
+    if (office.name != "Connaught Place") continue;
+    found = true;
+    EXPECT_EQ(office.branch_type, "SO");
+    EXPECT_EQ(office.delivery, "Delivery");
+    ASSERT_TRUE(office.latitude.has_value());
+    EXPECT_DOUBLE_EQ(*office.latitude, 28.6315);
+    EXPECT_DOUBLE_EQ(office.longitude.value_or(0), 77.2167);
+    EXPECT_EQ(office.circle, "Delhi Circle");
+  }
+  EXPECT_TRUE(found);
+  const auto alpha = LookupPincode(db_, Pincode(999011)).value();
+  ASSERT_EQ(alpha.offices.size(), 1u);
+  EXPECT_EQ(alpha.offices[0].name, "Camp \"Alpha\", North");
+  EXPECT_EQ(alpha.offices[0].delivery, "Non Delivery");
+  EXPECT_FALSE(alpha.offices[0].latitude.has_value());  // NA
+  const auto beta = LookupPincode(db_, Pincode(999012)).value();
+  ASSERT_EQ(beta.offices.size(), 2u);
+  EXPECT_EQ(beta.offices[0].name, "Camp Beta");
+  EXPECT_EQ(beta.offices[1].name, "Camp Gamma");
+  EXPECT_EQ(beta.offices[1].branch_type, "HO");
+  EXPECT_DOUBLE_EQ(beta.offices[1].longitude.value_or(0), -77.25);
+
+  // Again: nothing changes.
+  const auto after_first = keys();
+  const auto counts_first = counts();
+  const auto again = ImportDirectoryCsv(db_, kNewerCsv);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->offices_added, 0);
+  EXPECT_EQ(again->offices_updated, 0);
+  EXPECT_EQ(again->offices_unchanged, 4);
+  EXPECT_TRUE(again->pincodes_added.empty());
+  EXPECT_EQ(counts().offices, counts_first.offices);
+  const auto after_second = keys();
+  ASSERT_EQ(after_second.size(), after_first.size());
+  for (std::size_t i = 0; i < after_first.size(); ++i) {
+    EXPECT_EQ(after_second[i].key, after_first[i].key);
+  }
+}
+
+TEST_F(Importer, ReadsTheOlderLayout) {
+  const auto report = ImportDirectoryCsv(db_, kOlderCsv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->layout, CsvLayout::kOlder);
+  ASSERT_TRUE(report->problems.empty()) << report->problems.front().message;
+  EXPECT_EQ(report->rows, 2);
+  EXPECT_EQ(report->offices_added, 1);
+  EXPECT_EQ(report->offices_updated, 1);
+  ASSERT_EQ(report->pincodes_added.size(), 1u);
+  const auto zeta = LookupPincode(db_, Pincode(999021)).value();
+  ASSERT_EQ(zeta.offices.size(), 1u);
+  EXPECT_EQ(zeta.offices[0].name, "Zeta Camp");
+  EXPECT_EQ(zeta.offices[0].taluk, "Zeta Taluk");
+  EXPECT_EQ(zeta.offices[0].circle, "Army Postal Service");
+  EXPECT_EQ(zeta.key, report->pincodes_added[0].second);
+  const auto delhi = LookupPincode(db_, Pincode(110001)).value();
+  EXPECT_EQ(delhi.offices.front().name, "Bengali Market");
+  EXPECT_EQ(delhi.offices.front().branch_type, "SO");
+  EXPECT_EQ(delhi.offices.front().taluk, "New Delhi");
+  EXPECT_EQ(delhi.offices.size(), 21u);
+
+  const auto again = ImportDirectoryCsv(db_, kOlderCsv);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->offices_unchanged, 2);
+  EXPECT_TRUE(again->pincodes_added.empty());
+}
+
+// Line numbers count physical lines: the quoted line break in row 3 moves later rows down.
+const std::string kMalformedCsv =
+    "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+    "Districtname,statename\n"                                   // line 1
+    "Good One B.O,999031,BO,Delivery,APS,APS,APS,T,APS,APS\n"    // line 2
+    "\"Two\nLines\",999032,BO,Delivery,APS,APS,APS,T,APS,APS\n"  // 3-4
+    "Short Row,999033,BO\n"                                      // line 5
+    "Bad Pin,99903,BO,Delivery,APS,APS,APS,T,APS,APS\n"          // line 6
+    "Bad \"quote,999034,BO,Delivery,APS,APS,APS,T,APS,APS\n"     // line 7
+    "Empty District,999035,BO,Delivery,APS,APS,APS,T,,APS\n"     // line 8
+    "Good Two B.O,999036,BO,Delivery,APS,APS,APS,T,APS,APS\n";   // line 9
+
+TEST_F(Importer, ReportsMalformedRowsWithLineNumbersAndSkipsThem) {
+  const auto report = ImportDirectoryCsv(db_, kMalformedCsv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_TRUE(report->applied);
+  EXPECT_EQ(report->rows, 7);
+  ASSERT_EQ(report->problems.size(), 5u);
+  EXPECT_EQ(report->problems[0].line, 3);  // a line break in a name
+  EXPECT_NE(report->problems[0].message.find("control character"), std::string::npos);
+  EXPECT_EQ(report->problems[1].line, 5);
+  EXPECT_NE(report->problems[1].message.find("expected 10 fields, got 3"), std::string::npos);
+  EXPECT_EQ(report->problems[2].line, 6);
+  EXPECT_NE(report->problems[2].message.find("pincode"), std::string::npos);
+  EXPECT_EQ(report->problems[3].line, 7);
+  EXPECT_NE(report->problems[3].message.find("quote"), std::string::npos);
+  EXPECT_EQ(report->problems[4].line, 8);
+  EXPECT_NE(report->problems[4].message.find("district"), std::string::npos);
+  EXPECT_EQ(report->offices_added, 2);
+  ASSERT_EQ(report->pincodes_added.size(), 2u);
+  EXPECT_EQ(report->pincodes_added[0].first, Pincode(999031));
+  EXPECT_EQ(report->pincodes_added[1].first, Pincode(999036));
+}
+
+TEST_F(Importer, StrictRefusesTheWholeFileAndLeavesTheDatabaseUnchanged) {
+  const auto keys_before = keys();
+  const auto counts_before = counts();
+  const std::int64_t data_version = db_.queryInt64("SELECT total_changes()");
+  const auto report = ImportDirectoryCsv(db_, kMalformedCsv, {.strict = true});
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_FALSE(report->applied);
+  EXPECT_EQ(report->problems.size(), 5u);
+  EXPECT_TRUE(report->pincodes_added.empty());
+  EXPECT_EQ(db_.queryInt64("SELECT total_changes()"), data_version);
+  const auto counts_after = counts();
+  EXPECT_EQ(counts_after.offices, counts_before.offices);
+  EXPECT_EQ(counts_after.pincodes_active, counts_before.pincodes_active);
+  const auto keys_after = keys();
+  ASSERT_EQ(keys_after.size(), keys_before.size());
+  EXPECT_EQ(LookupPincode(db_, Pincode(999031)).error().code, ErrorCode::kNotFound);
+}
+
+TEST_F(Importer, RefusesAnUnknownHeader) {
+  const auto report = ImportDirectoryCsv(db_, "pincode,name\n110001,x\n");
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kInvalid);
+  EXPECT_NE(report.error().message.find("line 1"), std::string::npos);
+  EXPECT_EQ(ImportDirectoryCsvFile(db_, dir_.file("missing.csv")).error().code,
+            ErrorCode::kNotFound);
+}
+
+TEST_F(Importer, NewPincodesProbePastRetiredKeys) {
+  // Retire a pincode, then import one whose start slot is that retired key: it must probe on.
+  const auto rows = keys();
+  Pincode victim = rows.front().pincode;
+  TagKey victim_key = rows.front().key;
+  std::optional<Pincode> newcomer;
+  for (std::uint32_t p = 900000; p <= 999999 && !newcomer; ++p) {
+    if (StartSlot(Pincode(p)) == victim_key) newcomer = Pincode(p);
+  }
+  ASSERT_TRUE(newcomer.has_value());
+  ASSERT_TRUE(RetirePincode(db_, victim).ok());
+  const std::string csv =
+      "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+      "Districtname,statename\nProbe B.O," +
+      newcomer->str() + ",BO,Delivery,APS,APS,APS,T,APS,APS\n";
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok());
+  ASSERT_EQ(report->pincodes_added.size(), 1u);
+  EXPECT_NE(report->pincodes_added[0].second, victim_key);
+  EXPECT_EQ(LookupKey(db_, victim_key).value().pincode, victim);
+  EXPECT_EQ(LookupPincode(db_, victim).value().status, PincodeStatus::kRetired);
+}
+
+TEST_F(Importer, CommandLineImportAndLookups) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  const std::string csv = test::WriteFile(dir_.file("newer.csv"), kNewerCsv);
+  const std::string db = path_;
+  const auto imported =
+      test::RunCommand(test::PintagExe() + " import " + csv + " --db " + db + " 2>&1");
+  EXPECT_EQ(imported.exit_code, 0) << imported.out;
+  EXPECT_NE(imported.out.find("3 offices added"), std::string::npos) << imported.out;
+  const TagKey key = LookupPincode(db_, Pincode(999011)).value().key;
+  const auto by_key = test::RunCommand(test::PintagExe() + " keys lookup --key " +
+                                       std::to_string(key.value()) + " --db " + db);
+  EXPECT_EQ(by_key.exit_code, 0);
+  EXPECT_NE(by_key.out.find("pincode  999011"), std::string::npos) << by_key.out;
+  const auto by_pincode = test::RunCommand(test::PintagExe() + " keys lookup 110001 --db " + db);
+  EXPECT_NE(by_pincode.out.find("Central Delhi"), std::string::npos) << by_pincode.out;
+
+  const std::string bad = test::WriteFile(dir_.file("bad.csv"), kMalformedCsv);
+  const auto strict =
+      test::RunCommand(test::PintagExe() + " import " + bad + " --strict --db " + db + " 2>&1");
+  EXPECT_NE(strict.exit_code, 0);
+  EXPECT_NE(strict.out.find("bad.csv:5: expected 10 fields, got 3"), std::string::npos)
+      << strict.out;
+  EXPECT_NE(strict.out.find("nothing imported"), std::string::npos) << strict.out;
+  EXPECT_EQ(LookupPincode(db_, Pincode(999031)).error().code, ErrorCode::kNotFound);
+}
+
+}  // namespace
+}  // namespace pintag::db

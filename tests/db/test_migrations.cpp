@@ -1,0 +1,89 @@
+// Schema versions: an older file is upgraded, a newer one refused, a non-database reported.
+
+#include <gtest/gtest.h>
+
+#include "db_test_util.hpp"
+#include "pintag/db/registry.hpp"
+#include "pintag/db/sort_plan.hpp"
+
+namespace pintag::db {
+namespace {
+
+using test::TempDir;
+
+TEST(Migrations, NewDatabaseUsesWalAndTheCurrentVersion) {
+  Connection connection = test::OpenExisting(test::SeededTemplate());
+  EXPECT_EQ(SchemaVersion(connection), kSchemaVersion);
+  Statement mode = connection.prepare("PRAGMA journal_mode");
+  ASSERT_TRUE(mode.step());
+  EXPECT_EQ(mode.getText(0), "wal");
+  EXPECT_EQ(connection.queryInt64("PRAGMA foreign_keys"), 1);
+  EXPECT_EQ(connection.queryInt64("PRAGMA synchronous"), 1);  // NORMAL
+}
+
+TEST(Migrations, AnOlderFileIsUpgradedKeepingItsData) {
+  TempDir dir;
+  const std::string path = dir.file("v1.db");
+  {
+    Connection connection(path);
+    MigrateTo(connection, 1);
+    EXPECT_EQ(SchemaVersion(connection), 1);
+    connection.execute(
+        "INSERT INTO pincodes (pincode, added_at, source) VALUES (560001, 'then', 'v1');"
+        "INSERT INTO tag_keys (pincode, tag_key, allocated_at) VALUES (560001, 42, 'then');");
+  }
+  auto opened = OpenDatabase(path);
+  ASSERT_TRUE(opened.ok()) << opened.error().message;
+  EXPECT_EQ(opened->upgraded_from, 1);
+  EXPECT_FALSE(opened->created);
+  Connection& connection = opened.value().connection;
+  EXPECT_EQ(SchemaVersion(connection), kSchemaVersion);
+  EXPECT_EQ(LookupPincode(connection, Pincode(560001)).value().key, TagKey(42));
+  // Version 2 added plans; the upgrade gave this file the default plan.
+  const auto routed = Route(connection, Pincode(560001), kDefaultPlanName);
+  ASSERT_TRUE(routed.ok()) << routed.error().message;
+  EXPECT_EQ(routed->bin, "56");
+}
+
+TEST(Migrations, ANewerFileIsRefusedWithAClearMessage) {
+  TempDir dir;
+  const std::string path = dir.file("future.db");
+  {
+    Connection connection(path);
+    connection.execute("PRAGMA user_version = 99");
+  }
+  const auto opened = OpenDatabase(path);
+  ASSERT_FALSE(opened.ok());
+  EXPECT_EQ(opened.error().code, ErrorCode::kConflict);
+  EXPECT_NE(opened.error().message.find("schema version 99"), std::string::npos);
+  EXPECT_NE(opened.error().message.find("newer than this pintag supports (" +
+                                        std::to_string(kSchemaVersion) + ")"),
+            std::string::npos)
+      << opened.error().message;
+  Connection connection(path);
+  EXPECT_EQ(SchemaVersion(connection), 99);  // untouched
+}
+
+TEST(Migrations, NotADatabaseAndMissingFilesAreErrors) {
+  TempDir dir;
+  const std::string junk = test::WriteFile(dir.file("junk.db"), std::string(4096, 'x'));
+  const auto opened = OpenDatabase(junk);
+  ASSERT_FALSE(opened.ok());
+  EXPECT_EQ(opened.error().code, ErrorCode::kStorage);
+  const auto missing = OpenDatabase(dir.file("missing.db"), {.create = false});
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("missing.db")));
+}
+
+TEST(Migrations, ReadOnlyOpenWorksOnCurrentFiles) {
+  TempDir dir;
+  const std::string path = test::CopyOfSeeded(dir);
+  auto opened = OpenDatabase(path, {.read_only = true});
+  ASSERT_TRUE(opened.ok()) << opened.error().message;
+  EXPECT_TRUE(LookupPincode(opened.value().connection, Pincode(110001)).ok());
+  EXPECT_FALSE(RetirePincode(opened.value().connection, Pincode(110001)).ok());
+}
+
+}  // namespace
+}  // namespace pintag::db

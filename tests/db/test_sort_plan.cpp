@@ -1,0 +1,123 @@
+// Sort plans: longest prefix wins, explicit fallback, unknown plan, CSV in and out.
+
+#include <gtest/gtest.h>
+
+#include "db_test_util.hpp"
+#include "pintag/db/sort_plan.hpp"
+
+namespace pintag::db {
+namespace {
+
+using test::TempDir;
+
+SortPlan HubPlan() {
+  return {"hub-a",
+          "reject",
+          "test plan",
+          {{"1", "north"}, {"11", "delhi"}, {"110001", "parliament"}, {"56", "bengaluru"}}};
+}
+
+class SortPlans : public ::testing::Test {
+ protected:
+  TempDir dir_;
+  Connection db_ = test::OpenExisting(test::CopyOfSeeded(dir_));
+};
+
+TEST_F(SortPlans, LongestPrefixWinsElseTheFallback) {
+  ASSERT_TRUE(SavePlan(db_, HubPlan()).ok());
+  const struct {
+    std::uint32_t pincode;
+    const char* bin;
+    const char* prefix;  // nullptr: the fallback
+  } cases[] = {{110001, "parliament", "110001"}, {110002, "delhi", "11"},
+               {123456, "north", "1"},           {560001, "bengaluru", "56"},
+               {600001, "reject", nullptr},      {999999, "reject", nullptr}};
+  const SortPlan plan = GetPlan(db_, "hub-a").value();
+  for (const auto& c : cases) {
+    const auto routed = Route(db_, Pincode(c.pincode), "hub-a");
+    ASSERT_TRUE(routed.ok()) << routed.error().message;
+    EXPECT_EQ(routed->bin, c.bin) << c.pincode;
+    if (c.prefix == nullptr) {
+      EXPECT_FALSE(routed->rule.has_value()) << c.pincode;
+    } else {
+      ASSERT_TRUE(routed->rule.has_value()) << c.pincode;
+      EXPECT_EQ(routed->rule->prefix, c.prefix);
+      EXPECT_EQ(routed->rule->bin, c.bin);
+    }
+    const Routing in_memory = RouteWith(plan, Pincode(c.pincode));
+    EXPECT_EQ(in_memory.bin, routed->bin);
+    EXPECT_EQ(in_memory.rule, routed->rule);
+  }
+}
+
+TEST_F(SortPlans, UnknownPlanIsAnErrorValue) {
+  const auto routed = Route(db_, Pincode(110001), "no-such-plan");
+  ASSERT_FALSE(routed.ok());
+  EXPECT_EQ(routed.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(routed.error().message.find("no-such-plan"), std::string::npos);
+  EXPECT_EQ(GetPlan(db_, "no-such-plan").error().code, ErrorCode::kNotFound);
+  EXPECT_EQ(DeletePlan(db_, "no-such-plan").error().code, ErrorCode::kNotFound);
+}
+
+TEST_F(SortPlans, SavingReplacesAndDeletingRemoves) {
+  ASSERT_TRUE(SavePlan(db_, HubPlan()).ok());
+  SortPlan smaller{"hub-a", "other", "", {{"2", "two"}}};
+  ASSERT_TRUE(SavePlan(db_, smaller).ok());
+  const SortPlan stored = GetPlan(db_, "hub-a").value();
+  EXPECT_EQ(stored.rules, smaller.rules);
+  EXPECT_EQ(stored.fallback_bin, "other");
+  EXPECT_EQ(ListPlans(db_).value(), (std::vector<std::string>{"default", "hub-a"}));
+  ASSERT_TRUE(DeletePlan(db_, "hub-a").ok());
+  EXPECT_EQ(db_.queryInt64("SELECT count(*) FROM sort_rules WHERE bin = 'two'"), 0);
+}
+
+TEST_F(SortPlans, RejectsMalformedPlans) {
+  SortPlan plan = HubPlan();
+  plan.rules.push_back({"1234567", "x"});
+  EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kInvalid);
+  plan = HubPlan();
+  plan.rules.push_back({"1a", "x"});
+  EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kInvalid);
+  plan = HubPlan();
+  plan.rules.push_back({"11", "again"});
+  EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kInvalid);
+  plan = HubPlan();
+  plan.fallback_bin.clear();
+  EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kInvalid);
+  plan = HubPlan();
+  plan.rules.push_back({"", "x"});
+  EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kInvalid);
+  EXPECT_EQ(GetPlan(db_, "hub-a").error().code, ErrorCode::kNotFound);
+}
+
+TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
+  const SortPlan plan = HubPlan();
+  const std::string csv = PlanToCsv(plan);
+  EXPECT_EQ(csv, "prefix,bin\n*,reject\n1,north\n11,delhi\n110001,parliament\n56,bengaluru\n");
+  const auto parsed = ParsePlanCsv("hub-a", csv);
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  EXPECT_EQ(parsed->rules, plan.rules);
+  EXPECT_EQ(parsed->fallback_bin, "reject");
+
+  const auto quoted =
+      ParsePlanCsv("q", "prefix,bin\r\n*,\"bin, with comma\"\r\n2,\"say \"\"hi\"\"\"\r\n");
+  ASSERT_TRUE(quoted.ok()) << quoted.error().message;
+  EXPECT_EQ(quoted->fallback_bin, "bin, with comma");
+  EXPECT_EQ(quoted->rules[0].bin, "say \"hi\"");
+  EXPECT_EQ(ParsePlanCsv("q", PlanToCsv(*quoted)).value().rules, quoted->rules);
+
+  const auto no_fallback = ParsePlanCsv("x", "prefix,bin\n1,a\n");
+  ASSERT_FALSE(no_fallback.ok());
+  EXPECT_NE(no_fallback.error().message.find("fallback"), std::string::npos);
+  const auto two = ParsePlanCsv("x", "prefix,bin\n*,a\n1,b\n*,c\n");
+  ASSERT_FALSE(two.ok());
+  EXPECT_NE(two.error().message.find("line 4"), std::string::npos) << two.error().message;
+  const auto wide = ParsePlanCsv("x", "prefix,bin\n*,a\n1,b,c\n");
+  ASSERT_FALSE(wide.ok());
+  EXPECT_NE(wide.error().message.find("line 3"), std::string::npos);
+  EXPECT_FALSE(ParsePlanCsv("x", "pin,bin\n*,a\n").ok());
+  EXPECT_FALSE(ParsePlanCsv("x", "prefix,bin\n*,a\n12345a,b\n").ok());
+}
+
+}  // namespace
+}  // namespace pintag::db
