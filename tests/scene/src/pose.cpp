@@ -65,4 +65,9 @@ cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, cv::Vec3d model
   return {camera.fx * p[0] / p[2] + camera.cx, camera.fy * p[1] / p[2] + camera.cy};
 }
 
+cv::Point2d ProjectSquarePoint(const MarkerTruth& truth, cv::Point2d square_point) {
+  const cv::Vec3d p = truth.homography * cv::Vec3d(square_point.x, square_point.y, 1.0);
+  return {p[0] / p[2], p[1] / p[2]};
+}
+
 }  // namespace pintag::scene
