@@ -109,6 +109,7 @@ bool CompositeMarker(cv::Mat& frame, const LinearTexture& texture,
   if (ss > 1) cv::resize(canvas, area, box, 0, 0, cv::INTER_AREA);
 
   const auto& to_linear = SrgbToLinearTable();
+  const std::uint8_t* to_srgb = LinearToSrgbTable();
   for (int y = 0; y < box.height; ++y) {
     const float* src = area.ptr<float>(y);
     std::uint8_t* out = frame.ptr<std::uint8_t>(y + y0) + 3 * x0;
@@ -116,7 +117,8 @@ bool CompositeMarker(cv::Mat& frame, const LinearTexture& texture,
       const float coverage = src[3];
       if (coverage <= 0.0f) continue;
       const float rest = 1.0f - std::min(coverage, 1.0f);
-      for (int c = 0; c < 3; ++c) out[c] = LinearToSrgb8(src[c] + rest * to_linear[out[c]]);
+      for (int c = 0; c < 3; ++c)
+        out[c] = LinearToSrgb8(to_srgb, src[c] + rest * to_linear[out[c]]);
     }
   }
   return true;

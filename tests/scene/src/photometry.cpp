@@ -70,7 +70,8 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
         if constexpr (kLinearOut) {
           luts[b][c * 256 + v] = static_cast<float>(std::min(linear, 1.0));  // sensor saturates
         } else {
-          luts[b][c * 256 + v] = detail::LinearToSrgb8(static_cast<float>(linear));
+          luts[b][c * 256 + v] =
+              detail::LinearToSrgb8(detail::LinearToSrgbTable(), static_cast<float>(linear));
         }
       }
     }
@@ -203,9 +204,7 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
     }
     if (motion) ApplyMotionBlur(linear, p.motion_px, p.motion_angle_deg);
     for (int y = 0; y < frame.rows; ++y) {
-      const auto* src = linear.ptr<float>(y);
-      auto* dst = frame.ptr<std::uint8_t>(y);
-      for (int i = 0; i < frame.cols * 3; ++i) dst[i] = LinearToSrgb8(src[i]);
+      LinearToSrgb8(linear.ptr<float>(y), frame.ptr<std::uint8_t>(y), frame.cols * 3);
     }
   } else if (p.gradient > 0 || p.exposure != 1.0 || p.cast != Cast::kNone) {
     frame = ApplyLight<std::uint8_t>(frame, p);

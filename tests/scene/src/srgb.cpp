@@ -1,12 +1,11 @@
 #include "srgb.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 namespace pintag::scene::detail {
 namespace {
-
-constexpr int kLinearSteps = 65535;
 
 double ToLinear(double v) {
   return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
@@ -14,18 +13,6 @@ double ToLinear(double v) {
 
 double ToSrgb(double l) {
   return l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
-}
-
-const std::vector<std::uint8_t>& LinearTable() {
-  static const std::vector<std::uint8_t> table = [] {
-    std::vector<std::uint8_t> t(kLinearSteps + 1);
-    for (int i = 0; i <= kLinearSteps; ++i) {
-      const double code = std::round(255.0 * ToSrgb(static_cast<double>(i) / kLinearSteps));
-      t[i] = static_cast<std::uint8_t>(code < 0 ? 0 : code > 255 ? 255 : code);
-    }
-    return t;
-  }();
-  return table;
 }
 
 }  // namespace
@@ -39,15 +26,25 @@ const std::array<float, 256>& SrgbToLinearTable() {
   return table;
 }
 
-const std::uint8_t* Linear16ToSrgbTable() {
-  return LinearTable().data();
+const std::uint8_t* LinearToSrgbTable() {
+  static const std::vector<std::uint8_t> table = [] {
+    std::vector<std::uint8_t> t(kLinearSteps + 1);
+    for (int i = 0; i <= kLinearSteps; ++i) {
+      const double code = std::round(255.0 * ToSrgb(static_cast<double>(i) / kLinearSteps));
+      t[i] = static_cast<std::uint8_t>(std::clamp(code, 0.0, 255.0));
+    }
+    return t;
+  }();
+  return table.data();
 }
 
-std::uint8_t LinearToSrgb8(float linear) {
-  static const std::vector<std::uint8_t>& table = LinearTable();
-  if (!(linear > 0.0f)) return table[0];  // also NaN
-  if (linear >= 1.0f) return 255;
-  return table[static_cast<int>(linear * kLinearSteps + 0.5f)];
+void LinearToSrgb8(const float* linear, std::uint8_t* srgb, int count) {
+  const std::uint8_t* table = LinearToSrgbTable();
+  for (int i = 0; i < count; ++i) {
+    // Branch-free clamp (NaN goes to 0 through the max) so the index arithmetic vectorises.
+    const float v = std::min(std::max(0.0f, linear[i]), 1.0f);
+    srgb[i] = table[static_cast<int>(v * kLinearSteps + 0.5f)];
+  }
 }
 
 }  // namespace pintag::scene::detail
