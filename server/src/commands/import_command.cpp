@@ -85,8 +85,14 @@ void Run(const ImportArgs& args) {
             << " offices added, " << report.offices_updated << " updated, "
             << report.offices_unchanged << " unchanged, " << report.pincodes_added.size()
             << " new pincodes, " << report.problems.size() << " bad rows skipped\n";
-  for (const auto& [pincode, key] : report.pincodes_added) {
+  constexpr std::size_t kNewKeysShown = 20;
+  for (std::size_t i = 0; i < report.pincodes_added.size() && i < kNewKeysShown; ++i) {
+    const auto& [pincode, key] = report.pincodes_added[i];
     std::cout << "new pincode " << pincode.str() << " key " << key.value() << "\n";
+  }
+  if (report.pincodes_added.size() > kNewKeysShown) {
+    std::cout << "... and " << report.pincodes_added.size() - kNewKeysShown
+              << " more new pincodes (see `pintag keys export`)\n";
   }
 }
 
