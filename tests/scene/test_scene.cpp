@@ -13,6 +13,7 @@
 #include <memory>
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "pintag/scene/rng.hpp"
 #include "pintag/scene/scene.hpp"
@@ -134,6 +135,13 @@ TEST(RenderScene, SameSeedSameImageOtherSeedOtherImage) {
   ASSERT_EQ(a.bgr.size(), cv::Size(1920, 1080));
   EXPECT_EQ(cv::norm(a.bgr, b.bgr, cv::NORM_INF), 0.0);
   EXPECT_EQ(a.background, b.background);
+  // The same from another thread while this one renders too (shared caches, OpenCV's pool).
+  Scene from_thread;
+  std::thread worker([&] { from_thread = RenderScene(spec); });
+  const Scene d = RenderScene(spec);
+  worker.join();
+  EXPECT_EQ(cv::norm(a.bgr, from_thread.bgr, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(a.bgr, d.bgr, cv::NORM_INF), 0.0);
   spec.seed = 1235;
   const Scene c = RenderScene(spec);
   EXPECT_GT(cv::norm(a.bgr, c.bgr, cv::NORM_L1), 0.0);

@@ -68,7 +68,7 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
       for (int v = 0; v < 256; ++v) {
         const double linear = gain * cast[c] * to_linear[v];
         if constexpr (kLinearOut) {
-          luts[b][c * 256 + v] = static_cast<float>(std::min(linear, 1.0));  // sensor saturates
+          luts[b][c * 256 + v] = static_cast<float>(linear);  // saturates after the blur
         } else {
           luts[b][c * 256 + v] =
               detail::LinearToSrgb8(detail::LinearToSrgbTable(), static_cast<float>(linear));
