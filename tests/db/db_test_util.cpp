@@ -55,7 +55,9 @@ const std::string& SeededTemplate() {
         for (const auto& entry :
              std::filesystem::directory_iterator(PINTAG_TEST_TEMPLATE_DIR, error)) {
           const std::string name = entry.path().filename().string();
-          if (name.starts_with("seeded-") && entry.path().string() != cached) {
+          // Only finished templates: another process may be seeding a ".partial." file now.
+          if (name.starts_with("seeded-") && name.ends_with(".db") &&
+              entry.path().string() != cached) {
             std::filesystem::remove(entry.path(), error);
           }
         }
