@@ -15,6 +15,8 @@
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
+#include "pintag/codec/cells.hpp"
+#include "pintag/codec/geometry.hpp"
 #include "pintag/scene/rng.hpp"
 #include "pintag/scene/scene.hpp"
 
@@ -317,6 +319,34 @@ TEST(RenderScene, PinTagElementsAndOccluderLandWhereTheTruthSays) {
   // Between the elements the square is black.
   const cv::Vec3b middle = PixelAt(scene.bgr, ProjectSquarePoint(truth, {0.5, 0.5}));
   EXPECT_LT(middle[1], 40);
+}
+
+// Every PinTag cell, sampled in the image where the truth homography puts it, shows the bit the
+// codec encoded: the marker is neither mirrored nor turned, and the palette survives compositing.
+TEST(RenderScene, PinTagCellsReadBackThroughTheTruth) {
+  const Camera camera;
+  for (const int key : {0, 12345, 32767}) {
+    SceneSpec spec;
+    spec.real_background = false;
+    spec.markers.push_back(
+        Place(PinTagTexture(key), key, camera, {900, 600}, DistanceFor(camera, 180), 45, 70, 123));
+    const Scene scene = RenderScene(spec);
+    const TagCells cells = EncodeCells(TagKey(static_cast<std::uint16_t>(key)));
+    // Bit 1 colours (yellow-green, orange-red) have little blue; bit 0 (teal, crimson) much.
+    const auto bit_at = [&](geometry::Point p) {
+      return PixelAt(scene.bgr, ProjectSquarePoint(scene.truth[0], {p.x, p.y}))[0] < 80;
+    };
+    for (int e = 0; e < kElements; ++e) {
+      for (int s = 0; s < kGreenSectors; ++s) {
+        EXPECT_EQ(bit_at(geometry::GreenSectorCentre(e, s)), cells.green[e][s])
+            << "key " << key << " element " << e << " sector " << s;
+      }
+      for (int q = 0; q < kRedQuadrants; ++q) {
+        EXPECT_EQ(bit_at(geometry::RedQuadrantCentre(e, q)), cells.red[e][q])
+            << "key " << key << " element " << e << " quadrant " << q;
+      }
+    }
+  }
 }
 
 TEST(RenderScene, SeveralMarkersKeepTheirOrderAndPartlyOutsideIsFlagged) {

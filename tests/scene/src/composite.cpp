@@ -33,11 +33,12 @@ LinearTexture PrepareTexture(const MarkerTexture& texture, const std::vector<Occ
     bgr = texture.bgr.clone();
     const auto& c = texture.square_corners_px;
     constexpr int kShift = 4;  // sub-pixel drawing precision, 1/16 px
+    constexpr double kScale = 1 << kShift;
     for (const Occluder& o : occluders) {
       const cv::Point2d centre = c[0] + o.centre.x * (c[1] - c[0]) + o.centre.y * (c[3] - c[0]);
       const double radius = o.radius * cv::norm(c[1] - c[0]);
-      cv::circle(bgr, cv::Point(cvRound(centre.x * 16), cvRound(centre.y * 16)),
-                 cvRound(radius * 16), o.bgr, cv::FILLED, cv::LINE_AA, kShift);
+      cv::circle(bgr, cv::Point(cvRound(centre.x * kScale), cvRound(centre.y * kScale)),
+                 cvRound(radius * kScale), o.bgr, cv::FILLED, cv::LINE_AA, kShift);
     }
   }
   // Linear light with coverage 1 in the fourth channel: warped with a zero border, the fourth
