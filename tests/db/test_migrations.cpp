@@ -55,6 +55,7 @@ TEST(Migrations, ANewerFileIsRefusedWithAClearMessage) {
   const auto opened = OpenDatabase(path);
   ASSERT_FALSE(opened.ok());
   EXPECT_EQ(opened.error().code, ErrorCode::kConflict);
+  EXPECT_STREQ(ToString(opened.error().code), "conflict");
   EXPECT_NE(opened.error().message.find("schema version 99"), std::string::npos);
   EXPECT_NE(opened.error().message.find("newer than this pintag supports (" +
                                         std::to_string(kSchemaVersion) + ")"),

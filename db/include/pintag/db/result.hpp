@@ -19,6 +19,7 @@ enum class ErrorCode {
   kStorage,       ///< any other SQLite or file failure; the message says which        (500)
 };
 
+/// "invalid", "not_found", "conflict", "unauthorized", "full", "busy", "storage".
 const char* ToString(ErrorCode code);
 
 struct Error {
