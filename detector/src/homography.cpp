@@ -1,6 +1,7 @@
 #include "homography.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -8,23 +9,31 @@
 namespace pintag::stage {
 namespace {
 
+// Linear light of an 8-bit sRGB code. Blur and pixel integration happen in linear light, before
+// the camera's tone curve, so edges are located on linear values: there a blurred step crosses
+// halfway exactly at the edge.
+const std::array<float, 256>& LinearTable() {
+  static const std::array<float, 256> table = [] {
+    std::array<float, 256> t{};
+    for (int c = 0; c < 256; ++c) {
+      const double v = c / 255.0;
+      t[c] = static_cast<float>(v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4));
+    }
+    return t;
+  }();
+  return table;
+}
+
+/// Bilinear interpolation of linear light; −1 outside the image.
 double Bilinear(const cv::Mat& img, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   if (x0 < 0 || y0 < 0 || x0 + 1 >= img.cols || y0 + 1 >= img.rows) return -1;
+  const auto& lin = LinearTable();
   const double fx = x - x0, fy = y - y0;
   const std::uint8_t* r0 = img.ptr<std::uint8_t>(y0) + x0;
   const std::uint8_t* r1 = img.ptr<std::uint8_t>(y0 + 1) + x0;
-  return (r0[0] * (1 - fx) + r0[1] * fx) * (1 - fy) + (r1[0] * (1 - fx) + r1[1] * fx) * fy;
-}
-
-double CodeToLinear(double code) {
-  const double v = code / 255.0;
-  return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
-}
-
-double LinearToCode(double linear) {
-  const double v = linear <= 0.0031308 ? linear * 12.92 : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
-  return v * 255.0;
+  return (lin[r0[0]] * (1 - fx) + lin[r0[1]] * fx) * (1 - fy) +
+         (lin[r1[0]] * (1 - fx) + lin[r1[1]] * fx) * fy;
 }
 
 // Edge points along the side from a to b (clockwise, so the tag is on the right-hand side, the
@@ -58,10 +67,8 @@ std::vector<cv::Point2f> EdgePoints(const cv::Mat& dark, cv::Point2d a, cv::Poin
     }
     lo /= quarter;
     hi /= quarter;
-    if (hi - lo < 20) continue;
-    // Blur happens in linear light, before the camera's tone curve: the edge is where the profile
-    // is halfway in linear light, which in sRGB codes lies well above the codes' midpoint.
-    const double level = LinearToCode((CodeToLinear(lo) + CodeToLinear(hi)) / 2);
+    if (hi - lo < 0.08 || hi < 2 * lo) continue;  // no clear dark-to-white step here
+    const double level = (lo + hi) / 2;
     // The crossing nearest the expected edge (the middle of the profile).
     double best = 1e9;
     for (int s = 0; s < 2 * steps; ++s) {

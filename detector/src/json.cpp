@@ -1,0 +1,149 @@
+#include "pintag/detector/json.hpp"
+
+#include "pintag/detector/detector.hpp"
+
+namespace pintag {
+namespace {
+
+using nlohmann::json;
+
+json Xy(const Point2& p) {
+  return json::array({p.x, p.y});
+}
+
+json PoseJson(const PoseSolution& p) {
+  return {{"rotation_matrix", p.rotation},   {"rotation_vector", p.rotation_vector},
+          {"quaternion_wxyz", p.quaternion}, {"translation_m", p.translation},
+          {"distance_m", p.distance_m},      {"reprojection_error_px", p.reprojection_error_px}};
+}
+
+const char* BitName(Bit b) {
+  return b == Bit::kOne ? "1" : b == Bit::kZero ? "0" : "?";
+}
+
+// The options' fields, named once for reading and writing.
+template <typename Options, typename Visit>
+void VisitOptions(Options& o, Visit&& visit) {
+  visit("assumed_hfov_deg", o.assumed_hfov_deg);
+  visit("tag_size_m", o.tag_size_m);
+  visit("red_min_a", o.red_min_a);
+  visit("red_min_b", o.red_min_b);
+  visit("min_bit_span_b", o.min_bit_span_b);
+  visit("min_bit_margin", o.min_bit_margin);
+  visit("min_element_area_px", o.min_element_area_px);
+  visit("max_element_area_ratio", o.max_element_area_ratio);
+  visit("min_square_px", o.min_square_px);
+  visit("max_blobs", o.max_blobs);
+  visit("threads", o.threads);
+  visit("debug_dir", o.debug_dir);
+  visit("return_rejected", o.return_rejected);
+}
+
+}  // namespace
+
+json ToJson(const Detection& d) {
+  json j;
+  j["key"] = d.key ? json(d.key->value()) : json(nullptr);
+  if (!d.reject_reason.empty()) j["reject_reason"] = d.reject_reason;
+  j["corners_px"] = json::array();
+  j["element_centres_px"] = json::array();
+  for (int i = 0; i < 4; ++i) {
+    j["corners_px"].push_back(Xy(d.corners[i]));
+    j["element_centres_px"].push_back(Xy(d.element_centres[i]));
+  }
+  j["elements_seen"] = d.element_seen;
+  j["homography"] = d.homography;
+  j["square_px"] = d.square_px;
+  if (d.key) {
+    j["pose"] = PoseJson(d.pose);
+    j["alternative_pose"] = PoseJson(d.alternative_pose);
+    j["pose_ambiguous"] = d.pose_ambiguous;
+    j["intrinsics"] = std::string(ToString(d.intrinsics_source));
+  }
+  json bits = {{"green", json::array()}, {"red", json::array()}};
+  json margins = {{"green", json::array()}, {"red", json::array()}};
+  for (int e = 0; e < kElements; ++e) {
+    std::string green, red;
+    for (Bit b : d.cells.green[e]) green += BitName(b);
+    for (Bit b : d.cells.red[e]) red += BitName(b);
+    bits["green"].push_back(green);
+    bits["red"].push_back(red);
+    margins["green"].push_back(d.margins.green[e]);
+    margins["red"].push_back(d.margins.red[e]);
+  }
+  j["bits"] = bits;
+  j["bit_margins"] = margins;
+  j["unknown_bits"] = d.unknown_bits;
+  j["bits_from_second_copy"] = d.bits_from_second_copy;
+  j["bit_from_parity"] = d.bit_from_parity;
+  j["min_known_margin"] = d.min_known_margin;
+  return j;
+}
+
+json ToJson(const DetectResult& r) {
+  json j;
+  j["detections"] = json::array();
+  for (const Detection& d : r.detections) j["detections"].push_back(ToJson(d));
+  j["intrinsics"] = {{"fx", r.intrinsics.fx},
+                     {"fy", r.intrinsics.fy},
+                     {"cx", r.intrinsics.cx},
+                     {"cy", r.intrinsics.cy},
+                     {"distortion", r.intrinsics.distortion}};
+  j["intrinsics_source"] = std::string(ToString(r.intrinsics_source));
+  j["timings_ms"] = {{"redness", r.timings.redness_ms}, {"blobs", r.timings.blobs_ms},
+                     {"quads", r.timings.quads_ms},     {"decode", r.timings.decode_ms},
+                     {"pose", r.timings.pose_ms},       {"total", r.timings.total_ms}};
+  if (!r.error.empty()) j["error"] = r.error;
+  return j;
+}
+
+json ToJson(const DetectorOptions& options) {
+  json j;
+  VisitOptions(options, [&](const char* name, const auto& field) { j[name] = field; });
+  if (options.intrinsics) {
+    const CameraIntrinsics& c = *options.intrinsics;
+    j["intrinsics"] = {
+        {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy}, {"distortion", c.distortion}};
+  }
+  return j;
+}
+
+bool OptionsFromJson(const json& j, DetectorOptions* options, std::string* error) {
+  if (!j.is_object()) {
+    *error = "options must be a JSON object";
+    return false;
+  }
+  DetectorOptions out = *options;
+  try {
+    for (const auto& [name, value] : j.items()) {
+      bool known = false;
+      VisitOptions(out, [&](const char* field_name, auto& field) {
+        if (name != field_name) return;
+        known = true;
+        field = value.get<std::decay_t<decltype(field)>>();
+      });
+      if (name == "intrinsics") {
+        known = true;
+        CameraIntrinsics c;
+        c.fx = value.at("fx").get<double>();
+        c.fy = value.at("fy").get<double>();
+        c.cx = value.at("cx").get<double>();
+        c.cy = value.at("cy").get<double>();
+        if (value.contains("distortion"))
+          c.distortion = value["distortion"].get<std::vector<double>>();
+        out.intrinsics = c;
+      }
+      if (!known) {
+        *error = "unknown option '" + name + "'";
+        return false;
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    *error = std::string("bad option value: ") + e.what();
+    return false;
+  }
+  *options = std::move(out);
+  return true;
+}
+
+}  // namespace pintag

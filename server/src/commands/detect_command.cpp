@@ -1,0 +1,162 @@
+// `pintag detect`: find every tag in a photo; print keys and poses (JSON with --json) and draw an
+// overlay with outlines, keys and pose axes.
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <vector>
+
+#include "commands/commands.hpp"
+#include "pintag/detector/detector.hpp"
+#include "pintag/detector/json.hpp"
+
+namespace pintag::cli {
+namespace {
+
+struct DetectArgs {
+  std::string photo;
+  double tag_size_mm = 50;
+  std::optional<double> fx, fy, cx, cy;
+  std::vector<double> distortion;
+  bool json = false;
+  std::string overlay;
+  std::string debug_dir;
+  int threads = 1;
+  std::int64_t max_pixels = kDefaultMaxPixels;
+  bool rejected = false;
+};
+
+cv::Point ToPixel(const Point2& p) {
+  return {static_cast<int>(std::lround(p.x)), static_cast<int>(std::lround(p.y))};
+}
+
+void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
+  const double scale = std::max(1.0, std::max(image.cols, image.rows) / 1200.0);
+  const int thickness = static_cast<int>(std::lround(2 * scale));
+  const cv::Matx33d k(result.intrinsics.fx, 0, result.intrinsics.cx, 0, result.intrinsics.fy,
+                      result.intrinsics.cy, 0, 0, 1);
+  const cv::Mat dist = result.intrinsics.distortion.empty()
+                           ? cv::Mat()
+                           : cv::Mat(result.intrinsics.distortion, true).reshape(1, 1);
+  for (const Detection& d : result.detections) {
+    const cv::Scalar outline = d.key ? cv::Scalar(0, 255, 255) : cv::Scalar(0, 0, 255);
+    for (int i = 0; i < 4; ++i) {
+      cv::line(image, ToPixel(d.corners[i]), ToPixel(d.corners[(i + 1) % 4]), outline, thickness,
+               cv::LINE_AA);
+    }
+    cv::circle(image, ToPixel(d.corners[0]), 3 * thickness, outline, -1, cv::LINE_AA);
+    if (!d.key) continue;
+    // Pose axes from the square's centre: x (red) towards C1, y (green) towards C3, z (blue) out
+    // of the tag towards the viewer.
+    const double a = tag_size_m / 2;
+    const std::vector<cv::Point3d> axes = {{0, 0, 0}, {a, 0, 0}, {0, a, 0}, {0, 0, -a}};
+    std::vector<cv::Point2d> projected;
+    const cv::Vec3d rvec(d.pose.rotation_vector.data()), tvec(d.pose.translation.data());
+    cv::projectPoints(axes, rvec, tvec, k, dist, projected);
+    const cv::Scalar colours[] = {{0, 0, 255}, {0, 200, 0}, {255, 64, 0}};
+    for (int i = 0; i < 3; ++i) {
+      cv::arrowedLine(image, projected[0], projected[i + 1], colours[i], thickness, cv::LINE_AA, 0,
+                      0.15);
+    }
+    char label[64];
+    std::snprintf(label, sizeof label, "%d  %.2f m", d.key->value(), d.pose.distance_m);
+    const cv::Point at = ToPixel(d.corners[0]) + cv::Point(0, -4 * thickness);
+    cv::putText(image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.6 * scale, {0, 0, 0}, 3 * thickness,
+                cv::LINE_AA);
+    cv::putText(image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.6 * scale, {255, 255, 255}, thickness,
+                cv::LINE_AA);
+  }
+}
+
+void Run(const DetectArgs& args) {
+  const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
+  if (!loaded.image) throw std::runtime_error(loaded.error);
+
+  DetectorOptions options;
+  options.tag_size_m = args.tag_size_mm / 1000.0;
+  options.threads = args.threads;
+  options.debug_dir = args.debug_dir;
+  options.return_rejected = args.rejected;
+  const int given = args.fx.has_value() + args.fy.has_value();
+  if (given == 1) throw UsageError("give both --fx and --fy, or neither");
+  if (given == 2) {
+    const cv::Mat& img = loaded.image->bgr;
+    options.intrinsics =
+        CameraIntrinsics{*args.fx, *args.fy, args.cx.value_or((img.cols - 1) / 2.0),
+                         args.cy.value_or((img.rows - 1) / 2.0), args.distortion};
+  }
+  const DetectResult result = Detector(options).detect(*loaded.image);
+  if (!result.error.empty()) throw std::runtime_error(result.error);
+
+  if (args.json) {
+    std::cout << ToJson(result).dump(2) << "\n";
+  } else {
+    std::cout << result.detections.size() << " tag(s) in " << args.photo << " ("
+              << loaded.image->bgr.cols << "x" << loaded.image->bgr.rows << ", intrinsics "
+              << ToString(result.intrinsics_source) << ", " << result.timings.total_ms << " ms)\n";
+    for (const Detection& d : result.detections) {
+      if (!d.key) {
+        std::cout << "  rejected candidate: " << d.reject_reason << "\n";
+        continue;
+      }
+      std::printf("  key %5d  corners (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f)\n",
+                  d.key->value(), d.corners[0].x, d.corners[0].y, d.corners[1].x, d.corners[1].y,
+                  d.corners[2].x, d.corners[2].y, d.corners[3].x, d.corners[3].y);
+      std::printf(
+          "             distance %.3f m  t = (%.3f, %.3f, %.3f) m  rvec = (%.3f, %.3f, "
+          "%.3f)%s\n",
+          d.pose.distance_m, d.pose.translation[0], d.pose.translation[1], d.pose.translation[2],
+          d.pose.rotation_vector[0], d.pose.rotation_vector[1], d.pose.rotation_vector[2],
+          d.pose_ambiguous ? "  (pose ambiguous)" : "");
+    }
+  }
+  if (!args.overlay.empty()) {
+    cv::Mat overlay = loaded.image->bgr.clone();
+    DrawOverlay(overlay, result, options.tag_size_m);
+    bool ok = false;
+    try {
+      ok = cv::imwrite(args.overlay, overlay);
+    } catch (const cv::Exception&) {
+      ok = false;
+    }
+    if (!ok) throw std::runtime_error("cannot write overlay " + args.overlay);
+  }
+}
+
+void AddDetectCommand(CLI::App& app) {
+  auto args = std::make_shared<DetectArgs>();
+  CLI::App* cmd = app.add_subcommand("detect", "Find, decode and pose every PinTag in a photo");
+  cmd->add_option("photo", args->photo, "JPEG, PNG, TIFF or WebP photo")->required();
+  cmd->add_option("--tag-size-mm", args->tag_size_mm, "side of the black square, millimetres")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--fx", args->fx, "focal length x, pixels (with --fy: intrinsics given)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--fy", args->fy, "focal length y, pixels")->check(CLI::PositiveNumber);
+  cmd->add_option("--cx", args->cx, "principal point x, pixels (default: image centre)");
+  cmd->add_option("--cy", args->cy, "principal point y, pixels (default: image centre)");
+  cmd->add_option("--distortion", args->distortion, "k1 k2 p1 p2 [k3], OpenCV order")
+      ->expected(4, 8);
+  cmd->add_flag("--json", args->json, "print JSON");
+  cmd->add_option("--overlay", args->overlay, "write the photo with outlines, keys and axes");
+  cmd->add_option("--debug-dir", args->debug_dir, "write each pipeline stage's image here");
+  cmd->add_flag("--rejected", args->rejected, "also list candidates that did not decode");
+  cmd->add_option("--threads", args->threads, "worker threads")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  cmd->add_option("--max-pixels", args->max_pixels, "refuse larger images")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->callback([args] { Run(*args); });
+}
+
+const CommandRegistration registration{"detect", &AddDetectCommand};
+
+}  // namespace
+
+}  // namespace pintag::cli
