@@ -103,6 +103,20 @@ std::optional<double> ParseNumber(std::string_view text) {
   return value;
 }
 
+/// "B.O", "b.o." and "BO" all become "BO" (likewise S.O, H.O, P.O); other types stay as given.
+std::optional<std::string> NormalizeType(std::optional<std::string> type) {
+  if (!type) return type;
+  std::string letters;
+  for (const char c : *type) {
+    if (c != '.') letters += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  }
+  if (letters.size() == 2 && letters[1] == 'O' &&
+      std::isalpha(static_cast<unsigned char>(letters[0]))) {
+    return letters;
+  }
+  return type;
+}
+
 /// Drops " B.O", " S.O.", " HO" and the like when they repeat the office type's letter.
 std::string StripTypeSuffix(std::string name, const std::optional<std::string>& type) {
   if (!type || type->size() != 2 || (type->back() != 'O' && type->back() != 'o')) return name;
@@ -152,7 +166,7 @@ Result<ParsedRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   if (!pincode) return Error{ErrorCode::kInvalid, "pincode: " + pincode.error};
   ParsedRow row{record.line, *pincode.pincode, {}};
   PostOffice& office = row.office;
-  office.branch_type = optional(kType);
+  office.branch_type = NormalizeType(optional(kType));
   office.name = StripTypeSuffix(field(kOffice), office.branch_type);
   office.delivery = optional(kDelivery);
   office.division = field(kDivision);

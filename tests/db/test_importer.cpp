@@ -32,7 +32,7 @@ const std::string kOlderCsv =
     "Districtname,statename\n"
     "Bengali Market S.O,110001,SO,Delivery,New Delhi Central,Delhi,Delhi,New Delhi,Central "
     "Delhi,Delhi\n"
-    "Zeta Camp B.O,999021,BO,Delivery,APS,APS,Army Postal Service,Zeta Taluk,APS,APS\n";
+    "Zeta Camp B.O,999021,B.O,Delivery,APS,APS,Army Postal Service,Zeta Taluk,APS,APS\n";
 
 class Importer : public ::testing::Test {
  protected:
@@ -120,6 +120,7 @@ TEST_F(Importer, ReadsTheOlderLayout) {
   const auto zeta = LookupPincode(db_, Pincode(999021)).value();
   ASSERT_EQ(zeta.offices.size(), 1u);
   EXPECT_EQ(zeta.offices[0].name, "Zeta Camp");
+  EXPECT_EQ(zeta.offices[0].branch_type, "BO");  // "B.O" normalised
   EXPECT_EQ(zeta.offices[0].taluk, "Zeta Taluk");
   EXPECT_EQ(zeta.offices[0].circle, "Army Postal Service");
   EXPECT_EQ(zeta.key, report->pincodes_added[0].second);
