@@ -1,0 +1,50 @@
+#pragma once
+// Serves an Api over HTTP/1.1 with cpp-httplib (the only file that includes httplib.h is
+// http_server.cpp). Limits are set once here: body size (from ApiOptions), timeouts, worker
+// threads, listen backlog.
+
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pintag/server/api.hpp"
+
+namespace pintag::server {
+
+struct ServerOptions {
+  std::string bind_address = "127.0.0.1";  ///< "0.0.0.0" to serve every interface
+  int port = 8080;                         ///< 0 picks a free port (see HttpServer::port)
+  int threads = 4;                         ///< worker threads, 1 … 256
+  std::chrono::seconds read_timeout{5};    ///< per read of a request (headers or body chunk)
+  std::chrono::seconds write_timeout{5};   ///< per write of a response
+  std::chrono::seconds keep_alive_timeout{5};
+  int keep_alive_max_requests = 100;  ///< requests per connection before it is closed
+  int listen_backlog = 128;           ///< pending connections queued by the kernel
+};
+
+class HttpServer {
+ public:
+  HttpServer(std::shared_ptr<const Api> api, ServerOptions options);
+  ~HttpServer();  ///< stops and joins a server started with start()
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  /// Binds and listens; returns false and sets `error` when the address or port is unusable.
+  bool bind(std::string* error);
+  /// Serves on the calling thread until stop(); requires bind().
+  bool serve();
+  /// bind() and serve() on a background thread; returns once the port accepts connections.
+  bool start(std::string* error);
+  /// Stops accepting, finishes in-flight requests, joins the background thread.
+  void stop();
+
+  /// The bound port (useful with port 0); 0 before bind().
+  int port() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pintag::server

@@ -1,0 +1,88 @@
+#pragma once
+// The HTTP layer's plain values: a request in, a response out. Handlers are functions between
+// them, so they are tested without sockets; only http_server.cpp knows cpp-httplib.
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace pintag::server {
+
+/// Roles a bearer token can carry (issue 5): admin may do everything.
+enum class Role { kAdmin, kCounter, kScanner };
+
+std::string_view ToString(Role role);
+std::optional<Role> ParseRole(std::string_view text);
+
+/// Who is calling, once a bearer token was verified.
+struct Principal {
+  std::string id;  ///< token id or name, for logs; never the secret
+  Role role = Role::kCounter;
+};
+
+/// What a route requires. Admin satisfies every requirement.
+enum class Access { kOpen, kCounter, kScanner, kAdmin };
+
+std::string_view ToString(Access access);
+bool Allows(Access access, Role role);
+
+/// Header names compare case-insensitively (RFC 9110).
+struct CaseInsensitiveLess {
+  bool operator()(std::string_view a, std::string_view b) const;
+  using is_transparent = void;
+};
+using HeaderMap = std::multimap<std::string, std::string, CaseInsensitiveLess>;
+
+/// One part of a multipart/form-data body (e.g. the `image` field of POST /detect).
+struct FormPart {
+  std::string name;
+  std::string filename;
+  std::string content_type;
+  std::string content;
+};
+
+struct HttpRequest {
+  std::string method;                              ///< "GET", "POST", … (HEAD is routed as GET)
+  std::string path;                                ///< decoded path, no query
+  std::map<std::string, std::string> path_params;  ///< from the route pattern, e.g. {"pin", …}
+  std::multimap<std::string, std::string> query;   ///< decoded query parameters
+  HeaderMap headers;
+  std::string body;                    ///< the raw body, unless it was multipart/form-data
+  std::vector<FormPart> parts;         ///< the parts of a multipart/form-data body
+  std::string content_type;            ///< media type of the body without parameters, lower case
+  std::optional<Principal> principal;  ///< set when the route needs a role and the token passed
+
+  /// The path parameter `name`; empty when absent.
+  std::string pathParam(std::string_view name) const;
+  /// The first query parameter `name`, if given.
+  std::optional<std::string> queryParam(std::string_view name) const;
+  /// The first form part called `name`, if any.
+  const FormPart* part(std::string_view name) const;
+  /// The first header `name`, if given.
+  std::optional<std::string> header(std::string_view name) const;
+};
+
+struct HttpResponse {
+  int status = 200;
+  std::string content_type = "application/json";
+  std::string body;
+  std::vector<std::pair<std::string, std::string>> headers;  ///< extra headers
+
+  static HttpResponse Json(std::string body, int status = 200);
+  static HttpResponse Bytes(std::string content_type, std::string body, int status = 200);
+  static HttpResponse Bytes(std::string content_type, const std::vector<std::uint8_t>& body);
+  static HttpResponse Text(std::string body, int status = 200);
+};
+
+using Handler = std::function<HttpResponse(const HttpRequest&)>;
+
+/// Checks a bearer token; the registry supplies it (tokens table). Nothing for an unknown,
+/// revoked or malformed token. Must be thread-safe: it runs on the worker threads.
+using TokenVerifier = std::function<std::optional<Principal>(std::string_view token)>;
+
+}  // namespace pintag::server

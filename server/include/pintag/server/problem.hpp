@@ -1,0 +1,45 @@
+#pragma once
+// RFC 9457 problem details: every 4xx/5xx answer is application/problem+json with type, title,
+// status and detail.
+
+#include <exception>
+#include <string>
+#include <string_view>
+
+#include "pintag/server/http_types.hpp"
+
+namespace pintag::server {
+
+inline constexpr std::string_view kProblemContentType = "application/problem+json";
+
+struct Problem {
+  int status = 500;
+  std::string title;   ///< short, the same for every occurrence of this kind of problem
+  std::string detail;  ///< this occurrence, fit to show a user
+  std::string type = "about:blank";  ///< a URI naming the kind; about:blank means "see status"
+};
+
+/// Thrown by handlers (or returned as a value through ProblemResponse) to answer a problem.
+class HttpError : public std::exception {
+ public:
+  HttpError(int status, std::string detail, std::string title = {}, std::string type = {});
+  explicit HttpError(Problem problem) : problem_(std::move(problem)) {}
+  const Problem& problem() const { return problem_; }
+  const char* what() const noexcept override { return problem_.detail.c_str(); }
+
+ private:
+  Problem problem_;
+};
+
+/// The standard reason phrase of a status ("Not Found"), or "Error".
+std::string_view StatusTitle(int status);
+
+/// A problem+json response; an empty title becomes StatusTitle(status).
+HttpResponse ProblemResponse(Problem problem);
+HttpResponse ProblemResponse(int status, std::string detail);
+
+/// The one wrapper: runs `handler`, turning HttpError into its problem, any other exception into
+/// a 500 problem (details are not leaked), and an error status with an empty body into a problem.
+HttpResponse InvokeHandler(const Handler& handler, const HttpRequest& request);
+
+}  // namespace pintag::server

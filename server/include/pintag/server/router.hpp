@@ -1,0 +1,75 @@
+#pragma once
+// The route table: method, path pattern, who may call, handler, and what OpenAPI says about it.
+// Patterns are literal segments and parameters, a parameter optionally with a literal suffix in
+// its segment: "/api/v1/pincodes/{pin}", "/api/v1/tags/{pin}.png".
+
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pintag/server/http_types.hpp"
+
+namespace pintag::server {
+
+/// A query parameter, for the OpenAPI description.
+struct QueryParamDoc {
+  std::string name;
+  std::string description;
+  std::string type = "string";  ///< JSON schema type: "string", "integer", "number", "boolean"
+  bool required = false;
+};
+
+struct Route {
+  std::string method;   ///< "GET", "POST", "PUT", "DELETE", "PATCH"
+  std::string pattern;  ///< see the header comment
+  Access access = Access::kOpen;
+  Handler handler;
+  std::string summary;                ///< one line for OpenAPI
+  std::vector<std::string> produces;  ///< success media types; empty = application/json
+  std::vector<QueryParamDoc> query;   ///< documented query parameters
+  std::vector<std::string> consumes;  ///< request body media types; empty = no body
+  std::string tag = "api";            ///< OpenAPI tag grouping the route
+  bool hidden = false;                ///< left out of OpenAPI (static files)
+};
+
+/// A route with the fields every route sets; set produces, query and consumes on the result.
+Route MakeRoute(std::string method, std::string pattern, Access access, Handler handler,
+                std::string summary, std::string tag = "api");
+
+struct RouteMatch {
+  const Route* route = nullptr;               ///< null when nothing matched
+  std::map<std::string, std::string> params;  ///< path parameters of the matched route
+  std::vector<std::string> allowed_methods;   ///< when the path matched other methods only
+};
+
+class Router {
+ public:
+  /// Adds a route; throws std::invalid_argument for a malformed pattern or a duplicate.
+  Router& add(Route route);
+
+  /// The route for `method` (HEAD matches GET) and `path`. When the path exists for other methods
+  /// only, `route` is null and `allowed_methods` lists them (for 405 and Allow).
+  RouteMatch match(std::string_view method, std::string_view path) const;
+
+  const std::vector<Route>& routes() const { return routes_; }
+
+ private:
+  struct Segment {
+    bool param = false;
+    std::string text;    ///< literal, or the parameter's name
+    std::string suffix;  ///< literal after the parameter within the segment
+  };
+  struct Compiled {
+    std::vector<Segment> segments;
+  };
+  static Compiled Compile(const std::string& pattern);
+  static bool Matches(const Compiled& compiled, const std::vector<std::string_view>& parts,
+                      std::map<std::string, std::string>* params);
+
+  std::vector<Route> routes_;
+  std::vector<Compiled> compiled_;
+};
+
+}  // namespace pintag::server

@@ -1,0 +1,213 @@
+#include "pintag/server/api.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <nlohmann/json.hpp>
+
+#include "pintag/server/problem.hpp"
+
+namespace pintag::server {
+namespace {
+
+constexpr std::size_t kMaxTokenLength = 4096;
+
+std::string Lower(std::string_view text) {
+  std::string out(text);
+  std::transform(out.begin(), out.end(), out.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return out;
+}
+
+std::string_view Trim(std::string_view text) {
+  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+  return text;
+}
+
+/// "image/PNG; q=1" -> "image/png".
+std::string MediaType(std::string_view content_type) {
+  return Lower(Trim(content_type.substr(0, content_type.find(';'))));
+}
+
+std::optional<std::string> FirstHeader(const HeaderMap& headers, std::string_view name) {
+  const auto it = headers.find(name);
+  if (it == headers.end()) return std::nullopt;
+  return it->second;
+}
+
+HttpResponse Unauthorized(std::string detail, bool invalid_token) {
+  HttpResponse response = ProblemResponse(401, std::move(detail));
+  response.headers.emplace_back("WWW-Authenticate",
+                                invalid_token ? R"(Bearer realm="pintag", error="invalid_token")"
+                                              : R"(Bearer realm="pintag")");
+  return response;
+}
+
+}  // namespace
+
+Api::Api(Router router, TokenVerifier verifier, HealthCheck health,
+         std::shared_ptr<Metrics> metrics, ApiOptions options)
+    : router_(std::move(router)),
+      verifier_(std::move(verifier)),
+      health_(std::move(health)),
+      metrics_(metrics ? std::move(metrics) : std::make_shared<Metrics>()),
+      options_(std::move(options)) {
+  if (options_.web_dir) static_files_.emplace(*options_.web_dir);
+
+  router_.add(MakeRoute(
+      "GET", "/livez", Access::kOpen,
+      [](const HttpRequest&) { return HttpResponse::Json(R"({"status":"ok"})"); },
+      "The process is up", "operations"));
+  router_.add(MakeRoute(
+      "GET", "/readyz", Access::kOpen,
+      [health = health_](const HttpRequest&) {
+        const std::optional<std::string> problem = health ? health() : std::nullopt;
+        if (problem) return ProblemResponse(Problem{503, "Not Ready", *problem, "about:blank"});
+        return HttpResponse::Json(R"({"status":"ready"})");
+      },
+      "Ready to serve (the database is reachable)", "operations"));
+  Route metrics_route = MakeRoute(
+      "GET", "/metrics", Access::kOpen,
+      [metrics = metrics_](const HttpRequest&) {
+        return HttpResponse::Bytes(std::string(Metrics::kContentType), metrics->renderPrometheus());
+      },
+      "Prometheus metrics (text exposition format)", "operations");
+  metrics_route.produces = {"text/plain"};
+  router_.add(std::move(metrics_route));
+  // The document describes every route including itself, so it is built after this add.
+  auto document = std::make_shared<std::string>();
+  router_.add(MakeRoute(
+      "GET", "/openapi.json", Access::kOpen,
+      [document](const HttpRequest&) { return HttpResponse::Json(*document); },
+      "This API's OpenAPI 3.1 description", "operations"));
+  *document = OpenApiJson(router_, options_.info);
+}
+
+Admission Api::admit(std::string_view method, std::string_view path,
+                     const HeaderMap& headers) const {
+  Admission admission;
+  admission.match = router_.match(method, path);
+  const Route* route = admission.match.route;
+  if (route == nullptr) {
+    if (!admission.match.allowed_methods.empty()) {
+      std::vector<std::string> allowed = admission.match.allowed_methods;
+      if (std::find(allowed.begin(), allowed.end(), "GET") != allowed.end())
+        allowed.push_back("HEAD");
+      std::string allow;
+      for (const std::string& m : allowed) allow += (allow.empty() ? "" : ", ") + m;
+      HttpResponse response =
+          ProblemResponse(405, std::string(method) + " is not allowed here; use " + allow);
+      response.headers.emplace_back("Allow", allow);
+      admission.rejection = std::move(response);
+      admission.route_label = "unmatched";
+      return admission;
+    }
+    if (static_files_ && (method == "GET" || method == "HEAD") &&
+        std::string_view(path).rfind("/api/", 0) != 0) {
+      admission.is_static = true;
+      admission.route_label = "static";
+      return admission;
+    }
+    admission.rejection = ProblemResponse(
+        404, "no route for " + std::string(method) + " " + std::string(path.substr(0, 200)));
+    admission.route_label = "unmatched";
+    return admission;
+  }
+  admission.route_label = route->pattern;
+
+  // Bearer auth, before a byte of the body is read.
+  if (route->access != Access::kOpen) {
+    const std::optional<std::string> authorization = FirstHeader(headers, "Authorization");
+    if (!authorization) {
+      admission.rejection =
+          Unauthorized("this route needs a bearer token (Authorization: Bearer …)", false);
+      return admission;
+    }
+    const std::string_view value = Trim(*authorization);
+    const std::size_t space = value.find(' ');
+    if (space == std::string_view::npos || Lower(value.substr(0, space)) != "bearer") {
+      admission.rejection =
+          Unauthorized("the Authorization header must be 'Bearer <token>'", false);
+      return admission;
+    }
+    const std::string_view token = Trim(value.substr(space + 1));
+    std::optional<Principal> principal;
+    if (!token.empty() && token.size() <= kMaxTokenLength && verifier_)
+      principal = verifier_(token);
+    if (!principal) {
+      admission.rejection = Unauthorized("the bearer token is not valid", true);
+      return admission;
+    }
+    if (!Allows(route->access, principal->role)) {
+      admission.rejection =
+          ProblemResponse(403, "a " + std::string(ToString(principal->role)) +
+                                   " token may not call this route; it needs " +
+                                   std::string(ToString(route->access)) +
+                                   (route->access == Access::kAdmin ? "" : " or admin"));
+      return admission;
+    }
+    admission.principal = std::move(principal);
+  }
+
+  // The declared body: its length against the limit, its media type against the route's.
+  if (const auto length = FirstHeader(headers, "Content-Length")) {
+    std::size_t bytes = 0;
+    const std::string_view text = Trim(*length);
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), bytes);
+    if (ec == std::errc::result_out_of_range ||
+        (ec == std::errc() && bytes > options_.max_body_bytes)) {
+      admission.rejection =
+          ProblemResponse(413, "the request body may be at most " +
+                                   std::to_string(options_.max_body_bytes) + " bytes");
+      return admission;
+    }
+    if (ec != std::errc() || end != text.data() + text.size()) {
+      admission.rejection = ProblemResponse(400, "malformed Content-Length");
+      return admission;
+    }
+  }
+  const bool has_body = FirstHeader(headers, "Transfer-Encoding").has_value() ||
+                        (FirstHeader(headers, "Content-Length").value_or("0") != "0");
+  if (!route->consumes.empty() && has_body) {
+    const std::string type = MediaType(FirstHeader(headers, "Content-Type").value_or(""));
+    if (std::find(route->consumes.begin(), route->consumes.end(), type) == route->consumes.end()) {
+      std::string accepted;
+      for (const std::string& t : route->consumes) accepted += (accepted.empty() ? "" : ", ") + t;
+      admission.rejection = ProblemResponse(
+          415, "this route takes " + accepted + ", not '" + type.substr(0, 100) + "'");
+      return admission;
+    }
+  }
+  return admission;
+}
+
+HttpResponse Api::invoke(const Admission& admission, HttpRequest request) const {
+  if (admission.rejection) return *admission.rejection;
+  if (admission.is_static) return static_files_->serve(request.path);
+  request.path_params = admission.match.params;
+  request.principal = admission.principal;
+  if (request.content_type.empty()) {
+    request.content_type = MediaType(request.header("Content-Type").value_or(""));
+  }
+  return InvokeHandler(admission.match.route->handler, request);
+}
+
+HttpResponse Api::handle(HttpRequest request) const {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string method = request.method;
+  const Admission admission = admit(request.method, request.path, request.headers);
+  HttpResponse response;
+  if (!admission.rejection && request.body.size() > options_.max_body_bytes) {
+    response = ProblemResponse(413, "the request body may be at most " +
+                                        std::to_string(options_.max_body_bytes) + " bytes");
+  } else {
+    response = invoke(admission, std::move(request));
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  metrics_->observeRequest(admission.route_label, method, response.status, seconds);
+  return response;
+}
+
+}  // namespace pintag::server

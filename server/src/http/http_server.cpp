@@ -1,0 +1,263 @@
+// The only file that includes httplib.h: adapts cpp-httplib 0.11.4 to Api.
+//
+// Order of a request in cpp-httplib: headers are read, the pre-routing handler runs (here: route,
+// auth, declared length and type, via Api::admit), then the body is read and the handler runs,
+// then the error handler (status >= 400) and the logger. All of it on one worker thread, so the
+// admission is carried from the pre-routing handler to the handler and logger in a thread_local.
+//
+// Bodies: cpp-httplib 0.11.4 applies set_payload_max_length only to bodies with a Content-Length
+// (a chunked body is read without limit), so POST/PUT/PATCH/DELETE use content-reader handlers
+// that count every chunk, and GET/HEAD/OPTIONS requests that announce a body are refused before
+// it is read.
+
+#include "pintag/server/http_server.hpp"
+
+#include <httplib.h>
+#include <sys/socket.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "pintag/server/problem.hpp"
+
+namespace pintag::server {
+namespace {
+
+struct RequestState {
+  bool active = false;
+  std::chrono::steady_clock::time_point start;
+  Admission admission;
+};
+thread_local RequestState t_state;
+
+void Apply(const HttpResponse& from, httplib::Response& to) {
+  to.status = from.status;
+  for (const auto& [name, value] : from.headers) to.set_header(name, value);
+  to.set_content(from.body, from.content_type);
+}
+
+HeaderMap Headers(const httplib::Request& req) {
+  HeaderMap headers;
+  for (const auto& [name, value] : req.headers) headers.emplace(name, value);
+  return headers;
+}
+
+HttpRequest ToRequest(const httplib::Request& req) {
+  HttpRequest request;
+  request.method = req.method;
+  request.path = req.path;
+  for (const auto& [name, value] : req.params) request.query.emplace(name, value);
+  request.headers = Headers(req);
+  return request;
+}
+
+bool AnnouncesBody(const httplib::Request& req) {
+  return req.has_header("Transfer-Encoding") ||
+         (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
+}
+
+}  // namespace
+
+struct HttpServer::Impl {
+  std::shared_ptr<const Api> api;
+  ServerOptions options;
+  httplib::Server server;
+  std::atomic<int> listen_fd{-1};
+  int port = 0;
+  std::thread thread;
+
+  HttpResponse TooLarge() const {
+    return ProblemResponse(413, "the request body may be at most " +
+                                    std::to_string(api->options().max_body_bytes) + " bytes");
+  }
+
+  httplib::Server::HandlerResponse PreRoute(const httplib::Request& req, httplib::Response& res) {
+    t_state = RequestState{true, std::chrono::steady_clock::now(), {}};
+    t_state.admission = api->admit(req.method, req.path, Headers(req));
+    if (!t_state.admission.rejection && AnnouncesBody(req) &&
+        (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
+      t_state.admission.rejection = ProblemResponse(400, req.method + " requests take no body");
+    }
+    if (!t_state.admission.rejection) return httplib::Server::HandlerResponse::Unhandled;
+    Apply(*t_state.admission.rejection, res);
+    // The body, if any, is left unread: close the connection after answering.
+    if (AnnouncesBody(req)) res.set_header("Connection", "close");
+    return httplib::Server::HandlerResponse::Handled;
+  }
+
+  void Handle(const httplib::Request& req, httplib::Response& res) {
+    HttpRequest request = ToRequest(req);
+    request.body = req.body;
+    Apply(api->invoke(t_state.admission, std::move(request)), res);
+  }
+
+  void HandleWithReader(const httplib::Request& req, httplib::Response& res,
+                        const httplib::ContentReader& reader) {
+    HttpRequest request = ToRequest(req);
+    const std::size_t limit = api->options().max_body_bytes;
+    std::size_t total = 0;
+    bool too_large = false;
+    const auto count = [&](std::size_t n) {
+      total += n;
+      too_large = too_large || total > limit;
+      return !too_large;
+    };
+    bool ok = false;
+    if (req.is_multipart_form_data()) {
+      ok = reader(
+          [&](const httplib::MultipartFormData& part) {
+            request.parts.push_back({part.name, part.filename, part.content_type, {}});
+            return true;
+          },
+          [&](const char* data, std::size_t n) {
+            if (!count(n) || request.parts.empty()) return false;
+            request.parts.back().content.append(data, n);
+            return true;
+          });
+    } else {
+      ok = reader([&](const char* data, std::size_t n) {
+        if (!count(n)) return false;
+        request.body.append(data, n);
+        return true;
+      });
+    }
+    if (too_large) {
+      Apply(TooLarge(), res);
+      res.set_header("Connection", "close");
+      return;
+    }
+    if (!ok) {
+      Apply(ProblemResponse(400, "the request body could not be read"), res);
+      res.set_header("Connection", "close");
+      return;
+    }
+    Apply(api->invoke(t_state.admission, std::move(request)), res);
+  }
+
+  // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).
+  httplib::Server::HandlerResponse OnError(const httplib::Request&, httplib::Response& res) {
+    if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    const HttpResponse problem =
+        res.status == 413 ? TooLarge()
+                          : ProblemResponse(res.status, std::string(StatusTitle(res.status)));
+    res.set_content(problem.body, problem.content_type);
+    return httplib::Server::HandlerResponse::Handled;
+  }
+
+  void Log(const httplib::Request& req, const httplib::Response& res) {
+    double seconds = 0;
+    std::string label = "unmatched";
+    if (t_state.active) {
+      seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_state.start).count();
+      label = t_state.admission.route_label;
+    }
+    api->metrics().observeRequest(label, req.method, res.status, seconds);
+    t_state = RequestState{};
+  }
+};
+
+HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->api = std::move(api);
+  impl_->options = std::move(options);
+  Impl* impl = impl_.get();
+  httplib::Server& s = impl->server;
+
+  const int threads = std::clamp(impl->options.threads, 1, 256);
+  s.new_task_queue = [threads] {
+    return new httplib::ThreadPool(static_cast<std::size_t>(threads));
+  };
+  s.set_payload_max_length(impl->api->options().max_body_bytes);
+  s.set_read_timeout(impl->options.read_timeout);
+  s.set_write_timeout(impl->options.write_timeout);
+  s.set_keep_alive_timeout(impl->options.keep_alive_timeout.count());
+  s.set_keep_alive_max_count(
+      static_cast<std::size_t>(std::max(1, impl->options.keep_alive_max_requests)));
+  // The default socket options plus remembering the listening socket, to raise its backlog
+  // after cpp-httplib's own listen(fd, 5).
+  s.set_socket_options([impl](int fd) {
+    int yes = 1;
+    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    impl->listen_fd = fd;
+  });
+  s.set_pre_routing_handler([impl](const httplib::Request& req, httplib::Response& res) {
+    return impl->PreRoute(req, res);
+  });
+  s.set_error_handler(httplib::Server::HandlerWithResponse(
+      [impl](const httplib::Request& req, httplib::Response& res) {
+        return impl->OnError(req, res);
+      }));
+  s.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr) {
+    Apply(ProblemResponse(500, "the server failed to handle this request"), res);
+  });
+  s.set_logger(
+      [impl](const httplib::Request& req, const httplib::Response& res) { impl->Log(req, res); });
+
+  const auto plain = [impl](const httplib::Request& req, httplib::Response& res) {
+    impl->Handle(req, res);
+  };
+  const auto reading = [impl](const httplib::Request& req, httplib::Response& res,
+                              const httplib::ContentReader& reader) {
+    impl->HandleWithReader(req, res, reader);
+  };
+  s.Get(".*", plain);
+  s.Options(".*", plain);
+  s.Post(".*", reading);
+  s.Put(".*", reading);
+  s.Patch(".*", reading);
+  s.Delete(".*", reading);
+}
+
+HttpServer::~HttpServer() {
+  stop();
+}
+
+bool HttpServer::bind(std::string* error) {
+  const ServerOptions& o = impl_->options;
+  if (o.port == 0) {
+    impl_->port = impl_->server.bind_to_any_port(o.bind_address);
+  } else {
+    impl_->port = impl_->server.bind_to_port(o.bind_address, o.port) ? o.port : -1;
+  }
+  if (impl_->port <= 0) {
+    impl_->port = 0;
+    if (error) {
+      *error = "cannot listen on " + o.bind_address + ":" + std::to_string(o.port) +
+               " (address in use, not local, or not permitted)";
+    }
+    return false;
+  }
+  if (impl_->listen_fd >= 0 && o.listen_backlog > 0) ::listen(impl_->listen_fd, o.listen_backlog);
+  return true;
+}
+
+bool HttpServer::serve() {
+  return impl_->server.listen_after_bind();
+}
+
+bool HttpServer::start(std::string* error) {
+  if (!bind(error)) return false;
+  impl_->thread = std::thread([this] { serve(); });
+  for (int i = 0; i < 500 && !impl_->server.is_running(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (!impl_->server.is_running()) {
+    if (error) *error = "the server did not start";
+    stop();
+    return false;
+  }
+  return true;
+}
+
+void HttpServer::stop() {
+  impl_->server.stop();
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+int HttpServer::port() const {
+  return impl_->port;
+}
+
+}  // namespace pintag::server

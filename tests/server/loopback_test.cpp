@@ -1,0 +1,336 @@
+// A real server on a free loopback port, hit with cpp-httplib's client and raw sockets.
+
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <fstream>
+
+#include "pintag/server/http_server.hpp"
+#include "test_support.hpp"
+
+namespace pintag::server {
+namespace {
+
+constexpr std::size_t kMaxBody = 64 * 1024;
+
+class LoopbackTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::filesystem::create_directories(dir_.path() / "web" / "js");
+    std::ofstream(dir_.path() / "web" / "index.html") << "<h1>PinTag</h1>";
+    std::ofstream(dir_.path() / "web" / "js" / "app.js") << "console.log(1)";
+    std::ofstream(dir_.path() / "secret.txt") << "TOP-SECRET";
+    std::filesystem::create_symlink(dir_.path() / "secret.txt", dir_.path() / "web" / "link.txt");
+
+    metrics_ = std::make_shared<Metrics>();
+    auto api = std::make_shared<const Api>(
+        test::TestRouter(metrics_), test::FakeVerifier(),
+        [this]() -> std::optional<std::string> {
+          if (!ready_) return "database unreachable";
+          return std::nullopt;
+        },
+        metrics_, ApiOptions{kMaxBody, dir_.path() / "web", {}});
+    ServerOptions options;
+    options.port = 0;
+    options.threads = 4;
+    options.listen_backlog = 64;
+    server_ = std::make_unique<HttpServer>(api, options);
+    std::string error;
+    ASSERT_TRUE(server_->start(&error)) << error;
+    ASSERT_GT(server_->port(), 0);
+    client_ = std::make_unique<httplib::Client>("127.0.0.1", server_->port());
+    client_->set_read_timeout(10, 0);
+  }
+  void TearDown() override {
+    if (server_) server_->stop();
+  }
+
+  static void ExpectProblem(const httplib::Result& r, int status) {
+    ASSERT_TRUE(r) << "no response: " << httplib::to_string(r.error());
+    EXPECT_EQ(r->status, status) << r->body;
+    EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json") << r->body;
+    const nlohmann::json body = nlohmann::json::parse(r->body, nullptr, false);
+    ASSERT_FALSE(body.is_discarded()) << r->body;
+    EXPECT_EQ(body["status"], status);
+    EXPECT_TRUE(body.contains("type") && body.contains("title") && body.contains("detail"))
+        << r->body;
+  }
+
+  // Sends raw bytes and returns everything the server answers until it closes or goes quiet.
+  std::string Raw(const std::string& request) const {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+      ::close(fd);
+      return {};
+    }
+    ::send(fd, request.data(), request.size(), 0);
+    timeval timeout{1, 0};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    std::string out;
+    char buffer[4096];
+    ssize_t n = 0;
+    while ((n = ::recv(fd, buffer, sizeof buffer, 0)) > 0)
+      out.append(buffer, static_cast<std::size_t>(n));
+    ::close(fd);
+    return out;
+  }
+
+  // cpp-httplib calls the logger, which records the metrics, just after the response is written;
+  // a client can read its answer a moment before the request is counted. Wait for the count.
+  std::string MetricsWhen(const std::string& line) const {
+    std::string text;
+    for (int i = 0; i < 200; ++i) {
+      text = metrics_->renderPrometheus();
+      if (text.find(line) != std::string::npos) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return text;
+  }
+
+  test::TempDir dir_;
+  std::atomic<bool> ready_{true};
+  std::shared_ptr<Metrics> metrics_;
+  std::unique_ptr<HttpServer> server_;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+TEST_F(LoopbackTest, LivezAndReadyz) {
+  auto r = client_->Get("/livez");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, R"({"status":"ok"})");
+  r = client_->Get("/readyz");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  ready_ = false;
+  ExpectProblem(client_->Get("/readyz"), 503);
+  EXPECT_EQ(client_->Get("/livez")->status, 200);
+}
+
+TEST_F(LoopbackTest, ProblemsFor404And405) {
+  ExpectProblem(client_->Get("/api/v1/nothing"), 404);
+  const auto r = client_->Post("/livez", "x", "text/plain");
+  ExpectProblem(r, 405);
+  EXPECT_EQ(r->get_header_value("Allow"), "GET, HEAD");
+  ExpectProblem(client_->Delete("/api/v1/labels"), 405);
+}
+
+TEST_F(LoopbackTest, ProblemsFor401And403) {
+  auto r = client_->Get("/api/v1/labels/110001.pdf");
+  ExpectProblem(r, 401);
+  EXPECT_EQ(r->get_header_value("WWW-Authenticate"), R"(Bearer realm="pintag")");
+  r = client_->Get("/api/v1/labels/110001.pdf", {{"Authorization", "Bearer wrong"}});
+  ExpectProblem(r, 401);
+  ExpectProblem(client_->Get("/api/v1/labels/110001.pdf",
+                             {{"Authorization", std::string("Bearer ") + test::kScannerToken}}),
+                403);
+  r = client_->Get("/api/v1/labels/110001.pdf",
+                   {{"Authorization", std::string("Bearer ") + test::kCounterToken}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/pdf");
+  EXPECT_EQ(r->body.rfind("%PDF-", 0), 0U);
+}
+
+TEST_F(LoopbackTest, ProblemFor413WithContentLength) {
+  const httplib::Headers auth = {{"Authorization", std::string("Bearer ") + test::kScannerToken}};
+  auto r = client_->Post("/api/v1/upload", auth, std::string(kMaxBody + 1, 'x'),
+                         "application/octet-stream");
+  ExpectProblem(r, 413);
+  r = client_->Post("/api/v1/upload", auth, std::string(kMaxBody, 'x'), "application/octet-stream");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(nlohmann::json::parse(r->body)["bytes"], kMaxBody);
+}
+
+TEST_F(LoopbackTest, ProblemFor413WithChunkedBody) {
+  // cpp-httplib 0.11.4 does not limit chunked bodies itself; the server counts the chunks. Raw
+  // bytes, because cpp-httplib's client reads no answer before it has sent the whole body.
+  const std::string head =
+      std::string("POST /api/v1/upload HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer ") +
+      test::kScannerToken +
+      "\r\nContent-Type: application/octet-stream\r\nTransfer-Encoding: chunked\r\n\r\n";
+  std::string chunks;
+  const std::string chunk(16 * 1024, 'y');
+  for (std::size_t sent = 0; sent <= kMaxBody; sent += chunk.size())
+    chunks += "4000\r\n" + chunk + "\r\n";
+  std::string answer = Raw(head + chunks + "0\r\n\r\n");
+  EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 300);
+  EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
+  EXPECT_NE(answer.find("at most 65536 bytes"), std::string::npos);
+  // A small chunked body passes.
+  answer = Raw(head.substr(0, head.size() - 2) + "Connection: close\r\n\r\n" +
+               "a\r\n0123456789\r\n0\r\n\r\n");
+  EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
+  EXPECT_NE(answer.find(R"("bytes":10)"), std::string::npos) << answer;
+}
+
+// After a 413 the rest of the body stays unread on the connection. A request hidden there, right
+// after the chunk that crossed the limit, must not be answered as if it were a request.
+TEST_F(LoopbackTest, UnreadBodyIsNotParsedAsARequest) {
+  const std::string head =
+      std::string("POST /api/v1/upload HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer ") +
+      test::kScannerToken +
+      "\r\nContent-Type: application/octet-stream\r\nTransfer-Encoding: chunked\r\n\r\n";
+  std::string chunks;
+  const std::string chunk(16 * 1024, 'y');
+  for (int i = 0; i < 5; ++i) chunks += "4000\r\n" + chunk + "\r\n";
+  const std::string smuggled = "GET /livez HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
+  for (const std::string& tail : {smuggled, "\r\n" + smuggled}) {
+    const std::string answer = Raw(head + chunks + tail);
+    EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 200);
+    EXPECT_EQ(answer.find(R"({"status":"ok"})"), std::string::npos) << answer;
+  }
+  const std::string declared =
+      "POST /livez HTTP/1.1\r\nHost: x\r\nContent-Length: " + std::to_string(smuggled.size()) +
+      "\r\n\r\n";
+  const std::string answer = Raw(declared + smuggled);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 405", 0), 0U) << answer.substr(0, 200);
+  EXPECT_EQ(answer.find(R"({"status":"ok"})"), std::string::npos) << answer;
+}
+
+TEST_F(LoopbackTest, MultipartPartsReachTheHandler) {
+  const httplib::MultipartFormDataItems items = {{"image", "JPEGBYTES", "photo.jpg", "image/jpeg"},
+                                                 {"note", "hi", "", ""}};
+  const auto r = client_->Post(
+      "/api/v1/upload", {{"Authorization", std::string("Bearer ") + test::kScannerToken}}, items);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(nlohmann::json::parse(r->body)["parts"], 2);
+}
+
+TEST_F(LoopbackTest, ProblemFor415) {
+  ExpectProblem(client_->Post("/api/v1/upload",
+                              {{"Authorization", std::string("Bearer ") + test::kScannerToken}},
+                              "abc", "text/plain"),
+                415);
+}
+
+TEST_F(LoopbackTest, GetWithABodyIsRefused) {
+  const std::string answer =
+      Raw("GET /livez HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc");
+  EXPECT_EQ(answer.rfind("HTTP/1.1 400", 0), 0U) << answer;
+  EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
+}
+
+TEST_F(LoopbackTest, StaticFilesAndTraversalAttempts) {
+  auto r = client_->Get("/");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, "<h1>PinTag</h1>");
+  r = client_->Get("/js/app.js");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "text/javascript; charset=utf-8");
+  for (const char* path :
+       {"/../secret.txt", "/js/../../secret.txt", "/%2e%2e/secret.txt", "/%2E%2E%2Fsecret.txt",
+        "/%252e%252e/secret.txt", "/..%2fsecret.txt", "/..%5csecret.txt", "/link.txt",
+        "/js/%2e%2e/%2e%2e/secret.txt", "/%c0%ae%c0%ae/secret.txt", "/.%00./secret.txt"}) {
+    const std::string answer =
+        Raw(std::string("GET ") + path + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+    EXPECT_EQ(answer.find("TOP-SECRET"), std::string::npos) << path;
+    EXPECT_TRUE(answer.rfind("HTTP/1.1 404", 0) == 0 || answer.rfind("HTTP/1.1 400", 0) == 0)
+        << path << ": " << answer;
+  }
+  ExpectProblem(client_->Get("/api/v1/not-static.html"), 404);
+}
+
+TEST_F(LoopbackTest, MetricsCountWhatHappened) {
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(client_->Get("/livez"));
+  ASSERT_TRUE(client_->Get("/api/v1/nothing"));
+  ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png?dpi=100",
+                           {{"Authorization", std::string("Bearer ") + test::kCounterToken}}));
+  ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png", {{"Authorization", "Bearer nope"}}));
+  MetricsWhen(
+      R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)");
+  const auto r = client_->Get("/metrics");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "text/plain; version=0.0.4; charset=utf-8");
+  const std::string& text = r->body;
+  EXPECT_NE(text.find(R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 3)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(
+      text.find(R"(pintag_http_requests_total{route="unmatched",method="GET",status="404"} 1)"),
+      std::string::npos);
+  EXPECT_NE(
+      text.find(
+          R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="200"} 1)"),
+      std::string::npos);
+  EXPECT_NE(
+      text.find(
+          R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)"),
+      std::string::npos);
+  EXPECT_NE(
+      text.find(
+          R"(pintag_http_request_duration_seconds_count{route="/livez",method="GET",status="200"} 3)"),
+      std::string::npos);
+  EXPECT_NE(text.find("pintag_labels_rendered_total 1\n"), std::string::npos);
+}
+
+TEST_F(LoopbackTest, OpenApiIsServed) {
+  const auto r = client_->Get("/openapi.json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(nlohmann::json::parse(r->body)["openapi"], "3.1.0");
+}
+
+TEST_F(LoopbackTest, ManyConcurrentClients) {
+  std::vector<std::thread> threads;
+  std::atomic<int> ok{0};
+  for (int t = 0; t < 8; ++t) {
+    threads.emplace_back([&] {
+      httplib::Client client("127.0.0.1", server_->port());
+      for (int i = 0; i < 20; ++i) {
+        if (auto r = client.Get("/livez"); r && r->status == 200) ++ok;
+      }
+    });
+  }
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(ok, 160);
+  MetricsWhen(R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 160)");
+  EXPECT_EQ(metrics_->requestCount("/livez", "GET", 200), 160);
+}
+
+TEST_F(LoopbackTest, ListenBacklogIsRaised) {
+  // For a listening socket, ss reports the backlog in Send-Q.
+  const std::string command =
+      "ss -ltnH 'sport = :" + std::to_string(server_->port()) + "' 2>/dev/null";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  if (!pipe) GTEST_SKIP() << "ss not available";
+  char line[512] = {};
+  if (std::fgets(line, sizeof line, pipe.get()) == nullptr) GTEST_SKIP() << "ss printed nothing";
+  std::istringstream fields(line);
+  std::string state;
+  int recv_q = -1;
+  int send_q = -1;
+  fields >> state >> recv_q >> send_q;
+  EXPECT_EQ(send_q, 64) << line;
+}
+
+TEST(Loopback, PortInUseIsAClearError) {
+  auto api = std::make_shared<const Api>(Router{}, nullptr, nullptr, nullptr);
+  ServerOptions options;
+  options.port = 0;
+  HttpServer first(api, options);
+  std::string error;
+  ASSERT_TRUE(first.start(&error)) << error;
+  options.port = first.port();
+  HttpServer second(api, options);
+  EXPECT_FALSE(second.bind(&error));
+  EXPECT_NE(error.find("cannot listen on 127.0.0.1:" + std::to_string(first.port())),
+            std::string::npos)
+      << error;
+}
+
+}  // namespace
+}  // namespace pintag::server

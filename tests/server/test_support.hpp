@@ -1,0 +1,143 @@
+#pragma once
+// Shared fixtures for the server tests: a fake token table and a fake registry.
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "pintag/server/api.hpp"
+#include "pintag/server/label_routes.hpp"
+#include "pintag/server/problem.hpp"
+
+namespace pintag::server::test {
+
+inline constexpr const char* kAdminToken = "admin-secret";
+inline constexpr const char* kCounterToken = "counter-secret";
+inline constexpr const char* kScannerToken = "scanner-secret";
+
+inline TokenVerifier FakeVerifier() {
+  return [](std::string_view token) -> std::optional<Principal> {
+    if (token == kAdminToken) return Principal{"t-admin", Role::kAdmin};
+    if (token == kCounterToken) return Principal{"t-counter", Role::kCounter};
+    if (token == kScannerToken) return Principal{"t-scanner", Role::kScanner};
+    return std::nullopt;
+  };
+}
+
+/// 110001 and 560001 exist; 110002 is retired; plan "north" has bins; others are unknown.
+inline LabelContentProvider FakeRegistry() {
+  return [](Pincode pin, const std::optional<std::string>& plan) -> LabelLookup {
+    if (plan && *plan != "north")
+      return {std::nullopt,
+              Problem{404, "Unknown Plan", "no sort plan '" + *plan + "'", "about:blank"}};
+    if (pin == Pincode(110002)) {
+      return {std::nullopt,
+              Problem{410, "Retired Pincode", "pincode 110002 is retired", "about:blank"}};
+    }
+    if (pin != Pincode(110001) && pin != Pincode(560001)) {
+      return {std::nullopt,
+              Problem{404, "Unknown Pincode", "pincode " + pin.str() + " is not in the registry",
+                      "about:blank"}};
+    }
+    LabelContent label;
+    label.pincode = pin;
+    label.key = TagKey(pin == Pincode(110001) ? 12345 : 777);
+    label.office = pin == Pincode(110001) ? "Connaught Place S.O" : "Bangalore G.P.O.";
+    label.district = pin == Pincode(110001) ? "New Delhi" : "Bengaluru";
+    label.state = pin == Pincode(110001) ? "Delhi" : "Karnataka";
+    if (plan) {
+      label.plan = plan;
+      label.bin = pin == Pincode(110001) ? "N-07" : "S-02";
+    }
+    return {label, std::nullopt};
+  };
+}
+
+/// A test route table: an open echo, role-protected routes, a thrower, and the label routes.
+inline Router TestRouter(const std::shared_ptr<Metrics>& metrics) {
+  Router router;
+  router.add(MakeRoute(
+      "GET", "/api/v1/echo/{word}", Access::kOpen,
+      [](const HttpRequest& r) {
+        nlohmann::json out = {{"word", r.pathParam("word")}, {"q", r.queryParam("q").value_or("")}};
+        return HttpResponse::Json(out.dump());
+      },
+      "echo"));
+  Route upload = MakeRoute(
+      "POST", "/api/v1/upload", Access::kScanner,
+      [](const HttpRequest& r) {
+        nlohmann::json out = {{"bytes", r.body.size()},
+                              {"parts", r.parts.size()},
+                              {"who", r.principal ? r.principal->id : ""},
+                              {"type", r.content_type}};
+        return HttpResponse::Json(out.dump());
+      },
+      "upload");
+  upload.consumes = {"application/octet-stream", "image/jpeg", "multipart/form-data"};
+  router.add(std::move(upload));
+  router.add(MakeRoute(
+      "PUT", "/api/v1/admin/thing", Access::kAdmin,
+      [](const HttpRequest& r) {
+        return HttpResponse::Json(nlohmann::json{{"who", r.principal->id}}.dump());
+      },
+      "admin write"));
+  router.add(MakeRoute(
+      "GET", "/api/v1/boom", Access::kOpen,
+      [](const HttpRequest&) -> HttpResponse { throw std::runtime_error("secret path /etc/db"); },
+      "throws"));
+  router.add(MakeRoute(
+      "GET", "/api/v1/teapot", Access::kOpen,
+      [](const HttpRequest&) -> HttpResponse { throw HttpError(418, "short and stout", "Teapot"); },
+      "problem"));
+  AddLabelRoutes(router, FakeRegistry(), metrics, {.max_batch = 60, .max_tag_px = 1024});
+  return router;
+}
+
+inline HttpRequest Get(std::string path, std::optional<std::string> token = std::nullopt) {
+  HttpRequest r;
+  r.method = "GET";
+  const std::size_t q = path.find('?');
+  if (q != std::string::npos) {
+    std::string query = path.substr(q + 1);
+    path = path.substr(0, q);
+    std::size_t start = 0;
+    while (start <= query.size()) {
+      const std::size_t amp = std::min(query.find('&', start), query.size());
+      const std::string pair = query.substr(start, amp - start);
+      const std::size_t eq = pair.find('=');
+      if (!pair.empty())
+        r.query.emplace(pair.substr(0, eq), eq == std::string::npos ? "" : pair.substr(eq + 1));
+      start = amp + 1;
+    }
+  }
+  r.path = std::move(path);
+  if (token) r.headers.emplace("Authorization", "Bearer " + *token);
+  return r;
+}
+
+inline nlohmann::json Json(const HttpResponse& r) {
+  return nlohmann::json::parse(r.body);
+}
+
+/// A scratch directory removed at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "pintag-server-XXXXXX").string();
+    path_ = mkdtemp(pattern.data());
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace pintag::server::test
