@@ -168,17 +168,17 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   result.intrinsics_source = camera.source;
   const stage::DebugImages debug(options_.debug_dir);
 
-  const cv::Mat mask = stage::RednessMask(bgr, {options_.red_min_a, options_.red_min_b});
+  const stage::RedRuns red = stage::FindRedRuns(bgr, {options_.red_min_a, options_.red_min_b});
   const auto t_red = Clock::now();
   result.timings.redness_ms = Ms(start, t_red);
-  debug.redness(mask);
+  if (debug.enabled()) debug.redness(stage::RunsToMask(red));
 
   stage::BlobLimits limits;
   limits.min_area = options_.min_element_area_px;
   limits.max_area = std::max<int>(limits.min_area,
                                   static_cast<int>(options_.max_element_area_ratio * bgr.total()));
   limits.max_blobs = options_.max_blobs;
-  const std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(mask, limits);
+  const std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
   const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
   const auto t_blobs = Clock::now();
   result.timings.blobs_ms = Ms(t_red, t_blobs);

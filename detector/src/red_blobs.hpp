@@ -5,6 +5,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "redness.hpp"
+
 namespace pintag::stage {
 
 struct RedBlob {
@@ -24,6 +26,9 @@ struct BlobLimits {
   int max_blobs = 4000;       ///< keep the largest this many
 };
 
+/// 8-connected components of the runs, with their moments, filtered by `limits`.
+std::vector<RedBlob> FindRedBlobs(const RedRuns& runs, const BlobLimits& limits);
+/// Same from a mask (tests).
 std::vector<RedBlob> FindRedBlobs(const cv::Mat& mask, const BlobLimits& limits);
 
 }  // namespace pintag::stage

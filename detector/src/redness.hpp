@@ -7,6 +7,7 @@
 // few pixels that remain.
 
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace pintag::stage {
 
@@ -23,7 +24,25 @@ bool IsRedLab(double a, double b, const RednessThresholds& thresholds);
 /// The stand-in for one sRGB pixel.
 bool IsRedPixel(int r, int g, int b, const RednessThresholds& thresholds);
 
-/// CV_8U mask of `bgr` (CV_8UC3): 255 where red, 0 elsewhere.
+/// A horizontal run of red pixels [x0, x1] on row y.
+struct RedRun {
+  int y;
+  int x0;
+  int x1;
+};
+
+/// The red pixels of a frame as runs, row by row (rows ascending, runs left to right). Red is
+/// sparse in photos, so later stages work on runs rather than on a full-frame image.
+struct RedRuns {
+  cv::Size size;
+  std::vector<RedRun> runs;
+};
+
+/// One pass over `bgr` (CV_8UC3).
+RedRuns FindRedRuns(const cv::Mat& bgr, const RednessThresholds& thresholds);
+
+/// CV_8U mask: 255 where red, 0 elsewhere (tests and debug images).
+cv::Mat RunsToMask(const RedRuns& runs);
 cv::Mat RednessMask(const cv::Mat& bgr, const RednessThresholds& thresholds);
 
 }  // namespace pintag::stage
