@@ -6,7 +6,7 @@
 namespace pintag::stage {
 namespace {
 
-constexpr double kFullFrameDiagonalMm = 43.2666;  // hypot(36, 24)
+const double kFullFrameDiagonalMm = std::hypot(36.0, 24.0);  // 43.27 mm
 
 std::optional<double> PixelsPerMm(double resolution, int unit) {
   if (!(resolution > 0)) return std::nullopt;

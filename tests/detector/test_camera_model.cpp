@@ -1,1 +1,57 @@
+// Intrinsics: given, else EXIF, else the assumed field of view.
+
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "camera_model.hpp"
+
+namespace pintag::stage {
+namespace {
+
+TEST(CameraModel, GivenWins) {
+  DetectorOptions o;
+  o.intrinsics = CameraIntrinsics{1500, 1510, 950, 530, {0.1, 0, 0, 0}};
+  ExifCamera exif;
+  exif.focal_length_35mm = 28;
+  const ResolvedCamera c = ResolveCamera(o, &exif, 1920, 1080);
+  EXPECT_EQ(c.source, IntrinsicsSource::kGiven);
+  EXPECT_EQ(c.intrinsics.fy, 1510);
+  EXPECT_EQ(c.intrinsics.distortion.size(), 4u);
+}
+
+TEST(CameraModel, Exif35mmEquivalent) {
+  ExifCamera exif;
+  exif.focal_length_35mm = 26;
+  const ResolvedCamera c = ResolveCamera({}, &exif, 4000, 3000);
+  EXPECT_EQ(c.source, IntrinsicsSource::kExif);
+  EXPECT_NEAR(c.intrinsics.fx, 26 * 5000 / std::hypot(36.0, 24.0), 1e-6);
+  EXPECT_NEAR(c.intrinsics.cx, 1999.5, 1e-9);
+}
+
+TEST(CameraModel, ExifFocalLengthWithFocalPlaneResolution) {
+  ExifCamera exif;
+  exif.focal_length_mm = 4.2;
+  exif.focal_plane_x_resolution = 2540;  // px per inch = 100 px per mm
+  exif.focal_plane_resolution_unit = 2;
+  const ResolvedCamera c = ResolveCamera({}, &exif, 4000, 3000);
+  EXPECT_EQ(c.source, IntrinsicsSource::kExif);
+  EXPECT_NEAR(c.intrinsics.fx, 420, 1e-6);
+  exif.focal_plane_resolution_unit = 4;  // per mm
+  exif.focal_plane_x_resolution = 250;
+  EXPECT_NEAR(ResolveCamera({}, &exif, 4000, 3000).intrinsics.fx, 1050, 1e-6);
+}
+
+TEST(CameraModel, AssumedFieldOfViewOtherwise) {
+  ExifCamera empty;
+  for (const ExifCamera* exif :
+       {static_cast<const ExifCamera*>(nullptr), static_cast<const ExifCamera*>(&empty)}) {
+    const ResolvedCamera c = ResolveCamera({}, exif, 1920, 1080);
+    EXPECT_EQ(c.source, IntrinsicsSource::kAssumed);
+    EXPECT_NEAR(2 * std::atan(960 / c.intrinsics.fx) * 180 / std::numbers::pi, 65, 1e-9);
+  }
+}
+
+}  // namespace
+}  // namespace pintag::stage

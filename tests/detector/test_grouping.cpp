@@ -1,1 +1,62 @@
+// Stage 3b: clustering blobs into tag candidates and placing them at elements.
+
 #include <gtest/gtest.h>
+
+#include "grouping.hpp"
+#include "homography.hpp"
+
+namespace pintag::stage {
+namespace {
+
+RedBlob Blob(double x, double y, double d) {
+  RedBlob b;
+  b.centroid = {x, y};
+  b.major = b.minor = d;
+  b.area = static_cast<int>(3.14 * d * d / 4);
+  b.fill = 1;
+  return b;
+}
+
+// Elements of a tag with square side s at (x, y): centres 0.25 s / 0.75 s, disk diameter 0.2 s.
+void AddTag(std::vector<RedBlob>* blobs, double x, double y, double s, int skip = -1) {
+  const double c[4][2] = {{0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}};
+  for (int e = 0; e < 4; ++e) {
+    if (e != skip) blobs->push_back(Blob(x + c[e][0] * s, y + c[e][1] * s, 0.2 * s));
+  }
+}
+
+TEST(Grouping, TwoTagsTwoClustersAndStrayBlobsNone) {
+  std::vector<RedBlob> blobs;
+  AddTag(&blobs, 100, 100, 100);
+  AddTag(&blobs, 400, 120, 60, 2);      // one element hidden
+  blobs.push_back(Blob(700, 400, 20));  // alone
+  const auto clusters = ClusterBlobs(blobs, {800, 500});
+  ASSERT_EQ(clusters.size(), 2u);
+  for (const BlobCluster& c : clusters) {
+    if (c.blobs.size() == 4) {
+      EXPECT_TRUE(c.roi.contains({100, 100}) && c.roi.contains({199, 199}));
+    } else {
+      EXPECT_EQ(c.blobs.size(), 3u);
+      // The region reaches the hidden element's corner of the square too.
+      EXPECT_TRUE(c.roi.contains({459, 179}));
+    }
+  }
+}
+
+TEST(Grouping, AssignsBlobsToElementSlots) {
+  std::vector<RedBlob> blobs;
+  AddTag(&blobs, 100, 100, 100, 1);
+  const Quad quad = {cv::Point2d(100, 100), {200, 100}, {200, 200}, {100, 200}};
+  const ElementAssignment a = AssignElements(HomographyFromQuad(quad), blobs, {0, 1, 2});
+  EXPECT_EQ(a.found, 3);
+  EXPECT_FALSE(a.conflict);
+  EXPECT_EQ(a.blob[0], 0);
+  EXPECT_EQ(a.blob[1], -1);
+  EXPECT_EQ(a.blob[2], 1);
+  EXPECT_EQ(a.blob[3], 2);
+  blobs.push_back(Blob(150, 150, 10));  // red in the middle of the square: not a tag
+  EXPECT_TRUE(AssignElements(HomographyFromQuad(quad), blobs, {0, 1, 2, 3}).conflict);
+}
+
+}  // namespace
+}  // namespace pintag::stage

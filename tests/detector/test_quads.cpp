@@ -1,1 +1,41 @@
+// Stage 3a: the tag is one dark quad in min(R, G, B) inside its quiet zone.
+
 #include <gtest/gtest.h>
+
+#include "quads.hpp"
+#include "synthetic.hpp"
+
+namespace pintag::stage {
+namespace {
+
+TEST(Quads, FindsTheSquareOfAWarpedTagOnDarkAndLightGround) {
+  for (std::uint64_t seed : {1, 2, 3, 4}) {
+    testing::SyntheticOptions o;
+    o.seed = seed;
+    const auto scene = testing::MakeScene(
+        {{.key = 100, .square_px = 120, .tilt_deg = 40, .tilt_axis_deg = 30, .roll_deg = 20}}, o);
+    const cv::Rect roi(330, 120, 300, 300);
+    const auto quads = FindQuads(MinChannel(scene.bgr, roi), roi.tl(), 20);
+    int matched = 0;
+    for (const Quad& q : quads) {
+      EXPECT_GT(SignedArea2(q), 0);  // clockwise on screen
+      double worst = 0;
+      for (int i = 0; i < 4; ++i) {
+        double best = 1e9;
+        for (int j = 0; j < 4; ++j)
+          best = std::min(best, cv::norm(q[j] - scene.truth[0].corners[i]));
+        worst = std::max(worst, best);
+      }
+      matched += worst < 2.5;
+    }
+    EXPECT_EQ(matched, 1) << "seed " << seed;
+  }
+}
+
+TEST(Quads, SignedAreaIsPositiveClockwise) {
+  const Quad q = {cv::Point2d(0, 0), {1, 0}, {1, 1}, {0, 1}};
+  EXPECT_GT(SignedArea2(q), 0);
+}
+
+}  // namespace
+}  // namespace pintag::stage

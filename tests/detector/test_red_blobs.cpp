@@ -1,1 +1,52 @@
+// Stage 2: blobs, their ellipse moments and the shape filter.
+
 #include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "red_blobs.hpp"
+
+namespace pintag::stage {
+namespace {
+
+TEST(RedBlobs, EllipsesKeepTheirAxes) {
+  cv::Mat mask(300, 300, CV_8U, cv::Scalar(0));
+  cv::ellipse(mask, {{80, 80}, {40, 14}, 30}, 255, -1);  // a disk tilted ~70°
+  cv::circle(mask, {200, 200}, 20, 255, -1);
+  const auto blobs = FindRedBlobs(mask, {});
+  ASSERT_EQ(blobs.size(), 2u);
+  for (const RedBlob& b : blobs) {
+    if (b.centroid.x < 150) {
+      EXPECT_NEAR(b.centroid.x, 80, 0.5);
+      EXPECT_NEAR(b.major, 40, 2);
+      EXPECT_NEAR(b.minor, 14, 2);
+    } else {
+      EXPECT_NEAR(b.major, 40, 2);
+      EXPECT_NEAR(b.minor, 40, 2);
+    }
+    EXPECT_NEAR(b.fill, 1.0, 0.1);
+  }
+}
+
+TEST(RedBlobs, LinesRingsAndSpecksAreDropped) {
+  cv::Mat mask(300, 300, CV_8U, cv::Scalar(0));
+  cv::line(mask, {10, 10}, {200, 30}, 255, 2);     // too elongated
+  cv::circle(mask, {150, 150}, 40, 255, 3);        // a ring: its fill is far from 1
+  cv::rectangle(mask, {250, 250, 2, 2}, 255, -1);  // too small
+  cv::rectangle(mask, {20, 200, 60, 5}, 255, -1);  // elongated bar
+  EXPECT_TRUE(FindRedBlobs(mask, {}).empty());
+}
+
+TEST(RedBlobs, EightConnectedAcrossADiagonal) {
+  cv::Mat mask(20, 20, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(2, 2, 3, 3)).setTo(255);
+  mask(cv::Rect(5, 5, 3, 3)).setTo(255);  // touches the first only at a corner
+  BlobLimits limits;
+  limits.min_fill = 0.3;
+  const auto blobs = FindRedBlobs(mask, limits);
+  ASSERT_EQ(blobs.size(), 1u);
+  EXPECT_EQ(blobs[0].area, 18);
+}
+
+}  // namespace
+}  // namespace pintag::stage

@@ -344,10 +344,11 @@ TEST(SceneSuite, TimePer1080pFrameNextToAruco) {
         ours.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
         aruco.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
         redness.push_back(r.timings.redness_ms);
-        std::printf("  frame: total %.2f redness %.2f blobs %.2f quads %.2f decode %.2f pose %.2f | "
-                    "aruco %.2f\n",
-                    r.timings.total_ms, r.timings.redness_ms, r.timings.blobs_ms,
-                    r.timings.quads_ms, r.timings.decode_ms, r.timings.pose_ms, aruco.back());
+        std::printf(
+            "  frame: total %.2f redness %.2f blobs %.2f quads %.2f decode %.2f pose %.2f | "
+            "aruco %.2f\n",
+            r.timings.total_ms, r.timings.redness_ms, r.timings.blobs_ms, r.timings.quads_ms,
+            r.timings.decode_ms, r.timings.pose_ms, aruco.back());
         pintags += static_cast<int>(r.detections.size());
         arucos += static_cast<int>(ids.size());
       }
