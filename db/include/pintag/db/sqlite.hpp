@@ -2,9 +2,10 @@
 // A small RAII layer over the SQLite C API: Connection, Statement, Transaction and one exception
 // type. It is the only code in PinTag that calls sqlite3_*; <sqlite3.h> stays in db/src.
 //
-// Thread-safety: a Connection and its Statements belong to one thread at a time (SQLite is built
-// serialized on Debian, but statements share the connection's error state and transaction). Use
-// one Connection per thread; WAL lets readers run while one writer writes.
+// Thread-safety: a Connection and its Statements must be used by one thread at a time. They are
+// opened with SQLITE_OPEN_NOMUTEX (no per-call locking), and statements share the connection's
+// error state and transaction anyway. Give each thread its own Connection (or guard one with a
+// mutex); WAL lets any number of reader connections run beside the one writer.
 
 #include <cstdint>
 #include <memory>
@@ -112,10 +113,10 @@ class Connection {
   bool inTransaction() const;
   const std::string& path() const { return path_; }
 
-  /// The raw handle, for db/src only (public headers never include <sqlite3.h>).
+ private:
+  friend class Statement;
   sqlite3* handle() const { return db_.get(); }
 
- private:
   struct Closer {
     void operator()(sqlite3* db) const;
   };
