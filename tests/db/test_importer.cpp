@@ -220,21 +220,28 @@ TEST_F(Importer, NewPincodesProbePastRetiredKeys) {
   EXPECT_EQ(LookupPincode(db_, victim).value().status, PincodeStatus::kRetired);
 }
 
-TEST_F(Importer, CommandLineImportAndLookups) {
+// `pintag import` into a database file that does not exist yet: created, seeded, then imported.
+TEST_F(Importer, CommandLineImportCreatesTheDatabaseAndLooksUp) {
   if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
   const std::string csv = test::WriteFile(dir_.file("newer.csv"), kNewerCsv);
-  const std::string db = path_;
+  const std::string db = dir_.file("fresh.db");
   const auto imported =
       test::RunCommand(test::PintagExe() + " import " + csv + " --db " + db + " 2>&1");
   EXPECT_EQ(imported.exit_code, 0) << imported.out;
-  EXPECT_NE(imported.out.find("3 offices added"), std::string::npos) << imported.out;
-  const TagKey key = LookupPincode(db_, Pincode(999011)).value().key;
+  EXPECT_NE(imported.out.find("created " + db + " and seeded it"), std::string::npos)
+      << imported.out;
+  EXPECT_NE(imported.out.find("3 offices added, 1 updated"), std::string::npos) << imported.out;
+  Connection fresh = test::OpenExisting(db);
+  EXPECT_EQ(CountRegistry(fresh).value().pincodes_active, 19159 + 2);
+  const TagKey key = LookupPincode(fresh, Pincode(999011)).value().key;
   const auto by_key = test::RunCommand(test::PintagExe() + " keys lookup --key " +
                                        std::to_string(key.value()) + " --db " + db);
   EXPECT_EQ(by_key.exit_code, 0);
   EXPECT_NE(by_key.out.find("pincode  999011"), std::string::npos) << by_key.out;
   const auto by_pincode = test::RunCommand(test::PintagExe() + " keys lookup 110001 --db " + db);
   EXPECT_NE(by_pincode.out.find("Central Delhi"), std::string::npos) << by_pincode.out;
+  EXPECT_NE(
+      test::RunCommand(test::PintagExe() + " keys lookup 11000 --db " + db + " 2>&1").exit_code, 0);
 
   const std::string bad = test::WriteFile(dir_.file("bad.csv"), kMalformedCsv);
   const auto strict =
@@ -243,7 +250,15 @@ TEST_F(Importer, CommandLineImportAndLookups) {
   EXPECT_NE(strict.out.find("bad.csv:5: expected 10 fields, got 3"), std::string::npos)
       << strict.out;
   EXPECT_NE(strict.out.find("nothing imported"), std::string::npos) << strict.out;
-  EXPECT_EQ(LookupPincode(db_, Pincode(999031)).error().code, ErrorCode::kNotFound);
+  EXPECT_EQ(LookupPincode(fresh, Pincode(999031)).error().code, ErrorCode::kNotFound);
+  const auto lenient =
+      test::RunCommand(test::PintagExe() + " import " + bad + " --db " + db + " 2>&1");
+  EXPECT_EQ(lenient.exit_code, 0) << lenient.out;
+  EXPECT_NE(lenient.out.find("bad.csv:3: office name contains control character 10"),
+            std::string::npos)
+      << lenient.out;
+  EXPECT_NE(lenient.out.find("5 bad rows skipped"), std::string::npos) << lenient.out;
+  EXPECT_TRUE(LookupPincode(fresh, Pincode(999031)).ok());
 }
 
 }  // namespace
