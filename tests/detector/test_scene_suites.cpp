@@ -251,6 +251,35 @@ TEST(SceneSuite, PoseAccuracy) {
   EXPECT_LE(median(corner_errors), 0.5);
 }
 
+// --- steep views: tilted 70°, square >= 48 px -------------------------------------------------
+
+TEST(SceneSuite, SeventyDegreeTilt) {
+  const Detector detector(OptionsFor(k720));
+  TagRange range;
+  range.min_px = 48;
+  range.max_px = 110;
+  range.min_tilt = 70;
+  range.max_tilt = 70;
+  Tally tally;
+  for (std::uint64_t seed = 6000; seed < 6100; ++seed) {
+    const scene::Scene s = scene::RenderScene(MakeSpec(seed, k720, range, false, true));
+    if (s.truth.empty() || !s.truth[0].fully_visible || s.truth[0].square_px < 48) continue;
+    const int before = tally.found;
+    tally.add(s, detector.detect(s.bgr));
+    if (tally.found == before) {
+      std::printf("missed at 70°: seed %llu square %.1f px\n",
+                  static_cast<unsigned long long>(seed), s.truth[0].square_px);
+    }
+  }
+  std::printf(
+      "steep suite: %d tags tilted 70° (mean side >= 48 px, moderate photometry), found "
+      "%d (%.1f %%), misreads %d\n",
+      tally.tags, tally.found, 100.0 * tally.found / std::max(1, tally.tags), tally.misreads);
+  EXPECT_GE(tally.tags, 90);
+  EXPECT_GE(tally.found, 0.95 * tally.tags);
+  EXPECT_EQ(tally.misreads, 0);
+}
+
 // --- one element covered; several tags per frame -----------------------------------------------
 
 TEST(SceneSuite, OneElementCovered) {
