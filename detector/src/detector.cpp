@@ -88,6 +88,9 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
     }
     const stage::PayloadResult payload = stage::DecodePayload(orientation.reading);
     if (!payload.key) {
+      d.cells = orientation.reading;
+      d.margins = orientation.margins;
+      d.unknown_bits = orientation.unknown;
       reject(payload.error);
       continue;
     }

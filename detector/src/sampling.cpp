@@ -14,8 +14,8 @@ namespace {
 // wrong homography still land on the cell's own colour.
 constexpr double kGreenRadii[] = {0.135, 0.15, 0.165};
 constexpr double kGreenAngles[] = {-11, 0, 11};  // degrees around the sector's mid-angle
-constexpr double kRedRadii[] = {0.045, 0.065};
-constexpr double kRedAngles[] = {-18, 0, 18};
+constexpr double kRedRadii[] = {0.05, 0.065};
+constexpr double kRedAngles[] = {-12, 0, 12};
 
 bool SampleRgb(const cv::Mat& bgr, cv::Point2d p, int rgb[3]) {
   const int x0 = static_cast<int>(std::floor(p.x)), y0 = static_cast<int>(std::floor(p.y));

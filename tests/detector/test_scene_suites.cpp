@@ -9,8 +9,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <numbers>
 #include <opencv2/aruco.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -75,6 +77,10 @@ DetectorOptions OptionsFor(const scene::Camera& c) {
   DetectorOptions o;
   o.intrinsics = CameraIntrinsics{c.fx, c.fy, c.cx, c.cy, {}};
   o.tag_size_m = kTagM;
+  if (const char* dir = std::getenv("PINTAG_DEBUG_DIR")) {  // stage images and rejected candidates
+    o.debug_dir = dir;
+    o.return_rejected = true;
+  }
   return o;
 }
 
@@ -261,11 +267,18 @@ TEST(SceneSuite, SeventyDegreeTilt) {
   range.min_tilt = 70;
   range.max_tilt = 70;
   Tally tally;
+  const char* only = std::getenv("PINTAG_SEED");  // PINTAG_SEED=n: just that scene
   for (std::uint64_t seed = 6000; seed < 6100; ++seed) {
+    if (only && seed != std::strtoull(only, nullptr, 10)) continue;
     const scene::Scene s = scene::RenderScene(MakeSpec(seed, k720, range, false, true));
     if (s.truth.empty() || !s.truth[0].fully_visible || s.truth[0].square_px < 48) continue;
     const int before = tally.found;
-    tally.add(s, detector.detect(s.bgr));
+    const DetectResult r = detector.detect(s.bgr);
+    if (only) {
+      cv::imwrite("/tmp/pintag_scene.png", s.bgr);
+      for (const Detection& d : r.detections) std::printf("candidate: %s\n", d.reject_reason.c_str());
+    }
+    tally.add(s, r);
     if (tally.found == before) {
       std::printf("missed at 70°: seed %llu square %.1f px\n",
                   static_cast<unsigned long long>(seed), s.truth[0].square_px);
