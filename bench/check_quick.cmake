@@ -1,0 +1,47 @@
+# ctest bench_quick: runs `pintag_bench --quick` into a scratch directory and checks that it ran,
+# wrote a sane report and both plots, and that PinTag misread nothing (exit code 3 otherwise).
+# Times are not checked. Usage: cmake -DBENCH=<pintag_bench> -DOUT=<dir> -P check_quick.cmake
+file(REMOVE_RECURSE "${OUT}")
+file(MAKE_DIRECTORY "${OUT}")
+execute_process(COMMAND "${BENCH}" --quick --require-zero-misreads --out "${OUT}"
+                        --csv "${OUT}/frames.csv"
+                RESULT_VARIABLE status)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "pintag_bench --quick exited with ${status} (3: PinTag misread)")
+endif()
+foreach(file BENCHMARKS.md images/bench-recall-vs-tilt.png images/bench-recall-vs-size.png
+             frames.csv)
+  if(NOT EXISTS "${OUT}/${file}")
+    message(FATAL_ERROR "pintag_bench --quick wrote no ${file}")
+  endif()
+  file(SIZE "${OUT}/${file}" size)
+  if(size LESS 1000)
+    message(FATAL_ERROR "${file} is only ${size} bytes")
+  endif()
+endforeach()
+file(READ "${OUT}/BENCHMARKS.md" report)
+foreach(needle "### Summary" "| **PinTag** |" "| **ArUco** |" "| **AprilTag d1** |"
+               "| **AprilTag d2** |" "BGR→gray (floor)" "### Recall by size" "### Recall by tilt")
+  string(FIND "${report}" "${needle}" at)
+  if(at LESS 0)
+    message(FATAL_ERROR "BENCHMARKS.md lacks '${needle}'")
+  endif()
+endforeach()
+# Every detector was timed: no "–" in the median time column of the summary rows.
+string(FIND "${report}" "### Summary" summary_at)
+string(FIND "${report}" "Time ratios" ratios_at)
+math(EXPR summary_length "${ratios_at} - ${summary_at}")
+string(SUBSTRING "${report}" ${summary_at} ${summary_length} summary)
+string(REGEX MATCHALL "\\| \\*\\*[^|]+\\*\\* \\|[^\n]*" rows "${summary}")
+list(LENGTH rows count)
+if(NOT count EQUAL 4)
+  message(FATAL_ERROR "expected 4 detector rows in the summary, found ${count}")
+endif()
+foreach(row IN LISTS rows)
+  string(REPLACE "|" ";" cells "${row}")
+  list(GET cells 9 median)
+  if(NOT median MATCHES "[0-9]+\\.[0-9]+")
+    message(FATAL_ERROR "no median time in: ${row}")
+  endif()
+endforeach()
+message(STATUS "pintag_bench --quick: report, plots and CSV look sane; PinTag misread nothing")

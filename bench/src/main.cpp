@@ -1,0 +1,310 @@
+// pintag_bench: PinTag against ArUco and AprilTag on the same rendered poses, in one process
+// (issue 6; docs/BENCHMARKS.md says how to run it and what each column means).
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "detectors.hpp"
+#include "machine.hpp"
+#include "metrics.hpp"
+#include "progress.hpp"
+#include "report.hpp"
+#include "sweep.hpp"
+
+namespace pintag::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
+}
+
+struct Args {
+  SweepOptions sweep;
+  std::string out_dir = PINTAG_SOURCE_DIR "/docs";
+  std::string csv;
+  bool all_cores = true;
+  bool require_zero_misreads = false;
+  bool quiet = false;
+  int chunk = 24;
+};
+
+void Usage(FILE* to) {
+  std::fprintf(to,
+               "usage: pintag_bench [options]\n"
+               "  --quick               one frame per size x tilt bin, 6 tagless (CI, seconds)\n"
+               "  --frames-per-bin N    frames per size x tilt x photometry bin (default 6)\n"
+               "  --tagless N           tagless photograph frames (default 64)\n"
+               "  --seed N              base seed of the sweep (default 1)\n"
+               "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
+               "tree's docs/)\n"
+               "  --csv FILE            also write one row per frame and detector\n"
+               "  --one-thread-only     skip the all-cores pass\n"
+               "  --require-zero-misreads  exit 3 when PinTag misreads or reports a tag on a "
+               "tagless frame\n"
+               "  --quiet               no progress on stderr\n");
+}
+
+bool ParseArgs(int argc, char** argv, Args* args) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&](const char* name) -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "pintag_bench: %s needs a value\n", name);
+        return nullptr;
+      }
+      return argv[++i];
+    };
+    if (a == "--quick") {
+      args->sweep.quick = true;
+    } else if (a == "--frames-per-bin") {
+      const char* v = value("--frames-per-bin");
+      if (v == nullptr) return false;
+      args->sweep.frames_per_bin = std::max(1, std::atoi(v));
+    } else if (a == "--tagless") {
+      const char* v = value("--tagless");
+      if (v == nullptr) return false;
+      args->sweep.tagless_frames = std::max(0, std::atoi(v));
+    } else if (a == "--seed") {
+      const char* v = value("--seed");
+      if (v == nullptr) return false;
+      args->sweep.seed = std::strtoull(v, nullptr, 10);
+    } else if (a == "--out") {
+      const char* v = value("--out");
+      if (v == nullptr) return false;
+      args->out_dir = v;
+    } else if (a == "--csv") {
+      const char* v = value("--csv");
+      if (v == nullptr) return false;
+      args->csv = v;
+    } else if (a == "--one-thread-only") {
+      args->all_cores = false;
+    } else if (a == "--require-zero-misreads") {
+      args->require_zero_misreads = true;
+    } else if (a == "--quiet") {
+      args->quiet = true;
+    } else if (a == "--help" || a == "-h") {
+      Usage(stdout);
+      std::exit(0);
+    } else {
+      std::fprintf(stderr, "pintag_bench: unknown option %s\n", a.c_str());
+      Usage(stderr);
+      return false;
+    }
+  }
+  return true;
+}
+
+/// A frame rendered once per marker (a tagless frame once, shared by all).
+struct Rendered {
+  std::array<cv::Mat, kMarkerCount> bgr;
+  std::array<std::vector<scene::MarkerTruth>, kMarkerCount> truth;
+  const cv::Mat& image(const FrameSpec& f, Marker m) const {
+    return bgr[f.tagless() ? 0 : static_cast<int>(m)];
+  }
+  const std::vector<scene::MarkerTruth>& truthFor(const FrameSpec& f, Marker m) const {
+    return truth[f.tagless() ? 0 : static_cast<int>(m)];
+  }
+};
+
+struct CsvRow {
+  int frame = 0;
+  int detector = 0;
+  Outcome outcome;
+  double time_one = kNaN;
+  double time_all = kNaN;
+};
+
+int Main(int argc, char** argv) {
+  Args args;
+  if (!ParseArgs(argc, argv, &args)) return 2;
+  const auto wall_start = Clock::now();
+
+  BenchResult result;
+  result.machine = GatherMachineInfo(PINTAG_SOURCE_DIR);
+  for (int i = 0; i < argc; ++i) result.command_line += (i ? " " : "") + std::string(argv[i]);
+  result.sweep = args.sweep;
+  result.photos = static_cast<int>(scene::BackgroundPhotos().size());
+  const scene::Camera camera = result.camera;
+  const std::vector<FrameSpec> frames = MakeSweep(args.sweep, camera);
+  for (const FrameSpec& f : frames) (f.tagless() ? result.tagless_frames : result.tagged_frames)++;
+  const int cores = std::max(1, result.machine.cores);
+  result.all_cores = args.all_cores ? cores : 0;
+
+  std::vector<std::unique_ptr<MarkerDetector>> detectors;
+  detectors.push_back(MakePinTagDetector(camera));
+  detectors.push_back(MakeArucoDetector(camera));
+  detectors.push_back(MakeAprilTagDetector(camera, 1));
+  detectors.push_back(MakeAprilTagDetector(camera, 2));
+  for (const auto& d : detectors) {
+    MarkerStats s;
+    s.name = d->name();
+    s.description = d->description();
+    s.marker = d->marker();
+    result.markers.push_back(std::move(s));
+  }
+  std::vector<CsvRow> rows;
+  if (!args.csv.empty()) rows.resize(frames.size() * detectors.size());
+
+  std::fprintf(
+      stderr, "pintag_bench: %d tagged + %d tagless frames, %dx%d, %zu detectors, 1 thread%s\n",
+      result.tagged_frames, result.tagless_frames, camera.width, camera.height, detectors.size(),
+      args.all_cores ? (" then " + std::to_string(cores) + " threads").c_str() : "");
+  Progress progress(frames.size() * 2, args.quiet);
+  std::size_t done = 0;
+  std::mutex progress_mutex;
+  bool warmed_up = false;
+  cv::Mat gray;
+
+  for (std::size_t begin = 0; begin < frames.size();
+       begin += static_cast<std::size_t>(args.chunk)) {
+    const std::size_t end = std::min(frames.size(), begin + static_cast<std::size_t>(args.chunk));
+    // 1. Render the chunk (not timed), on every core.
+    cv::setNumThreads(1);
+    std::vector<Rendered> rendered(end - begin);
+    std::atomic<std::size_t> next{begin};
+    const auto render_worker = [&] {
+      for (std::size_t i; (i = next++) < end;) {
+        const FrameSpec& f = frames[i];
+        const int markers = f.tagless() ? 1 : kMarkerCount;
+        for (int m = 0; m < markers; ++m) {
+          scene::Scene s = scene::RenderScene(SceneFor(f, static_cast<Marker>(m), camera));
+          rendered[i - begin].bgr[m] = std::move(s.bgr);
+          rendered[i - begin].truth[m] = std::move(s.truth);
+        }
+        const std::lock_guard lock(progress_mutex);
+        progress.update(++done, "rendering");
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < cores; ++t) pool.emplace_back(render_worker);
+    render_worker();
+    for (std::thread& t : pool) t.join();
+
+    // 2. Time every detector over the chunk: one thread, then all cores. The order of the
+    // detectors turns from chunk to chunk so none always runs first on a cold cache.
+    const std::size_t turn = (begin / static_cast<std::size_t>(args.chunk)) % detectors.size();
+    for (int pass = 0; pass < (args.all_cores ? 2 : 1); ++pass) {
+      const int threads = pass == 0 ? 1 : cores;
+      cv::setNumThreads(threads);
+      for (auto& d : detectors) d->setThreads(threads);
+      if (!warmed_up || pass == 1) {
+        // First use allocates (dictionaries, worker pools, tables): not part of any frame's time.
+        for (auto& d : detectors) {
+          const FrameSpec& f = frames[begin];
+          for (int k = 0; k < 2; ++k) d->detect(rendered[0].image(f, d->marker()));
+        }
+        GrayFloor(rendered[0].bgr[0], &gray);
+      }
+      for (std::size_t i = begin; i < end; ++i) {
+        const auto t0 = Clock::now();
+        GrayFloor(rendered[i - begin].bgr[0], &gray);
+        (pass == 0 ? result.floor_ms_one_thread : result.floor_ms_all_cores)
+            .push_back(Ms(t0, Clock::now()));
+      }
+      for (std::size_t k = 0; k < detectors.size(); ++k) {
+        const std::size_t di = (k + turn) % detectors.size();
+        MarkerDetector& d = *detectors[di];
+        MarkerStats& stats = result.markers[di];
+        for (std::size_t i = begin; i < end; ++i) {
+          const FrameSpec& f = frames[i];
+          const Rendered& r = rendered[i - begin];
+          const auto t0 = Clock::now();
+          const std::vector<Found> found = d.detect(r.image(f, d.marker()));
+          const double ms = Ms(t0, Clock::now());
+          if (pass == 1) {
+            stats.time_ms_all_cores.push_back(ms);
+            if (!rows.empty()) rows[i * detectors.size() + di].time_all = ms;
+            continue;
+          }
+          stats.time_ms_one_thread.push_back(ms);
+          const Outcome outcome = Score(f, r.truthFor(f, d.marker()), found);
+          stats.add(f, outcome);
+          const auto stages = d.lastStageTimes();
+          if (!stages.empty()) {
+            if (stats.stage_names.empty()) {
+              for (const auto& [name, v] : stages) stats.stage_names.push_back(name);
+              stats.stage_ms.resize(stages.size());
+            }
+            for (std::size_t s = 0; s < stages.size(); ++s) {
+              stats.stage_ms[s].push_back(stages[s].second);
+            }
+          }
+          if (!rows.empty()) {
+            rows[i * detectors.size() + di] = {static_cast<int>(i), static_cast<int>(di), outcome,
+                                               ms, kNaN};
+          }
+        }
+      }
+      warmed_up = true;
+      cv::setNumThreads(1);
+    }
+    done += end - begin;
+    progress.update(done, "detecting");
+  }
+  result.machine.load_end = LoadAverage();
+  result.wall_seconds = std::chrono::duration<double>(Clock::now() - wall_start).count();
+
+  const MarkerStats& pintag = result.markers[0];
+  char summary[256];
+  std::snprintf(summary, sizeof summary,
+                "%zu frames; PinTag recall %.1f %%, misreads %d, tagless false positives %d, "
+                "median %.2f ms (ArUco %.2f ms)",
+                frames.size(), pintag.recall(-1, -1, -1).percent(), pintag.misreads,
+                pintag.false_positives, Median(pintag.time_ms_one_thread),
+                Median(result.markers[1].time_ms_one_thread));
+  progress.finish(summary);
+
+  std::string error;
+  if (!WriteReport(result, args.out_dir, &error)) {
+    std::fprintf(stderr, "pintag_bench: %s\n", error.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "pintag_bench: wrote %s/BENCHMARKS.md and %s/images/bench-*.png\n",
+               args.out_dir.c_str(), args.out_dir.c_str());
+  if (!args.csv.empty()) {
+    std::ofstream csv(args.csv);
+    csv << "frame,size_px,tilt_deg,photometry,detector,counted,found,misreads,false_positives,"
+           "corner_error_px,rotation_error_deg,translation_error_pct,time_ms_1_thread,"
+           "time_ms_all_cores\n";
+    for (const CsvRow& row : rows) {
+      const FrameSpec& f = frames[static_cast<std::size_t>(row.frame)];
+      csv << row.frame << ',' << (f.tagless() ? 0 : kSizesPx[f.size_index]) << ','
+          << (f.tagless() ? -1 : kTiltsDeg[f.tilt_index]) << ',' << (f.hard ? "hard" : "moderate")
+          << ',' << detectors[static_cast<std::size_t>(row.detector)]->name() << ','
+          << row.outcome.counted << ',' << row.outcome.found << ',' << row.outcome.misreads << ','
+          << row.outcome.false_positives << ',' << row.outcome.corner_error_px << ','
+          << row.outcome.rotation_error_deg << ',' << row.outcome.translation_error_pct << ','
+          << row.time_one << ',' << row.time_all << '\n';
+    }
+    if (!csv) {
+      std::fprintf(stderr, "pintag_bench: cannot write %s\n", args.csv.c_str());
+      return 1;
+    }
+  }
+  if (args.require_zero_misreads && (pintag.misreads > 0 || pintag.false_positives > 0)) {
+    std::fprintf(stderr,
+                 "pintag_bench: PinTag misread %d tags and reported %d tags on tagless "
+                 "frames\n",
+                 pintag.misreads, pintag.false_positives);
+    return 3;
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace pintag::bench
+
+int main(int argc, char** argv) {
+  return pintag::bench::Main(argc, argv);
+}

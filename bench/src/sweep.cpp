@@ -1,0 +1,136 @@
+#include "sweep.hpp"
+
+#include "pintag/codec/tag_key.hpp"
+#include "pintag/scene/rng.hpp"
+
+namespace pintag::bench {
+namespace {
+
+// Mixes the parts of a frame's identity into one seed (SplitMix64 finaliser over a running hash).
+std::uint64_t Mix(std::uint64_t h, std::uint64_t v) {
+  std::uint64_t z = h ^ (v + 0x9E3779B97F4A7C15ULL + (h << 6) + (h >> 2));
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+FrameSpec TaggedFrame(std::uint64_t base, int round, bool hard, int size_index, int tilt_index,
+                      const scene::Camera& camera) {
+  FrameSpec f;
+  f.size_index = size_index;
+  f.tilt_index = tilt_index;
+  f.hard = hard;
+  std::uint64_t h = Mix(base, 0x7A66ED);
+  for (std::uint64_t part :
+       {static_cast<std::uint64_t>(round), std::uint64_t{hard},
+        static_cast<std::uint64_t>(size_index), static_cast<std::uint64_t>(tilt_index)}) {
+    h = Mix(h, part);
+  }
+  f.seed = h;
+  scene::Rng rng(h);
+  // The square with its quiet zone (1.3 sides), turned and seen in perspective, stays inside a
+  // margin of 1.1 frontal sides around its centre.
+  const double margin = 1.1 * kSizesPx[size_index] + 2;
+  f.centre = {rng.uniform(margin, camera.width - margin),
+              rng.uniform(margin, camera.height - margin)};
+  f.tilt_axis_deg = rng.uniform(0, 360);
+  f.roll_deg = rng.uniform(0, 360);
+  f.pintag_key = rng.below(kKeyCount);
+  f.aruco_id = rng.below(1000);
+  f.apriltag_id = rng.below(2320);
+  return f;
+}
+
+}  // namespace
+
+std::string ToString(Marker marker) {
+  switch (marker) {
+    case Marker::kPinTag:
+      return "PinTag";
+    case Marker::kAruco:
+      return "ArUco";
+    case Marker::kAprilTag:
+      return "AprilTag";
+  }
+  return "?";
+}
+
+std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camera& camera) {
+  std::vector<FrameSpec> frames;
+  // Rounds outermost: any stretch of the sweep mixes every bin, so drift in the machine's load
+  // spreads over all bins instead of landing on a few.
+  if (options.quick) {
+    for (int s = 0; s < kSizeCount; ++s) {
+      for (int t = 0; t < kTiltCount; ++t) {
+        frames.push_back(TaggedFrame(options.seed, 0, (s + t) % 2 == 1, s, t, camera));
+      }
+    }
+  } else {
+    for (int round = 0; round < options.frames_per_bin; ++round) {
+      for (int hard = 0; hard < 2; ++hard) {
+        for (int s = 0; s < kSizeCount; ++s) {
+          for (int t = 0; t < kTiltCount; ++t) {
+            frames.push_back(TaggedFrame(options.seed, round, hard == 1, s, t, camera));
+          }
+        }
+      }
+    }
+  }
+  const int tagless = options.quick ? std::min(options.tagless_frames, 6) : options.tagless_frames;
+  const int photos = static_cast<int>(scene::BackgroundPhotos().size());
+  for (int i = 0; i < tagless; ++i) {
+    FrameSpec f;
+    f.hard = i % 2 == 1;
+    f.seed = Mix(Mix(options.seed, 0x7A6E55), static_cast<std::uint64_t>(i));
+    f.background_photo = photos > 0 ? i % photos : -1;
+    frames.push_back(f);
+  }
+  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].index = static_cast<int>(i);
+  return frames;
+}
+
+int TruthId(const FrameSpec& frame, Marker marker) {
+  if (frame.tagless()) return -1;
+  switch (marker) {
+    case Marker::kPinTag:
+      return frame.pintag_key;
+    case Marker::kAruco:
+      return frame.aruco_id;
+    case Marker::kAprilTag:
+      return frame.apriltag_id;
+  }
+  return -1;
+}
+
+scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Camera& camera) {
+  scene::SceneSpec spec;
+  spec.camera = camera;
+  spec.seed = frame.seed;
+  spec.real_background = true;
+  spec.background_photo = frame.background_photo;
+  spec.photometry =
+      frame.hard ? scene::Photometry::Hard(frame.seed) : scene::Photometry::Moderate(frame.seed);
+  if (frame.tagless()) return spec;
+  scene::PlacedMarker placed;
+  placed.id = TruthId(frame, marker);
+  switch (marker) {
+    case Marker::kPinTag:
+      placed.texture = scene::PinTagTexture(placed.id);
+      break;
+    case Marker::kAruco:
+      placed.texture = scene::ArucoTexture(placed.id);
+      break;
+    case Marker::kAprilTag:
+      placed.texture = scene::AprilTagTexture(placed.id);
+      break;
+  }
+  placed.square_side_m = kTagSideM;
+  placed.pose =
+      scene::MakePose(camera, frame.centre,
+                      scene::DistanceForSquarePx(camera, kSizesPx[frame.size_index], kTagSideM),
+                      kTiltsDeg[frame.tilt_index], frame.tilt_axis_deg, frame.roll_deg);
+  spec.markers.push_back(std::move(placed));
+  return spec;
+}
+
+}  // namespace pintag::bench

@@ -1,0 +1,61 @@
+#pragma once
+// The benchmark's deterministic sweep: which frames exist (size, tilt, photometry, pose, ids,
+// background) and how each is turned into a scene for a given marker. Every frame is a pure
+// function of its seed, so the three markers are rendered with the same pose on the same
+// background with the same photometry and noise.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pintag/scene/scene.hpp"
+
+namespace pintag::bench {
+
+/// Black-square sides in pixels, as the square would project facing the camera at its distance.
+inline constexpr int kSizesPx[] = {160, 80, 48, 32, 24, 18, 14};
+/// Viewing tilts, degrees (0 = facing the camera).
+inline constexpr int kTiltsDeg[] = {0, 20, 40, 55, 65, 72, 78};
+inline constexpr int kSizeCount = static_cast<int>(std::size(kSizesPx));
+inline constexpr int kTiltCount = static_cast<int>(std::size(kTiltsDeg));
+inline constexpr double kTagSideM = 0.05;  ///< every marker's black square, metres
+
+/// The marker drawn in a frame.
+enum class Marker { kPinTag, kAruco, kAprilTag };
+inline constexpr int kMarkerCount = 3;
+std::string ToString(Marker marker);
+
+struct SweepOptions {
+  int frames_per_bin = 6;   ///< frames per (size, tilt, photometry) bin
+  int tagless_frames = 64;  ///< frames of photographs without a tag (moderate and hard alternate)
+  bool quick = false;       ///< one frame per (size, tilt), photometry alternating; few tagless
+  std::uint64_t seed = 1;   ///< base seed of the whole sweep
+};
+
+struct FrameSpec {
+  int index = 0;           ///< position in the sweep
+  int size_index = -1;     ///< into kSizesPx; −1 on a tagless frame
+  int tilt_index = -1;     ///< into kTiltsDeg; −1 on a tagless frame
+  bool hard = false;       ///< Photometry::Hard, else Moderate
+  std::uint64_t seed = 0;  ///< background, photometry and noise
+  cv::Point2d centre;      ///< where the square's centre projects, px
+  double tilt_axis_deg = 0;
+  double roll_deg = 0;
+  int pintag_key = 0;         ///< 0 … 32767
+  int aruco_id = 0;           ///< 0 … 999 (DICT_5X5_1000)
+  int apriltag_id = 0;        ///< 0 … 2319 (tag36h10)
+  int background_photo = -1;  ///< tagless frames: the photograph, else chosen by the seed
+
+  bool tagless() const { return size_index < 0; }
+};
+
+/// The frames of the sweep, tagged ones first, in a fixed order.
+std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camera& camera);
+
+/// The scene of `frame` carrying `marker` (ignored on tagless frames).
+scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Camera& camera);
+
+/// The truth id of `frame` for `marker`.
+int TruthId(const FrameSpec& frame, Marker marker);
+
+}  // namespace pintag::bench

@@ -1,0 +1,322 @@
+// pintag_bench_stages: Google Benchmark micro-benchmarks of each PinTag detector stage on one
+// 1080p frame, so that a regression in one stage shows on its own. The frame is rendered once by
+// the scene generator (a real photograph, moderate photometry, four PinTags of 160, 80, 48 and
+// 32 px at various tilts); the stage inputs are computed once from it, then each stage runs alone.
+// Baselines on the same frame: BGR->gray (one pass over the pixels), ArUco and AprilTag.
+
+#include <benchmark/benchmark.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "detectors.hpp"
+#include "grouping.hpp"
+#include "homography.hpp"
+#include "orientation.hpp"
+#include "payload.hpp"
+#include "pintag/detector/detector.hpp"
+#include "pintag/scene/scene.hpp"
+#include "pose.hpp"
+#include "quads.hpp"
+#include "red_blobs.hpp"
+#include "redness.hpp"
+#include "sampling.hpp"
+#include "sweep.hpp"
+
+namespace pintag::bench {
+namespace {
+
+struct Fixture {
+  scene::Camera camera;
+  scene::Scene tagged;    ///< four PinTags
+  scene::Scene tagless;   ///< the same photograph without tags
+  scene::Scene aruco;     ///< the same poses with ArUco markers
+  scene::Scene apriltag;  ///< … and AprilTags
+  DetectorOptions options;
+  cv::Mat mask;
+  std::vector<stage::RedBlob> blobs;
+  std::vector<stage::BlobCluster> clusters;
+  std::vector<cv::Mat> dark;  ///< MinChannel per cluster
+  struct Candidate {
+    int cluster = 0;
+    stage::Quad quad;     ///< as found
+    stage::Quad refined;  ///< after RefineCorners
+    cv::Matx33d h;        ///< from the refined quad
+    stage::CellSamples samples;
+    stage::OrientationResult orientation;
+  };
+  std::vector<Candidate> candidates;  ///< quads that decode
+};
+
+scene::SceneSpec Spec(Marker marker, bool with_tags) {
+  scene::SceneSpec spec;
+  spec.seed = 20261122;
+  spec.background_photo = 0;
+  spec.photometry = scene::Photometry::Moderate(spec.seed);
+  if (!with_tags) return spec;
+  const struct {
+    int side;
+    double x, y, tilt, axis, roll;
+  } kTags[] = {{160, 400, 300, 0, 0, 10},
+               {80, 1300, 280, 40, 30, 200},
+               {48, 700, 800, 55, 120, 75},
+               {32, 1500, 800, 20, 250, 300}};
+  int id = 101;
+  for (const auto& t : kTags) {
+    scene::PlacedMarker m;
+    m.id = id;
+    m.texture = marker == Marker::kPinTag  ? scene::PinTagTexture(id * 37)
+                : marker == Marker::kAruco ? scene::ArucoTexture(id)
+                                           : scene::AprilTagTexture(id);
+    if (marker == Marker::kPinTag) m.id = id * 37;
+    m.square_side_m = kTagSideM;
+    m.pose = scene::MakePose(spec.camera, {t.x, t.y},
+                             scene::DistanceForSquarePx(spec.camera, t.side, kTagSideM), t.tilt,
+                             t.axis, t.roll);
+    spec.markers.push_back(std::move(m));
+    ++id;
+  }
+  return spec;
+}
+
+const Fixture& Get() {
+  static const Fixture fixture = [] {
+    cv::setNumThreads(1);
+    Fixture f;
+    f.tagged = scene::RenderScene(Spec(Marker::kPinTag, true));
+    f.tagless = scene::RenderScene(Spec(Marker::kPinTag, false));
+    f.aruco = scene::RenderScene(Spec(Marker::kAruco, true));
+    f.apriltag = scene::RenderScene(Spec(Marker::kAprilTag, true));
+    f.options.intrinsics = CameraIntrinsics{f.camera.fx, f.camera.fy, f.camera.cx, f.camera.cy, {}};
+    f.options.tag_size_m = kTagSideM;
+    f.mask = stage::RednessMask(f.tagged.bgr, {f.options.red_min_a, f.options.red_min_b});
+    stage::BlobLimits limits;
+    limits.min_area = f.options.min_element_area_px;
+    limits.max_area = static_cast<int>(f.options.max_element_area_ratio * f.tagged.bgr.total());
+    limits.max_blobs = f.options.max_blobs;
+    f.blobs = stage::FindRedBlobs(f.mask, limits);
+    f.clusters = stage::ClusterBlobs(f.blobs, f.tagged.bgr.size());
+    const stage::BitThresholds thresholds{f.options.min_bit_span_b, f.options.min_bit_margin};
+    for (std::size_t c = 0; c < f.clusters.size(); ++c) {
+      f.dark.push_back(stage::MinChannel(f.tagged.bgr, f.clusters[c].roi));
+      for (const stage::Quad& q :
+           stage::FindQuads(f.dark.back(), f.clusters[c].roi.tl(), f.options.min_square_px)) {
+        Fixture::Candidate cand;
+        cand.cluster = static_cast<int>(c);
+        cand.quad = q;
+        cand.refined = q;
+        if (!stage::RefineCorners(f.dark.back(), f.clusters[c].roi.tl(), &cand.refined)) continue;
+        cand.h = stage::HomographyFromQuad(cand.refined);
+        cand.samples = stage::SampleCells(f.tagged.bgr, cand.h);
+        cand.orientation = stage::ReadOrientation(cand.samples, thresholds);
+        if (!cand.orientation.ok) continue;
+        f.candidates.push_back(cand);
+      }
+    }
+    return f;
+  }();
+  return fixture;
+}
+
+void ReportCounts(benchmark::State& state) {
+  const Fixture& f = Get();
+  state.counters["blobs"] = static_cast<double>(f.blobs.size());
+  state.counters["clusters"] = static_cast<double>(f.clusters.size());
+  state.counters["tags"] = static_cast<double>(f.candidates.size());
+}
+
+// --- whole frame -------------------------------------------------------------------------------
+
+void BM_Floor_BgrToGray(benchmark::State& state) {
+  const Fixture& f = Get();
+  cv::Mat gray;
+  for (auto _ : state) {
+    GrayFloor(f.tagged.bgr, &gray);
+    benchmark::DoNotOptimize(gray.data);
+  }
+}
+BENCHMARK(BM_Floor_BgrToGray)->Unit(benchmark::kMillisecond);
+
+void BM_Detect_Full(benchmark::State& state) {
+  const Fixture& f = Get();
+  const Detector detector(f.options);
+  std::size_t found = 0;
+  for (auto _ : state) found = detector.detect(f.tagged.bgr).detections.size();
+  state.counters["found"] = static_cast<double>(found);
+  ReportCounts(state);
+}
+BENCHMARK(BM_Detect_Full)->Unit(benchmark::kMillisecond);
+
+void BM_Detect_Tagless(benchmark::State& state) {
+  const Fixture& f = Get();
+  const Detector detector(f.options);
+  for (auto _ : state) benchmark::DoNotOptimize(detector.detect(f.tagless.bgr));
+}
+BENCHMARK(BM_Detect_Tagless)->Unit(benchmark::kMillisecond);
+
+// --- stages, in pipeline order ------------------------------------------------------------------
+
+void BM_Stage1_RednessMask(benchmark::State& state) {
+  const Fixture& f = Get();
+  const stage::RednessThresholds t{f.options.red_min_a, f.options.red_min_b};
+  for (auto _ : state) benchmark::DoNotOptimize(stage::RednessMask(f.tagged.bgr, t));
+}
+BENCHMARK(BM_Stage1_RednessMask)->Unit(benchmark::kMillisecond);
+
+void BM_Stage1_RednessMask_Tagless(benchmark::State& state) {
+  const Fixture& f = Get();
+  const stage::RednessThresholds t{f.options.red_min_a, f.options.red_min_b};
+  for (auto _ : state) benchmark::DoNotOptimize(stage::RednessMask(f.tagless.bgr, t));
+}
+BENCHMARK(BM_Stage1_RednessMask_Tagless)->Unit(benchmark::kMillisecond);
+
+void BM_Stage2_FindRedBlobs(benchmark::State& state) {
+  const Fixture& f = Get();
+  stage::BlobLimits limits;
+  limits.min_area = f.options.min_element_area_px;
+  limits.max_area = static_cast<int>(f.options.max_element_area_ratio * f.tagged.bgr.total());
+  for (auto _ : state) benchmark::DoNotOptimize(stage::FindRedBlobs(f.mask, limits));
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage2_FindRedBlobs)->Unit(benchmark::kMillisecond);
+
+void BM_Stage3_ClusterBlobs(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(stage::ClusterBlobs(f.blobs, f.tagged.bgr.size()));
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage3_ClusterBlobs)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage3_MinChannel(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const stage::BlobCluster& c : f.clusters) {
+      benchmark::DoNotOptimize(stage::MinChannel(f.tagged.bgr, c.roi));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage3_MinChannel)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage3_FindQuads(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (std::size_t c = 0; c < f.clusters.size(); ++c) {
+      benchmark::DoNotOptimize(
+          stage::FindQuads(f.dark[c], f.clusters[c].roi.tl(), f.options.min_square_px));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage3_FindQuads)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage3_AssignElements(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      benchmark::DoNotOptimize(stage::AssignElements(
+          c.h, f.blobs, f.clusters[static_cast<std::size_t>(c.cluster)].blobs));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage3_AssignElements)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage4_RefineCorners(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      stage::Quad q = c.quad;
+      const auto& cluster = f.clusters[static_cast<std::size_t>(c.cluster)];
+      benchmark::DoNotOptimize(
+          stage::RefineCorners(f.dark[static_cast<std::size_t>(c.cluster)], cluster.roi.tl(), &q));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage4_RefineCorners)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage4_HomographyFromQuad(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      benchmark::DoNotOptimize(stage::HomographyFromQuad(c.refined));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage4_HomographyFromQuad)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage5_SampleCells(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      benchmark::DoNotOptimize(stage::SampleCells(f.tagged.bgr, c.h));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage5_SampleCells)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage6_ReadOrientation(benchmark::State& state) {
+  const Fixture& f = Get();
+  const stage::BitThresholds t{f.options.min_bit_span_b, f.options.min_bit_margin};
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      benchmark::DoNotOptimize(stage::ReadOrientation(c.samples, t));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage6_ReadOrientation)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage6_DecodePayload(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      benchmark::DoNotOptimize(stage::DecodePayload(c.orientation.reading));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage6_DecodePayload)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage7_EstimatePose(benchmark::State& state) {
+  const Fixture& f = Get();
+  const CameraIntrinsics& k = *f.options.intrinsics;
+  for (auto _ : state) {
+    for (const Fixture::Candidate& c : f.candidates) {
+      const stage::Quad q = stage::RotateQuad(c.refined, c.orientation.quarter_turns);
+      benchmark::DoNotOptimize(stage::EstimatePose(q, k, f.options.tag_size_m));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage7_EstimatePose)->Unit(benchmark::kMicrosecond);
+
+// --- the other detectors on the same poses -------------------------------------------------------
+
+void BM_Baseline_Aruco(benchmark::State& state) {
+  const Fixture& f = Get();
+  auto detector = MakeArucoDetector(f.camera);
+  std::size_t found = 0;
+  for (auto _ : state) found = detector->detect(f.aruco.bgr).size();
+  state.counters["found"] = static_cast<double>(found);
+}
+BENCHMARK(BM_Baseline_Aruco)->Unit(benchmark::kMillisecond);
+
+void BM_Baseline_AprilTag(benchmark::State& state) {
+  const Fixture& f = Get();
+  auto detector = MakeAprilTagDetector(f.camera, static_cast<int>(state.range(0)));
+  std::size_t found = 0;
+  for (auto _ : state) found = detector->detect(f.apriltag.bgr).size();
+  state.counters["found"] = static_cast<double>(found);
+}
+BENCHMARK(BM_Baseline_AprilTag)->Arg(1)->Arg(2)->ArgName("decimate")->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace pintag::bench
+
+BENCHMARK_MAIN();
