@@ -1,0 +1,92 @@
+#include "app/app.hpp"
+
+#include <sys/stat.h>
+
+#include "app/routes.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/tokens.hpp"
+#include "pintag/server/label_routes.hpp"
+
+namespace pintag::app {
+namespace {
+
+server::Role ToServerRole(db::Role role) {
+  switch (role) {
+    case db::Role::kAdmin:
+      return server::Role::kAdmin;
+    case db::Role::kCounter:
+      return server::Role::kCounter;
+    case db::Role::kScanner:
+      break;
+  }
+  return server::Role::kScanner;
+}
+
+server::TokenVerifier RegistryTokenVerifier(std::shared_ptr<ConnectionPool> pool) {
+  return [pool](std::string_view secret) -> std::optional<server::Principal> {
+    try {
+      auto connection = pool->acquire();
+      auto token = db::VerifyToken(*connection, secret);
+      if (!token) return std::nullopt;
+      return server::Principal{std::to_string(token->id), ToServerRole(token->role)};
+    } catch (const std::exception&) {
+      return std::nullopt;  // database unreachable: no one is admitted
+    }
+  };
+}
+
+}  // namespace
+
+server::HealthCheck DatabaseHealthCheck(std::string path) {
+  struct stat at_start {};
+  const bool known = ::stat(path.c_str(), &at_start) == 0;
+  return [path, at_start, known]() -> std::optional<std::string> {
+    struct stat now {};
+    if (::stat(path.c_str(), &now) != 0) return "database unreachable: " + path + " is missing";
+    if (known && (now.st_dev != at_start.st_dev || now.st_ino != at_start.st_ino)) {
+      return "database unreachable: " + path +
+             " was replaced since the server started (restart it to use the new file)";
+    }
+    try {
+      db::ConnectionOptions options;
+      options.create = false;
+      options.busy_timeout_ms = 1000;
+      db::Connection connection(path, options);
+      if (connection.queryInt64("PRAGMA user_version") != db::kSchemaVersion)
+        return "database unreachable: " + path + " has an unexpected schema version";
+      connection.queryInt64("SELECT count(*) FROM (SELECT 1 FROM tag_keys LIMIT 1)");
+    } catch (const std::exception& e) {
+      return std::string("database unreachable: ") + e.what();
+    }
+    return std::nullopt;
+  };
+}
+
+std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
+  auto context = std::make_shared<AppContext>();
+  context->pool = std::make_shared<ConnectionPool>(config.db_path, config.busy_timeout_ms);
+  context->metrics = std::make_shared<server::Metrics>();
+  context->max_pixels = config.max_pixels;
+  std::shared_ptr<const AppContext> shared = context;
+
+  server::Router router;
+  AddRegistryRoutes(router, shared);
+  server::AddLabelRoutes(router, RegistryLabelProvider(shared), context->metrics,
+                         {.max_batch = config.max_batch, .max_tag_px = config.max_tag_px});
+  AddDetectRoutes(router, shared);
+  AddRoutingRoutes(router, shared);
+  AddTokenRoutes(router, shared);
+
+  server::ApiOptions options;
+  options.max_body_bytes = config.max_body_bytes;
+  options.web_dir = config.web_dir;
+  options.info.description =
+      "PinTag labels, detection, registry and routing. Errors are application/problem+json "
+      "(RFC 9457). Roles: admin (everything), counter (labels), scanner (detect); lookups are "
+      "open.";
+  return std::make_shared<const server::Api>(
+      std::move(router), RegistryTokenVerifier(context->pool), DatabaseHealthCheck(config.db_path),
+      context->metrics, std::move(options));
+}
+
+}  // namespace pintag::app

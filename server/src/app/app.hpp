@@ -1,0 +1,35 @@
+#pragma once
+// The PinTag application assembled: every /api/v1 route over one database, the registry as the
+// label content provider and the token verifier, readiness from the database, the metrics.
+// `pintag serve` builds this and hands it to server::HttpServer.
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pintag/server/api.hpp"
+
+namespace pintag::app {
+
+struct AppConfig {
+  std::string db_path;                                        ///< an existing, migrated database
+  std::optional<std::filesystem::path> web_dir;               ///< static files; none = none
+  std::size_t max_body_bytes = server::kDefaultMaxBodyBytes;  ///< 25 MiB
+  std::int64_t max_pixels = 40'000'000;                       ///< decoded pixels per photo
+  std::size_t max_batch = 100;                                ///< labels per POST /labels
+  int max_tag_px = 4096;                                      ///< largest tag PNG square side
+  int busy_timeout_ms = 5000;                                 ///< SQLite lock wait
+};
+
+/// Builds the Api. Throws std::runtime_error when the web dir does not exist.
+std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
+
+/// Readiness of the database at `path`, as /readyz reports it: a fresh connection to the file
+/// now at that path (never created), a real query on the registry, and the same file (device
+/// and inode) the server opened at start. Nothing when ready, else why not.
+server::HealthCheck DatabaseHealthCheck(std::string path);
+
+}  // namespace pintag::app

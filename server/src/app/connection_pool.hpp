@@ -1,0 +1,50 @@
+#pragma once
+// Database connections for the worker threads. A db::Connection is used by one thread at a time
+// (it is opened NOMUTEX), so each request leases one from this pool and gives it back when done;
+// connections are opened on demand and kept (at most one per concurrent request).
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "pintag/db/sqlite.hpp"
+
+namespace pintag::app {
+
+class ConnectionPool {
+ public:
+  /// `path` must be an existing database (the serve command opened and migrated it first).
+  explicit ConnectionPool(std::string path, int busy_timeout_ms = 5000);
+
+  /// A connection for the calling thread until the lease ends.
+  class Lease {
+   public:
+    Lease(ConnectionPool* pool, std::unique_ptr<db::Connection> connection)
+        : pool_(pool), connection_(std::move(connection)) {}
+    Lease(Lease&&) noexcept = default;
+    Lease& operator=(Lease&&) = delete;
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    ~Lease();
+    db::Connection& operator*() const { return *connection_; }
+    db::Connection* operator->() const { return connection_.get(); }
+
+   private:
+    ConnectionPool* pool_;
+    std::unique_ptr<db::Connection> connection_;
+  };
+
+  /// Throws server::HttpError 503 when the database cannot be opened.
+  Lease acquire();
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  int busy_timeout_ms_;
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<db::Connection>> idle_;
+};
+
+}  // namespace pintag::app

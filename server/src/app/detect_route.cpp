@@ -1,0 +1,329 @@
+// POST /api/v1/detect: photo bytes -> header check (format, pixel limit, whole file) -> decode
+// (OpenImageIO, EXIF) -> Detector -> keys -> registry (pincode, status, office) -> sort plan (bin)
+// -> JSON, or the photo annotated as PNG. Every call that reaches the handler is written to the
+// scan log, refusals of the photo included.
+
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "app/common.hpp"
+#include "app/image_header.hpp"
+#include "app/routes.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/db/sort_plan.hpp"
+#include "pintag/detector/detector.hpp"
+
+namespace pintag::app {
+namespace {
+
+using nlohmann::json;
+using server::Access;
+using server::HttpError;
+using server::HttpRequest;
+using server::HttpResponse;
+using server::MakeRoute;
+using server::Route;
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
+}
+
+json Xy(double x, double y) {
+  return json::array({x, y});
+}
+
+/// What one decoded tag resolves to in the registry and the plan.
+struct Resolved {
+  std::optional<db::PincodeRecord> record;
+  std::optional<db::Routing> routing;
+};
+
+Point2 Centre(const Detection& d) {
+  const auto& h = d.homography;
+  const double w = h[6] * 0.5 + h[7] * 0.5 + h[8];
+  if (w == 0) return {};
+  return {(h[0] * 0.5 + h[1] * 0.5 + h[2]) / w, (h[3] * 0.5 + h[4] * 0.5 + h[5]) / w};
+}
+
+json TagJson(const Detection& d, const Resolved& r) {
+  json tag;
+  tag["key"] = d.key->value();
+  if (r.record) {
+    const db::PostOffice* office = MainOffice(*r.record);
+    tag["pincode"] = r.record->pincode.str();
+    tag["status"] = db::ToString(r.record->status);
+    tag["office"] = office ? json(office->name) : json(nullptr);
+    tag["district"] = r.record->district;
+    tag["state"] = r.record->state;
+    tag["bin"] = r.routing ? json(r.routing->bin) : json(nullptr);
+  } else {
+    // Never a guess: a key no pincode holds is reported as such, without pincode or bin.
+    tag["pincode"] = nullptr;
+    tag["status"] = "unknown_key";
+    tag["office"] = nullptr;
+    tag["district"] = nullptr;
+    tag["state"] = nullptr;
+    tag["bin"] = nullptr;
+  }
+  tag["corners_px"] = json::array();
+  for (const Point2& p : d.corners) tag["corners_px"].push_back(Xy(p.x, p.y));
+  const Point2 centre = Centre(d);
+  tag["centre_px"] = Xy(centre.x, centre.y);
+  tag["square_px"] = d.square_px;
+  tag["pose"] = {{"rotation_vector", d.pose.rotation_vector},
+                 {"quaternion_wxyz", d.pose.quaternion},
+                 {"translation_m", d.pose.translation},
+                 {"distance_m", d.pose.distance_m},
+                 {"reprojection_error_px", d.pose.reprojection_error_px}};
+  tag["pose_ambiguous"] = d.pose_ambiguous;
+  return tag;
+}
+
+cv::Point ToPixel(double x, double y) {
+  return {static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y))};
+}
+
+std::string OverlayPng(cv::Mat image, const DetectResult& result,
+                       const std::vector<Resolved>& resolved) {
+  const double scale = std::max(1.0, std::max(image.cols, image.rows) / 1200.0);
+  const int thickness = static_cast<int>(std::lround(2 * scale));
+  for (std::size_t i = 0; i < result.detections.size(); ++i) {
+    const Detection& d = result.detections[i];
+    const bool known = resolved[i].record.has_value();
+    const cv::Scalar colour = known ? cv::Scalar(0, 220, 255) : cv::Scalar(0, 0, 255);
+    for (int c = 0; c < 4; ++c) {
+      cv::line(image, ToPixel(d.corners[c].x, d.corners[c].y),
+               ToPixel(d.corners[(c + 1) % 4].x, d.corners[(c + 1) % 4].y), colour, thickness,
+               cv::LINE_AA);
+    }
+    cv::circle(image, ToPixel(d.corners[0].x, d.corners[0].y), 3 * thickness, colour, -1,
+               cv::LINE_AA);
+    std::string text = known ? resolved[i].record->pincode.str()
+                             : "key " + std::to_string(d.key->value()) + " unknown";
+    if (known && resolved[i].routing) text += "  bin " + resolved[i].routing->bin;
+    char distance[32];
+    std::snprintf(distance, sizeof distance, "  %.2f m", d.pose.distance_m);
+    text += distance;
+    const cv::Point at = ToPixel(d.corners[0].x, d.corners[0].y) + cv::Point(0, -5 * thickness);
+    cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.7 * scale, {0, 0, 0}, 3 * thickness,
+                cv::LINE_AA);
+    cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.7 * scale, {255, 255, 255}, thickness,
+                cv::LINE_AA);
+  }
+  std::vector<std::uint8_t> png;
+  if (!cv::imencode(".png", image, png)) throw std::runtime_error("cannot encode the overlay");
+  return {png.begin(), png.end()};
+}
+
+class DetectService {
+ public:
+  explicit DetectService(std::shared_ptr<const AppContext> context) : context_(std::move(context)) {
+    context_->metrics->defineCounter(kScansCounter, "POST /api/v1/detect calls that sent a photo.");
+    context_->metrics->defineCounter(kDetectionsCounter, "Tags decoded in uploaded photos.");
+    context_->metrics->defineCounter(kUnknownKeysCounter,
+                                     "Decoded tags whose key no pincode holds.");
+  }
+
+  HttpResponse handle(const HttpRequest& request) const {
+    const Clock::time_point start = Clock::now();
+    std::string_view bytes = request.body;
+    if (request.content_type == "multipart/form-data") {
+      const server::FormPart* part = request.part("image");
+      if (part == nullptr) throw HttpError(400, "the multipart body needs a part named 'image'");
+      bytes = part->content;
+    }
+    if (bytes.empty()) throw HttpError(400, "no photo: the body is empty", "No Image");
+    Outcome outcome;
+    try {
+      HttpResponse response = detect(request, bytes, start, &outcome);
+      log(request, bytes.size(), outcome);
+      return response;
+    } catch (const HttpError& e) {
+      outcome.result = {
+          {"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}};
+      log(request, bytes.size(), outcome);
+      throw;
+    }
+  }
+
+ private:
+  struct Outcome {
+    json result;
+    std::optional<int> width, height;
+  };
+
+  void log(const HttpRequest& request, std::size_t bytes, const Outcome& outcome) const {
+    context_->metrics->increment(kScansCounter);
+    db::ScanRecord scan;
+    if (request.principal) {
+      std::int64_t id = 0;
+      const std::string& text = request.principal->id;
+      if (std::from_chars(text.data(), text.data() + text.size(), id).ec == std::errc())
+        scan.token_id = id;
+    }
+    scan.image_bytes = static_cast<std::int64_t>(bytes);
+    scan.image_width = outcome.width;
+    scan.image_height = outcome.height;
+    scan.result_json = outcome.result.dump();
+    try {
+      auto connection = context_->pool->acquire();
+      auto appended = db::AppendScan(*connection, scan);
+      if (!appended) std::cerr << "pintag serve: scan log: " << appended.error().message << "\n";
+    } catch (const std::exception& e) {
+      std::cerr << "pintag serve: scan log: " << e.what() << "\n";
+    }
+  }
+
+  HttpResponse detect(const HttpRequest& request, std::string_view bytes, Clock::time_point start,
+                      Outcome* outcome) const {
+    const std::string plan_name =
+        request.queryParam("plan").value_or(std::string(db::kDefaultPlanName));
+    const double tag_size_mm = NumberQuery(request, "tag_size_mm", 1, 10000).value_or(50);
+    const std::optional<double> fx = NumberQuery(request, "fx", 1e-3, 1e7);
+    const std::optional<double> fy = NumberQuery(request, "fy", 1e-3, 1e7);
+    const std::optional<double> cx = NumberQuery(request, "cx", -1e6, 1e6);
+    const std::optional<double> cy = NumberQuery(request, "cy", -1e6, 1e6);
+    if (fx.has_value() != fy.has_value()) throw HttpError(400, "give both fx and fy, or neither");
+    if ((cx || cy) && !fx) throw HttpError(400, "cx and cy need fx and fy");
+    const bool overlay = BoolQuery(request, "overlay", false);
+
+    db::SortPlan plan;
+    {
+      auto connection = context_->pool->acquire();
+      auto found = db::GetPlan(*connection, plan_name);
+      if (!found && found.error().code == db::ErrorCode::kNotFound) {
+        throw HttpError(404, "no sort plan named '" + plan_name.substr(0, 100) + "'",
+                        "Unknown Sort Plan");
+      }
+      plan = Unwrap(std::move(found));
+    }
+
+    // The photo: format and claimed size from the header, before anything is decoded.
+    const std::span<const std::uint8_t> data(reinterpret_cast<const std::uint8_t*>(bytes.data()),
+                                             bytes.size());
+    const ImageHeader header = InspectImage(data);
+    if (header.format.empty()) {
+      throw HttpError(415, "the body is not a JPEG, PNG, TIFF or WebP image",
+                      "Unsupported Image Format");
+    }
+    if (header.width > 0 && header.height > 0) {
+      outcome->width = header.width;
+      outcome->height = header.height;
+      const std::int64_t pixels = std::int64_t{header.width} * header.height;
+      if (pixels > context_->max_pixels) {
+        throw HttpError(413,
+                        "the image is " + std::to_string(header.width) + " x " +
+                            std::to_string(header.height) + " pixels; at most " +
+                            std::to_string(context_->max_pixels) + " pixels are decoded",
+                        "Image Too Large");
+      }
+    }
+    if (!header.complete) throw HttpError(400, header.problem, "Corrupt Image");
+    const Clock::time_point decode_start = Clock::now();
+    const LoadResult loaded = LoadImageBytes(data, context_->max_pixels);
+    if (!loaded.image) {
+      // TIFF and WebP sizes are checked by the loader, from the header too.
+      if (loaded.error.rfind("image too large", 0) == 0)
+        throw HttpError(413, loaded.error, "Image Too Large");
+      throw HttpError(400, loaded.error, "Corrupt Image");
+    }
+    const double decode_ms = Ms(decode_start);
+    const cv::Mat& image = loaded.image->bgr;
+    outcome->width = image.cols;
+    outcome->height = image.rows;
+
+    DetectorOptions options;
+    options.tag_size_m = tag_size_mm / 1000.0;
+    if (fx) {
+      options.intrinsics = CameraIntrinsics{
+          *fx, *fy, cx.value_or((image.cols - 1) / 2.0), cy.value_or((image.rows - 1) / 2.0), {}};
+    }
+    const Clock::time_point detect_start = Clock::now();
+    const DetectResult result = Detector(options).detect(*loaded.image);
+    if (!result.error.empty()) throw HttpError(400, result.error, "Cannot Detect");
+    const double detect_ms = Ms(detect_start);
+
+    std::vector<Resolved> resolved;
+    json tags = json::array();
+    {
+      auto connection = context_->pool->acquire();
+      for (const Detection& d : result.detections) {
+        Resolved r;
+        if (d.key) {
+          auto record = db::LookupKey(*connection, *d.key);
+          if (record) {
+            r.routing = db::RouteWith(plan, record->pincode);
+            r.record = std::move(record).value();
+          } else if (record.error().code != db::ErrorCode::kNotFound) {
+            ThrowDbError(record.error());
+          }
+          tags.push_back(TagJson(d, r));
+        }
+        resolved.push_back(std::move(r));
+      }
+    }
+    context_->metrics->increment(kDetectionsCounter, static_cast<double>(tags.size()));
+    std::size_t unknown = 0;
+    for (const json& tag : tags) unknown += tag["pincode"].is_null();
+    if (unknown > 0)
+      context_->metrics->increment(kUnknownKeysCounter, static_cast<double>(unknown));
+
+    json out;
+    out["image"] = {{"width", image.cols},
+                    {"height", image.rows},
+                    {"format", loaded.image->format},
+                    {"bytes", bytes.size()},
+                    {"exif_orientation", loaded.image->exif_orientation}};
+    out["intrinsics"] = {{"source", std::string(ToString(result.intrinsics_source))},
+                         {"fx", result.intrinsics.fx},
+                         {"fy", result.intrinsics.fy},
+                         {"cx", result.intrinsics.cx},
+                         {"cy", result.intrinsics.cy}};
+    out["tag_size_mm"] = tag_size_mm;
+    out["plan"] = plan.name;
+    out["tag_count"] = tags.size();
+    out["tags"] = std::move(tags);
+    out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
+    outcome->result = out;
+
+    if (overlay) {
+      HttpResponse response =
+          HttpResponse::Bytes("image/png", OverlayPng(image.clone(), result, resolved));
+      response.headers.emplace_back("X-PinTag-Tags", std::to_string(out["tag_count"].get<int>()));
+      return response;
+    }
+    return HttpResponse::Json(out.dump());
+  }
+
+  std::shared_ptr<const AppContext> context_;
+};
+
+}  // namespace
+
+void AddDetectRoutes(server::Router& router, std::shared_ptr<const AppContext> context) {
+  auto service = std::make_shared<DetectService>(std::move(context));
+  Route detect = MakeRoute(
+      "POST", "/api/v1/detect", Access::kScanner,
+      [service](const HttpRequest& r) { return service->handle(r); },
+      "Find every PinTag in a photo: pincode, key, status, office, bin, corners, pose",
+      "detection");
+  detect.consumes = {"image/jpeg", "image/png",           "image/tiff",
+                     "image/webp", "multipart/form-data", "application/octet-stream"};
+  detect.produces = {"application/json", "image/png"};
+  detect.query = {{"plan", "sort plan for the bins (default: default)"},
+                  {"tag_size_mm", "black square side, millimetres (default 50)", "number"},
+                  {"fx", "focal length x, pixels (with fy: intrinsics given)", "number"},
+                  {"fy", "focal length y, pixels", "number"},
+                  {"cx", "principal point x, pixels (default: image centre)", "number"},
+                  {"cy", "principal point y, pixels (default: image centre)", "number"},
+                  {"overlay", "1: answer the photo with the tags outlined, as PNG", "boolean"}};
+  router.add(std::move(detect));
+}
+
+}  // namespace pintag::app

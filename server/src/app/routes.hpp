@@ -1,0 +1,26 @@
+#pragma once
+// The application's /api/v1 routes beyond the label routes, one file per group. Each adds its
+// routes to the table with their access rule and OpenAPI notes.
+
+#include <memory>
+
+#include "app/context.hpp"
+#include "pintag/server/label_routes.hpp"
+#include "pintag/server/router.hpp"
+
+namespace pintag::app {
+
+/// GET /pincodes/{pin}, GET /pincodes, GET /keys/{key}, POST /pincodes, POST
+/// /pincodes/{pin}/retire.
+void AddRegistryRoutes(server::Router& router, std::shared_ptr<const AppContext> context);
+/// GET /route/{pin}, GET /sortplans, GET and PUT /sortplans/{name}.
+void AddRoutingRoutes(server::Router& router, std::shared_ptr<const AppContext> context);
+/// POST /tokens, GET /tokens, DELETE /tokens/{id}, POST /tokens/{id}/revoke.
+void AddTokenRoutes(server::Router& router, std::shared_ptr<const AppContext> context);
+/// POST /detect.
+void AddDetectRoutes(server::Router& router, std::shared_ptr<const AppContext> context);
+
+/// The registry as the label routes see it: unknown pincode 404, retired 410, unknown plan 404.
+server::LabelContentProvider RegistryLabelProvider(std::shared_ptr<const AppContext> context);
+
+}  // namespace pintag::app

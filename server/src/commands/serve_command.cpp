@@ -1,0 +1,166 @@
+// `pintag serve`: the HTTP API over one database. On first start with no database file it creates
+// and seeds one; when the token table is empty it creates one admin token and prints its secret
+// on stdout, the only place it ever appears. SIGINT or SIGTERM stops it gracefully (in-flight
+// requests finish).
+
+#include <pthread.h>
+#include <signal.h>
+
+#include <atomic>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include "app/app.hpp"
+#include "commands/commands.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/tokens.hpp"
+#include "pintag/server/http_server.hpp"
+
+namespace pintag::cli {
+namespace {
+
+struct ServeArgs {
+  std::string db = "pintag.db";
+  int port = 8080;
+  std::string bind = "127.0.0.1";
+  int threads = 4;
+  std::string web;
+  double max_body_mb = 25;
+  std::int64_t max_pixels = 40'000'000;
+  int max_batch = 100;
+  int max_tag_px = 4096;
+  int read_timeout_s = 5;
+  int write_timeout_s = 5;
+};
+
+/// Opens (creating and seeding when missing) and migrates the database; on an empty token table
+/// creates the first admin token. Returns its secret, or "" when tokens already existed.
+std::string PrepareDatabase(const std::string& path) {
+  auto opened = db::OpenDatabase(path);
+  if (!opened) throw std::runtime_error(opened.error().message);
+  if (opened->created) {
+    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
+  }
+  db::Connection& connection = opened.value().connection;
+  auto tokens = db::ListTokens(connection);
+  if (!tokens) throw std::runtime_error(tokens.error().message);
+  if (!tokens->empty()) return {};
+  auto token = db::CreateToken(connection, db::Role::kAdmin, "first start of pintag serve");
+  if (!token) throw std::runtime_error(token.error().message);
+  return token->secret;
+}
+
+void Run(const ServeArgs& args) {
+  if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
+    throw UsageError("--web " + args.web + " is not a directory");
+  }
+  const std::string first_admin = PrepareDatabase(args.db);
+
+  app::AppConfig config;
+  config.db_path = args.db;
+  if (!args.web.empty()) config.web_dir = args.web;
+  config.max_body_bytes = static_cast<std::size_t>(args.max_body_mb * 1024 * 1024);
+  config.max_pixels = args.max_pixels;
+  config.max_batch = static_cast<std::size_t>(args.max_batch);
+  config.max_tag_px = args.max_tag_px;
+  server::ServerOptions options;
+  options.bind_address = args.bind;
+  options.port = args.port;
+  options.threads = args.threads;
+  options.read_timeout = std::chrono::seconds(args.read_timeout_s);
+  options.write_timeout = std::chrono::seconds(args.write_timeout_s);
+
+  // Signals are taken by one thread with sigwait, never by an asynchronous handler: block them
+  // here, before any thread starts, so every worker thread inherits the mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  server::HttpServer http(app::BuildApi(config), options);
+  std::string error;
+  if (!http.bind(&error)) throw std::runtime_error(error);
+
+  const bool any = args.bind == "0.0.0.0" || args.bind == "::";
+  const std::string host = any ? "127.0.0.1" : args.bind;
+  const std::string url = "http://" + host + ":" + std::to_string(http.port());
+  std::cout << "PinTag serving " << url << "/ (database " << args.db << ", " << args.threads
+            << " threads" << (any ? ", all interfaces" : "") << ")\n";
+  std::cout << "  API: " << url << "/api/v1/   OpenAPI: " << url
+            << "/openapi.json   health: " << url << "/readyz\n";
+  if (!first_admin.empty()) {
+    std::cout << "First start: an admin token was created. Its secret is shown only now (the "
+                 "database keeps a hash):\n"
+              << "  " << first_admin << "\n"
+              << "  e.g. curl -H 'Authorization: Bearer " << first_admin << "' " << url
+              << "/api/v1/tokens\n";
+  } else {
+    std::cout << "Tokens: pintag token create --role admin|counter|scanner --db " << args.db
+              << "\n";
+  }
+  std::cout << "Stop with Ctrl-C.\n" << std::flush;
+
+  std::atomic<bool> finished{false};
+  std::thread waiter([&http, &finished, signals] {
+    int signal = 0;
+    sigwait(&signals, &signal);
+    if (finished) return;
+    std::cerr << "pintag serve: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
+              << ", finishing requests in flight\n";
+    http.stop();
+  });
+  const bool served = http.serve();
+  // serve() returned: stop() ran from the waiter, or serving failed; then wake the waiter.
+  finished = true;
+  pthread_kill(waiter.native_handle(), SIGTERM);
+  waiter.join();
+  http.stop();
+  std::cerr << "pintag serve: stopped\n";
+  if (!served) throw std::runtime_error("the server stopped unexpectedly");
+}
+
+void AddServeCommand(CLI::App& app) {
+  auto args = std::make_shared<ServeArgs>();
+  CLI::App* cmd = app.add_subcommand("serve",
+                                     "Serve the HTTP API (labels, detection, registry, "
+                                     "routing, tokens)");
+  cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->capture_default_str();
+  cmd->add_option("--port", args->port, "TCP port; 0 picks a free one (printed)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  cmd->add_option("--bind", args->bind, "address to listen on; 0.0.0.0 for every interface")
+      ->capture_default_str();
+  cmd->add_option("--threads", args->threads, "worker threads (concurrent requests)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  cmd->add_option("--web", args->web, "serve static files from this directory (default: none)");
+  cmd->add_option("--max-body-mb", args->max_body_mb, "largest request body, MiB (413 above)")
+      ->check(CLI::Range(0.001, 1024.0))
+      ->capture_default_str();
+  cmd->add_option("--max-pixels", args->max_pixels,
+                  "largest photo to decode, pixels, checked from its header (413 above)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000}))
+      ->capture_default_str();
+  cmd->add_option("--max-batch", args->max_batch, "labels per POST /api/v1/labels (413 above)")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  cmd->add_option("--max-tag-px", args->max_tag_px, "largest tag PNG square side, pixels")
+      ->check(CLI::Range(64, 16384))
+      ->capture_default_str();
+  cmd->add_option("--read-timeout", args->read_timeout_s, "seconds per read of a request")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  cmd->add_option("--write-timeout", args->write_timeout_s, "seconds per write of a response")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  cmd->callback([args] { Run(*args); });
+}
+
+const CommandRegistration registration{"serve", &AddServeCommand};
+
+}  // namespace
+}  // namespace pintag::cli
