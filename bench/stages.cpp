@@ -33,7 +33,7 @@ struct Fixture {
   scene::Scene aruco;     ///< the same poses with ArUco markers
   scene::Scene apriltag;  ///< … and AprilTags
   DetectorOptions options;
-  cv::Mat mask;
+  stage::RedRuns red;
   std::vector<stage::RedBlob> blobs;
   std::vector<stage::BlobCluster> clusters;
   std::vector<cv::Mat> dark;  ///< MinChannel per cluster
@@ -89,12 +89,12 @@ const Fixture& Get() {
     f.apriltag = scene::RenderScene(Spec(Marker::kAprilTag, true));
     f.options.intrinsics = CameraIntrinsics{f.camera.fx, f.camera.fy, f.camera.cx, f.camera.cy, {}};
     f.options.tag_size_m = kTagSideM;
-    f.mask = stage::RednessMask(f.tagged.bgr, {f.options.red_min_a, f.options.red_min_b});
+    f.red = stage::FindRedRuns(f.tagged.bgr, {f.options.red_min_a, f.options.red_min_b});
     stage::BlobLimits limits;
     limits.min_area = f.options.min_element_area_px;
     limits.max_area = static_cast<int>(f.options.max_element_area_ratio * f.tagged.bgr.total());
     limits.max_blobs = f.options.max_blobs;
-    f.blobs = stage::FindRedBlobs(f.mask, limits);
+    f.blobs = stage::FindRedBlobs(f.red, limits);
     f.clusters = stage::ClusterBlobs(f.blobs, f.tagged.bgr.size());
     const stage::BitThresholds thresholds{f.options.min_bit_span_b, f.options.min_bit_margin};
     for (std::size_t c = 0; c < f.clusters.size(); ++c) {
@@ -156,29 +156,31 @@ BENCHMARK(BM_Detect_Tagless)->Unit(benchmark::kMillisecond);
 
 // --- stages, in pipeline order ------------------------------------------------------------------
 
-void BM_Stage1_RednessMask(benchmark::State& state) {
+void BM_Stage1_FindRedRuns(benchmark::State& state) {
   const Fixture& f = Get();
   const stage::RednessThresholds t{f.options.red_min_a, f.options.red_min_b};
-  for (auto _ : state) benchmark::DoNotOptimize(stage::RednessMask(f.tagged.bgr, t));
+  for (auto _ : state) benchmark::DoNotOptimize(stage::FindRedRuns(f.tagged.bgr, t));
+  state.counters["runs"] = static_cast<double>(f.red.runs.size());
 }
-BENCHMARK(BM_Stage1_RednessMask)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stage1_FindRedRuns)->Unit(benchmark::kMillisecond);
 
-void BM_Stage1_RednessMask_Tagless(benchmark::State& state) {
+void BM_Stage1_FindRedRuns_Tagless(benchmark::State& state) {
   const Fixture& f = Get();
   const stage::RednessThresholds t{f.options.red_min_a, f.options.red_min_b};
-  for (auto _ : state) benchmark::DoNotOptimize(stage::RednessMask(f.tagless.bgr, t));
+  for (auto _ : state) benchmark::DoNotOptimize(stage::FindRedRuns(f.tagless.bgr, t));
 }
-BENCHMARK(BM_Stage1_RednessMask_Tagless)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stage1_FindRedRuns_Tagless)->Unit(benchmark::kMillisecond);
 
 void BM_Stage2_FindRedBlobs(benchmark::State& state) {
   const Fixture& f = Get();
   stage::BlobLimits limits;
   limits.min_area = f.options.min_element_area_px;
   limits.max_area = static_cast<int>(f.options.max_element_area_ratio * f.tagged.bgr.total());
-  for (auto _ : state) benchmark::DoNotOptimize(stage::FindRedBlobs(f.mask, limits));
+  limits.max_blobs = f.options.max_blobs;
+  for (auto _ : state) benchmark::DoNotOptimize(stage::FindRedBlobs(f.red, limits));
   ReportCounts(state);
 }
-BENCHMARK(BM_Stage2_FindRedBlobs)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stage2_FindRedBlobs)->Unit(benchmark::kMicrosecond);
 
 void BM_Stage3_ClusterBlobs(benchmark::State& state) {
   const Fixture& f = Get();

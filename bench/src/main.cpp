@@ -2,6 +2,7 @@
 // (issue 6; docs/BENCHMARKS.md says how to run it and what each column means).
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -34,25 +35,32 @@ struct Args {
   std::string out_dir = PINTAG_SOURCE_DIR "/docs";
   std::string csv;
   bool all_cores = true;
+  int all_cores_every = 2;  ///< the all-cores pass times every this-many-th chunk (1 in --quick)
   bool require_zero_misreads = false;
   bool quiet = false;
+  std::string detectors = "pintag,aruco,apriltag-d1,apriltag-d2";
   int chunk = 24;
 };
 
 void Usage(FILE* to) {
-  std::fprintf(to,
-               "usage: pintag_bench [options]\n"
-               "  --quick               one frame per size x tilt bin, 6 tagless (CI, seconds)\n"
-               "  --frames-per-bin N    frames per size x tilt x photometry bin (default 6)\n"
-               "  --tagless N           tagless photograph frames (default 64)\n"
-               "  --seed N              base seed of the sweep (default 1)\n"
-               "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
-               "tree's docs/)\n"
-               "  --csv FILE            also write one row per frame and detector\n"
-               "  --one-thread-only     skip the all-cores pass\n"
-               "  --require-zero-misreads  exit 3 when PinTag misreads or reports a tag on a "
-               "tagless frame\n"
-               "  --quiet               no progress on stderr\n");
+  std::fprintf(
+      to,
+      "usage: pintag_bench [options]\n"
+      "  --quick               one frame per size x tilt bin, 6 tagless (CI, seconds)\n"
+      "  --frames-per-bin N    frames per size x tilt x photometry bin (default 8)\n"
+      "  --tagless N           tagless photograph frames (default 64)\n"
+      "  --seed N              base seed of the sweep (default 1)\n"
+      "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
+      "tree's docs/)\n"
+      "  --csv FILE            also write one row per frame and detector\n"
+      "  --one-thread-only     skip the all-cores pass\n"
+      "  --all-cores-every N   time the all-cores pass on every N-th chunk of 24 frames "
+      "(default 2; 1 with --quick)\n"
+      "  --require-zero-misreads  exit 3 when PinTag misreads or reports a tag on a "
+      "tagless frame\n"
+      "  --detectors LIST      which of pintag,aruco,apriltag-d1,apriltag-d2 to run (default "
+      "all; PinTag always runs)\n"
+      "  --quiet               no progress on stderr\n");
 }
 
 bool ParseArgs(int argc, char** argv, Args* args) {
@@ -87,10 +95,18 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--csv");
       if (v == nullptr) return false;
       args->csv = v;
+    } else if (a == "--all-cores-every") {
+      const char* v = value("--all-cores-every");
+      if (v == nullptr) return false;
+      args->all_cores_every = std::max(1, std::atoi(v));
     } else if (a == "--one-thread-only") {
       args->all_cores = false;
     } else if (a == "--require-zero-misreads") {
       args->require_zero_misreads = true;
+    } else if (a == "--detectors") {
+      const char* v = value("--detectors");
+      if (v == nullptr) return false;
+      args->detectors = v;
     } else if (a == "--quiet") {
       args->quiet = true;
     } else if (a == "--help" || a == "-h") {
@@ -140,12 +156,16 @@ int Main(int argc, char** argv) {
   for (const FrameSpec& f : frames) (f.tagless() ? result.tagless_frames : result.tagged_frames)++;
   const int cores = std::max(1, result.machine.cores);
   result.all_cores = args.all_cores ? cores : 0;
+  result.all_cores_every = args.all_cores_every;
 
   std::vector<std::unique_ptr<MarkerDetector>> detectors;
+  const auto wanted = [&](const std::string& key) {
+    return ("," + args.detectors + ",").find("," + key + ",") != std::string::npos;
+  };
   detectors.push_back(MakePinTagDetector(camera));
-  detectors.push_back(MakeArucoDetector(camera));
-  detectors.push_back(MakeAprilTagDetector(camera, 1));
-  detectors.push_back(MakeAprilTagDetector(camera, 2));
+  if (wanted("aruco")) detectors.push_back(MakeArucoDetector(camera));
+  if (wanted("apriltag-d1")) detectors.push_back(MakeAprilTagDetector(camera, 1));
+  if (wanted("apriltag-d2")) detectors.push_back(MakeAprilTagDetector(camera, 2));
   for (const auto& d : detectors) {
     MarkerStats s;
     s.name = d->name();
@@ -153,6 +173,8 @@ int Main(int argc, char** argv) {
     s.marker = d->marker();
     result.markers.push_back(std::move(s));
   }
+  std::array<bool, kMarkerCount> needed{};  // markers some detector looks for: rendered
+  for (const auto& d : detectors) needed[static_cast<std::size_t>(d->marker())] = true;
   std::vector<CsvRow> rows;
   if (!args.csv.empty()) rows.resize(frames.size() * detectors.size());
 
@@ -164,6 +186,7 @@ int Main(int argc, char** argv) {
   std::size_t done = 0;
   std::mutex progress_mutex;
   bool warmed_up = false;
+  int last_threads = 1;
   cv::Mat gray;
 
   for (std::size_t begin = 0; begin < frames.size();
@@ -176,8 +199,8 @@ int Main(int argc, char** argv) {
     const auto render_worker = [&] {
       for (std::size_t i; (i = next++) < end;) {
         const FrameSpec& f = frames[i];
-        const int markers = f.tagless() ? 1 : kMarkerCount;
-        for (int m = 0; m < markers; ++m) {
+        for (int m = 0; m < (f.tagless() ? 1 : kMarkerCount); ++m) {
+          if (!f.tagless() && !needed[static_cast<std::size_t>(m)]) continue;
           scene::Scene s = scene::RenderScene(SceneFor(f, static_cast<Marker>(m), camera));
           rendered[i - begin].bgr[m] = std::move(s.bgr);
           rendered[i - begin].truth[m] = std::move(s.truth);
@@ -194,17 +217,25 @@ int Main(int argc, char** argv) {
     // 2. Time every detector over the chunk: one thread, then all cores. The order of the
     // detectors turns from chunk to chunk so none always runs first on a cold cache.
     const std::size_t turn = (begin / static_cast<std::size_t>(args.chunk)) % detectors.size();
-    for (int pass = 0; pass < (args.all_cores ? 2 : 1); ++pass) {
+
+    const std::size_t chunk_index = begin / static_cast<std::size_t>(args.chunk);
+    const int every = args.sweep.quick ? 1 : args.all_cores_every;
+    const bool time_all_cores =
+        args.all_cores && chunk_index % static_cast<std::size_t>(every) == 0;
+    for (int pass = 0; pass < (time_all_cores ? 2 : 1); ++pass) {
       const int threads = pass == 0 ? 1 : cores;
       cv::setNumThreads(threads);
       for (auto& d : detectors) d->setThreads(threads);
-      if (!warmed_up || pass == 1) {
-        // First use allocates (dictionaries, worker pools, tables): not part of any frame's time.
+      if (!warmed_up || threads != last_threads) {
+        // First use allocates (dictionaries, tables), and a new thread count makes libapriltag
+        // rebuild its worker pool: warm-up calls, not part of any frame's time.
         for (auto& d : detectors) {
           const FrameSpec& f = frames[begin];
-          for (int k = 0; k < 2; ++k) d->detect(rendered[0].image(f, d->marker()));
+          for (int k = 0; k < (warmed_up ? 1 : 2); ++k)
+            d->detect(rendered[0].image(f, d->marker()));
         }
         GrayFloor(rendered[0].bgr[0], &gray);
+        last_threads = threads;
       }
       for (std::size_t i = begin; i < end; ++i) {
         const auto t0 = Clock::now();
@@ -257,12 +288,16 @@ int Main(int argc, char** argv) {
 
   const MarkerStats& pintag = result.markers[0];
   char summary[256];
-  std::snprintf(summary, sizeof summary,
-                "%zu frames; PinTag recall %.1f %%, misreads %d, tagless false positives %d, "
-                "median %.2f ms (ArUco %.2f ms)",
-                frames.size(), pintag.recall(-1, -1, -1).percent(), pintag.misreads,
-                pintag.false_positives, Median(pintag.time_ms_one_thread),
-                Median(result.markers[1].time_ms_one_thread));
+  std::snprintf(
+      summary, sizeof summary,
+      "%zu frames; PinTag recall %.1f %%, misreads %d, tagless false positives %d, "
+      "median %.2f ms%s",
+      frames.size(), pintag.recall(-1, -1, -1).percent(), pintag.misreads, pintag.false_positives,
+      Median(pintag.time_ms_one_thread),
+      result.markers.size() > 1 && result.markers[1].name == "ArUco"
+          ? (" (ArUco " + std::to_string(Median(result.markers[1].time_ms_one_thread)) + " ms)")
+                .c_str()
+          : "");
   progress.finish(summary);
 
   std::string error;

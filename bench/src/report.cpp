@@ -1,5 +1,6 @@
 #include "report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -89,8 +90,12 @@ std::string ReportMarkdown(const BenchResult& r) {
      << " px, no distortion; one 50 mm tag per tagged frame |\n";
   md << "| threads | pass 1: one thread (cv::setNumThreads(1), apriltag nthreads 1, PinTag "
         "threads 1)";
-  if (r.all_cores > 0)
-    md << "; pass 2: all " << r.all_cores << " cores (same settings = " << r.all_cores << ")";
+  if (r.all_cores > 0) {
+    md << "; pass 2: all " << r.all_cores << " cores (the same three settings = " << r.all_cores
+       << "), timed on " << r.floor_ms_all_cores.size() << " of the "
+       << r.floor_ms_one_thread.size() << " frames (one chunk of 24 frames in "
+       << (r.sweep.quick ? 1 : r.all_cores_every) << ")";
+  }
   md << " |\n";
   md << "| frames | " << r.tagged_frames << " tagged poses (";
   if (r.sweep.quick) {
@@ -98,8 +103,11 @@ std::string ReportMarkdown(const BenchResult& r) {
   } else {
     md << r.sweep.frames_per_bin << " per size × tilt × photometry bin, 7 × 7 × 2 bins";
   }
+  int excluded = 0;
+  for (const MarkerStats& s : r.markers) excluded = std::max(excluded, s.excluded);
   md << "), each rendered with each of the 3 markers; " << r.tagless_frames << " tagless frames on "
-     << r.photos << " photographs |\n";
+     << r.photos << " photographs; " << excluded
+     << " tags not fully visible, left out of recall |\n";
   md << "| wall time | " << Fmt("%.0f", r.wall_seconds) << " s (rendering included) |\n\n";
 
   // --- summary ---
@@ -159,33 +167,37 @@ std::string ReportMarkdown(const BenchResult& r) {
   }
 
   // --- the bins the next step is judged on ---
-  const MarkerStats& aruco = r.markers.at(1);
-  md << "\n### Recall per size × tilt bin: PinTag / ArUco\n\n";
-  md << "% found, both photometries (" << pintag.recall(-1, 0, 0).tags
-     << " tags per bin). **Bold**: a bin of the target region (≥ 24 px, ≤ 72°) where PinTag "
-        "finds fewer than ArUco.\n\n";
-  std::vector<std::string> tilt_header{"side px \\ tilt °"};
-  for (int t : kTiltsDeg) tilt_header.push_back(std::to_string(t));
-  md << Header(tilt_header);
-  int behind = 0, target_bins = 0;
-  for (int si = 0; si < kSizeCount; ++si) {
-    std::vector<std::string> row{std::to_string(kSizesPx[si])};
-    for (int ti = 0; ti < kTiltCount; ++ti) {
-      const Tally p = pintag.recall(-1, si, ti), a = aruco.recall(-1, si, ti);
-      std::string cell = Fmt("%.0f", p.percent()) + " / " + Fmt("%.0f", a.percent());
-      if (InTarget(si, ti)) {
-        ++target_bins;
-        if (p.found * std::max(1, a.tags) < a.found * std::max(1, p.tags)) {
-          ++behind;
-          cell = "**" + cell + "**";
+  const auto aruco_it = std::find_if(r.markers.begin(), r.markers.end(),
+                                     [](const MarkerStats& s) { return s.name == "ArUco"; });
+  if (aruco_it != r.markers.end()) {
+    const MarkerStats& aruco = *aruco_it;
+    md << "\n### Recall per size × tilt bin: PinTag / ArUco\n\n";
+    md << "% found, both photometries (" << pintag.recall(-1, 0, 0).tags
+       << " tags per bin). **Bold**: a bin of the target region (≥ 24 px, ≤ 72°) where PinTag "
+          "finds fewer than ArUco.\n\n";
+    std::vector<std::string> tilt_header{"side px \\ tilt °"};
+    for (int t : kTiltsDeg) tilt_header.push_back(std::to_string(t));
+    md << Header(tilt_header);
+    int behind = 0, target_bins = 0;
+    for (int si = 0; si < kSizeCount; ++si) {
+      std::vector<std::string> row{std::to_string(kSizesPx[si])};
+      for (int ti = 0; ti < kTiltCount; ++ti) {
+        const Tally p = pintag.recall(-1, si, ti), a = aruco.recall(-1, si, ti);
+        std::string cell = Fmt("%.0f", p.percent()) + " / " + Fmt("%.0f", a.percent());
+        if (InTarget(si, ti)) {
+          ++target_bins;
+          if (p.found * std::max(1, a.tags) < a.found * std::max(1, p.tags)) {
+            ++behind;
+            cell = "**" + cell + "**";
+          }
         }
+        row.push_back(cell);
       }
-      row.push_back(cell);
+      md << Row(row);
     }
-    md << Row(row);
+    md << "\nPinTag finds fewer tags than ArUco in " << behind << " of the " << target_bins
+       << " target bins.\n";
   }
-  md << "\nPinTag finds fewer tags than ArUco in " << behind << " of the " << target_bins
-     << " target bins.\n";
 
   // --- corner error by size ---
   names[0] = "square side px";

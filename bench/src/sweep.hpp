@@ -26,7 +26,7 @@ inline constexpr int kMarkerCount = 3;
 std::string ToString(Marker marker);
 
 struct SweepOptions {
-  int frames_per_bin = 6;   ///< frames per (size, tilt, photometry) bin
+  int frames_per_bin = 8;   ///< frames per (size, tilt, photometry) bin
   int tagless_frames = 64;  ///< frames of photographs without a tag (moderate and hard alternate)
   bool quick = false;       ///< one frame per (size, tilt), photometry alternating; few tagless
   std::uint64_t seed = 1;   ///< base seed of the whole sweep
