@@ -47,8 +47,8 @@ const std::string& SeededTemplate() {
     std::error_code error;
     const auto stamp = std::filesystem::last_write_time("/proc/self/exe", error);
     if (!error) {
-      const std::string cached = std::string(PINTAG_TEST_TEMPLATE_DIR) + "/seeded-" +
-                                 std::to_string(stamp.time_since_epoch().count()) + ".db";
+      std::string cached = std::string(PINTAG_TEST_TEMPLATE_DIR) + "/seeded-" +
+                           std::to_string(stamp.time_since_epoch().count()) + ".db";
       if (!std::filesystem::exists(cached)) {
         SeedInto(cached);
         // Templates of earlier builds are 35 MB each: drop them.
@@ -65,7 +65,7 @@ const std::string& SeededTemplate() {
       return cached;
     }
 #endif
-    const std::string file = dir.file("seeded.db");
+    std::string file = dir.file("seeded.db");
     SeedInto(file);
     return file;
   }();
@@ -73,7 +73,7 @@ const std::string& SeededTemplate() {
 }
 
 std::string CopyOfSeeded(const TempDir& dir, const std::string& name) {
-  const std::string target = dir.file(name);
+  std::string target = dir.file(name);
   std::filesystem::copy_file(SeededTemplate(), target);
   return target;
 }

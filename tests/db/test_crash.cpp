@@ -14,8 +14,6 @@
 #include "db_test_util.hpp"
 #include "pintag/db/registry.hpp"
 
-extern char** environ;
-
 namespace pintag::db {
 namespace {
 
@@ -42,6 +40,7 @@ std::string LargeCsv() {
 
 pid_t Spawn(const std::vector<std::string>& args) {
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
   argv.push_back(nullptr);
   posix_spawn_file_actions_t actions;
@@ -72,7 +71,7 @@ Outcome Inspect(const std::string& path, const RegistryCounts& before) {
       after.keys_allocated == before.keys_allocated) {
     return Outcome::kNone;
   }
-  if (after.offices == before.offices + kNewPincodes * kOfficesPerPincode &&
+  if (after.offices == before.offices + std::int64_t{kNewPincodes} * kOfficesPerPincode &&
       after.pincodes_active == before.pincodes_active + kNewPincodes &&
       after.keys_allocated == before.keys_allocated + kNewPincodes) {
     return Outcome::kAll;
