@@ -110,6 +110,8 @@ void Run(const ServeArgs& args) {
     if (finished) return;
     std::cerr << "pintag serve: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
               << ", finishing requests in flight\n";
+    // A signal right after start may come before serve() runs; cpp-httplib ignores stop() then.
+    while (!http.running() && !finished) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     http.stop();
   });
   const bool served = http.serve();

@@ -256,6 +256,10 @@ void HttpServer::stop() {
   if (impl_->thread.joinable()) impl_->thread.join();
 }
 
+bool HttpServer::running() const {
+  return impl_->server.is_running();
+}
+
 int HttpServer::port() const {
   return impl_->port;
 }

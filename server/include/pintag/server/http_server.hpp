@@ -39,6 +39,10 @@ class HttpServer {
   /// Stops accepting, finishes in-flight requests, joins the background thread.
   void stop();
 
+  /// Whether serve() is accepting connections (stop() before that is a no-op in cpp-httplib, so a
+  /// caller stopping from another thread waits for this first).
+  bool running() const;
+
   /// The bound port (useful with port 0); 0 before bind().
   int port() const;
 

@@ -1,0 +1,334 @@
+// POST /api/v1/detect on a real `pintag serve`: a label fetched from the server, photographed in a
+// synthetic scene at a known pose, uploaded, read back; and every way an upload can be wrong.
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "pintag/codec/label.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/scene/scene.hpp"
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+struct Photo {
+  std::string jpeg;
+  scene::MarkerTruth truth;
+  scene::Camera camera;
+  double square_mm = 0;
+};
+
+/// The label PNG for `pin` from the server, as a marker texture at a known pose in a 1080p scene.
+Photo PhotographLabel(httplib::Client& client, const httplib::Headers& auth, const std::string& pin,
+                      double tilt_deg) {
+  Photo photo;
+  auto r = client.Get("/api/v1/labels/" + pin + ".png?dpi=300", auth);
+  EXPECT_TRUE(r && r->status == 200);
+  if (!r || r->status != 200) return photo;
+  const std::vector<std::uint8_t> png(r->body.begin(), r->body.end());
+  scene::MarkerTexture texture;
+  texture.bgr = cv::imdecode(png, cv::IMREAD_COLOR);
+  EXPECT_FALSE(texture.bgr.empty());
+  // Where the renderer put the tag's black square on the label (exact in pixels).
+  const LabelOptions options;  // 100 x 150 mm, 300 dpi: what the server rendered
+  const LabelTagPixels at = TagPlacementPixels(options);
+  const double x0 = at.square_x - 0.5, y0 = at.square_y - 0.5, n = at.square_side;
+  texture.square_corners_px = {cv::Point2d{x0, y0}, cv::Point2d{x0 + n, y0},
+                               cv::Point2d{x0 + n, y0 + n}, cv::Point2d{x0, y0 + n}};
+  photo.square_mm = TagPlacement(options.size).square_side_mm;
+
+  scene::SceneSpec spec;
+  spec.seed = 7;
+  spec.photometry.noise_sigma = 2;
+  spec.photometry.defocus_sigma_px = 0.5;
+  scene::PlacedMarker marker;
+  marker.texture = texture;
+  marker.square_side_m = photo.square_mm / 1000;
+  const double distance = scene::DistanceForSquarePx(spec.camera, 220, marker.square_side_m);
+  marker.pose = scene::MakePose(spec.camera, {900, 500}, distance, tilt_deg, 30, 20);
+  spec.markers.push_back(marker);
+  const scene::Scene rendered = scene::RenderScene(spec);
+  photo.truth = rendered.truth.at(0);
+  photo.camera = spec.camera;
+  std::vector<std::uint8_t> jpeg;
+  cv::imencode(".jpg", rendered.bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 92});
+  photo.jpeg.assign(jpeg.begin(), jpeg.end());
+  return photo;
+}
+
+double RotationErrorDeg(const json& rotation_vector, const cv::Matx33d& truth) {
+  const cv::Vec3d rvec(rotation_vector[0].get<double>(), rotation_vector[1].get<double>(),
+                       rotation_vector[2].get<double>());
+  cv::Matx33d estimate;
+  cv::Rodrigues(rvec, estimate);
+  const cv::Matx33d delta = estimate * truth.t();
+  const double c = std::clamp((cv::trace(delta) - 1) / 2, -1.0, 1.0);
+  return std::acos(c) * 180 / M_PI;
+}
+
+TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
+  const Photo photo = PhotographLabel(client(), counter(), "110001", 30);
+  ASSERT_FALSE(photo.jpeg.empty());
+  const std::string query =
+      "/api/v1/detect?plan=default&tag_size_mm=" + std::to_string(photo.square_mm) +
+      "&fx=1400&fy=1400&cx=960&cy=540";
+  httplib::MultipartFormDataItems form = {{"image", photo.jpeg, "photo.jpg", "image/jpeg"}};
+  const json out = ExpectJson(client().Post(query.c_str(), scanner(), form));
+  ASSERT_EQ(out["tags"].size(), 1U) << out.dump(1);
+  const json& tag = out["tags"][0];
+  EXPECT_EQ(tag["pincode"], "110001");
+  EXPECT_EQ(tag["key"], 11684);
+  EXPECT_EQ(tag["bin"], "11");
+  EXPECT_EQ(tag["status"], "active");
+  EXPECT_EQ(tag["district"], "Central Delhi");
+  EXPECT_EQ(tag["state"], "Delhi");
+  EXPECT_TRUE(tag["office"].is_string());
+  EXPECT_EQ(out["image"]["width"], 1920);
+  EXPECT_EQ(out["image"]["height"], 1080);
+  EXPECT_EQ(out["intrinsics"]["source"], "given");
+  EXPECT_EQ(out["plan"], "default");
+  EXPECT_GT(out["time_ms"]["total"].get<double>(), 0);
+  for (int c = 0; c < 4; ++c) {
+    EXPECT_NEAR(tag["corners_px"][c][0].get<double>(), photo.truth.corners_px[c].x, 1.0);
+    EXPECT_NEAR(tag["corners_px"][c][1].get<double>(), photo.truth.corners_px[c].y, 1.0);
+  }
+  const cv::Point2d centre = scene::ProjectSquarePoint(photo.truth, {0.5, 0.5});
+  EXPECT_NEAR(tag["centre_px"][0].get<double>(), centre.x, 1.0);
+  EXPECT_NEAR(tag["centre_px"][1].get<double>(), centre.y, 1.0);
+  const json& pose = tag["pose"];
+  const double true_distance = cv::norm(photo.truth.pose.translation);
+  EXPECT_NEAR(pose["distance_m"].get<double>(), true_distance, 0.02 * true_distance);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(pose["translation_m"][i].get<double>(), photo.truth.pose.translation[i],
+                0.02 * true_distance);
+  }
+  EXPECT_LT(RotationErrorDeg(pose["rotation_vector"], photo.truth.pose.rotation), 3.0);
+  EXPECT_EQ(pose["quaternion_wxyz"].size(), 4U);
+  EXPECT_TRUE(tag["pose_ambiguous"].is_boolean());
+
+  // The same photo as a raw body without intrinsics: same reading, intrinsics assumed.
+  const json raw = ExpectJson(client().Post("/api/v1/detect", scanner(), photo.jpeg, "image/jpeg"));
+  ASSERT_EQ(raw["tags"].size(), 1U);
+  EXPECT_EQ(raw["tags"][0]["pincode"], "110001");
+  EXPECT_EQ(raw["intrinsics"]["source"], "assumed");
+
+  // ?overlay=1: the photo annotated, as PNG of the same size.
+  auto r = client().Post((query + "&overlay=1").c_str(), admin(), form);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body.substr(0, 300);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  const cv::Mat overlay =
+      cv::imdecode(std::vector<std::uint8_t>(r->body.begin(), r->body.end()), cv::IMREAD_COLOR);
+  EXPECT_EQ(overlay.cols, 1920);
+  EXPECT_EQ(overlay.rows, 1080);
+
+  // Each call is in the scan log, with the token that made it.
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  auto scans = db::RecentScans(opened.value().connection, 10);
+  ASSERT_TRUE(scans);
+  ASSERT_EQ(scans->size(), 3U);
+  EXPECT_EQ((*scans)[2].image_width, 1920);
+  EXPECT_EQ((*scans)[2].image_bytes, static_cast<std::int64_t>(photo.jpeg.size()));
+  const json logged = json::parse((*scans)[2].result_json);
+  EXPECT_EQ(logged["tags"][0]["pincode"], "110001");
+  EXPECT_TRUE((*scans)[2].token_id.has_value());
+  EXPECT_NE((*scans)[0].token_id, (*scans)[2].token_id);  // admin made the last call
+}
+
+TEST_F(ServeTest, KeysUnknownToTheRegistryAreReportedAsSuchNeverGuessed) {
+  int free_key = -1;
+  for (int key = 32767; key > 32000 && free_key < 0; --key) {
+    const auto r = client().Get("/api/v1/keys/" + std::to_string(key));
+    ASSERT_TRUE(r);
+    if (r->status == 404) free_key = key;
+  }
+  ASSERT_GE(free_key, 0);
+  scene::SceneSpec spec;
+  scene::PlacedMarker marker;
+  marker.texture = scene::PinTagTexture(free_key, 256);
+  marker.pose = scene::MakePose(spec.camera, {960, 540},
+                                scene::DistanceForSquarePx(spec.camera, 200), 15, 0, 0);
+  spec.markers.push_back(marker);
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", scene::RenderScene(spec).bgr, png);
+  const json out = ExpectJson(
+      client().Post("/api/v1/detect", scanner(), std::string(png.begin(), png.end()), "image/png"));
+  ASSERT_EQ(out["tags"].size(), 1U) << out.dump(1);
+  const json& tag = out["tags"][0];
+  EXPECT_EQ(tag["key"], free_key);
+  EXPECT_EQ(tag["status"], "unknown_key");
+  EXPECT_TRUE(tag["pincode"].is_null());
+  EXPECT_TRUE(tag["bin"].is_null());
+  EXPECT_TRUE(tag["office"].is_null());
+  EXPECT_TRUE(tag.contains("pose"));
+}
+
+std::uint32_t Crc(const std::string& bytes) {
+  return static_cast<std::uint32_t>(
+      crc32(0, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(bytes.size())));
+}
+
+std::string Be32(std::uint32_t v) {
+  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+          static_cast<char>(v)};
+}
+
+std::string Chunk(const std::string& type, const std::string& data) {
+  return Be32(static_cast<std::uint32_t>(data.size())) + type + data + Be32(Crc(type + data));
+}
+
+/// A well-formed, tiny PNG whose header claims width x height pixels.
+std::string PngClaiming(std::uint32_t width, std::uint32_t height) {
+  std::string ihdr = Be32(width) + Be32(height) + std::string("\x08\x02\x00\x00\x00", 5);
+  std::string idat_raw(1000, '\0');
+  uLongf size = compressBound(idat_raw.size());
+  std::string idat(size, '\0');
+  compress(reinterpret_cast<Bytef*>(idat.data()), &size,
+           reinterpret_cast<const Bytef*>(idat_raw.data()), idat_raw.size());
+  idat.resize(size);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + Chunk("IHDR", ihdr) + Chunk("IDAT", idat) +
+         Chunk("IEND", "");
+}
+
+std::string SmallJpeg(int width = 64, int height = 48) {
+  std::vector<std::uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(height, width, CV_8UC3, cv::Scalar(30, 120, 200)), jpeg);
+  return {jpeg.begin(), jpeg.end()};
+}
+
+/// A real small JPEG with its SOF0 size patched to width x height.
+std::string JpegClaiming(std::uint16_t width, std::uint16_t height) {
+  std::string jpeg = SmallJpeg();
+  for (std::size_t i = 2; i + 9 < jpeg.size(); ++i) {
+    if (static_cast<unsigned char>(jpeg[i]) == 0xFF &&
+        static_cast<unsigned char>(jpeg[i + 1]) == 0xC0) {
+      jpeg[i + 5] = static_cast<char>(height >> 8);
+      jpeg[i + 6] = static_cast<char>(height & 0xFF);
+      jpeg[i + 7] = static_cast<char>(width >> 8);
+      jpeg[i + 8] = static_cast<char>(width & 0xFF);
+      return jpeg;
+    }
+  }
+  ADD_FAILURE() << "no SOF0 in the test JPEG";
+  return jpeg;
+}
+
+TEST_F(ServeTest, DetectRefusesBadUploadsWithProblems) {
+  const std::string jpeg = SmallJpeg();
+  // Auth before anything: no token, a wrong one, a counter token.
+  ExpectProblem(client().Post("/api/v1/detect", jpeg, "image/jpeg"), 401);
+  ExpectProblem(client().Post("/api/v1/detect", Auth("pt_9_nope"), jpeg, "image/jpeg"), 401);
+  ExpectProblem(client().Post("/api/v1/detect", counter(), jpeg, "image/jpeg"), 403);
+  // A whole small JPEG with no tag: fine, no tags.
+  EXPECT_EQ(
+      ExpectJson(client().Post("/api/v1/detect", scanner(), jpeg, "image/jpeg"))["tags"].size(),
+      0U);
+
+  // Pixel bombs: tiny files whose headers claim 100000 x 100000 and 60000 x 60000 pixels.
+  const std::string png_bomb = PngClaiming(100000, 100000);
+  EXPECT_LT(png_bomb.size(), 2000U);
+  json p = ExpectProblem(client().Post("/api/v1/detect", scanner(), png_bomb, "image/png"), 413);
+  EXPECT_EQ(p["title"], "Image Too Large");
+  EXPECT_NE(p["detail"].get<std::string>().find("100000 x 100000"), std::string::npos);
+  ExpectProblem(
+      client().Post("/api/v1/detect", scanner(), JpegClaiming(60000, 60000), "image/jpeg"), 413);
+  httplib::MultipartFormDataItems bomb_form = {{"image", png_bomb, "bomb.png", "image/png"}};
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), bomb_form), 413);
+
+  // Truncated JPEG and PNG: 400.
+  EXPECT_EQ(ExpectProblem(client().Post("/api/v1/detect", scanner(),
+                                        jpeg.substr(0, jpeg.size() / 2), "image/jpeg"),
+                          400)["title"],
+            "Corrupt Image");
+  const std::string png = PngClaiming(64, 48);
+  ExpectProblem(
+      client().Post("/api/v1/detect", scanner(), png.substr(0, png.size() - 20), "image/png"), 400);
+  // Bytes that are no image at all: 415; a body type the route does not take: 415; none: 400.
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), std::string(5000, 'x'), "image/jpeg"),
+                415);
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), "%PDF-1.4 not an image",
+                              "application/octet-stream"),
+                415);
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), jpeg, "text/plain"), 415);
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), jpeg, "application/json"), 415);
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), "", "image/jpeg"), 400);
+  httplib::MultipartFormDataItems wrong_field = {{"photo", jpeg, "a.jpg", "image/jpeg"}};
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), wrong_field), 400);
+  // Query parameters.
+  ExpectProblem(client().Post("/api/v1/detect?tag_size_mm=0", scanner(), jpeg, "image/jpeg"), 400);
+  ExpectProblem(client().Post("/api/v1/detect?fx=1000", scanner(), jpeg, "image/jpeg"), 400);
+  ExpectProblem(client().Post("/api/v1/detect?fx=abc&fy=1", scanner(), jpeg, "image/jpeg"), 400);
+  ExpectProblem(client().Post("/api/v1/detect?overlay=maybe", scanner(), jpeg, "image/jpeg"), 400);
+  EXPECT_EQ(ExpectProblem(client().Post("/api/v1/detect?plan=nope", scanner(), jpeg, "image/jpeg"),
+                          404)["title"],
+            "Unknown Sort Plan");
+  // GET is not how one detects.
+  ExpectProblem(client().Get("/api/v1/detect", scanner()), 405);
+}
+
+/// Sends raw bytes; returns what the server answers before it closes or goes quiet for 2 s.
+std::string Raw(int port, const std::string& request) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+    ::close(fd);
+    return {};
+  }
+  ::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+  timeval timeout{2, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  std::string out;
+  char buffer[4096];
+  ssize_t n = 0;
+  while ((n = ::recv(fd, buffer, sizeof buffer, 0)) > 0) {
+    out.append(buffer, static_cast<std::size_t>(n));
+    if (out.find("\r\n\r\n") != std::string::npos && out.find("}") != std::string::npos) break;
+  }
+  ::close(fd);
+  return out;
+}
+
+TEST_F(ServeTest, BodyAndPixelLimitsAreFlags) {
+  // The default body limit, 25 MiB, from the declared length before a byte of the body is read.
+  const std::string head = "POST /api/v1/detect HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " +
+                           scanner_token_ + "\r\nContent-Type: image/jpeg\r\nContent-Length: ";
+  std::string answer =
+      Raw(server_->port(), head + std::to_string(25 * 1024 * 1024 + 1) + "\r\n\r\n");
+  EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 300);
+  EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
+
+  // Smaller limits from the command line: a 60 KiB body over a 50 KiB limit, a 2 MP photo over a
+  // 1 MP limit, a batch of 3 labels over a limit of 2.
+  StartServer({"--max-body-mb", "0.05", "--max-pixels", "1000000", "--max-batch", "2"});
+  ExpectProblem(
+      client().Post("/api/v1/detect", scanner(), std::string(60 * 1024, 'x'), "image/jpeg"), 413);
+  const std::string photo = SmallJpeg(1920, 1080);
+  ASSERT_LT(photo.size(), 50U * 1024);
+  json p = ExpectProblem(client().Post("/api/v1/detect", scanner(), photo, "image/jpeg"), 413);
+  EXPECT_NE(p["detail"].get<std::string>().find("1920 x 1080"), std::string::npos);
+  EXPECT_EQ(ExpectJson(client().Post("/api/v1/detect", scanner(), SmallJpeg(1000, 1000),
+                                     "image/jpeg"))["image"]["width"],
+            1000);
+  ExpectProblem(
+      client().Post("/api/v1/labels", counter(), R"({"pincodes": ["110001", "110001", "110001"]})",
+                    "application/json"),
+      413);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test

@@ -1,0 +1,227 @@
+#include "serve_fixture.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "pintag/db/database.hpp"
+#include "pintag/db/tokens.hpp"
+
+namespace pintag::serve_test {
+
+ScratchDir::ScratchDir() {
+  std::string pattern = (std::filesystem::temp_directory_path() / "pintag-serve-XXXXXX").string();
+  if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  path_ = pattern;
+}
+
+ScratchDir::~ScratchDir() {
+  std::error_code ignored;
+  // A test may have made files unreadable; make sure they can be removed.
+  std::filesystem::permissions(path_, std::filesystem::perms::owner_all,
+                               std::filesystem::perm_options::add, ignored);
+  std::filesystem::remove_all(path_, ignored);
+}
+
+std::string PintagExe() {
+  return PINTAG_EXE;
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void WriteFile(const std::string& path, const std::string& content) {
+  std::ofstream out(path, std::ios::binary);
+  out << content;
+  if (!out.flush()) throw std::runtime_error("cannot write " + path);
+}
+
+ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
+                             int timeout_s) {
+  int pipe_fds[2];
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) return;
+  std::vector<std::string> argv_text = {PintagExe(), "serve", "--port", "0", "--bind", "127.0.0.1"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t parent = ::getpid();
+  pid_ = ::fork();
+  if (pid_ == 0) {
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);
+    ::dup2(pipe_fds[1], 1);
+    const int err = ::open(stderr_file.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0600);
+    if (err >= 0) ::dup2(err, 2);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  ::close(pipe_fds[1]);
+  out_fd_ = pipe_fds[0];
+  if (pid_ < 0) return;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_s);
+  while (out_.find("Stop with Ctrl-C.") == std::string::npos) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return;
+    pollfd p{out_fd_, POLLIN, 0};
+    if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) return;
+    char buffer[4096];
+    const ssize_t n = ::read(out_fd_, buffer, sizeof buffer);
+    if (n <= 0) return;  // exited
+    out_.append(buffer, static_cast<std::size_t>(n));
+  }
+  std::smatch match;
+  if (std::regex_search(out_, match, std::regex(R"(serving http://127\.0\.0\.1:(\d+)/)"))) {
+    port_ = std::stoi(match[1].str());
+  }
+}
+
+void ServerProcess::signal(int signal) const {
+  if (pid_ > 0) ::kill(pid_, signal);
+}
+
+int ServerProcess::stop(int signal, int timeout_s) {
+  if (pid_ <= 0) return -1;
+  ::kill(pid_, signal);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_s);
+  int status = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    const pid_t done = ::waitpid(pid_, &status, WNOHANG);
+    if (done == pid_) {
+      pid_ = -1;
+      return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return -1;
+}
+
+ServerProcess::~ServerProcess() {
+  if (pid_ > 0 && stop(SIGTERM, 5) == -1 && pid_ > 0) {
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+  }
+  if (out_fd_ >= 0) ::close(out_fd_);
+}
+
+namespace {
+
+void SeedInto(const std::string& path) {
+  const std::string partial = path + ".partial." + std::to_string(getpid());
+  {
+    auto opened = db::OpenDatabase(partial);
+    if (!opened) throw std::runtime_error(opened.error().message);
+  }  // closing checkpoints the WAL into the file
+  std::filesystem::rename(partial, path);
+}
+
+}  // namespace
+
+// ctest runs each test in its own process: seed once per build of this executable, not per test.
+const std::string& SeededTemplate() {
+  static const ScratchDir fallback_dir;
+  static const std::string path = [] {
+    std::error_code error;
+    const auto stamp = std::filesystem::last_write_time("/proc/self/exe", error);
+    if (!error) {
+      const std::string cached = std::string(PINTAG_TEST_TEMPLATE_DIR) + "/seeded-" +
+                                 std::to_string(stamp.time_since_epoch().count()) + ".db";
+      if (!std::filesystem::exists(cached)) {
+        SeedInto(cached);
+        for (const auto& entry :
+             std::filesystem::directory_iterator(PINTAG_TEST_TEMPLATE_DIR, error)) {
+          const std::string name = entry.path().filename().string();
+          if (name.starts_with("seeded-") && name.ends_with(".db") &&
+              entry.path().string() != cached) {
+            std::filesystem::remove(entry.path(), error);
+          }
+        }
+      }
+      return cached;
+    }
+    const std::string file = fallback_dir.file("seeded.db");
+    SeedInto(file);
+    return file;
+  }();
+  return path;
+}
+
+void ServeTest::SetUp() {
+  db_path_ = dir_.file("registry.db");
+  std::filesystem::copy_file(SeededTemplate(), db_path_);
+  {
+    auto opened = db::OpenDatabase(db_path_, {.create = false});
+    ASSERT_TRUE(opened) << opened.error().message;
+    auto admin = db::CreateToken(opened.value().connection, db::Role::kAdmin, "test admin");
+    auto counter = db::CreateToken(opened.value().connection, db::Role::kCounter, "test counter");
+    auto scanner = db::CreateToken(opened.value().connection, db::Role::kScanner, "test scanner");
+    ASSERT_TRUE(admin && counter && scanner);
+    admin_token_ = admin->secret;
+    counter_token_ = counter->secret;
+    counter_token_id_ = counter->info.id;
+    scanner_token_ = scanner->secret;
+  }
+  StartServer();
+}
+
+void ServeTest::StartServer(const std::vector<std::string>& extra) {
+  client_.reset();
+  server_.reset();
+  std::vector<std::string> args = {"--db", db_path_, "--threads", "4"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  server_ = std::make_unique<ServerProcess>(args, dir_.file("stderr.log"));
+  ASSERT_TRUE(server_->ok()) << "pintag serve did not start; stdout:\n"
+                             << server_->out() << "\nstderr:\n"
+                             << ReadFile(dir_.file("stderr.log"));
+  client_ = std::make_unique<httplib::Client>("127.0.0.1", server_->port());
+  client_->set_read_timeout(30, 0);
+  client_->set_write_timeout(30, 0);
+}
+
+void ServeTest::TearDown() {
+  client_.reset();
+  server_.reset();  // SIGTERM, SIGKILL after 5 s
+  if (HasFailure()) std::cerr << "server stderr:\n" << ReadFile(dir_.file("stderr.log"));
+}
+
+nlohmann::json ServeTest::ExpectProblem(const httplib::Result& r, int status) {
+  EXPECT_TRUE(r) << "no response: " << httplib::to_string(r.error());
+  if (!r) return {};
+  EXPECT_EQ(r->status, status) << r->body.substr(0, 500);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json")
+      << r->body.substr(0, 300);
+  nlohmann::json body = nlohmann::json::parse(r->body, nullptr, false);
+  EXPECT_FALSE(body.is_discarded()) << r->body.substr(0, 300);
+  if (body.is_discarded()) return {};
+  EXPECT_EQ(body.value("status", 0), status);
+  EXPECT_TRUE(body.contains("type") && body.contains("title") && body.contains("detail"))
+      << r->body;
+  return body;
+}
+
+nlohmann::json ServeTest::ExpectJson(const httplib::Result& r, int status) {
+  EXPECT_TRUE(r) << "no response: " << httplib::to_string(r.error());
+  if (!r) return {};
+  EXPECT_EQ(r->status, status) << r->body.substr(0, 500);
+  EXPECT_EQ(r->get_header_value("Content-Type").rfind("application/json", 0), 0U);
+  nlohmann::json body = nlohmann::json::parse(r->body, nullptr, false);
+  EXPECT_FALSE(body.is_discarded()) << r->body.substr(0, 300);
+  return body.is_discarded() ? nlohmann::json() : body;
+}
+
+}  // namespace pintag::serve_test

@@ -1,0 +1,99 @@
+#pragma once
+// A real `pintag serve` process for the end-to-end tests: a copy of a seeded database in a
+// temporary directory, tokens of every role made in it, the server on a free loopback port
+// (--port 0; the port is read from its stdout), and cpp-httplib's client. The process is
+// stopped with SIGTERM when the fixture ends (SIGKILL if it does not stop within 5 s), and it
+// dies with the test process (PR_SET_PDEATHSIG) if that crashes.
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pintag::serve_test {
+
+/// A scratch directory removed at the end.
+class ScratchDir {
+ public:
+  ScratchDir();
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// One `pintag serve` child process.
+class ServerProcess {
+ public:
+  /// Starts `pintag serve --port 0 --bind 127.0.0.1 <args>`, stderr to `stderr_file`, and waits
+  /// until it printed its URL (at most `timeout_s`). Check ok() afterwards.
+  ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
+                int timeout_s = 60);
+  ~ServerProcess();
+  ServerProcess(const ServerProcess&) = delete;
+  ServerProcess& operator=(const ServerProcess&) = delete;
+
+  bool ok() const { return port_ > 0; }
+  int port() const { return port_; }
+  /// Everything the process printed on stdout up to its "Stop with Ctrl-C." line.
+  const std::string& out() const { return out_; }
+  /// Sends `signal` and waits for the exit; the exit status (or 128 + signal), -1 on timeout.
+  int stop(int signal = SIGTERM, int timeout_s = 10);
+  /// Sends `signal` without waiting.
+  void signal(int signal) const;
+  pid_t pid() const { return pid_; }
+
+ private:
+  pid_t pid_ = -1;
+  int out_fd_ = -1;
+  int port_ = 0;
+  std::string out_;
+};
+
+/// The `pintag` executable under test.
+std::string PintagExe();
+/// The path of a seeded database made once per build (do not modify it).
+const std::string& SeededTemplate();
+std::string ReadFile(const std::string& path);
+void WriteFile(const std::string& path, const std::string& content);
+
+/// A fixture with a seeded database copy, one token per role and a running server.
+class ServeTest : public ::testing::Test {
+ protected:
+  void SetUp() override;
+  void TearDown() override;
+
+  /// Starts (or restarts) the server with extra serve arguments.
+  void StartServer(const std::vector<std::string>& extra = {});
+
+  httplib::Client& client() { return *client_; }
+  static httplib::Headers Auth(const std::string& token) {
+    return {{"Authorization", "Bearer " + token}};
+  }
+  httplib::Headers admin() const { return Auth(admin_token_); }
+  httplib::Headers counter() const { return Auth(counter_token_); }
+  httplib::Headers scanner() const { return Auth(scanner_token_); }
+
+  /// Asserts a problem+json answer with this status; returns its body.
+  static nlohmann::json ExpectProblem(const httplib::Result& r, int status);
+  /// Asserts a 200 (or `status`) JSON answer; returns its body.
+  static nlohmann::json ExpectJson(const httplib::Result& r, int status = 200);
+
+  ScratchDir dir_;
+  std::string db_path_;
+  std::string admin_token_, counter_token_, scanner_token_;
+  std::int64_t counter_token_id_ = 0;
+  std::unique_ptr<ServerProcess> server_;
+  std::unique_ptr<httplib::Client> client_;
+};
+
+}  // namespace pintag::serve_test

@@ -1,0 +1,288 @@
+// Running `pintag serve`: first start, readiness, metrics, the OpenAPI document against the live
+// routes, static files, graceful shutdown.
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <regex>
+#include <set>
+#include <thread>
+
+#include "pintag/db/database.hpp"
+#include "pintag/db/tokens.hpp"
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+std::set<std::string> Secrets(const std::string& text) {
+  std::set<std::string> found;
+  const std::regex secret(R"(pt_\d+_[A-Za-z0-9_-]{43})");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), secret);
+       it != std::sregex_iterator(); ++it) {
+    found.insert(it->str());
+  }
+  return found;
+}
+
+TEST(ServeFirstStart, CreatesSeedsAndPrintsOneAdminTokenOnStdoutOnly) {
+  ScratchDir dir;
+  const std::string db_path = dir.file("new.db");
+  std::string secret;
+  {
+    ServerProcess server({"--db", db_path}, dir.file("stderr.log"));
+    ASSERT_TRUE(server.ok()) << server.out() << ReadFile(dir.file("stderr.log"));
+    const std::set<std::string> secrets = Secrets(server.out());
+    ASSERT_EQ(secrets.size(), 1U) << server.out();
+    secret = *secrets.begin();
+    EXPECT_NE(server.out().find("http://127.0.0.1:" + std::to_string(server.port())),
+              std::string::npos);
+
+    httplib::Client client("127.0.0.1", server.port());
+    auto r = client.Get("/api/v1/tokens", {{"Authorization", "Bearer " + secret}});
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body;
+    const json tokens = json::parse(r->body)["tokens"];
+    ASSERT_EQ(tokens.size(), 1U);
+    EXPECT_EQ(tokens[0]["role"], "admin");
+    r = client.Get("/api/v1/pincodes/110001");  // seeded
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200);
+    EXPECT_EQ(server.stop(SIGTERM), 0);
+  }
+  // Nowhere else: not on stderr, not in the database files (only a salted hash is kept).
+  const std::string stderr_text = ReadFile(dir.file("stderr.log"));
+  EXPECT_NE(stderr_text.find("created"), std::string::npos) << stderr_text;
+  EXPECT_EQ(stderr_text.find(secret), std::string::npos);
+  EXPECT_TRUE(Secrets(stderr_text).empty());
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(ReadFile(entry.path().string()).find(secret.substr(5)), std::string::npos)
+        << entry.path();
+  }
+  // A second start finds the token table non-empty and prints no token.
+  ServerProcess again({"--db", db_path}, dir.file("stderr.log"));
+  ASSERT_TRUE(again.ok());
+  EXPECT_TRUE(Secrets(again.out()).empty()) << again.out();
+  EXPECT_NE(again.out().find("pintag token create"), std::string::npos);
+}
+
+TEST_F(ServeTest, FixtureServerPrintsNoTokenWhenTokensExist) {
+  EXPECT_TRUE(Secrets(server_->out()).empty()) << server_->out();
+}
+
+TEST_F(ServeTest, ReadyzFailsWhenTheDatabaseIsUnreachable) {
+  ExpectJson(client().Get("/livez"));
+  EXPECT_EQ(ExpectJson(client().Get("/readyz"))["status"], "ready");
+
+  // Unreadable by permissions: only meaningful when not root (root reads through mode 000).
+  if (::geteuid() != 0) {
+    std::filesystem::permissions(db_path_, std::filesystem::perms::none);
+    ExpectProblem(client().Get("/readyz"), 503);
+    std::filesystem::permissions(
+        db_path_, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+    ExpectJson(client().Get("/readyz"));
+  }
+  // Moved away (what an unmounted volume looks like): 503; moved back: ready again.
+  std::filesystem::rename(db_path_, db_path_ + ".away");
+  json problem = ExpectProblem(client().Get("/readyz"), 503);
+  EXPECT_EQ(problem["title"], "Not Ready");
+  EXPECT_NE(problem["detail"].get<std::string>().find("missing"), std::string::npos);
+  ExpectJson(client().Get("/livez"));  // the process is still up
+  std::filesystem::rename(db_path_ + ".away", db_path_);
+  ExpectJson(client().Get("/readyz"));
+
+  // Replaced by a file that is not a database: 503.
+  std::filesystem::rename(db_path_, db_path_ + ".away");
+  WriteFile(db_path_, std::string(8192, 'z'));
+  ExpectProblem(client().Get("/readyz"), 503);
+  std::filesystem::remove(db_path_);
+  std::filesystem::rename(db_path_ + ".away", db_path_);
+  ExpectJson(client().Get("/readyz"));
+}
+
+double Metric(const std::string& text, const std::string& series) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind(series + " ", 0) == 0) return std::stod(line.substr(series.size() + 1));
+  }
+  return 0;
+}
+
+TEST_F(ServeTest, MetricsCountWhatTheTestDid) {
+  for (int i = 0; i < 3; ++i) ExpectJson(client().Get("/api/v1/pincodes/110001"));
+  for (int i = 0; i < 2; ++i) ExpectProblem(client().Get("/api/v1/pincodes/999999"), 404);
+  ExpectProblem(client().Get("/api/v1/pincodes/12"), 400);
+  for (int i = 0; i < 2; ++i) {
+    auto r = client().Get("/api/v1/labels/110001.svg", counter());
+    ASSERT_TRUE(r && r->status == 200);
+  }
+  auto r = client().Post("/api/v1/labels", counter(),
+                         R"({"pincodes": ["110001", "560001", "400001"]})", "application/json");
+  ASSERT_TRUE(r && r->status == 200);
+  r = client().Get("/api/v1/tags/110001.png", counter());
+  ASSERT_TRUE(r && r->status == 200);
+  // A detection of a real tag.
+  r = client().Get("/api/v1/tags/110001.png?px=200", counter());
+  ASSERT_TRUE(r && r->status == 200);
+  const json detected =
+      ExpectJson(client().Post("/api/v1/detect", scanner(), r->body, "image/png"));
+  ASSERT_EQ(detected["tags"].size(), 1U) << detected.dump();
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), "nope", "image/png"), 415);
+
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the logger runs after sending
+  r = client().Get("/metrics");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  const std::string& m = r->body;
+  const auto requests = [&](const std::string& route, const std::string& method, int status) {
+    return Metric(m, "pintag_http_requests_total{route=\"" + route + "\",method=\"" + method +
+                         "\",status=\"" + std::to_string(status) + "\"}");
+  };
+  EXPECT_EQ(requests("/api/v1/pincodes/{pin}", "GET", 200), 3);
+  EXPECT_EQ(requests("/api/v1/pincodes/{pin}", "GET", 404), 2);
+  EXPECT_EQ(requests("/api/v1/pincodes/{pin}", "GET", 400), 1);
+  EXPECT_EQ(requests("/api/v1/labels/{pin}.svg", "GET", 200), 2);
+  EXPECT_EQ(requests("/api/v1/labels", "POST", 200), 1);
+  EXPECT_EQ(requests("/api/v1/tags/{pin}.png", "GET", 200), 2);
+  EXPECT_EQ(requests("/api/v1/detect", "POST", 200), 1);
+  EXPECT_EQ(requests("/api/v1/detect", "POST", 415), 1);
+  EXPECT_EQ(Metric(m, "pintag_labels_rendered_total"), 5);  // 2 SVGs + 3 PDF pages
+  EXPECT_EQ(Metric(m, "pintag_tags_rendered_total"), 2);
+  EXPECT_EQ(Metric(m, "pintag_detections_total"), 1);
+  EXPECT_EQ(Metric(m, "pintag_scans_total"), 2);
+  EXPECT_EQ(Metric(m, "pintag_detections_unknown_key_total"), 0);
+  EXPECT_EQ(Metric(m,
+                   "pintag_http_request_duration_seconds_count{route=\"/api/v1/pincodes/{pin}\","
+                   "method=\"GET\",status=\"200\"}"),
+            3);
+}
+
+// Every route the OpenAPI document lists answers (no 404 "no route", no 405), and every route
+// issue 5 names is listed.
+TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
+  const json doc = ExpectJson(client().Get("/openapi.json"));
+  EXPECT_EQ(doc["openapi"].get<std::string>().rfind("3.1", 0), 0U);
+  std::set<std::string> listed;
+  for (const auto& [path, item] : doc["paths"].items()) {
+    for (const auto& [method, operation] : item.items()) {
+      if (method == "parameters") continue;
+      std::string upper = method;
+      for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      listed.insert(upper + " " + path);
+      std::string concrete = std::regex_replace(path, std::regex(R"(\{pin\})"), "110001");
+      concrete = std::regex_replace(concrete, std::regex(R"(\{key\})"), "11684");
+      concrete = std::regex_replace(concrete, std::regex(R"(\{name\})"), "default");
+      concrete =
+          std::regex_replace(concrete, std::regex(R"(\{id\})"), std::to_string(counter_token_id_));
+      const bool image = concrete == "/api/v1/detect";
+      httplib::Result r =
+          upper == "GET"    ? client().Get(concrete.c_str(), admin())
+          : upper == "POST" ? client().Post(concrete.c_str(), admin(), image ? "x" : "{}",
+                                            image ? "image/jpeg" : "application/json")
+          : upper == "PUT"  ? client().Put(concrete.c_str(), admin(), "{}", "application/json")
+                            : client().Delete(concrete.c_str(), admin());
+      EXPECT_TRUE(upper == "GET" || upper == "POST" || upper == "PUT" || upper == "DELETE")
+          << upper;
+      ASSERT_TRUE(r) << upper << " " << concrete;
+      EXPECT_NE(r->status, 405) << upper << " " << concrete;
+      EXPECT_NE(r->status, 501) << upper << " " << concrete;
+      EXPECT_EQ(r->body.find("no route for"), std::string::npos) << upper << " " << concrete;
+      EXPECT_LT(r->status, 500) << upper << " " << concrete << " " << r->body;
+    }
+  }
+  for (const char* route : {"GET /api/v1/pincodes/{pin}",
+                            "GET /api/v1/pincodes",
+                            "GET /api/v1/keys/{key}",
+                            "POST /api/v1/pincodes",
+                            "POST /api/v1/pincodes/{pin}/retire",
+                            "GET /api/v1/tags/{pin}.png",
+                            "GET /api/v1/tags/{pin}.svg",
+                            "GET /api/v1/labels/{pin}.pdf",
+                            "GET /api/v1/labels/{pin}.png",
+                            "GET /api/v1/labels/{pin}.svg",
+                            "POST /api/v1/labels",
+                            "POST /api/v1/detect",
+                            "GET /api/v1/route/{pin}",
+                            "GET /api/v1/sortplans",
+                            "GET /api/v1/sortplans/{name}",
+                            "PUT /api/v1/sortplans/{name}",
+                            "POST /api/v1/tokens",
+                            "GET /api/v1/tokens",
+                            "DELETE /api/v1/tokens/{id}",
+                            "POST /api/v1/tokens/{id}/revoke",
+                            "GET /livez",
+                            "GET /readyz",
+                            "GET /metrics",
+                            "GET /openapi.json"}) {
+    EXPECT_EQ(listed.count(route), 1U) << route;
+  }
+  EXPECT_EQ(listed.size(), 24U);
+}
+
+TEST_F(ServeTest, StaticFilesFromTheWebDirectoryOnly) {
+  std::filesystem::create_directories(dir_.path() / "web");
+  WriteFile(dir_.file("web/index.html"), "<h1>PinTag</h1>");
+  WriteFile(dir_.file("outside.txt"), "SECRET");
+  StartServer({"--web", dir_.file("web")});
+  auto r = client().Get("/");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, "<h1>PinTag</h1>");
+  for (const char* path : {"/../outside.txt", "/%2e%2e/outside.txt", "/..%2foutside.txt"}) {
+    r = client().Get(path);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 404) << path;
+    EXPECT_EQ(r->body.find("SECRET"), std::string::npos);
+  }
+  ExpectProblem(client().Get("/api/v1/nothing"), 404);
+}
+
+// A request whose body is still arriving when SIGTERM comes is read to the end and answered;
+// then the process exits 0 and the port is closed.
+TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
+  const std::string body = R"({"pincodes": ["110001", "560001"], "size": "a6"})";
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  const std::string head =
+      "POST /api/v1/labels HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " + counter_token_ +
+      "\r\nContent-Type: application/json\r\nContent-Length: " + std::to_string(body.size()) +
+      "\r\n\r\n" + body.substr(0, 10);
+  ::send(fd, head.data(), head.size(), MSG_NOSIGNAL);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  server_->signal(SIGTERM);  // the request is half read
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const std::string rest = body.substr(10);
+  ::send(fd, rest.data(), rest.size(), MSG_NOSIGNAL);
+  timeval timeout{10, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  std::string answer;
+  char buffer[65536];
+  ssize_t n = 0;
+  while ((n = ::recv(fd, buffer, sizeof buffer, 0)) > 0) answer.append(buffer, n);
+  ::close(fd);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
+  EXPECT_NE(answer.find("%PDF-"), std::string::npos);
+  EXPECT_EQ(server_->stop(SIGTERM, 30), 0);
+  EXPECT_NE(ReadFile(dir_.file("stderr.log")).find("stopped"), std::string::npos);
+  httplib::Client after("127.0.0.1", server_->port());
+  after.set_connection_timeout(1, 0);
+  EXPECT_FALSE(after.Get("/livez"));
+}
+
+TEST_F(ServeTest, SigintStopsToo) {
+  EXPECT_EQ(server_->stop(SIGINT, 20), 0);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test

@@ -1,0 +1,126 @@
+// Routing, sort plans and tokens on a real `pintag serve`.
+
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+TEST_F(ServeTest, RouteAPincode) {
+  json r = ExpectJson(client().Get("/api/v1/route/110001"));
+  EXPECT_EQ(r["plan"], "default");
+  EXPECT_EQ(r["bin"], "11");
+  EXPECT_EQ(r["matched_prefix"], "11");
+  EXPECT_EQ(r["fallback"], false);
+  EXPECT_EQ(r["status"], "active");
+  r = ExpectJson(client().Get("/api/v1/route/560001?plan=default"));
+  EXPECT_EQ(r["bin"], "56");
+  // Routing is by prefix: a pincode outside the registry still routes, and says so.
+  r = ExpectJson(client().Get("/api/v1/route/999999"));
+  EXPECT_EQ(r["status"], "unknown");
+  EXPECT_EQ(r["bin"], "manual");
+  EXPECT_EQ(r["fallback"], true);
+  EXPECT_EQ(ExpectProblem(client().Get("/api/v1/route/110001?plan=nope"), 404)["title"],
+            "Unknown Sort Plan");
+  ExpectProblem(client().Get("/api/v1/route/1100"), 400);
+}
+
+TEST_F(ServeTest, SortPlansReadAndWrite) {
+  json plans = ExpectJson(client().Get("/api/v1/sortplans"));
+  ASSERT_EQ(plans["plans"].size(), 1U);
+  EXPECT_EQ(plans["plans"][0]["name"], "default");
+  EXPECT_EQ(plans["plans"][0]["fallback_bin"], "manual");
+  EXPECT_EQ(plans["plans"][0]["rules"], 69);
+
+  json plan = ExpectJson(client().Get("/api/v1/sortplans/default"));
+  EXPECT_EQ(plan["rules"].size(), 69U);
+  auto csv = client().Get("/api/v1/sortplans/default?format=csv");
+  ASSERT_TRUE(csv);
+  EXPECT_EQ(csv->status, 200);
+  EXPECT_EQ(csv->get_header_value("Content-Type").rfind("text/csv", 0), 0U);
+  EXPECT_EQ(csv->body.rfind("prefix,bin\n*,manual\n", 0), 0U) << csv->body.substr(0, 100);
+  csv = client().Get("/api/v1/sortplans/default", {{"Accept", "text/csv"}});
+  ASSERT_TRUE(csv);
+  EXPECT_EQ(csv->body.rfind("prefix,bin", 0), 0U);
+  ExpectProblem(client().Get("/api/v1/sortplans/nope"), 404);
+
+  // PUT as CSV (admin only), then as JSON replacing it.
+  const std::string north = "prefix,bin\n*,manual\n11,delhi\n110001,parliament\n56,bengaluru\n";
+  ExpectProblem(client().Put("/api/v1/sortplans/hub", north, "text/csv"), 401);
+  ExpectProblem(client().Put("/api/v1/sortplans/hub", counter(), north, "text/csv"), 403);
+  ExpectProblem(client().Put("/api/v1/sortplans/hub", admin(), north, "text/plain"), 415);
+  plan = ExpectJson(client().Put("/api/v1/sortplans/hub", admin(), north, "text/csv"), 201);
+  EXPECT_EQ(plan["rules"].size(), 3U);
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/110001?plan=hub"))["bin"], "parliament");
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/110002?plan=hub"))["bin"], "delhi");
+  auto label = client().Get("/api/v1/labels/110001.pdf?plan=hub", counter());
+  ASSERT_TRUE(label);
+  EXPECT_EQ(label->status, 200);
+
+  const json replacement = {{"fallback_bin", "floor"},
+                            {"description", "two bins"},
+                            {"rules", {{{"prefix", "1"}, {"bin", "north"}}}}};
+  plan = ExpectJson(
+      client().Put("/api/v1/sortplans/hub", admin(), replacement.dump(), "application/json"));
+  EXPECT_EQ(plan["fallback_bin"], "floor");
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/110001?plan=hub"))["bin"], "north");
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/560001?plan=hub"))["bin"], "floor");
+
+  // Malformed plans: no fallback row, a bad prefix, a duplicate, bad JSON.
+  ExpectProblem(client().Put("/api/v1/sortplans/bad", admin(), "prefix,bin\n11,a\n", "text/csv"),
+                400);
+  ExpectProblem(
+      client().Put("/api/v1/sortplans/bad", admin(), "prefix,bin\n*,m\n1x,a\n", "text/csv"), 400);
+  ExpectProblem(
+      client().Put("/api/v1/sortplans/bad", admin(), "prefix,bin\n*,m\n11,a\n11,b\n", "text/csv"),
+      400);
+  ExpectProblem(client().Put("/api/v1/sortplans/bad", admin(), "{", "application/json"), 400);
+  ExpectProblem(
+      client().Put("/api/v1/sortplans/bad", admin(), R"({"rules": []})", "application/json"), 400);
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/sortplans"))["plans"].size(), 2U);
+}
+
+TEST_F(ServeTest, TokensCreateListRevoke) {
+  ExpectProblem(client().Get("/api/v1/tokens"), 401);
+  ExpectProblem(client().Get("/api/v1/tokens", counter()), 403);
+  ExpectProblem(
+      client().Post("/api/v1/tokens", scanner(), R"({"role": "admin"})", "application/json"), 403);
+  const json created =
+      ExpectJson(client().Post("/api/v1/tokens", admin(),
+                               R"({"role": "scanner", "label": "handheld 7"})", "application/json"),
+                 201);
+  const std::string secret = created["secret"];
+  EXPECT_EQ(secret.rfind("pt_", 0), 0U);
+  EXPECT_EQ(created["role"], "scanner");
+  EXPECT_EQ(created["label"], "handheld 7");
+  const int id = created["id"];
+
+  // The new token works at once; the list never shows a secret.
+  const json detect_free = ExpectJson(client().Get("/api/v1/tokens", admin()));
+  EXPECT_EQ(detect_free["tokens"].size(), 4U);
+  EXPECT_EQ(detect_free.dump().find(secret), std::string::npos);
+  EXPECT_EQ(detect_free.dump().find("secret"), std::string::npos);
+  auto r = client().Post("/api/v1/detect", Auth(secret), std::string(10, 'x'), "image/jpeg");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 415);  // admitted (the bytes are not an image)
+
+  // Revoke by DELETE; the token is refused from then on.
+  const json revoked = ExpectJson(client().Delete("/api/v1/tokens/" + std::to_string(id), admin()));
+  EXPECT_FALSE(revoked["revoked_at"].is_null());
+  ExpectProblem(client().Post("/api/v1/detect", Auth(secret), std::string(10, 'x'), "image/jpeg"),
+                401);
+  // Revoke by POST …/revoke: the counter token stops working.
+  ExpectJson(client().Post("/api/v1/tokens/" + std::to_string(counter_token_id_) + "/revoke",
+                           admin(), "", "text/plain"));
+  ExpectProblem(client().Get("/api/v1/tags/110001.png", counter()), 401);
+
+  ExpectProblem(client().Delete("/api/v1/tokens/999", admin()), 404);
+  ExpectProblem(client().Delete("/api/v1/tokens/abc", admin()), 400);
+  ExpectProblem(client().Post("/api/v1/tokens", admin(), R"({"role": "root"})", "application/json"),
+                400);
+  ExpectProblem(client().Post("/api/v1/tokens", admin(), R"(["admin"])", "application/json"), 400);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
