@@ -1,12 +1,21 @@
 #!/usr/bin/env bash
-# Quick start, step 1: install what is missing, build, and run the main job.
-# For now the main job renders a sample tag; with the HTTP server it will start the server.
+# Quick start, step 1: install what is missing, build, then start the PinTag server in the
+# foreground (Ctrl-C stops it). The first start creates and seeds the database and prints one
+# admin token; later starts say how to make one.
+#
+#   PINTAG_DB=FILE      database (default: out/pintag.db)
+#   PINTAG_PORT=N       port (default 8080)
+#   PINTAG_BIND=ADDR    address (default 127.0.0.1; 0.0.0.0 for every interface)
+#   PINTAG_BUILD_DIR    build tree (default build/)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/scripts/setup.sh"
 "$root/scripts/build.sh"
 build="${PINTAG_BUILD_DIR:-$root/build}"
-mkdir -p "$root/out"
-"$build/server/pintag" render --key 11684 --size-mm 50 --dpi 300 -o "$root/out/sample-tag.png"
-"$build/server/pintag" render --key 11684 --size-mm 50 -o "$root/out/sample-tag.svg"
-echo "Sample tag (key 11684): $root/out/sample-tag.png and .svg"
+db="${PINTAG_DB:-$root/out/pintag.db}"
+mkdir -p "$(dirname "$db")"
+args=(serve --db "$db" --port "${PINTAG_PORT:-8080}" --bind "${PINTAG_BIND:-127.0.0.1}")
+[[ -d "$root/web" ]] && args+=(--web "$root/web")
+echo "Starting the server (database $db; first start seeds it, ~2 s)."
+echo "Another admin token at any time: $build/server/pintag token create --role admin --db $db"
+exec "$build/server/pintag" "${args[@]}"
