@@ -8,8 +8,10 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <thread>
 
 #include "pintag/codec/label.hpp"
 #include "pintag/db/database.hpp"
@@ -147,7 +149,9 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_NE((*scans)[0].token_id, (*scans)[2].token_id);  // admin made the last call
 }
 
-TEST_F(ServeTest, KeysUnknownToTheRegistryAreReportedAsSuchNeverGuessed) {
+// Three tags in one photo: an active pincode, a retired one (its printed labels still decode) and a
+// key no pincode holds (reported as such, never mapped to a guess).
+TEST_F(ServeTest, EveryTagInAFrameActiveRetiredAndUnknownKeys) {
   int free_key = -1;
   for (int key = 32767; key > 32000 && free_key < 0; --key) {
     const auto r = client().Get("/api/v1/keys/" + std::to_string(key));
@@ -155,24 +159,47 @@ TEST_F(ServeTest, KeysUnknownToTheRegistryAreReportedAsSuchNeverGuessed) {
     if (r->status == 404) free_key = key;
   }
   ASSERT_GE(free_key, 0);
+  const json retired =
+      ExpectJson(client().Post("/api/v1/pincodes/560001/retire", admin(), "", "text/plain"));
+  const int retired_key = retired["key"];
   scene::SceneSpec spec;
-  scene::PlacedMarker marker;
-  marker.texture = scene::PinTagTexture(free_key, 256);
-  marker.pose = scene::MakePose(spec.camera, {960, 540},
-                                scene::DistanceForSquarePx(spec.camera, 200), 15, 0, 0);
-  spec.markers.push_back(marker);
+  spec.seed = 3;
+  const std::vector<std::pair<int, cv::Point2d>> tags = {
+      {11684, {420, 540}}, {retired_key, {960, 540}}, {free_key, {1500, 540}}};
+  for (const auto& [key, at] : tags) {
+    scene::PlacedMarker marker;
+    marker.texture = scene::PinTagTexture(key, 256);
+    marker.pose =
+        scene::MakePose(spec.camera, at, scene::DistanceForSquarePx(spec.camera, 180), 20, 45, 10);
+    spec.markers.push_back(marker);
+  }
   std::vector<std::uint8_t> png;
   cv::imencode(".png", scene::RenderScene(spec).bgr, png);
   const json out = ExpectJson(
       client().Post("/api/v1/detect", scanner(), std::string(png.begin(), png.end()), "image/png"));
-  ASSERT_EQ(out["tags"].size(), 1U) << out.dump(1);
-  const json& tag = out["tags"][0];
-  EXPECT_EQ(tag["key"], free_key);
-  EXPECT_EQ(tag["status"], "unknown_key");
-  EXPECT_TRUE(tag["pincode"].is_null());
-  EXPECT_TRUE(tag["bin"].is_null());
-  EXPECT_TRUE(tag["office"].is_null());
-  EXPECT_TRUE(tag.contains("pose"));
+  ASSERT_EQ(out["tags"].size(), 3U) << out.dump(1);
+  std::map<int, json> by_key;
+  for (const json& tag : out["tags"]) by_key[tag["key"].get<int>()] = tag;
+  ASSERT_EQ(by_key.size(), 3U);
+  EXPECT_EQ(by_key[11684]["pincode"], "110001");
+  EXPECT_EQ(by_key[11684]["status"], "active");
+  EXPECT_EQ(by_key[11684]["bin"], "11");
+  EXPECT_EQ(by_key[retired_key]["pincode"], "560001");
+  EXPECT_EQ(by_key[retired_key]["status"], "retired");
+  EXPECT_EQ(by_key[retired_key]["bin"], "56");
+  const json& unknown = by_key[free_key];
+  EXPECT_EQ(unknown["status"], "unknown_key");
+  EXPECT_TRUE(unknown["pincode"].is_null());
+  EXPECT_TRUE(unknown["bin"].is_null());
+  EXPECT_TRUE(unknown["office"].is_null());
+  EXPECT_TRUE(unknown["district"].is_null());
+  EXPECT_TRUE(unknown.contains("pose"));
+  EXPECT_TRUE(unknown.contains("corners_px"));
+
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const std::string metrics = client().Get("/metrics")->body;
+  EXPECT_NE(metrics.find("pintag_detections_total 3"), std::string::npos);
+  EXPECT_NE(metrics.find("pintag_detections_unknown_key_total 1"), std::string::npos);
 }
 
 std::uint32_t Crc(const std::string& bytes) {
@@ -276,6 +303,22 @@ TEST_F(ServeTest, DetectRefusesBadUploadsWithProblems) {
             "Unknown Sort Plan");
   // GET is not how one detects.
   ExpectProblem(client().Get("/api/v1/detect", scanner()), 405);
+
+  // Refused photos are in the scan log too (with the problem); refused tokens are not.
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  auto scans = db::RecentScans(opened.value().connection, 100);
+  ASSERT_TRUE(scans);
+  EXPECT_EQ(scans->size(), 13U);  // every POST above that reached the handler with a photo
+  bool bomb_logged = false;
+  for (const db::ScanRecord& scan : *scans) {
+    const json result = json::parse(scan.result_json);
+    if (result.contains("error") && result["error"]["status"] == 413 &&
+        scan.image_width == 100000) {
+      bomb_logged = true;
+    }
+  }
+  EXPECT_TRUE(bomb_logged);
 }
 
 /// Sends raw bytes; returns what the server answers before it closes or goes quiet for 2 s.

@@ -5,14 +5,17 @@
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <fstream>
 #include <regex>
 #include <set>
 #include <thread>
 
 #include "pintag/db/database.hpp"
+#include "pintag/db/scan_log.hpp"
 #include "pintag/db/tokens.hpp"
 #include "serve_fixture.hpp"
 
@@ -70,6 +73,61 @@ TEST(ServeFirstStart, CreatesSeedsAndPrintsOneAdminTokenOnStdoutOnly) {
   ASSERT_TRUE(again.ok());
   EXPECT_TRUE(Secrets(again.out()).empty()) << again.out();
   EXPECT_NE(again.out().find("pintag token create"), std::string::npos);
+}
+
+// A start that cannot listen (port taken) exits non-zero and creates no token nobody would see.
+TEST_F(ServeTest, PortInUseFailsWithoutCreatingAToken) {
+  const std::string fresh = dir_.file("fresh.db");
+  std::filesystem::copy_file(SeededTemplate(), fresh);  // seeded, no tokens
+  const std::string command = PintagExe() + " serve --db " + fresh + " --port " +
+                              std::to_string(server_->port()) + " 2>" + dir_.file("busy.log");
+  FILE* pipe = ::popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  EXPECT_NE(WEXITSTATUS(status), 0);
+  EXPECT_TRUE(Secrets(out).empty()) << out;
+  EXPECT_NE(ReadFile(dir_.file("busy.log")).find("cannot listen"), std::string::npos);
+  auto opened = db::OpenDatabase(fresh, {.create = false});
+  ASSERT_TRUE(opened);
+  auto tokens = db::ListTokens(opened.value().connection);
+  ASSERT_TRUE(tokens);
+  EXPECT_TRUE(tokens->empty());
+}
+
+// Many clients at once: each request leases its own database connection.
+TEST_F(ServeTest, ConcurrentClientsGetConsistentAnswers) {
+  auto tag = client().Get("/api/v1/tags/110001.png?px=160", counter());
+  ASSERT_TRUE(tag && tag->status == 200);
+  const std::string png = tag->body;
+  std::atomic<int> good{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 8; ++t) {
+    threads.emplace_back([&, t] {
+      httplib::Client c("127.0.0.1", server_->port());
+      c.set_read_timeout(30, 0);
+      for (int i = 0; i < 12; ++i) {
+        httplib::Result r = (i + t) % 3 == 0 ? c.Get("/api/v1/pincodes/110001")
+                            : (i + t) % 3 == 1
+                                ? c.Get("/api/v1/labels/560001.svg", counter())
+                                : c.Post("/api/v1/detect", scanner(), png, "image/png");
+        if (!r || r->status != 200) continue;
+        if ((i + t) % 3 == 0 && json::parse(r->body)["key"] != 11684) continue;
+        if ((i + t) % 3 == 2 && json::parse(r->body)["tags"][0]["pincode"] != "110001") continue;
+        ++good;
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(good, 96);
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  auto scans = db::RecentScans(opened.value().connection, 1000);
+  ASSERT_TRUE(scans);
+  EXPECT_EQ(scans->size(), 32U);  // every detect call logged, none lost to lock contention
 }
 
 TEST_F(ServeTest, FixtureServerPrintsNoTokenWhenTokensExist) {

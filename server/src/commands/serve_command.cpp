@@ -35,14 +35,21 @@ struct ServeArgs {
   int write_timeout_s = 5;
 };
 
-/// Opens (creating and seeding when missing) and migrates the database; on an empty token table
-/// creates the first admin token. Returns its secret, or "" when tokens already existed.
-std::string PrepareDatabase(const std::string& path) {
+/// Opens (creating and seeding when missing) and migrates the database.
+void PrepareDatabase(const std::string& path) {
   auto opened = db::OpenDatabase(path);
   if (!opened) throw std::runtime_error(opened.error().message);
   if (opened->created) {
     std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
   }
+}
+
+/// On an empty token table, creates the first admin token and returns its secret; "" when tokens
+/// already exist. Called once the port is bound, so a start that cannot listen does not create a
+/// token nobody sees.
+std::string FirstAdminToken(const std::string& path) {
+  auto opened = db::OpenDatabase(path, {.create = false});
+  if (!opened) throw std::runtime_error(opened.error().message);
   db::Connection& connection = opened.value().connection;
   auto tokens = db::ListTokens(connection);
   if (!tokens) throw std::runtime_error(tokens.error().message);
@@ -56,7 +63,7 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
-  const std::string first_admin = PrepareDatabase(args.db);
+  PrepareDatabase(args.db);
 
   app::AppConfig config;
   config.db_path = args.db;
@@ -83,6 +90,7 @@ void Run(const ServeArgs& args) {
   server::HttpServer http(app::BuildApi(config), options);
   std::string error;
   if (!http.bind(&error)) throw std::runtime_error(error);
+  const std::string first_admin = FirstAdminToken(args.db);
 
   const bool any = args.bind == "0.0.0.0" || args.bind == "::";
   const std::string host = any ? "127.0.0.1" : args.bind;
