@@ -47,8 +47,10 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
                     ClusterOutput* out) {
   const auto t0 = Clock::now();
   const cv::Mat dark = stage::MinChannel(bgr, cluster.roi);
+  std::vector<cv::Point2d> anchors;
+  for (int i : cluster.blobs) anchors.push_back(blobs[i].centroid);
   const std::vector<stage::Quad> quads =
-      stage::FindQuads(dark, cluster.roi.tl(), options.min_square_px);
+      stage::FindQuads(dark, cluster.roi.tl(), options.min_square_px, &anchors);
   out->quads.insert(out->quads.end(), quads.begin(), quads.end());
   auto t1 = Clock::now();
   out->quads_ms += Ms(t0, t1);
@@ -181,7 +183,8 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   limits.max_area = std::max<int>(limits.min_area,
                                   static_cast<int>(options_.max_element_area_ratio * bgr.total()));
   limits.max_blobs = options_.max_blobs;
-  const std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
+  std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
+  std::erase_if(blobs, [&](const stage::RedBlob& b) { return !stage::HasRing(bgr, b); });
   const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
   const auto t_blobs = Clock::now();
   result.timings.blobs_ms = Ms(t_red, t_blobs);

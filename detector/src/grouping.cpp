@@ -1,6 +1,7 @@
 #include "grouping.hpp"
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 
 #include "pintag/codec/geometry.hpp"
@@ -60,17 +61,25 @@ std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Siz
       include(blobs[i].centroid);
       major = std::max(major, blobs[i].major);
     }
-    if (group.size() <= 6) {
-      // One element may be missing: add the fourth corner of the parallelogram of every three.
-      for (std::size_t i = 0; i < group.size(); ++i) {
-        for (std::size_t j = i + 1; j < group.size(); ++j) {
-          for (std::size_t k = j + 1; k < group.size(); ++k) {
-            const cv::Point2d p0 = blobs[group[i]].centroid, p1 = blobs[group[j]].centroid,
-                              p2 = blobs[group[k]].centroid;
-            include(p0 + p1 - p2);
-            include(p1 + p2 - p0);
-            include(p2 + p0 - p1);
-          }
+    // One element may be missing: add the fourth corner of the parallelogram that each blob
+    // makes with two of its nearest neighbours (the hidden element is opposite the element
+    // adjacent to both others).
+    for (int i : group) {
+      std::array<std::pair<double, int>, 4> nearest;
+      nearest.fill({1e300, -1});
+      for (int j : group) {
+        if (j == i) continue;
+        const cv::Point2d d = blobs[j].centroid - blobs[i].centroid;
+        std::pair<double, int> candidate{d.dot(d), j};
+        for (auto& slot : nearest) {
+          if (candidate.first < slot.first) std::swap(candidate, slot);
+        }
+      }
+      for (std::size_t a = 0; a < nearest.size(); ++a) {
+        for (std::size_t b = a + 1; b < nearest.size(); ++b) {
+          if (nearest[a].second < 0 || nearest[b].second < 0) continue;
+          include(blobs[nearest[a].second].centroid + blobs[nearest[b].second].centroid -
+                  blobs[i].centroid);
         }
       }
     }

@@ -99,12 +99,18 @@ bool Intersect(const cv::Vec4f& l1, const cv::Vec4f& l2, cv::Point2d* out) {
 bool RefineCorners(const cv::Mat& dark, cv::Point origin, Quad* quad) {
   Quad local = *quad;
   for (cv::Point2d& p : local) p -= cv::Point2d(origin);
-  for (int pass = 0; pass < 2; ++pass) {
+  double mean_side = 0;
+  for (int i = 0; i < 4; ++i) mean_side += cv::norm(local[(i + 1) % 4] - local[i]) / 4;
+  // The rough quad can be a few pixels off, more where something covers part of the outline:
+  // two wide passes (each fit uses the edge points found near the rough line, Huber-weighted),
+  // then a narrow one.
+  constexpr int kPasses = 3;
+  for (int pass = 0; pass < kPasses; ++pass) {
     std::array<cv::Vec4f, 4> lines;
     for (int i = 0; i < 4; ++i) {
       const cv::Point2d a = local[i], b = local[(i + 1) % 4];
       const double length = cv::norm(b - a);
-      const double reach = pass == 0 ? std::clamp(0.08 * length, 2.5, 8.0) : 2.5;
+      const double reach = pass + 1 < kPasses ? std::clamp(0.08 * length, 2.5, 8.0) : 2.5;
       const std::vector<cv::Point2f> points = EdgePoints(dark, a, b, reach);
       if (points.size() < 4) return false;
       cv::fitLine(points, lines[i], cv::DIST_HUBER, 0, 0.01, 0.01);
@@ -113,11 +119,17 @@ bool RefineCorners(const cv::Mat& dark, cv::Point origin, Quad* quad) {
     for (int i = 0; i < 4; ++i) {
       // Corner i is where the edge into it (i−1 → i) meets the edge out of it (i → i+1).
       if (!Intersect(lines[(i + 3) % 4], lines[i], &refined[i])) return false;
-      if (cv::norm(refined[i] - local[i]) > 8) return false;  // the fit went astray
     }
     local = refined;
   }
-  for (int i = 0; i < 4; ++i) (*quad)[i] = local[i] + cv::Point2d(origin);
+  for (int i = 0; i < 4; ++i) {
+    const cv::Point2d p = local[i] + cv::Point2d(origin);
+    if (cv::norm(p - (*quad)[i]) > 0.2 * mean_side) return false;  // the fit went astray
+  }
+  Quad out;
+  for (int i = 0; i < 4; ++i) out[i] = local[i] + cv::Point2d(origin);
+  if (SignedArea2(out) <= 0) return false;
+  *quad = out;
   return true;
 }
 

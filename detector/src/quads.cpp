@@ -39,9 +39,13 @@ cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi) {
 }
 
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
-                            cv::Mat* binary_out) {
+                            const std::vector<cv::Point2d>* anchors, cv::Mat* binary_out) {
   cv::Mat binary;
   cv::threshold(dark, binary, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
+  // Close one-pixel gaps: a cover over an element can leave only a thin, blurred band of black
+  // between it and the square's edge.
+  cv::morphologyEx(binary, binary, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
   if (binary_out) *binary_out = binary.clone();
   // Outer boundaries of every dark component, including those inside holes of others (a tag on
   // dark ground sits inside the hole its quiet zone makes).
@@ -53,6 +57,12 @@ std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_si
   for (std::size_t c = 0; c < contours.size(); ++c) {
     const auto& contour = contours[c];
     if (hierarchy[c][3] >= 0 || contour.size() < 8) continue;
+    if (anchors) {
+      const cv::Rect box = cv::boundingRect(contour) + origin;
+      int inside = 0;
+      for (const cv::Point2d& p : *anchors) inside += box.contains(cv::Point(p));
+      if (inside < 3) continue;
+    }
     const double area = cv::contourArea(contour);
     if (area < min_area) continue;
     const double perimeter = cv::arcLength(contour, true);

@@ -16,8 +16,11 @@ using Quad = std::array<cv::Point2d, 4>;  ///< clockwise on screen (x right, y d
 cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
 
 /// Quads in `dark` (MinChannel of the region at `origin`), returned in image coordinates.
-/// `min_side_px`: shorter quads are dropped.
+/// `min_side_px`: shorter quads are dropped. When `anchors` (image coordinates) is given, only
+/// contours whose bounding box holds at least 3 of them are fitted (a tag holds its red blobs),
+/// which keeps textured photo regions cheap.
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
+                            const std::vector<cv::Point2d>* anchors = nullptr,
                             cv::Mat* binary_out = nullptr);
 
 /// Twice the signed area; positive when clockwise on screen.

@@ -6,6 +6,8 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
+#include "lab_approx.hpp"
+
 namespace pintag::stage {
 namespace {
 
@@ -55,11 +57,31 @@ bool ToBlob(const Moments& m, const BlobLimits& limits, RedBlob* blob) {
   blob->minor = 4 * std::sqrt(l2);
   blob->fill = area / (std::numbers::pi / 4 * blob->major * blob->minor);
   blob->box = cv::Rect(m.x0, m.y0, m.x1 - m.x0 + 1, m.y1 - m.y0 + 1);
+  blob->angle = 0.5 * std::atan2(2 * vxy, vxx - vyy);
   if (blob->fill < limits.min_fill || blob->fill > 1.0 / limits.min_fill) return false;
   return blob->major <= limits.max_elongation * blob->minor;
 }
 
 }  // namespace
+
+bool HasRing(const cv::Mat& bgr, const RedBlob& blob) {
+  const LabApprox& lab = LabApprox::Get();
+  const double ca = std::cos(blob.angle), sa = std::sin(blob.angle);
+  const double ra = 0.75 * blob.major, rb = 0.75 * blob.minor;  // 1.5 × the semi-axes
+  int ring = 0;
+  for (int k = 0; k < 8; ++k) {
+    const double t = k * std::numbers::pi / 4;
+    const double u = ra * std::cos(t), v = rb * std::sin(t);
+    const int x = static_cast<int>(std::lround(blob.centroid.x + u * ca - v * sa));
+    const int y = static_cast<int>(std::lround(blob.centroid.y + u * sa + v * ca));
+    if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * x;
+    int a, b;
+    lab.Ab(p[2], p[1], p[0], &a, &b);
+    ring += a < 10 * kLabScale && lab.L(p[2], p[1], p[0]) < 85 * kLabScale;
+  }
+  return ring >= 5;
+}
 
 std::vector<RedBlob> FindRedBlobs(const RedRuns& red, const BlobLimits& limits) {
   const std::vector<RedRun>& runs = red.runs;

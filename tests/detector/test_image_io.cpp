@@ -46,7 +46,11 @@ std::string Write(const std::string& name, int w, int h,
 
 TEST(ImageIo, ReadsPngJpegTiffAndWebp) {
   for (const char* ext : {"png", "jpg", "tif", "webp"}) {
-    if (std::string(ext) == "webp" && !OIIO::is_imageio_format_name("webp")) continue;
+    const std::string optional_format = ext;
+    if (optional_format == "webp" &&
+        !OIIO::ImageOutput::create(TempPath(std::string("probe.") + ext))) {
+      continue;  // this OpenImageIO build cannot write it; reading is still wired
+    }
     const std::string path = Write(std::string("small.") + ext, 40, 30);
     const LoadResult r = LoadImageFile(path);
     ASSERT_TRUE(r.image) << ext << ": " << r.error;

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "red_blobs.hpp"
+#include "redness.hpp"
 
 namespace pintag::stage {
 namespace {
@@ -46,6 +47,35 @@ TEST(RedBlobs, EightConnectedAcrossADiagonal) {
   const auto blobs = FindRedBlobs(mask, limits);
   ASSERT_EQ(blobs.size(), 1u);
   EXPECT_EQ(blobs[0].area, 18);
+}
+
+}  // namespace
+}  // namespace pintag::stage
+
+#include "pintag/codec/tag_raster.hpp"
+
+namespace pintag::stage {
+namespace {
+
+TEST(RedBlobs, ElementsHaveTheirRingRedMarksOnPaperDoNot) {
+  const TagRaster raster = RenderTagRaster(TagKey(77), {120, 4});
+  cv::Mat bgr(raster.image.height, raster.image.width, CV_8UC3);
+  for (int y = 0; y < bgr.rows; ++y)
+    for (int x = 0; x < bgr.cols; ++x) {
+      const Rgb8 c = raster.image.at(x, y);
+      bgr.at<cv::Vec3b>(y, x) = {c.b, c.g, c.r};
+    }
+  const auto elements = FindRedBlobs(RednessMask(bgr, {}), {});
+  ASSERT_EQ(elements.size(), 4u);
+  for (const RedBlob& b : elements) EXPECT_TRUE(HasRing(bgr, b));
+
+  cv::Mat paper(100, 200, CV_8UC3, cv::Scalar(245, 245, 245));
+  cv::circle(paper, {50, 50}, 12, {3, 80, 249}, -1);  // red dot on white
+  cv::Mat orange(100, 100, CV_8UC3, cv::Scalar(40, 110, 215));
+  orange.copyTo(paper(cv::Rect(100, 0, 100, 100)));
+  cv::circle(paper, {150, 50}, 12, {3, 60, 249}, -1);  // red dot on orange
+  const auto marks = FindRedBlobs(RednessMask(paper, {}), {});
+  for (const RedBlob& b : marks) EXPECT_FALSE(HasRing(paper, b)) << b.centroid;
 }
 
 }  // namespace
