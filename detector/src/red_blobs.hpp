@@ -14,7 +14,8 @@ struct RedBlob {
   int area = 0;          ///< px
   double major = 0;      ///< full axis lengths of the ellipse with the same second moments, px
   double minor = 0;
-  double fill = 0;  ///< area / that ellipse's area; about 1 for a filled ellipse
+  double fill = 0;   ///< area / that ellipse's area; about 1 for a filled ellipse
+  double angle = 0;  ///< direction of the major axis, radians (image x towards y)
   cv::Rect box;
 };
 
