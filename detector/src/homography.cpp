@@ -96,40 +96,47 @@ bool Intersect(const cv::Vec4f& l1, const cv::Vec4f& l2, cv::Point2d* out) {
 
 }  // namespace
 
+namespace {
+
+// Line fits with the search reaching `wide_passes` times up to 8 px from the current edge, then
+// once 2.5 px. Corners may move at most `max_move` px in all.
+bool Refine(const cv::Mat& dark, int wide_passes, double max_move, Quad* local) {
+  Quad q = *local;
+  for (int pass = 0; pass <= wide_passes; ++pass) {
+    std::array<cv::Vec4f, 4> lines;
+    for (int i = 0; i < 4; ++i) {
+      const cv::Point2d a = q[i], b = q[(i + 1) % 4];
+      const double length = cv::norm(b - a);
+      const double reach = pass < wide_passes ? std::clamp(0.08 * length, 2.5, 8.0) : 2.5;
+      const std::vector<cv::Point2f> points = EdgePoints(dark, a, b, reach);
+      if (points.size() < 4) return false;
+      cv::fitLine(points, lines[i], cv::DIST_HUBER, 0, 0.01, 0.01);
+    }
+    for (int i = 0; i < 4; ++i) {
+      // Corner i is where the edge into it (i−1 → i) meets the edge out of it (i → i+1).
+      if (!Intersect(lines[(i + 3) % 4], lines[i], &q[i])) return false;
+    }
+  }
+  for (int i = 0; i < 4; ++i) {
+    if (cv::norm(q[i] - (*local)[i]) > max_move) return false;  // the fit went astray
+  }
+  if (SignedArea2(q) <= 0) return false;
+  *local = q;
+  return true;
+}
+
+}  // namespace
+
 bool RefineCorners(const cv::Mat& dark, cv::Point origin, Quad* quad) {
   Quad local = *quad;
   for (cv::Point2d& p : local) p -= cv::Point2d(origin);
   double mean_side = 0;
   for (int i = 0; i < 4; ++i) mean_side += cv::norm(local[(i + 1) % 4] - local[i]) / 4;
-  // The rough quad can be a few pixels off, more where something covers part of the outline:
-  // two wide passes (each fit uses the edge points found near the rough line, Huber-weighted),
-  // then a narrow one.
-  constexpr int kPasses = 3;
-  for (int pass = 0; pass < kPasses; ++pass) {
-    std::array<cv::Vec4f, 4> lines;
-    for (int i = 0; i < 4; ++i) {
-      const cv::Point2d a = local[i], b = local[(i + 1) % 4];
-      const double length = cv::norm(b - a);
-      const double reach = pass + 1 < kPasses ? std::clamp(0.08 * length, 2.5, 8.0) : 2.5;
-      const std::vector<cv::Point2f> points = EdgePoints(dark, a, b, reach);
-      if (points.size() < 4) return false;
-      cv::fitLine(points, lines[i], cv::DIST_HUBER, 0, 0.01, 0.01);
-    }
-    Quad refined;
-    for (int i = 0; i < 4; ++i) {
-      // Corner i is where the edge into it (i−1 → i) meets the edge out of it (i → i+1).
-      if (!Intersect(lines[(i + 3) % 4], lines[i], &refined[i])) return false;
-    }
-    local = refined;
-  }
-  for (int i = 0; i < 4; ++i) {
-    const cv::Point2d p = local[i] + cv::Point2d(origin);
-    if (cv::norm(p - (*quad)[i]) > 0.2 * mean_side) return false;  // the fit went astray
-  }
-  Quad out;
-  for (int i = 0; i < 4; ++i) out[i] = local[i] + cv::Point2d(origin);
-  if (SignedArea2(out) <= 0) return false;
-  *quad = out;
+  // Usually the rough quad is within a pixel or two: one wide pass and one narrow. Where
+  // something covers part of the outline it can be further off: then two wide passes (each fit
+  // Huber-weighted over the edge points found near the previous line) and a narrow one.
+  if (!Refine(dark, 1, 8, &local) && !Refine(dark, 2, 0.2 * mean_side, &local)) return false;
+  for (int i = 0; i < 4; ++i) (*quad)[i] = local[i] + cv::Point2d(origin);
   return true;
 }
 
