@@ -124,6 +124,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   ASSERT_EQ(raw["tags"].size(), 1U);
   EXPECT_EQ(raw["tags"][0]["pincode"], "110001");
   EXPECT_EQ(raw["intrinsics"]["source"], "assumed");
+  EXPECT_NEAR(raw["tag_size_mm"].get<double>(), TagPlacement(kLabel100x150).square_side_mm, 1e-9);
 
   // ?overlay=1: the photo annotated, as PNG of the same size.
   auto r = client().Post((query + "&overlay=1").c_str(), admin(), form);

@@ -14,6 +14,7 @@
 #include "app/common.hpp"
 #include "app/image_header.hpp"
 #include "app/routes.hpp"
+#include "pintag/codec/label.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/detector/detector.hpp"
@@ -184,7 +185,9 @@ class DetectService {
                       Outcome* outcome) const {
     const std::string plan_name =
         request.queryParam("plan").value_or(std::string(db::kDefaultPlanName));
-    const double tag_size_mm = NumberQuery(request, "tag_size_mm", 1, 10000).value_or(50);
+    // By default the tag is the one printed on the default label (100 x 150 mm: 57.9 mm).
+    const double tag_size_mm = NumberQuery(request, "tag_size_mm", 1, 10000)
+                                   .value_or(TagPlacement(kLabel100x150).square_side_mm);
     const std::optional<double> fx = NumberQuery(request, "fx", 1e-3, 1e7);
     const std::optional<double> fy = NumberQuery(request, "fy", 1e-3, 1e7);
     const std::optional<double> cx = NumberQuery(request, "cx", -1e6, 1e6);
@@ -316,13 +319,17 @@ void AddDetectRoutes(server::Router& router, std::shared_ptr<const AppContext> c
   detect.consumes = {"image/jpeg", "image/png",           "image/tiff",
                      "image/webp", "multipart/form-data", "application/octet-stream"};
   detect.produces = {"application/json", "image/png"};
-  detect.query = {{"plan", "sort plan for the bins (default: default)"},
-                  {"tag_size_mm", "black square side, millimetres (default 50)", "number"},
-                  {"fx", "focal length x, pixels (with fy: intrinsics given)", "number"},
-                  {"fy", "focal length y, pixels", "number"},
-                  {"cx", "principal point x, pixels (default: image centre)", "number"},
-                  {"cy", "principal point y, pixels (default: image centre)", "number"},
-                  {"overlay", "1: answer the photo with the tags outlined, as PNG", "boolean"}};
+  detect.query = {
+      {"plan", "sort plan for the bins (default: default)"},
+      {"tag_size_mm",
+       "black square side, millimetres (default: the tag of a 100x150mm label, 57.892; a6 "
+       "57.062, 4x6in 58.889)",
+       "number"},
+      {"fx", "focal length x, pixels (with fy: intrinsics given)", "number"},
+      {"fy", "focal length y, pixels", "number"},
+      {"cx", "principal point x, pixels (default: image centre)", "number"},
+      {"cy", "principal point y, pixels (default: image centre)", "number"},
+      {"overlay", "1: answer the photo with the tags outlined, as PNG", "boolean"}};
   router.add(std::move(detect));
 }
 
