@@ -9,6 +9,18 @@
 
 #include "pintag/detector/detector.hpp"
 
+// Under `valgrind --tool=callgrind --instr-atstart=no`, only PinTag's detect() is instrumented, so
+// rendering runs at valgrind's base speed (docs/BENCHMARKS.md). Outside valgrind these are a few
+// no-op instructions.
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define PINTAG_BENCH_PROFILE_BEGIN() CALLGRIND_START_INSTRUMENTATION
+#define PINTAG_BENCH_PROFILE_END() CALLGRIND_STOP_INSTRUMENTATION
+#else
+#define PINTAG_BENCH_PROFILE_BEGIN()
+#define PINTAG_BENCH_PROFILE_END()
+#endif
+
 namespace pintag::bench {
 namespace {
 
@@ -46,7 +58,9 @@ class PinTagDetector final : public MarkerDetector {
     detector_ = Detector(options_);
   }
   std::vector<Found> detect(const cv::Mat& bgr) override {
+    PINTAG_BENCH_PROFILE_BEGIN();
     const DetectResult result = detector_.detect(bgr);
+    PINTAG_BENCH_PROFILE_END();
     timings_ = result.timings;
     std::vector<Found> out;
     for (const Detection& d : result.detections) {

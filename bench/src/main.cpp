@@ -1,6 +1,8 @@
 // pintag_bench: PinTag against ArUco and AprilTag on the same rendered poses, in one process
 // (issue 6; docs/BENCHMARKS.md says how to run it and what each column means).
 
+#include <time.h>
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "detectors.hpp"
+#include "explain.hpp"
 #include "machine.hpp"
 #include "metrics.hpp"
 #include "progress.hpp"
@@ -28,6 +31,14 @@ using Clock = std::chrono::steady_clock;
 
 double Ms(Clock::time_point from, Clock::time_point to) {
   return std::chrono::duration<double, std::milli>(to - from).count();
+}
+
+/// CPU time of the calling thread, ms. With one thread every detector works in the caller, so this
+/// is its time without what other processes on the machine took.
+double ThreadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
 struct Args {
@@ -238,10 +249,12 @@ int Main(int argc, char** argv) {
         last_threads = threads;
       }
       for (std::size_t i = begin; i < end; ++i) {
+        const double c0 = ThreadCpuMs();
         const auto t0 = Clock::now();
         GrayFloor(rendered[i - begin].bgr[0], &gray);
         (pass == 0 ? result.floor_ms_one_thread : result.floor_ms_all_cores)
             .push_back(Ms(t0, Clock::now()));
+        if (pass == 0) result.floor_cpu_ms_one_thread.push_back(ThreadCpuMs() - c0);
       }
       for (std::size_t k = 0; k < detectors.size(); ++k) {
         const std::size_t di = (k + turn) % detectors.size();
@@ -250,17 +263,25 @@ int Main(int argc, char** argv) {
         for (std::size_t i = begin; i < end; ++i) {
           const FrameSpec& f = frames[i];
           const Rendered& r = rendered[i - begin];
+          const double c0 = ThreadCpuMs();
           const auto t0 = Clock::now();
           const std::vector<Found> found = d.detect(r.image(f, d.marker()));
           const double ms = Ms(t0, Clock::now());
+          const double cpu_ms = ThreadCpuMs() - c0;
           if (pass == 1) {
             stats.time_ms_all_cores.push_back(ms);
             if (!rows.empty()) rows[i * detectors.size() + di].time_all = ms;
             continue;
           }
           stats.time_ms_one_thread.push_back(ms);
+          stats.cpu_ms_one_thread.push_back(cpu_ms);
           const Outcome outcome = Score(f, r.truthFor(f, d.marker()), found);
           stats.add(f, outcome);
+          if (d.marker() == Marker::kPinTag && outcome.counted && !outcome.found) {
+            const std::string why =
+                ExplainMiss(r.image(f, d.marker()), r.truthFor(f, d.marker()).front(), camera);
+            ++stats.misses[why][f.hard][static_cast<std::size_t>(f.size_index)];
+          }
           const auto stages = d.lastStageTimes();
           if (!stages.empty()) {
             if (stats.stage_names.empty()) {

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -58,9 +59,12 @@ struct MarkerStats {
   std::vector<double> rotation_error_deg;
   std::vector<double> translation_error_pct;
   std::vector<double> time_ms_one_thread;
+  std::vector<double> cpu_ms_one_thread;  ///< the calling thread's CPU time (load-proof)
   std::vector<double> time_ms_all_cores;
   std::vector<std::string> stage_names;
   std::vector<std::vector<double>> stage_ms;  ///< [stage][frame], one thread
+  /// PinTag only: tags missed, by the stage that lost them (ExplainMiss), [hard][size].
+  std::map<std::string, std::array<std::array<int, kSizeCount>, 2>> misses;
 
   void add(const FrameSpec& frame, const Outcome& outcome);
   /// hard: 0 moderate, 1 hard, −1 both; size / tilt −1 = all.

@@ -1,6 +1,7 @@
 #include "report.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -111,37 +112,51 @@ std::string ReportMarkdown(const BenchResult& r) {
   md << "| wall time | " << Fmt("%.0f", r.wall_seconds) << " s (rendering included) |\n\n";
 
   // --- summary ---
-  md << "### Summary\n\n";
-  const std::string all = r.all_cores > 0 ? std::to_string(r.all_cores) + " cores" : "all cores";
-  md << Header({"detector", "recall", "recall ≥24 px, ≤72°", "misreads", "tagless FP (frames)",
-                "corner err. px", "rotation err. °", "translation err. %", "1 thread median ms",
-                "1 thread p90 ms", all + " median ms", all + " p90 ms", "PinTag ÷ this"});
-  const double pintag_median = Median(pintag.time_ms_one_thread);
+  md << "### Accuracy\n\n";
+  md << Header({"detector", "recall %", "recall % ≥24 px, ≤72°", "misreads", "tagless FP (frames)",
+                "corner err. px", "rotation err. °", "translation err. %"});
   for (const MarkerStats& s : r.markers) {
-    const double med = Median(s.time_ms_one_thread);
     md << Row({"**" + s.name + "**", Percent(s.recall(-1, -1, -1)), Percent(TargetRecall(s)),
                std::to_string(s.misreads),
                std::to_string(s.false_positives) + " (" + std::to_string(s.false_positive_frames) +
                    " of " + std::to_string(s.tagless_frames) + ")",
                Fmt("%.3f", Median(s.allCornerErrors())), Fmt("%.2f", Median(s.rotation_error_deg)),
-               Fmt("%.2f", Median(s.translation_error_pct)), Fmt("%.2f", med),
-               Fmt("%.2f", Percentile(s.time_ms_one_thread, 90)),
-               Fmt("%.2f", Median(s.time_ms_all_cores)),
-               Fmt("%.2f", Percentile(s.time_ms_all_cores, 90)),
-               &s == &pintag ? "1 ×" : Ratio(pintag_median, med)});
+               Fmt("%.2f", Median(s.translation_error_pct))});
   }
-  md << Row(
-      {"BGR→gray (floor)", "", "", "", "", "", "", "", Fmt("%.2f", Median(r.floor_ms_one_thread)),
-       Fmt("%.2f", Percentile(r.floor_ms_one_thread, 90)),
-       Fmt("%.2f", Median(r.floor_ms_all_cores)), Fmt("%.2f", Percentile(r.floor_ms_all_cores, 90)),
-       Ratio(pintag_median, Median(r.floor_ms_one_thread))});
+  const std::string all = r.all_cores > 0 ? std::to_string(r.all_cores) + " cores" : "all cores";
+  md << "\n### Speed\n\nms per frame. Wall: elapsed time of the call; CPU: the calling thread's "
+        "CPU time (with one thread all the work is in that thread; this is the column that other "
+        "processes on the machine disturb least).\n\n";
+  md << Header({"detector", "1 thread wall median", "1 thread wall p90", "1 thread CPU median",
+                "1 thread CPU p90", all + " wall median", all + " wall p90",
+                "PinTag ÷ this (1 thread wall)", "PinTag ÷ this (1 thread CPU)"});
+  const double pintag_median = Median(pintag.time_ms_one_thread);
+  const double pintag_cpu = Median(pintag.cpu_ms_one_thread);
+  for (const MarkerStats& s : r.markers) {
+    md << Row(
+        {"**" + s.name + "**", Fmt("%.2f", Median(s.time_ms_one_thread)),
+         Fmt("%.2f", Percentile(s.time_ms_one_thread, 90)),
+         Fmt("%.2f", Median(s.cpu_ms_one_thread)), Fmt("%.2f", Percentile(s.cpu_ms_one_thread, 90)),
+         Fmt("%.2f", Median(s.time_ms_all_cores)), Fmt("%.2f", Percentile(s.time_ms_all_cores, 90)),
+         &s == &pintag ? "1 ×" : Ratio(pintag_median, Median(s.time_ms_one_thread)),
+         &s == &pintag ? "1 ×" : Ratio(pintag_cpu, Median(s.cpu_ms_one_thread))});
+  }
+  md << Row({"BGR→gray (floor)", Fmt("%.2f", Median(r.floor_ms_one_thread)),
+             Fmt("%.2f", Percentile(r.floor_ms_one_thread, 90)),
+             Fmt("%.2f", Median(r.floor_cpu_ms_one_thread)),
+             Fmt("%.2f", Percentile(r.floor_cpu_ms_one_thread, 90)),
+             Fmt("%.2f", Median(r.floor_ms_all_cores)),
+             Fmt("%.2f", Percentile(r.floor_ms_all_cores, 90)),
+             Ratio(pintag_median, Median(r.floor_ms_one_thread)),
+             Ratio(pintag_cpu, Median(r.floor_cpu_ms_one_thread))});
   md << "\n";
-  md << "Time ratios, median over median (below 1: PinTag is faster):\n\n";
-  md << Header({"", "1 thread", all});
+  md << "Time ratios, PinTag's median over the other's (below 1: PinTag is faster):\n\n";
+  md << Header({"", "1 thread wall", "1 thread CPU", all + " wall"});
   const double pintag_all = Median(pintag.time_ms_all_cores);
   for (std::size_t i = 1; i < r.markers.size(); ++i) {
     const MarkerStats& s = r.markers[i];
     md << Row({"PinTag ÷ " + s.name, Ratio(pintag_median, Median(s.time_ms_one_thread)),
+               Ratio(pintag_cpu, Median(s.cpu_ms_one_thread)),
                Ratio(pintag_all, Median(s.time_ms_all_cores))});
   }
   md << "\n";
@@ -207,6 +222,41 @@ std::string ReportMarkdown(const BenchResult& r) {
     std::vector<std::string> row{std::to_string(kSizesPx[si])};
     for (const MarkerStats& s : r.markers)
       row.push_back(Fmt("%.3f", Median(s.corner_error_px[si])));
+    md << Row(row);
+  }
+
+  // --- where PinTag loses tags ---
+  if (!pintag.misses.empty()) {
+    md << "\n### Where PinTag loses tags\n\nEvery tag PinTag missed, by the first stage that lost "
+          "it (`bench/src/explain.cpp`: red pixels and blobs checked against the truth, later "
+          "stages from the detector's own rejected candidates on the tag). Columns: square side "
+          "px, all tilts, both photometries; then totals per photometry.\n\n";
+    std::vector<std::string> header{"stage that lost the tag"};
+    for (int px : kSizesPx) header.push_back(std::to_string(px));
+    header.insert(header.end(), {"moderate", "hard", "all"});
+    md << Header(header);
+    std::array<int, kSizeCount> size_total{};
+    int moderate_total = 0, hard_total = 0;
+    for (const auto& [why, counts] : pintag.misses) {
+      std::vector<std::string> row{why};
+      int moderate = 0, hard = 0;
+      for (int si = 0; si < kSizeCount; ++si) {
+        const int n = counts[0][si] + counts[1][si];
+        size_total[si] += n;
+        moderate += counts[0][si];
+        hard += counts[1][si];
+        row.push_back(n ? std::to_string(n) : "");
+      }
+      moderate_total += moderate;
+      hard_total += hard;
+      row.insert(row.end(),
+                 {std::to_string(moderate), std::to_string(hard), std::to_string(moderate + hard)});
+      md << Row(row);
+    }
+    std::vector<std::string> row{"**missed**"};
+    for (int n : size_total) row.push_back(std::to_string(n));
+    row.insert(row.end(), {std::to_string(moderate_total), std::to_string(hard_total),
+                           std::to_string(moderate_total + hard_total)});
     md << Row(row);
   }
 

@@ -21,6 +21,7 @@ struct BenchResult {
   std::vector<MarkerStats> markers;         ///< PinTag first, then ArUco, then the AprilTags
   std::vector<double> floor_ms_one_thread;  ///< BGR->gray per frame
   std::vector<double> floor_ms_all_cores;
+  std::vector<double> floor_cpu_ms_one_thread;
   int all_cores = 0;        ///< threads of the second pass; 0 = not run
   int all_cores_every = 1;  ///< the second pass timed every this-many-th chunk
   double wall_seconds = 0;

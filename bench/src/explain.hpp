@@ -1,0 +1,20 @@
+#pragma once
+// Why PinTag missed a tag: the first stage of the pipeline that lost it, judged against the truth.
+// Runs outside the timed call (only with --explain-misses); uses the stage functions of
+// detector/src for the first two stages and the detector's own rejected candidates for the rest.
+
+#include <string>
+#include <vector>
+
+#include "pintag/scene/scene.hpp"
+
+namespace pintag::bench {
+
+/// Why a PinTag detector with default options (intrinsics of `camera`) does not report `truth` in
+/// `bgr`: a short text starting with the number of the stage that lost the tag (1 red pixels,
+/// 2 blobs, 3 candidate square, 4 edges and element match, 5 orientation, 6 payload and parity,
+/// 8 decoded elsewhere), so that sorting the texts sorts them in pipeline order.
+std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
+                        const scene::Camera& camera);
+
+}  // namespace pintag::bench
