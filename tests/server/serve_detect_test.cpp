@@ -1,6 +1,7 @@
 // POST /api/v1/detect on a real `pintag serve`: a label fetched from the server, photographed in a
 // synthetic scene at a known pose, uploaded, read back; and every way an upload can be wrong.
 
+#include <OpenImageIO/imageio.h>
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -11,6 +12,7 @@
 #include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <thread>
 
 #include "pintag/codec/label.hpp"
@@ -201,6 +203,39 @@ TEST_F(ServeTest, EveryTagInAFrameActiveRetiredAndUnknownKeys) {
   const std::string metrics = client().Get("/metrics")->body;
   EXPECT_NE(metrics.find("pintag_detections_total 3"), std::string::npos);
   EXPECT_NE(metrics.find("pintag_detections_unknown_key_total 1"), std::string::npos);
+}
+
+// A phone photo carries its focal length in EXIF: pose then uses it ("exif"), not a guess.
+TEST_F(ServeTest, ExifFocalLengthGivesTheIntrinsics) {
+  scene::SceneSpec spec;
+  scene::PlacedMarker marker;
+  marker.texture = scene::PinTagTexture(11684, 256);
+  marker.pose = scene::MakePose(spec.camera, {960, 540},
+                                scene::DistanceForSquarePx(spec.camera, 200), 20, 0, 0);
+  spec.markers.push_back(marker);
+  const cv::Mat bgr = scene::RenderScene(spec).bgr;
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  const std::string path = dir_.file("phone.jpg");
+  {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec image_spec(rgb.cols, rgb.rows, 3, OIIO::TypeDesc::UINT8);
+    image_spec.attribute("Exif:FocalLengthIn35mmFilm", 28);
+    image_spec.attribute("Compression", "jpeg:92");
+    ASSERT_TRUE(out->open(path, image_spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, rgb.data));
+    out->close();
+  }
+  const json out = ExpectJson(
+      client().Post("/api/v1/detect?tag_size_mm=50", scanner(), ReadFile(path), "image/jpeg"));
+  EXPECT_EQ(out["intrinsics"]["source"], "exif");
+  ASSERT_EQ(out["tags"].size(), 1U) << out.dump(1);
+  EXPECT_EQ(out["tags"][0]["pincode"], "110001");
+  // 28 mm equivalent: fx = 28 mm over the 35 mm frame's diagonal (43.27 mm), times the image's
+  // diagonal in pixels (the detector's camera model).
+  EXPECT_NEAR(out["intrinsics"]["fx"].get<double>(),
+              28.0 * std::hypot(1920.0, 1080.0) / std::hypot(36.0, 24.0), 1.0);
 }
 
 std::uint32_t Crc(const std::string& bytes) {

@@ -338,6 +338,35 @@ TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
   EXPECT_FALSE(after.Get("/livez"));
 }
 
+// A client that stops sending mid-request is answered 400 after the read timeout
+// (--read-timeout), not waited for; other clients are served meanwhile.
+TEST_F(ServeTest, ReadTimeoutAnswersASilentClient) {
+  StartServer({"--read-timeout", "1"});
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  const std::string partial = "GET /api/v1/pincodes/110001 HTTP/1.1\r\nHost: x\r\n";
+  ::send(fd, partial.data(), partial.size(), MSG_NOSIGNAL);
+  ExpectJson(client().Get("/api/v1/pincodes/110001"));  // not blocked by the silent one
+  timeval timeout{10, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  const auto start = std::chrono::steady_clock::now();
+  char buffer[4096];
+  ssize_t n = 0;
+  std::string answer;
+  while (answer.find('}') == std::string::npos && (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0)
+    answer.append(buffer, n);
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ::close(fd);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 400", 0), 0U) << answer;
+  EXPECT_NE(answer.find("application/problem+json"), std::string::npos) << answer;
+  EXPECT_LT(waited, 3.0);
+}
+
 TEST_F(ServeTest, SigintStopsToo) {
   EXPECT_EQ(server_->stop(SIGINT, 20), 0);
 }
