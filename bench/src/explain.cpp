@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <array>
 
+#include "grouping.hpp"
+#include "homography.hpp"
 #include "pintag/codec/geometry.hpp"
 #include "pintag/detector/detector.hpp"
+#include "quads.hpp"
 #include "red_blobs.hpp"
 #include "redness.hpp"
 #include "sweep.hpp"
@@ -39,12 +42,13 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
 
   // Stage 1: red pixels within the red disk of each element.
   const stage::RedRuns red = stage::FindRedRuns(bgr, {options.red_min_a, options.red_min_b});
-  cv::Rect2d box(truth.corners_px[0], truth.corners_px[0]);
-  for (const cv::Point2d& c : truth.corners_px) box |= cv::Rect2d(c, c);
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const cv::Point2d& c : truth.corners_px) {
+    x0 = std::min(x0, c.x), y0 = std::min(y0, c.y), x1 = std::max(x1, c.x), y1 = std::max(y1, c.y);
+  }
   std::array<bool, 4> red_at{};
   for (const stage::RedRun& run : red.runs) {
-    if (run.y < box.y || run.y > box.y + box.height || run.x1 < box.x || run.x0 > box.x + box.width)
-      continue;
+    if (run.y < y0 || run.y > y1 || run.x1 < x0 || run.x0 > x1) continue;
     for (int x = run.x0; x <= run.x1; ++x) {
       const int e =
           NearestElement(ToSquare(to_square, {double(x), double(run.y)}), geometry::kRedRadius);
@@ -60,20 +64,51 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
   limits.max_area = std::max<int>(limits.min_area,
                                   static_cast<int>(options.max_element_area_ratio * bgr.total()));
   limits.max_blobs = options.max_blobs;
-  std::array<bool, 4> blob_at{};
-  for (const stage::RedBlob& b : stage::FindRedBlobs(red, limits)) {
-    const int e = NearestElement(ToSquare(to_square, b.centroid), kNear);
-    if (e >= 0) blob_at[static_cast<std::size_t>(e)] = true;
+  std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
+  const auto on_elements = [&](const std::vector<stage::RedBlob>& list) {
+    std::array<bool, 4> at{};
+    std::vector<int> indices;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const int e = NearestElement(ToSquare(to_square, list[i].centroid), kNear);
+      if (e < 0) continue;
+      at[static_cast<std::size_t>(e)] = true;
+      indices.push_back(static_cast<int>(i));
+    }
+    return std::pair(static_cast<int>(std::count(at.begin(), at.end(), true)), indices);
+  };
+  if (on_elements(blobs).first < 3) return "2 blobs: < 3 elements give a red blob (size, shape)";
+
+  // Stage 3, as detector.cpp runs it: the ring check, clusters, then quads per cluster.
+  std::erase_if(blobs, [&](const stage::RedBlob& b) { return !stage::HasRing(bgr, b); });
+  const auto [kept, on_tag] = on_elements(blobs);
+  if (kept < 3) return "3a ring check: < 3 element blobs keep their green ring";
+  const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
+  const stage::BlobCluster* cluster = nullptr;
+  for (const stage::BlobCluster& c : clusters) {
+    const auto n = std::count_if(c.blobs.begin(), c.blobs.end(), [&](int b) {
+      return std::find(on_tag.begin(), on_tag.end(), b) != on_tag.end();
+    });
+    if (n >= 3) cluster = &c;
   }
-  if (std::count(blob_at.begin(), blob_at.end(), true) < 3)
-    return "2 blobs: < 3 elements give a red blob (size, shape)";
+  if (cluster == nullptr) return "3b grouping: no cluster holds >= 3 of the element blobs";
+  const cv::Point2d centre_px =
+      (truth.corners_px[0] + truth.corners_px[1] + truth.corners_px[2] + truth.corners_px[3]) *
+      0.25;
+  bool quad_on_tag = false, rough_ok = false;
+  for (const stage::Quad& q : stage::FindQuads(stage::MinChannel(bgr, cluster->roi),
+                                               cluster->roi.tl(), options.min_square_px)) {
+    if (cv::norm((q[0] + q[1] + q[2] + q[3]) * 0.25 - centre_px) >= 0.3 * truth.square_px) continue;
+    quad_on_tag = true;
+    rough_ok |=
+        stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs).found >= 3;
+  }
+  if (!quad_on_tag) return "3c quad search: no quad on the tag in its cluster's region";
+  if (!rough_ok) return "3d quad found, but < 3 blobs fall on its elements";
 
   // Later stages: what the detector says about candidates on the tag.
   options.return_rejected = true;
   const DetectResult result = Detector(options).detect(bgr);
-  const cv::Point2d centre =
-      (truth.corners_px[0] + truth.corners_px[1] + truth.corners_px[2] + truth.corners_px[3]) *
-      0.25;
+  const cv::Point2d centre = centre_px;
   // The most advanced stage any candidate on the tag reached decides.
   std::string reason;
   int rank = 0;
@@ -92,7 +127,7 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
       reason = (r == 1 || r == 2 ? "4 " : r == 3 ? "5 " : "6 ") + why;
     }
   }
-  return rank > 0 ? reason : "3 no candidate square (ring check, grouping or quad search)";
+  return rank > 0 ? reason : "7 no candidate on the tag reached the decoder";
 }
 
 }  // namespace pintag::bench
