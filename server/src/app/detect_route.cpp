@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -22,13 +21,6 @@
 namespace pintag::app {
 namespace {
 
-using nlohmann::json;
-using server::Access;
-using server::HttpError;
-using server::HttpRequest;
-using server::HttpResponse;
-using server::MakeRoute;
-using server::Route;
 using Clock = std::chrono::steady_clock;
 
 double Ms(Clock::time_point since) {

@@ -1,7 +1,6 @@
 // Registry routes: pincode and key lookups, office search, adding and retiring pincodes.
 
 #include <charconv>
-#include <nlohmann/json.hpp>
 
 #include "app/common.hpp"
 #include "app/routes.hpp"
@@ -9,14 +8,6 @@
 
 namespace pintag::app {
 namespace {
-
-using nlohmann::json;
-using server::Access;
-using server::HttpError;
-using server::HttpRequest;
-using server::HttpResponse;
-using server::MakeRoute;
-using server::Route;
 
 HttpResponse GetPincode(const AppContext& context, const HttpRequest& request) {
   const Pincode pincode = ParsePincodeOrThrow(request.pathParam("pin"));

@@ -3,12 +3,22 @@
 // routes to the table with their access rule and OpenAPI notes.
 
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "app/context.hpp"
 #include "pintag/server/label_routes.hpp"
 #include "pintag/server/router.hpp"
 
 namespace pintag::app {
+
+// The route files speak the HTTP layer's vocabulary throughout.
+using nlohmann::json;
+using server::Access;
+using server::HttpError;
+using server::HttpRequest;
+using server::HttpResponse;
+using server::MakeRoute;
+using server::Route;
 
 /// GET /pincodes/{pin}, GET /pincodes, GET /keys/{key}, POST /pincodes, POST
 /// /pincodes/{pin}/retire.

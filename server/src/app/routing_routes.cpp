@@ -1,7 +1,6 @@
 // Routing routes: the bin for a pincode under a sort plan, and the plans themselves (read by
 // anyone, written by admins as CSV or JSON).
 
-#include <nlohmann/json.hpp>
 
 #include "app/common.hpp"
 #include "app/routes.hpp"
@@ -9,14 +8,6 @@
 
 namespace pintag::app {
 namespace {
-
-using nlohmann::json;
-using server::Access;
-using server::HttpError;
-using server::HttpRequest;
-using server::HttpResponse;
-using server::MakeRoute;
-using server::Route;
 
 db::SortPlan GetPlanOrThrow(db::Connection& connection, const std::string& name) {
   auto plan = db::GetPlan(connection, name);

@@ -1,7 +1,6 @@
 // Token routes (admin only): create (the secret is in this one answer), list, revoke.
 
 #include <charconv>
-#include <nlohmann/json.hpp>
 
 #include "app/common.hpp"
 #include "app/routes.hpp"
@@ -9,14 +8,6 @@
 
 namespace pintag::app {
 namespace {
-
-using nlohmann::json;
-using server::Access;
-using server::HttpError;
-using server::HttpRequest;
-using server::HttpResponse;
-using server::MakeRoute;
-using server::Route;
 
 json TokenJson(const db::TokenInfo& token) {
   return {{"id", token.id},
