@@ -8,6 +8,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "commands/open_db.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/importer.hpp"
 
@@ -21,14 +22,6 @@ struct ImportArgs {
 };
 
 constexpr std::size_t kProblemsShown = 50;
-
-db::Connection OpenDb(const std::string& path) {
-  auto opened = db::OpenDatabase(path);
-  if (!opened) throw std::runtime_error(opened.error().message);
-  if (opened->created)
-    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
-  return std::move(opened).value().connection;
-}
 
 /// A one-line bar on stderr, redrawn at most ten times a second.
 class ProgressBar {

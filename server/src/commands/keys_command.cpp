@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "commands/open_db.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/registry.hpp"
 
@@ -17,15 +18,6 @@ struct KeysArgs {
   std::string pincode;
   std::optional<int> key;
 };
-
-db::Connection OpenDb(const std::string& path) {
-  auto opened = db::OpenDatabase(path);
-  if (!opened) throw std::runtime_error(opened.error().message);
-  if (opened->created) {
-    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
-  }
-  return std::move(opened).value().connection;
-}
 
 void Export(const KeysArgs& args) {
   db::Connection connection = OpenDb(args.db);

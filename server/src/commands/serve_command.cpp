@@ -14,6 +14,7 @@
 
 #include "app/app.hpp"
 #include "commands/commands.hpp"
+#include "commands/open_db.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/server/http_server.hpp"
@@ -35,15 +36,6 @@ struct ServeArgs {
   int write_timeout_s = 5;
 };
 
-/// Opens (creating and seeding when missing) and migrates the database.
-void PrepareDatabase(const std::string& path) {
-  auto opened = db::OpenDatabase(path);
-  if (!opened) throw std::runtime_error(opened.error().message);
-  if (opened->created) {
-    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
-  }
-}
-
 /// On an empty token table, creates the first admin token and returns its secret; "" when tokens
 /// already exist. Called once the port is bound, so a start that cannot listen does not create a
 /// token nobody sees.
@@ -63,7 +55,7 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
-  PrepareDatabase(args.db);
+  OpenDb(args.db);  // creates and seeds a missing file, migrates an old one
 
   app::AppConfig config;
   config.db_path = args.db;

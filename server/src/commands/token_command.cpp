@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "commands/open_db.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 
@@ -17,15 +18,6 @@ struct TokenArgs {
   std::string label;
   std::int64_t id = 0;
 };
-
-db::Connection OpenDb(const std::string& path) {
-  auto opened = db::OpenDatabase(path);
-  if (!opened) throw std::runtime_error(opened.error().message);
-  if (opened->created) {
-    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
-  }
-  return std::move(opened).value().connection;
-}
 
 void Create(const TokenArgs& args) {
   const auto role = db::ParseRole(args.role);
