@@ -17,13 +17,6 @@ std::string_view ToString(Role role) {
   return "unknown";
 }
 
-std::optional<Role> ParseRole(std::string_view text) {
-  for (Role role : {Role::kAdmin, Role::kCounter, Role::kScanner}) {
-    if (text == ToString(role)) return role;
-  }
-  return std::nullopt;
-}
-
 std::string_view ToString(Access access) {
   switch (access) {
     case Access::kOpen:

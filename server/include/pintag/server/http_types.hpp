@@ -13,11 +13,12 @@
 
 namespace pintag::server {
 
-/// Roles a bearer token can carry (issue 5): admin may do everything.
+/// Roles a bearer token can carry (issue 5): admin may do everything. The tokens and the names
+/// they are stored and created under are db's (`db::Role`, `db::ParseRole`); the application
+/// maps a verified token's role onto this one, so this layer needs no database.
 enum class Role { kAdmin, kCounter, kScanner };
 
-std::string_view ToString(Role role);
-std::optional<Role> ParseRole(std::string_view text);
+std::string_view ToString(Role role);  ///< "admin", "counter", "scanner", for messages
 
 /// Who is calling, once a bearer token was verified.
 struct Principal {
