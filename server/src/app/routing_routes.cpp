@@ -1,7 +1,6 @@
 // Routing routes: the bin for a pincode under a sort plan, and the plans themselves (read by
 // anyone, written by admins as CSV or JSON).
 
-
 #include "app/common.hpp"
 #include "app/routes.hpp"
 #include "pintag/db/sort_plan.hpp"
