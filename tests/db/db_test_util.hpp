@@ -7,22 +7,13 @@
 #include <vector>
 
 #include "pintag/db/database.hpp"
+#include "pintag/test/files.hpp"
 
 namespace pintag::db::test {
 
-/// A fresh directory under the system temp dir, removed with everything in it.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using pintag::test::ReadFile;
+using pintag::test::TempDir;
+using pintag::test::WriteFile;
 
 /// A seeded database file (seeded once per test process, then copied): its path in `dir`.
 std::string CopyOfSeeded(const TempDir& dir, const std::string& name = "registry.db");
@@ -31,9 +22,6 @@ const std::string& SeededTemplate();
 
 /// Opens an existing database; fails the test (throws) if it cannot.
 Connection OpenExisting(const std::string& path);
-
-std::string WriteFile(const std::string& path, const std::string& content);
-std::string ReadFile(const std::string& path);
 
 struct CommandResult {
   int exit_code = -1;

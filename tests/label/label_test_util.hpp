@@ -1,18 +1,19 @@
 #pragma once
-// Helpers shared by the label tests: sample labels, reading PNGs back, running poppler.
+// Helpers shared by the label tests: sample labels, reading PNGs back, running poppler (scratch
+// directories and files: pintag/test/files.hpp).
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "pintag/codec/label.hpp"
+#include "pintag/test/files.hpp"
 
 namespace pintag::test {
 
@@ -48,29 +49,6 @@ inline std::optional<DecodedPng> ReadPng(const std::vector<std::uint8_t>& bytes)
     for (int c = 0; c < 3; ++c) out.image.pixels[i * 3 + c] = all[i * out.spec.nchannels + c];
   }
   return out;
-}
-
-/// A scratch directory removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "pintag-label-XXXXXX").string();
-    path_ = mkdtemp(pattern.data());
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
-inline void WriteFile(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
 }
 
 /// Runs a shell command and returns its standard output; nothing when it cannot run or fails.

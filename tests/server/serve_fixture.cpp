@@ -3,51 +3,22 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <stdlib.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <fstream>
 #include <regex>
-#include <sstream>
 #include <thread>
 
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
+#include "pintag/test/seeded_db.hpp"
 
 namespace pintag::serve_test {
 
-ScratchDir::ScratchDir() {
-  std::string pattern = (std::filesystem::temp_directory_path() / "pintag-serve-XXXXXX").string();
-  if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-  path_ = pattern;
-}
-
-ScratchDir::~ScratchDir() {
-  std::error_code ignored;
-  // A test may have made files unreadable; make sure they can be removed.
-  std::filesystem::permissions(path_, std::filesystem::perms::owner_all,
-                               std::filesystem::perm_options::add, ignored);
-  std::filesystem::remove_all(path_, ignored);
-}
-
 std::string PintagExe() {
   return PINTAG_EXE;
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-void WriteFile(const std::string& path, const std::string& content) {
-  std::ofstream out(path, std::ios::binary);
-  out << content;
-  if (!out.flush()) throw std::runtime_error("cannot write " + path);
 }
 
 ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
@@ -119,45 +90,9 @@ ServerProcess::~ServerProcess() {
   if (out_fd_ >= 0) ::close(out_fd_);
 }
 
-namespace {
-
-void SeedInto(const std::string& path) {
-  const std::string partial = path + ".partial." + std::to_string(getpid());
-  {
-    auto opened = db::OpenDatabase(partial);
-    if (!opened) throw std::runtime_error(opened.error().message);
-  }  // closing checkpoints the WAL into the file
-  std::filesystem::rename(partial, path);
-}
-
-}  // namespace
-
 // ctest runs each test in its own process: seed once per build of this executable, not per test.
 const std::string& SeededTemplate() {
-  static const ScratchDir fallback_dir;
-  static const std::string path = [] {
-    std::error_code error;
-    const auto stamp = std::filesystem::last_write_time("/proc/self/exe", error);
-    if (!error) {
-      const std::string cached = std::string(PINTAG_TEST_TEMPLATE_DIR) + "/seeded-" +
-                                 std::to_string(stamp.time_since_epoch().count()) + ".db";
-      if (!std::filesystem::exists(cached)) {
-        SeedInto(cached);
-        for (const auto& entry :
-             std::filesystem::directory_iterator(PINTAG_TEST_TEMPLATE_DIR, error)) {
-          const std::string name = entry.path().filename().string();
-          if (name.starts_with("seeded-") && name.ends_with(".db") &&
-              entry.path().string() != cached) {
-            std::filesystem::remove(entry.path(), error);
-          }
-        }
-      }
-      return cached;
-    }
-    const std::string file = fallback_dir.file("seeded.db");
-    SeedInto(file);
-    return file;
-  }();
+  static const std::string path = pintag::test::SeededTemplate(PINTAG_TEST_TEMPLATE_DIR);
   return path;
 }
 

@@ -15,21 +15,13 @@
 #include <string>
 #include <vector>
 
+#include "pintag/test/files.hpp"
+
 namespace pintag::serve_test {
 
-/// A scratch directory removed at the end.
-class ScratchDir {
- public:
-  ScratchDir();
-  ~ScratchDir();
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using pintag::test::ReadFile;
+using pintag::test::TempDir;
+using pintag::test::WriteFile;
 
 /// One `pintag serve` child process.
 class ServerProcess {
@@ -63,8 +55,6 @@ class ServerProcess {
 std::string PintagExe();
 /// The path of a seeded database made once per build (do not modify it).
 const std::string& SeededTemplate();
-std::string ReadFile(const std::string& path);
-void WriteFile(const std::string& path, const std::string& content);
 
 /// A fixture with a seeded database copy, one token per role and a running server.
 class ServeTest : public ::testing::Test {
@@ -88,7 +78,7 @@ class ServeTest : public ::testing::Test {
   /// Asserts a 200 (or `status`) JSON answer; returns its body.
   static nlohmann::json ExpectJson(const httplib::Result& r, int status = 200);
 
-  ScratchDir dir_;
+  TempDir dir_;
   std::string db_path_;
   std::string admin_token_, counter_token_, scanner_token_;
   std::int64_t counter_token_id_ = 0;

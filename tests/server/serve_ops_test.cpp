@@ -35,7 +35,7 @@ std::set<std::string> Secrets(const std::string& text) {
 }
 
 TEST(ServeFirstStart, CreatesSeedsAndPrintsOneAdminTokenOnStdoutOnly) {
-  ScratchDir dir;
+  TempDir dir;
   const std::string db_path = dir.file("new.db");
   std::string secret;
   {

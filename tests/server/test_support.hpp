@@ -11,6 +11,7 @@
 #include "pintag/server/api.hpp"
 #include "pintag/server/label_routes.hpp"
 #include "pintag/server/problem.hpp"
+#include "pintag/test/files.hpp"
 
 namespace pintag::server::test {
 
@@ -122,22 +123,6 @@ inline nlohmann::json Json(const HttpResponse& r) {
   return nlohmann::json::parse(r.body);
 }
 
-/// A scratch directory removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "pintag-server-XXXXXX").string();
-    path_ = mkdtemp(pattern.data());
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using pintag::test::TempDir;
 
 }  // namespace pintag::server::test
