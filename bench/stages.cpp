@@ -34,7 +34,8 @@ struct Fixture {
   scene::Scene apriltag;  ///< … and AprilTags
   DetectorOptions options;
   stage::RedRuns red;
-  std::vector<stage::RedBlob> blobs;
+  std::vector<stage::RedBlob> raw_blobs;  ///< before the ring check
+  std::vector<stage::RedBlob> blobs;      ///< after it
   std::vector<stage::BlobCluster> clusters;
   std::vector<cv::Mat> dark;  ///< MinChannel per cluster
   struct Candidate {
@@ -94,7 +95,10 @@ const Fixture& Get() {
     limits.min_area = f.options.min_element_area_px;
     limits.max_area = static_cast<int>(f.options.max_element_area_ratio * f.tagged.bgr.total());
     limits.max_blobs = f.options.max_blobs;
-    f.blobs = stage::FindRedBlobs(f.red, limits);
+    f.raw_blobs = stage::FindRedBlobs(f.red, limits);
+    f.blobs = f.raw_blobs;  // as detector.cpp: blobs without a green ring around them are dropped
+    std::erase_if(f.blobs,
+                  [&](const stage::RedBlob& b) { return !stage::HasRing(f.tagged.bgr, b); });
     f.clusters = stage::ClusterBlobs(f.blobs, f.tagged.bgr.size());
     const stage::BitThresholds thresholds{f.options.min_bit_span_b, f.options.min_bit_margin};
     for (std::size_t c = 0; c < f.clusters.size(); ++c) {
@@ -120,6 +124,7 @@ const Fixture& Get() {
 
 void ReportCounts(benchmark::State& state) {
   const Fixture& f = Get();
+  state.counters["raw_blobs"] = static_cast<double>(f.raw_blobs.size());
   state.counters["blobs"] = static_cast<double>(f.blobs.size());
   state.counters["clusters"] = static_cast<double>(f.clusters.size());
   state.counters["tags"] = static_cast<double>(f.candidates.size());
@@ -181,6 +186,17 @@ void BM_Stage2_FindRedBlobs(benchmark::State& state) {
   ReportCounts(state);
 }
 BENCHMARK(BM_Stage2_FindRedBlobs)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage2_HasRing(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const stage::RedBlob& b : f.raw_blobs) {
+      benchmark::DoNotOptimize(stage::HasRing(f.tagged.bgr, b));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage2_HasRing)->Unit(benchmark::kMicrosecond);
 
 void BM_Stage3_ClusterBlobs(benchmark::State& state) {
   const Fixture& f = Get();
