@@ -1,15 +1,13 @@
 // A real server on a free loopback port, hit with cpp-httplib's client and raw sockets.
 
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <fstream>
 
 #include "pintag/server/http_server.hpp"
+#include "pintag/test/loopback_socket.hpp"
 #include "test_support.hpp"
 
 namespace pintag::server {
@@ -62,25 +60,7 @@ class LoopbackTest : public ::testing::Test {
 
   // Sends raw bytes and returns everything the server answers until it closes or goes quiet.
   std::string Raw(const std::string& request) const {
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-      ::close(fd);
-      return {};
-    }
-    ::send(fd, request.data(), request.size(), 0);
-    timeval timeout{1, 0};
-    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-    std::string out;
-    char buffer[4096];
-    ssize_t n = 0;
-    while ((n = ::recv(fd, buffer, sizeof buffer, 0)) > 0)
-      out.append(buffer, static_cast<std::size_t>(n));
-    ::close(fd);
-    return out;
+    return pintag::test::SendRaw(server_->port(), request, 1);
   }
 
   // cpp-httplib calls the logger, which records the metrics, just after the response is written;

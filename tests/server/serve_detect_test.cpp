@@ -2,9 +2,6 @@
 // synthetic scene at a known pose, uploaded, read back; and every way an upload can be wrong.
 
 #include <OpenImageIO/imageio.h>
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -19,6 +16,7 @@
 #include "pintag/db/database.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/scene/scene.hpp"
+#include "pintag/test/loopback_socket.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -155,12 +153,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
 // Three tags in one photo: an active pincode, a retired one (its printed labels still decode) and a
 // key no pincode holds (reported as such, never mapped to a guess).
 TEST_F(ServeTest, EveryTagInAFrameActiveRetiredAndUnknownKeys) {
-  int free_key = -1;
-  for (int key = 32767; key > 32000 && free_key < 0; --key) {
-    const auto r = client().Get("/api/v1/keys/" + std::to_string(key));
-    ASSERT_TRUE(r);
-    if (r->status == 404) free_key = key;
-  }
+  const int free_key = FreeKey();
   ASSERT_GE(free_key, 0);
   const json retired =
       ExpectJson(client().Post("/api/v1/pincodes/560001/retire", admin(), "", "text/plain"));
@@ -359,27 +352,9 @@ TEST_F(ServeTest, DetectRefusesBadUploadsWithProblems) {
 
 /// Sends raw bytes; returns what the server answers before it closes or goes quiet for 2 s.
 std::string Raw(int port, const std::string& request) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-    ::close(fd);
-    return {};
-  }
-  ::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
-  timeval timeout{2, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  std::string out;
-  char buffer[4096];
-  ssize_t n = 0;
-  while ((n = ::recv(fd, buffer, sizeof buffer, 0)) > 0) {
-    out.append(buffer, static_cast<std::size_t>(n));
-    if (out.find("\r\n\r\n") != std::string::npos && out.find("}") != std::string::npos) break;
-  }
-  ::close(fd);
-  return out;
+  return test::SendRaw(port, request, 2, [](const std::string& out) {
+    return out.find("\r\n\r\n") != std::string::npos && out.find('}') != std::string::npos;
+  });
 }
 
 TEST_F(ServeTest, BodyAndPixelLimitsAreFlags) {

@@ -159,4 +159,14 @@ nlohmann::json ServeTest::ExpectJson(const httplib::Result& r, int status) {
   return body.is_discarded() ? nlohmann::json() : body;
 }
 
+int ServeTest::FreeKey() {
+  for (int key = 32767; key > 32000; --key) {
+    const auto r = client().Get("/api/v1/keys/" + std::to_string(key));
+    EXPECT_TRUE(r);
+    if (!r) return -1;
+    if (r->status == 404) return key;
+  }
+  return -1;
+}
+
 }  // namespace pintag::serve_test

@@ -73,6 +73,10 @@ class ServeTest : public ::testing::Test {
   httplib::Headers counter() const { return Auth(counter_token_); }
   httplib::Headers scanner() const { return Auth(scanner_token_); }
 
+  /// The highest key no pincode holds (GET /api/v1/keys/{key} answers 404), found through the
+  /// API from 32767 down to 32001; -1 (with a failure) when there is none or a call fails.
+  int FreeKey();
+
   /// Asserts a problem+json answer with this status; returns its body.
   static nlohmann::json ExpectProblem(const httplib::Result& r, int status);
   /// Asserts a 200 (or `status`) JSON answer; returns its body.

@@ -1,10 +1,7 @@
 // Running `pintag serve`: first start, readiness, metrics, the OpenAPI document against the live
 // routes, static files, graceful shutdown.
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -17,6 +14,7 @@
 #include "pintag/db/database.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/tokens.hpp"
+#include "pintag/test/loopback_socket.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -306,28 +304,19 @@ TEST_F(ServeTest, StaticFilesFromTheWebDirectoryOnly) {
 // then the process exits 0 and the port is closed.
 TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
   const std::string body = R"({"pincodes": ["110001", "560001"], "size": "a6"})";
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  const int fd = test::ConnectLoopback(server_->port());
+  ASSERT_GE(fd, 0);
   const std::string head =
       "POST /api/v1/labels HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " + counter_token_ +
       "\r\nContent-Type: application/json\r\nContent-Length: " + std::to_string(body.size()) +
       "\r\n\r\n" + body.substr(0, 10);
-  ::send(fd, head.data(), head.size(), MSG_NOSIGNAL);
+  test::SendAll(fd, head);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   server_->signal(SIGTERM);  // the request is half read
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const std::string rest = body.substr(10);
-  ::send(fd, rest.data(), rest.size(), MSG_NOSIGNAL);
-  timeval timeout{10, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  std::string answer;
-  char buffer[65536];
-  ssize_t n = 0;
-  while ((n = ::recv(fd, buffer, sizeof buffer, 0)) > 0) answer.append(buffer, n);
+  test::SendAll(fd, rest);
+  const std::string answer = test::ReceiveUntil(fd, 10);
   ::close(fd);
   EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
   EXPECT_NE(answer.find("%PDF-"), std::string::npos);
@@ -342,23 +331,14 @@ TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
 // (--read-timeout), not waited for; other clients are served meanwhile.
 TEST_F(ServeTest, ReadTimeoutAnswersASilentClient) {
   StartServer({"--read-timeout", "1"});
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<std::uint16_t>(server_->port()));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  const int fd = test::ConnectLoopback(server_->port());
+  ASSERT_GE(fd, 0);
   const std::string partial = "GET /api/v1/pincodes/110001 HTTP/1.1\r\nHost: x\r\n";
-  ::send(fd, partial.data(), partial.size(), MSG_NOSIGNAL);
+  test::SendAll(fd, partial);
   ExpectJson(client().Get("/api/v1/pincodes/110001"));  // not blocked by the silent one
-  timeval timeout{10, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
   const auto start = std::chrono::steady_clock::now();
-  char buffer[4096];
-  ssize_t n = 0;
-  std::string answer;
-  while (answer.find('}') == std::string::npos && (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0)
-    answer.append(buffer, n);
+  const std::string answer = test::ReceiveUntil(
+      fd, 10, [](const std::string& out) { return out.find('}') != std::string::npos; });
   const double waited =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ::close(fd);
