@@ -22,7 +22,7 @@ server::Role ToServerRole(db::Role role) {
   return server::Role::kScanner;
 }
 
-server::TokenVerifier RegistryTokenVerifier(std::shared_ptr<ConnectionPool> pool) {
+server::TokenVerifier RegistryTokenVerifier(const std::shared_ptr<ConnectionPool>& pool) {
   return [pool](std::string_view secret) -> std::optional<server::Principal> {
     try {
       auto connection = pool->acquire();
@@ -37,7 +37,7 @@ server::TokenVerifier RegistryTokenVerifier(std::shared_ptr<ConnectionPool> pool
 
 }  // namespace
 
-server::HealthCheck DatabaseHealthCheck(std::string path) {
+server::HealthCheck DatabaseHealthCheck(const std::string& path) {
   struct stat at_start {};
   const bool known = ::stat(path.c_str(), &at_start) == 0;
   return [path, at_start, known]() -> std::optional<std::string> {

@@ -30,6 +30,6 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
 /// Readiness of the database at `path`, as /readyz reports it: a fresh connection to the file
 /// now at that path (never created), a real query on the registry, and the same file (device
 /// and inode) the server opened at start. Nothing when ready, else why not.
-server::HealthCheck DatabaseHealthCheck(std::string path);
+server::HealthCheck DatabaseHealthCheck(const std::string& path);
 
 }  // namespace pintag::app

@@ -24,7 +24,7 @@ T Unwrap(db::Result<T> result, std::string title = {}) {
   if (!result) ThrowDbError(result.error(), std::move(title));
   return std::move(result).value();
 }
-inline void Unwrap(db::Result<void> result, std::string title = {}) {
+inline void Unwrap(const db::Result<void>& result, std::string title = {}) {
   if (!result) ThrowDbError(result.error(), std::move(title));
 }
 

@@ -75,12 +75,13 @@ HttpResponse AddPincodeRoute(const AppContext& context, const HttpRequest& reque
     throw HttpError(400, R"(expected {"pincode": "NNNNNN", "offices": [{"name": …}, …]})");
   const json& pin = body["pincode"];
   std::string text;
-  if (pin.is_string())
+  if (pin.is_string()) {
     text = pin.get<std::string>();
-  else if (pin.is_number_unsigned())
+  } else if (pin.is_number_unsigned()) {
     text = std::to_string(pin.get<std::uint64_t>());
-  else
+  } else {
     throw HttpError(400, "'pincode' must be a string of six digits", "Malformed Pincode");
+  }
   const Pincode pincode = ParsePincodeOrThrow(text);
   std::vector<db::PostOffice> offices;
   if (body.contains("offices")) {
@@ -120,15 +121,12 @@ HttpResponse RetirePincodeRoute(const AppContext& context, const HttpRequest& re
 
 }  // namespace
 
-void AddRegistryRoutes(server::Router& router, std::shared_ptr<const AppContext> context) {
-  const auto bind = [context](HttpResponse (*f)(const AppContext&, const HttpRequest&)) {
-    return [context, f](const HttpRequest& r) { return f(*context, r); };
-  };
-  router.add(MakeRoute("GET", "/api/v1/pincodes/{pin}", Access::kOpen, bind(GetPincode),
+void AddRegistryRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context) {
+  router.add(MakeRoute("GET", "/api/v1/pincodes/{pin}", Access::kOpen, Bind(context, GetPincode),
                        "A pincode: key, status, district, state, circle, region, division and "
                        "every post office",
                        "registry"));
-  Route search = MakeRoute("GET", "/api/v1/pincodes", Access::kOpen, bind(SearchPincodes),
+  Route search = MakeRoute("GET", "/api/v1/pincodes", Access::kOpen, Bind(context, SearchPincodes),
                            "Search post offices by name prefix, district and/or state", "registry");
   search.query = {{"q", "office name prefix (case-insensitive for ASCII)"},
                   {"district", "district, exact (case-insensitive for ASCII)"},
@@ -136,19 +134,20 @@ void AddRegistryRoutes(server::Router& router, std::shared_ptr<const AppContext>
                   {"limit", "page size, 1 to 500 (default 50)", "integer"},
                   {"offset", "rows to skip (default 0)", "integer"}};
   router.add(std::move(search));
-  router.add(MakeRoute("GET", "/api/v1/keys/{key}", Access::kOpen, bind(GetKey),
+  router.add(MakeRoute("GET", "/api/v1/keys/{key}", Access::kOpen, Bind(context, GetKey),
                        "The pincode a tag key belongs to (retired ones included)", "registry"));
-  Route add = MakeRoute("POST", "/api/v1/pincodes", Access::kAdmin, bind(AddPincodeRoute),
+  Route add = MakeRoute("POST", "/api/v1/pincodes", Access::kAdmin, Bind(context, AddPincodeRoute),
                         R"(Add a pincode (and its offices); answers 201 with the allocated key)",
                         "registry");
   add.consumes = {"application/json"};
   router.add(std::move(add));
-  router.add(
-      MakeRoute("POST", "/api/v1/pincodes/{pin}/retire", Access::kAdmin, bind(RetirePincodeRoute),
-                "Retire a pincode: it keeps its key, labels are no longer issued", "registry"));
+  router.add(MakeRoute(
+      "POST", "/api/v1/pincodes/{pin}/retire", Access::kAdmin, Bind(context, RetirePincodeRoute),
+      "Retire a pincode: it keeps its key, labels are no longer issued", "registry"));
 }
 
-server::LabelContentProvider RegistryLabelProvider(std::shared_ptr<const AppContext> context) {
+server::LabelContentProvider RegistryLabelProvider(
+    const std::shared_ptr<const AppContext>& context) {
   return [context](Pincode pincode, const std::optional<std::string>& plan) -> server::LabelLookup {
     auto connection = context->pool->acquire();
     auto record = db::LookupPincode(*connection, pincode);

@@ -128,25 +128,22 @@ HttpResponse PutPlanRoute(const AppContext& context, const HttpRequest& request)
 
 }  // namespace
 
-void AddRoutingRoutes(server::Router& router, std::shared_ptr<const AppContext> context) {
-  const auto bind = [context](HttpResponse (*f)(const AppContext&, const HttpRequest&)) {
-    return [context, f](const HttpRequest& r) { return f(*context, r); };
-  };
+void AddRoutingRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context) {
   Route route =
-      MakeRoute("GET", "/api/v1/route/{pin}", Access::kOpen, bind(RoutePincode),
+      MakeRoute("GET", "/api/v1/route/{pin}", Access::kOpen, Bind(context, RoutePincode),
                 "The bin for a pincode under a sort plan (longest prefix wins)", "routing");
   route.query = {{"plan", "sort plan name (default: default)"}};
   router.add(std::move(route));
-  router.add(MakeRoute("GET", "/api/v1/sortplans", Access::kOpen, bind(ListPlansRoute),
+  router.add(MakeRoute("GET", "/api/v1/sortplans", Access::kOpen, Bind(context, ListPlansRoute),
                        "Every sort plan with its fallback bin and rule count", "routing"));
   Route get =
-      MakeRoute("GET", "/api/v1/sortplans/{name}", Access::kOpen, bind(GetPlanRoute),
+      MakeRoute("GET", "/api/v1/sortplans/{name}", Access::kOpen, Bind(context, GetPlanRoute),
                 "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv)", "routing");
   get.produces = {"application/json", "text/csv"};
   get.query = {{"format", "json (default) or csv"}};
   router.add(std::move(get));
   Route put = MakeRoute(
-      "PUT", "/api/v1/sortplans/{name}", Access::kAdmin, bind(PutPlanRoute),
+      "PUT", "/api/v1/sortplans/{name}", Access::kAdmin, Bind(context, PutPlanRoute),
       "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON", "routing");
   put.consumes = {"text/csv", "application/json"};
   put.query = {{"description", "plan description (CSV bodies)"}};

@@ -60,21 +60,19 @@ HttpResponse RevokeTokenRoute(const AppContext& context, const HttpRequest& requ
 
 }  // namespace
 
-void AddTokenRoutes(server::Router& router, std::shared_ptr<const AppContext> context) {
-  const auto bind = [context](HttpResponse (*f)(const AppContext&, const HttpRequest&)) {
-    return [context, f](const HttpRequest& r) { return f(*context, r); };
-  };
+void AddTokenRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context) {
   Route create =
-      MakeRoute("POST", "/api/v1/tokens", Access::kAdmin, bind(CreateTokenRoute),
+      MakeRoute("POST", "/api/v1/tokens", Access::kAdmin, Bind(context, CreateTokenRoute),
                 R"(Create a token {"role", "label"}; the answer holds its secret, once)", "tokens");
   create.consumes = {"application/json"};
   router.add(std::move(create));
-  router.add(MakeRoute("GET", "/api/v1/tokens", Access::kAdmin, bind(ListTokensRoute),
+  router.add(MakeRoute("GET", "/api/v1/tokens", Access::kAdmin, Bind(context, ListTokensRoute),
                        "Every token (never a secret), revoked ones included", "tokens"));
-  router.add(MakeRoute("DELETE", "/api/v1/tokens/{id}", Access::kAdmin, bind(RevokeTokenRoute),
-                       "Revoke a token (permanent)", "tokens"));
-  router.add(MakeRoute("POST", "/api/v1/tokens/{id}/revoke", Access::kAdmin, bind(RevokeTokenRoute),
-                       "Revoke a token (same as DELETE)", "tokens"));
+  router.add(MakeRoute("DELETE", "/api/v1/tokens/{id}", Access::kAdmin,
+                       Bind(context, RevokeTokenRoute), "Revoke a token (permanent)", "tokens"));
+  router.add(MakeRoute("POST", "/api/v1/tokens/{id}/revoke", Access::kAdmin,
+                       Bind(context, RevokeTokenRoute), "Revoke a token (same as DELETE)",
+                       "tokens"));
 }
 
 }  // namespace pintag::app
