@@ -117,7 +117,8 @@ void Run(const ServeArgs& args) {
   const bool served = http.serve();
   // serve() returned: stop() ran from the waiter, or serving failed; then wake the waiter.
   finished = true;
-  pthread_kill(waiter.native_handle(), SIGTERM);
+  // Every thread blocks SIGTERM; the waiter takes it from sigwait, so this wakes it, not kills it.
+  pthread_kill(waiter.native_handle(), SIGTERM);  // NOLINT(bugprone-bad-signal-to-kill-thread)
   waiter.join();
   http.stop();
   std::cerr << "pintag serve: stopped\n";

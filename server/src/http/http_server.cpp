@@ -67,12 +67,12 @@ struct HttpServer::Impl {
   int port = 0;
   std::thread thread;
 
-  HttpResponse TooLarge() const {
+  HttpResponse tooLarge() const {
     return ProblemResponse(413, "the request body may be at most " +
                                     std::to_string(api->options().max_body_bytes) + " bytes");
   }
 
-  httplib::Server::HandlerResponse PreRoute(const httplib::Request& req, httplib::Response& res) {
+  httplib::Server::HandlerResponse preRoute(const httplib::Request& req, httplib::Response& res) {
     t_state = RequestState{true, std::chrono::steady_clock::now(), {}};
     t_state.admission = api->admit(req.method, req.path, Headers(req));
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
@@ -86,13 +86,13 @@ struct HttpServer::Impl {
     return httplib::Server::HandlerResponse::Handled;
   }
 
-  void Handle(const httplib::Request& req, httplib::Response& res) {
+  void handle(const httplib::Request& req, httplib::Response& res) {
     HttpRequest request = ToRequest(req);
     request.body = req.body;
     Apply(api->invoke(t_state.admission, std::move(request)), res);
   }
 
-  void HandleWithReader(const httplib::Request& req, httplib::Response& res,
+  void handleWithReader(const httplib::Request& req, httplib::Response& res,
                         const httplib::ContentReader& reader) {
     HttpRequest request = ToRequest(req);
     const std::size_t limit = api->options().max_body_bytes;
@@ -123,7 +123,7 @@ struct HttpServer::Impl {
       });
     }
     if (too_large) {
-      Apply(TooLarge(), res);
+      Apply(tooLarge(), res);
       res.set_header("Connection", "close");
       return;
     }
@@ -136,16 +136,16 @@ struct HttpServer::Impl {
   }
 
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).
-  httplib::Server::HandlerResponse OnError(const httplib::Request&, httplib::Response& res) {
+  httplib::Server::HandlerResponse onError(const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     const HttpResponse problem =
-        res.status == 413 ? TooLarge()
+        res.status == 413 ? tooLarge()
                           : ProblemResponse(res.status, std::string(StatusTitle(res.status)));
     res.set_content(problem.body, problem.content_type);
     return httplib::Server::HandlerResponse::Handled;
   }
 
-  void Log(const httplib::Request& req, const httplib::Response& res) {
+  void log(const httplib::Request& req, const httplib::Response& res) {
     double seconds = 0;
     std::string label = "unmatched";
     if (t_state.active) {
@@ -183,24 +183,25 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
     impl->listen_fd = fd;
   });
   s.set_pre_routing_handler([impl](const httplib::Request& req, httplib::Response& res) {
-    return impl->PreRoute(req, res);
+    return impl->preRoute(req, res);
   });
   s.set_error_handler(httplib::Server::HandlerWithResponse(
       [impl](const httplib::Request& req, httplib::Response& res) {
-        return impl->OnError(req, res);
+        return impl->onError(req, res);
       }));
-  s.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr) {
-    Apply(ProblemResponse(500, "the server failed to handle this request"), res);
-  });
+  s.set_exception_handler(
+      [](const httplib::Request&, httplib::Response& res, const std::exception_ptr&) {
+        Apply(ProblemResponse(500, "the server failed to handle this request"), res);
+      });
   s.set_logger(
-      [impl](const httplib::Request& req, const httplib::Response& res) { impl->Log(req, res); });
+      [impl](const httplib::Request& req, const httplib::Response& res) { impl->log(req, res); });
 
   const auto plain = [impl](const httplib::Request& req, httplib::Response& res) {
-    impl->Handle(req, res);
+    impl->handle(req, res);
   };
   const auto reading = [impl](const httplib::Request& req, httplib::Response& res,
                               const httplib::ContentReader& reader) {
-    impl->HandleWithReader(req, res, reader);
+    impl->handleWithReader(req, res, reader);
   };
   s.Get(".*", plain);
   s.Options(".*", plain);

@@ -191,7 +191,7 @@ void AddLabelRoutes(Router& router, LabelContentProvider provider, std::shared_p
   const QueryParamDoc dpi{"dpi", "PNG resolution, 72 to 1200 (default 300), recorded in the file",
                           "number"};
   const QueryParamDoc plan{"plan", "sort plan whose bin is printed"};
-  const auto label_route = [&](std::string format, std::string type,
+  const auto label_route = [&](const std::string& format, std::string type,
                                std::vector<QueryParamDoc> query) {
     Route route = MakeRoute(
         "GET", "/api/v1/labels/{pin}." + format, Access::kCounter,

@@ -14,7 +14,7 @@ namespace pintag::server {
 namespace {
 
 constexpr std::size_t kMaxUrlPath = 1024;
-constexpr std::uintmax_t kMaxFileBytes = 64 * 1024 * 1024;
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t{64} * 1024 * 1024;
 
 // realpath(3): the canonical absolute path with every symlink resolved; nothing if missing.
 std::optional<std::filesystem::path> RealPath(const std::filesystem::path& path) {

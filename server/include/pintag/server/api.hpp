@@ -22,7 +22,7 @@ namespace pintag::server {
 /// Readiness: nothing when ready, else why not (e.g. "database unreachable: …"). Thread-safe.
 using HealthCheck = std::function<std::optional<std::string>()>;
 
-inline constexpr std::size_t kDefaultMaxBodyBytes = 25 * 1024 * 1024;
+inline constexpr std::size_t kDefaultMaxBodyBytes = std::size_t{25} * 1024 * 1024;
 
 struct ApiOptions {
   std::size_t max_body_bytes = kDefaultMaxBodyBytes;  ///< larger bodies answer 413
