@@ -11,10 +11,10 @@
 
 namespace pintag::stage {
 
-inline constexpr int kRednessPrefilter = 20;  ///< least R − G (8-bit codes) of any red pixel
+inline constexpr int kRednessPrefilter = 2;  ///< least R − G (8-bit codes) of any red pixel
 
 struct RednessThresholds {
-  double min_a = 30;   ///< CIELAB a*
+  double min_a = 20;   ///< CIELAB a*
   double min_b = -30;  ///< CIELAB b*
 };
 

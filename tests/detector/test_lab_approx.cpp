@@ -134,5 +134,24 @@ TEST(Redness, PrefilterNeverRejectsARedColour) {
   EXPECT_EQ(reds, 0);
 }
 
+TEST(Redness, PrefilterNeverRejectsARedColourAtTheDefaultThreshold) {
+  // The same proof at the default thresholds (a* >= 20), every code of R and G, with 1 unit of
+  // slack: the prefilter R − G >= kRednessPrefilter loses no colour the exact rule calls red.
+  const RednessThresholds defaults;
+  const RednessThresholds loose{defaults.min_a - 1, defaults.min_b - 1};
+  int reds = 0;
+  for (int r = 0; r < 256; ++r) {
+    for (int g = 0; g < 256; ++g) {
+      if (r - g >= kRednessPrefilter) continue;
+      for (int b = 0; b < 256; b += 3) {
+        const Lab exact = SrgbToLab({static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
+                                     static_cast<std::uint8_t>(b)});
+        reds += IsRedLab(exact.a, exact.b, loose);
+      }
+    }
+  }
+  EXPECT_EQ(reds, 0);
+}
+
 }  // namespace
 }  // namespace pintag::stage

@@ -43,7 +43,7 @@ struct DetectorOptions {
   double tag_size_m = 0.050;     ///< side of the black square, metres (default 50 mm)
 
   // --- colour (CIELAB units, computed with integer stand-ins; see DESIGN.md §2) ---
-  double red_min_a = 30;         ///< a pixel is red when a* >= this …
+  double red_min_a = 20;         ///< a pixel is red when a* >= this …
   double red_min_b = -30;        ///< … and b* >= this (keeps saturated blues, a* ~ +79, out)
   double min_bit_span_b = 20;    ///< least b* difference between a tag's 1 and 0 levels
   double min_bit_margin = 0.30;  ///< |b* − mid| / half-span below this: the bit is read as unknown
