@@ -13,7 +13,7 @@
 namespace pintag::server {
 namespace {
 
-constexpr std::size_t kMaxBody = 64 * 1024;
+constexpr std::size_t kMaxBody = std::size_t{64} * 1024;
 
 class LoopbackTest : public ::testing::Test {
  protected:
@@ -59,13 +59,13 @@ class LoopbackTest : public ::testing::Test {
   }
 
   // Sends raw bytes and returns everything the server answers until it closes or goes quiet.
-  std::string Raw(const std::string& request) const {
+  std::string raw(const std::string& request) const {
     return pintag::test::SendRaw(server_->port(), request, 1);
   }
 
   // cpp-httplib calls the logger, which records the metrics, just after the response is written;
   // a client can read its answer a moment before the request is counted. Wait for the count.
-  std::string MetricsWhen(const std::string& line) const {
+  std::string metricsWhen(const std::string& line) const {
     std::string text;
     for (int i = 0; i < 200; ++i) {
       text = metrics_->renderPrometheus();
@@ -131,23 +131,27 @@ TEST_F(LoopbackTest, ProblemFor413WithContentLength) {
   EXPECT_EQ(nlohmann::json::parse(r->body)["bytes"], kMaxBody);
 }
 
+/// The head of a chunked POST /api/v1/upload with the scanner's token; the chunks follow.
+std::string ChunkedUploadHead() {
+  return std::string("POST /api/v1/upload HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer ") +
+         test::kScannerToken +
+         "\r\nContent-Type: application/octet-stream\r\nTransfer-Encoding: chunked\r\n\r\n";
+}
+
 TEST_F(LoopbackTest, ProblemFor413WithChunkedBody) {
   // cpp-httplib 0.11.4 does not limit chunked bodies itself; the server counts the chunks. Raw
   // bytes, because cpp-httplib's client reads no answer before it has sent the whole body.
-  const std::string head =
-      std::string("POST /api/v1/upload HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer ") +
-      test::kScannerToken +
-      "\r\nContent-Type: application/octet-stream\r\nTransfer-Encoding: chunked\r\n\r\n";
+  const std::string head = ChunkedUploadHead();
   std::string chunks;
-  const std::string chunk(16 * 1024, 'y');
+  const std::string chunk(std::size_t{16} * 1024, 'y');
   for (std::size_t sent = 0; sent <= kMaxBody; sent += chunk.size())
     chunks += "4000\r\n" + chunk + "\r\n";
-  std::string answer = Raw(head + chunks + "0\r\n\r\n");
+  std::string answer = raw(head + chunks + "0\r\n\r\n");
   EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 300);
   EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
   EXPECT_NE(answer.find("at most 65536 bytes"), std::string::npos);
   // A small chunked body passes.
-  answer = Raw(head.substr(0, head.size() - 2) + "Connection: close\r\n\r\n" +
+  answer = raw(head.substr(0, head.size() - 2) + "Connection: close\r\n\r\n" +
                "a\r\n0123456789\r\n0\r\n\r\n");
   EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
   EXPECT_NE(answer.find(R"("bytes":10)"), std::string::npos) << answer;
@@ -156,23 +160,20 @@ TEST_F(LoopbackTest, ProblemFor413WithChunkedBody) {
 // After a 413 the rest of the body stays unread on the connection. A request hidden there, right
 // after the chunk that crossed the limit, must not be answered as if it were a request.
 TEST_F(LoopbackTest, UnreadBodyIsNotParsedAsARequest) {
-  const std::string head =
-      std::string("POST /api/v1/upload HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer ") +
-      test::kScannerToken +
-      "\r\nContent-Type: application/octet-stream\r\nTransfer-Encoding: chunked\r\n\r\n";
+  const std::string head = ChunkedUploadHead();
   std::string chunks;
-  const std::string chunk(16 * 1024, 'y');
+  const std::string chunk(std::size_t{16} * 1024, 'y');
   for (int i = 0; i < 5; ++i) chunks += "4000\r\n" + chunk + "\r\n";
   const std::string smuggled = "GET /livez HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
   for (const std::string& tail : {smuggled, "\r\n" + smuggled}) {
-    const std::string answer = Raw(head + chunks + tail);
+    const std::string answer = raw(head + chunks + tail);
     EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 200);
     EXPECT_EQ(answer.find(R"({"status":"ok"})"), std::string::npos) << answer;
   }
   const std::string declared =
       "POST /livez HTTP/1.1\r\nHost: x\r\nContent-Length: " + std::to_string(smuggled.size()) +
       "\r\n\r\n";
-  const std::string answer = Raw(declared + smuggled);
+  const std::string answer = raw(declared + smuggled);
   EXPECT_EQ(answer.rfind("HTTP/1.1 405", 0), 0U) << answer.substr(0, 200);
   EXPECT_EQ(answer.find(R"({"status":"ok"})"), std::string::npos) << answer;
 }
@@ -196,7 +197,7 @@ TEST_F(LoopbackTest, ProblemFor415) {
 
 TEST_F(LoopbackTest, GetWithABodyIsRefused) {
   const std::string answer =
-      Raw("GET /livez HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc");
+      raw("GET /livez HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc");
   EXPECT_EQ(answer.rfind("HTTP/1.1 400", 0), 0U) << answer;
   EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
 }
@@ -215,7 +216,7 @@ TEST_F(LoopbackTest, StaticFilesAndTraversalAttempts) {
         "/%252e%252e/secret.txt", "/..%2fsecret.txt", "/..%5csecret.txt", "/link.txt",
         "/js/%2e%2e/%2e%2e/secret.txt", "/%c0%ae%c0%ae/secret.txt", "/.%00./secret.txt"}) {
     const std::string answer =
-        Raw(std::string("GET ") + path + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        raw(std::string("GET ") + path + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
     EXPECT_EQ(answer.find("TOP-SECRET"), std::string::npos) << path;
     EXPECT_TRUE(answer.rfind("HTTP/1.1 404", 0) == 0 || answer.rfind("HTTP/1.1 400", 0) == 0)
         << path << ": " << answer;
@@ -229,7 +230,7 @@ TEST_F(LoopbackTest, MetricsCountWhatHappened) {
   ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png?dpi=100",
                            {{"Authorization", std::string("Bearer ") + test::kCounterToken}}));
   ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png", {{"Authorization", "Bearer nope"}}));
-  MetricsWhen(
+  metricsWhen(
       R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)");
   const auto r = client_->Get("/metrics");
   ASSERT_TRUE(r);
@@ -266,6 +267,7 @@ TEST_F(LoopbackTest, OpenApiIsServed) {
 
 TEST_F(LoopbackTest, ManyConcurrentClients) {
   std::vector<std::thread> threads;
+  threads.reserve(8);
   std::atomic<int> ok{0};
   for (int t = 0; t < 8; ++t) {
     threads.emplace_back([&] {
@@ -277,7 +279,7 @@ TEST_F(LoopbackTest, ManyConcurrentClients) {
   }
   for (auto& t : threads) t.join();
   EXPECT_EQ(ok, 160);
-  MetricsWhen(R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 160)");
+  metricsWhen(R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 160)");
   EXPECT_EQ(metrics_->requestCount("/livez", "GET", 200), 160);
 }
 

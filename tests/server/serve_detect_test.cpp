@@ -153,7 +153,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
 // Three tags in one photo: an active pincode, a retired one (its printed labels still decode) and a
 // key no pincode holds (reported as such, never mapped to a guess).
 TEST_F(ServeTest, EveryTagInAFrameActiveRetiredAndUnknownKeys) {
-  const int free_key = FreeKey();
+  const int free_key = freeKey();
   ASSERT_GE(free_key, 0);
   const json retired =
       ExpectJson(client().Post("/api/v1/pincodes/560001/retire", admin(), "", "text/plain"));
@@ -368,7 +368,7 @@ TEST_F(ServeTest, BodyAndPixelLimitsAreFlags) {
 
   // Smaller limits from the command line: a 60 KiB body over a 50 KiB limit, a 2 MP photo over a
   // 1 MP limit, a batch of 3 labels over a limit of 2.
-  StartServer({"--max-body-mb", "0.05", "--max-pixels", "1000000", "--max-batch", "2"});
+  startServer({"--max-body-mb", "0.05", "--max-pixels", "1000000", "--max-batch", "2"});
   ExpectProblem(
       client().Post("/api/v1/detect", scanner(), std::string(60 * 1024, 'x'), "image/jpeg"), 413);
   const std::string photo = SmallJpeg(1920, 1080);

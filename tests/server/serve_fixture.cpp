@@ -111,10 +111,10 @@ void ServeTest::SetUp() {
     counter_token_id_ = counter->info.id;
     scanner_token_ = scanner->secret;
   }
-  StartServer();
+  startServer();
 }
 
-void ServeTest::StartServer(const std::vector<std::string>& extra) {
+void ServeTest::startServer(const std::vector<std::string>& extra) {
   client_.reset();
   server_.reset();
   std::vector<std::string> args = {"--db", db_path_, "--threads", "4"};
@@ -159,7 +159,7 @@ nlohmann::json ServeTest::ExpectJson(const httplib::Result& r, int status) {
   return body.is_discarded() ? nlohmann::json() : body;
 }
 
-int ServeTest::FreeKey() {
+int ServeTest::freeKey() {
   for (int key = 32767; key > 32000; --key) {
     const auto r = client().Get("/api/v1/keys/" + std::to_string(key));
     EXPECT_TRUE(r);

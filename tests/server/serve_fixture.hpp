@@ -63,7 +63,7 @@ class ServeTest : public ::testing::Test {
   void TearDown() override;
 
   /// Starts (or restarts) the server with extra serve arguments.
-  void StartServer(const std::vector<std::string>& extra = {});
+  void startServer(const std::vector<std::string>& extra = {});
 
   httplib::Client& client() { return *client_; }
   static httplib::Headers Auth(const std::string& token) {
@@ -75,7 +75,7 @@ class ServeTest : public ::testing::Test {
 
   /// The highest key no pincode holds (GET /api/v1/keys/{key} answers 404), found through the
   /// API from 32767 down to 32001; -1 (with a failure) when there is none or a call fails.
-  int FreeKey();
+  int freeKey();
 
   /// Asserts a problem+json answer with this status; returns its body.
   static nlohmann::json ExpectProblem(const httplib::Result& r, int status);

@@ -103,6 +103,7 @@ TEST_F(ServeTest, ConcurrentClientsGetConsistentAnswers) {
   const std::string png = tag->body;
   std::atomic<int> good{0};
   std::vector<std::thread> threads;
+  threads.reserve(8);
   for (int t = 0; t < 8; ++t) {
     threads.emplace_back([&, t] {
       httplib::Client c("127.0.0.1", server_->port());
@@ -239,11 +240,11 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
           std::regex_replace(concrete, std::regex(R"(\{id\})"), std::to_string(counter_token_id_));
       const bool image = concrete == "/api/v1/detect";
       httplib::Result r =
-          upper == "GET"    ? client().Get(concrete.c_str(), admin())
-          : upper == "POST" ? client().Post(concrete.c_str(), admin(), image ? "x" : "{}",
+          upper == "GET"    ? client().Get(concrete, admin())
+          : upper == "POST" ? client().Post(concrete, admin(), image ? "x" : "{}",
                                             image ? "image/jpeg" : "application/json")
-          : upper == "PUT"  ? client().Put(concrete.c_str(), admin(), "{}", "application/json")
-                            : client().Delete(concrete.c_str(), admin());
+          : upper == "PUT"  ? client().Put(concrete, admin(), "{}", "application/json")
+                            : client().Delete(concrete, admin());
       EXPECT_TRUE(upper == "GET" || upper == "POST" || upper == "PUT" || upper == "DELETE")
           << upper;
       ASSERT_TRUE(r) << upper << " " << concrete;
@@ -286,7 +287,7 @@ TEST_F(ServeTest, StaticFilesFromTheWebDirectoryOnly) {
   std::filesystem::create_directories(dir_.path() / "web");
   WriteFile(dir_.file("web/index.html"), "<h1>PinTag</h1>");
   WriteFile(dir_.file("outside.txt"), "SECRET");
-  StartServer({"--web", dir_.file("web")});
+  startServer({"--web", dir_.file("web")});
   auto r = client().Get("/");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
@@ -330,7 +331,7 @@ TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
 // A client that stops sending mid-request is answered 400 after the read timeout
 // (--read-timeout), not waited for; other clients are served meanwhile.
 TEST_F(ServeTest, ReadTimeoutAnswersASilentClient) {
-  StartServer({"--read-timeout", "1"});
+  startServer({"--read-timeout", "1"});
   const int fd = test::ConnectLoopback(server_->port());
   ASSERT_GE(fd, 0);
   const std::string partial = "GET /api/v1/pincodes/110001 HTTP/1.1\r\nHost: x\r\n";

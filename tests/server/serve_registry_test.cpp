@@ -77,7 +77,7 @@ TEST_F(ServeTest, KeyLookup) {
     EXPECT_EQ(ExpectProblem(client().Get(bad), 400)["title"], "Malformed Key") << bad;
   }
   // 19,159 of 32,768 keys are taken by the seed: find a free one through the API's own answers.
-  const int free_key = FreeKey();
+  const int free_key = freeKey();
   ASSERT_GE(free_key, 0);
   EXPECT_EQ(ExpectProblem(client().Get("/api/v1/keys/" + std::to_string(free_key)), 404)["title"],
             "Unknown Key");

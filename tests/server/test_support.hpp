@@ -31,9 +31,10 @@ inline TokenVerifier FakeVerifier() {
 /// 110001 and 560001 exist; 110002 is retired; plan "north" has bins; others are unknown.
 inline LabelContentProvider FakeRegistry() {
   return [](Pincode pin, const std::optional<std::string>& plan) -> LabelLookup {
-    if (plan && *plan != "north")
+    if (plan && *plan != "north") {
       return {std::nullopt,
               Problem{404, "Unknown Plan", "no sort plan '" + *plan + "'", "about:blank"}};
+    }
     if (pin == Pincode(110002)) {
       return {std::nullopt,
               Problem{410, "Retired Pincode", "pincode 110002 is retired", "about:blank"}};
