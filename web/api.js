@@ -1,0 +1,248 @@
+// Shared helpers for the PinTag pages: a fetch wrapper that turns RFC 9457 problem+json answers
+// into errors the pages can show, tokens kept in sessionStorage, and small DOM helpers.
+// Plain ES module, served as is by `pintag serve --web`.
+
+/** An answer that was not 2xx (or no answer): the problem's title and detail, fit to show. */
+export class ApiError extends Error {
+  constructor(status, title, detail) {
+    super(detail ? `${title}: ${detail}` : title);
+    this.name = 'ApiError';
+    this.status = status;
+    this.title = title;
+    this.detail = detail;
+  }
+}
+
+const kReasons = {
+  400: 'Bad Request', 401: 'Unauthorized', 403: 'Forbidden', 404: 'Not Found', 405: 'Method Not Allowed',
+  409: 'Conflict', 410: 'Gone', 413: 'Content Too Large', 415: 'Unsupported Media Type',
+  500: 'Internal Server Error', 503: 'Service Unavailable', 507: 'Insufficient Storage',
+};
+
+async function problemFrom(response) {
+  let title = response.statusText || kReasons[response.status] || 'Error';
+  let detail = '';
+  const type = response.headers.get('Content-Type') || '';
+  try {
+    if (type.includes('json')) {
+      const problem = await response.json();
+      if (problem && typeof problem === 'object') {
+        if (problem.title) title = String(problem.title);
+        if (problem.detail) detail = String(problem.detail);
+      }
+    } else {
+      detail = (await response.text()).trim().slice(0, 300);
+    }
+  } catch {
+    // An unreadable body: the status line is all there is.
+  }
+  return new ApiError(response.status, title, detail);
+}
+
+/**
+ * Calls the PinTag API.
+ *   path    '/api/v1/…' (same origin)
+ *   token   bearer secret, sent when given
+ *   json    a value sent as application/json
+ *   body    a raw body (FormData, Blob, …) when json is not given
+ *   as      'json' (default), 'blob' or 'response'
+ * Resolves with the parsed answer; rejects with an ApiError carrying the problem's title and detail.
+ */
+export async function api(path, { method = 'GET', token = '', json, body, headers = {}, as = 'json', signal } = {}) {
+  const sent = new Headers(headers);
+  if (token) sent.set('Authorization', `Bearer ${token}`);
+  if (json !== undefined) {
+    sent.set('Content-Type', 'application/json');
+    body = JSON.stringify(json);
+  }
+  if (as === 'json' && !sent.has('Accept')) sent.set('Accept', 'application/json');
+  let response;
+  try {
+    response = await fetch(path, { method, headers: sent, body, signal, cache: 'no-store' });
+  } catch (error) {
+    if (error && error.name === 'AbortError') throw error;
+    throw new ApiError(0, 'Server unreachable', 'The PinTag server did not answer. Check the connection and try again.');
+  }
+  if (!response.ok) throw await problemFrom(response);
+  if (as === 'blob') return response.blob();
+  if (as === 'response') return response;
+  return response.json();
+}
+
+/** Query string from an object, leaving out empty values. */
+export function query(params) {
+  const search = new URLSearchParams();
+  for (const [name, value] of Object.entries(params)) {
+    if (value !== undefined && value !== null && value !== '') search.set(name, String(value));
+  }
+  const text = search.toString();
+  return text ? `?${text}` : '';
+}
+
+// ---------- DOM helpers ----------
+
+/** el('p', {class: 'x'}, 'text', child…): an element; attributes starting with "on" are listeners. */
+export function el(tag, attrs = {}, ...children) {
+  const node = document.createElement(tag);
+  for (const [name, value] of Object.entries(attrs || {})) {
+    if (value === undefined || value === null || value === false) continue;
+    if (name.startsWith('on') && typeof value === 'function') node.addEventListener(name.slice(2), value);
+    else if (name === 'class') node.className = value;
+    else if (name === 'text') node.textContent = value;
+    else node.setAttribute(name, value === true ? '' : String(value));
+  }
+  for (const child of children.flat()) {
+    if (child === undefined || child === null || child === false) continue;
+    node.append(child instanceof Node ? child : document.createTextNode(String(child)));
+  }
+  return node;
+}
+
+/** Replaces the content of `container` with `nodes`. */
+export function show(container, ...nodes) {
+  container.replaceChildren(...nodes.flat().filter((n) => n !== null && n !== undefined && n !== false));
+}
+
+const kAuthHints = {
+  401: 'The token was not accepted: paste a valid token (it starts with pt_) above.',
+  403: 'This token is valid but its role may not do this.',
+};
+
+/** An alert box for an error: the problem's title, HTTP status and detail, plus a hint for auth errors. */
+export function problemBox(error, { hint } = {}) {
+  const title = error instanceof ApiError ? error.title : 'Something went wrong';
+  const detail = error instanceof ApiError ? error.detail : String(error && error.message ? error.message : error);
+  const status = error instanceof ApiError && error.status ? el('span', { class: 'code' }, `HTTP ${error.status}`) : null;
+  const extra = hint || (error instanceof ApiError ? kAuthHints[error.status] : '');
+  return el('div', { class: 'alert alert-error', role: 'alert' },
+    el('strong', { class: 'problem-title' }, title), status,
+    detail ? el('p', { class: 'problem-detail' }, detail) : null,
+    extra ? el('p', { class: 'small' }, extra) : null);
+}
+
+/** An alert box for good news or information. */
+export function messageBox(kind, ...content) {
+  return el('div', { class: `alert alert-${kind}`, role: kind === 'ok' ? 'status' : null }, ...content);
+}
+
+/** A status badge: active, retired, unknown_key, error; `text` replaces the status as its words. */
+export function badge(status, text) {
+  const words = text || (status === 'unknown_key' ? 'unknown key' : status);
+  return el('span', { class: `badge badge-${status}` }, words);
+}
+
+/** Marks a button busy while `work` runs; returns what `work` returns. */
+export async function busy(button, work) {
+  const was = button.disabled;
+  button.disabled = true;
+  button.setAttribute('aria-busy', 'true');
+  try {
+    return await work();
+  } finally {
+    button.disabled = was;
+    button.removeAttribute('aria-busy');
+  }
+}
+
+/** Saves a blob under a file name, as a download. */
+export function downloadBlob(blob, filename) {
+  const url = URL.createObjectURL(blob);
+  const link = el('a', { href: url, download: filename, hidden: true });
+  document.body.append(link);
+  link.click();
+  link.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 60_000);
+}
+
+// ---------- pincodes ----------
+
+/** Six digits, the first 1–9: what the server accepts as a pincode. */
+export function isPincode(text) {
+  return /^[1-9][0-9]{5}$/.test(text);
+}
+
+/**
+ * The pincodes in pasted text: separated by spaces, commas, semicolons or new lines; "110 001"
+ * (three and three digits) is read as one. Returns [{text, valid}] in order, duplicates kept.
+ */
+export function parsePincodes(text) {
+  const joined = text.replace(/(^|[^0-9])([0-9]{3}) ([0-9]{3})(?![0-9])/g, '$1$2$3');
+  return joined.split(/[\s,;]+/).filter(Boolean).map((item) => ({ text: item, valid: isPincode(item) }));
+}
+
+// ---------- tokens ----------
+
+const kStorePrefix = 'pintag.token.';
+
+function store() {
+  try {
+    return window.sessionStorage;
+  } catch {
+    return null;  // storage blocked: the token lives in the field only
+  }
+}
+
+/** The token saved for `name` in this tab ('' when none). */
+export function savedToken(name) {
+  const s = store();
+  return (s && s.getItem(kStorePrefix + name)) || '';
+}
+
+/**
+ * Wires a token field: filled from sessionStorage, saved on every change (this tab only), a
+ * Show/Hide toggle and a Forget button. Returns a function giving the current token.
+ */
+export function bindToken({ name, input, status, forget, toggle }) {
+  const s = store();
+  input.value = savedToken(name);
+  const describe = () => {
+    if (!status) return;
+    status.textContent = input.value.trim()
+      ? 'Token kept for this browser tab only; it is forgotten when the tab closes.'
+      : 'No token yet. Paste one to continue.';
+  };
+  input.addEventListener('input', () => {
+    const value = input.value.trim();
+    if (s) {
+      if (value) s.setItem(kStorePrefix + name, value);
+      else s.removeItem(kStorePrefix + name);
+    }
+    describe();
+  });
+  if (forget) {
+    forget.addEventListener('click', () => {
+      input.value = '';
+      if (s) s.removeItem(kStorePrefix + name);
+      describe();
+      input.focus();
+    });
+  }
+  if (toggle) {
+    toggle.addEventListener('click', () => {
+      const hidden = input.type === 'password';
+      input.type = hidden ? 'text' : 'password';
+      toggle.textContent = hidden ? 'Hide' : 'Show';
+      toggle.setAttribute('aria-pressed', String(hidden));
+    });
+  }
+  describe();
+  return () => input.value.trim();
+}
+
+/** Fills a <select> with the server's sort plans; keeps `preferred` selected when it exists. */
+export async function loadPlans(select, preferred = 'default') {
+  try {
+    const { plans } = await api('/api/v1/sortplans');
+    const current = select.value;
+    for (const plan of plans) {
+      if ([...select.options].some((o) => o.value === plan.name)) continue;
+      let text = plan.name;
+      if (plan.description) text += ` — ${plan.description.length > 44 ? `${plan.description.slice(0, 43)}…` : plan.description}`;
+      select.append(el('option', { value: plan.name, title: plan.description || null }, text));
+    }
+    const want = current || preferred;
+    if ([...select.options].some((o) => o.value === want)) select.value = want;
+  } catch {
+    // Plans are a convenience here; the default plan still works when the list fails.
+  }
+}

@@ -1,0 +1,239 @@
+// Dispatch counter: pincodes in, office and district to confirm, label preview, PDF out.
+import {
+  api, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, loadPlans,
+} from './api.js';
+
+const $ = (id) => document.getElementById(id);
+
+const token = bindToken({
+  name: 'counter', input: $('token'), status: $('token-status'), forget: $('token-forget'), toggle: $('token-toggle'),
+});
+
+const kPreviewDpi = 120;
+const kConcurrency = 6;
+
+/** Rows of the table, in the order typed: {text, valid, record, error, include}. */
+let rows = [];
+/** The pincode whose label is shown. */
+let selected = null;
+let previewUrl = null;
+let previewRequest = 0;
+
+const sizeValue = () => document.querySelector('input[name="size"]:checked').value;
+const planValue = () => $('plan').value;
+const sizeText = { '100x150mm': '100 × 150 mm', a6: 'A6', '4x6in': '4 × 6 in' };
+
+function labelQuery(extra = {}) {
+  return query({ size: sizeValue(), plan: planValue(), ...extra });
+}
+
+async function lookupAll(pins) {
+  const answers = new Map();
+  const queue = [...pins];
+  const worker = async () => {
+    while (queue.length) {
+      const pin = queue.shift();
+      try {
+        answers.set(pin, { record: await api(`/api/v1/pincodes/${pin}`) });
+      } catch (error) {
+        answers.set(pin, { error });
+      }
+    }
+  };
+  await Promise.all(Array.from({ length: Math.min(kConcurrency, pins.length) }, worker));
+  return answers;
+}
+
+function printable() {
+  return rows.filter((r) => r.include && r.record && r.record.status === 'active');
+}
+
+function updateButtons() {
+  const count = printable().length;
+  const batch = $('batch-pdf');
+  batch.disabled = count === 0;
+  batch.textContent = count === 1 ? 'Batch PDF (1 label)' : `Batch PDF (${count} labels)`;
+  const ok = selected !== null;
+  $('download-pdf').disabled = !ok;
+  $('print-pdf').disabled = !ok;
+}
+
+function renderTable() {
+  const body = $('results-body');
+  const found = rows.filter((r) => r.record).length;
+  $('results-caption').textContent =
+    `${rows.length} ${rows.length === 1 ? 'pincode' : 'pincodes'}, ${found} found. Tick the ones to print.`;
+  show(body, rows.map((row, index) => {
+    const pin = row.text;
+    if (!row.record) {
+      const why = !row.valid
+        ? 'Not a pincode: six digits, the first 1–9.'
+        : (row.error && (row.error.detail || row.error.title)) || 'Not found.';
+      return el('tr', { class: 'is-error' },
+        el('td', {}, el('input', { type: 'checkbox', disabled: true, 'aria-label': `${pin} cannot be printed` })),
+        el('td', { class: 'mono' }, pin),
+        el('td', { colspan: 4 }, badge('error', row.valid ? 'not found' : 'invalid'), ' ', why));
+    }
+    const r = row.record;
+    const retired = r.status !== 'active';
+    const check = el('input', {
+      type: 'checkbox', checked: row.include && !retired, disabled: retired, 'aria-label': `Print a label for ${pin}`,
+      onchange: (event) => { row.include = event.target.checked; updateButtons(); },
+    });
+    const previewButton = el('button', {
+      type: 'button', class: 'link', 'aria-label': `Preview the label for ${pin}`, disabled: retired,
+      onclick: () => select(pin),
+    }, 'Preview');
+    return el('tr', { class: pin === selected ? 'is-selected' : null, 'data-pincode': pin, 'data-row': index },
+      el('td', {}, check),
+      el('td', { class: 'mono nowrap' }, pin),
+      el('td', {}, r.office || '—', retired ? [' ', badge(r.status)] : null,
+        r.office_count > 1 ? el('div', { class: 'small muted' }, `${r.office_count} offices`) : null),
+      el('td', { class: 'district' }, r.district),
+      el('td', { class: 'hide-narrow' }, r.state),
+      el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
+  }));
+  $('results').hidden = rows.length === 0;
+  updateButtons();
+}
+
+async function lookup() {
+  const parsed = parsePincodes($('pins').value);
+  show($('lookup-msg'));
+  if (parsed.length === 0) {
+    show($('lookup-msg'), messageBox('info', 'Type or paste at least one pincode, e.g. 110001.'));
+    $('pins').focus();
+    return;
+  }
+  const unique = [...new Set(parsed.filter((p) => p.valid).map((p) => p.text))];
+  const answers = await lookupAll(unique);
+  rows = parsed.map((p) => ({ ...p, ...(answers.get(p.text) || {}), include: true }));
+  // A failure that is not about the pincode itself (server down, busy) is worth saying once.
+  const general = [...answers.values()].find((a) => a.error && ![400, 404].includes(a.error.status));
+  if (general) show($('lookup-msg'), problemBox(general.error));
+  renderTable();
+  const first = rows.find((r) => r.record && r.record.status === 'active');
+  selected = null;
+  if (first) await select(first.text);
+  else {
+    clearPreview('No printable pincode in the list.');
+    updateButtons();
+  }
+}
+
+function clearPreview(text) {
+  if (previewUrl) URL.revokeObjectURL(previewUrl);
+  previewUrl = null;
+  show($('preview'), el('p', { class: 'placeholder' }, text));
+}
+
+async function select(pin) {
+  selected = pin;
+  for (const tr of $('results-body').rows) tr.classList.toggle('is-selected', tr.dataset.pincode === pin);
+  updateButtons();
+  await refreshPreview();
+}
+
+async function refreshPreview() {
+  if (!selected) return;
+  const row = rows.find((r) => r.text === selected);
+  if (!token()) {
+    clearPreview('Paste a counter token above to preview and print labels.');
+    return;
+  }
+  const request = ++previewRequest;
+  $('preview').setAttribute('aria-busy', 'true');
+  try {
+    const blob = await api(`/api/v1/labels/${selected}.png${labelQuery({ dpi: kPreviewDpi })}`, { token: token(), as: 'blob' });
+    if (request !== previewRequest) return;
+    if (previewUrl) URL.revokeObjectURL(previewUrl);
+    previewUrl = URL.createObjectURL(blob);
+    const office = row && row.record ? row.record.office : '';
+    const plan = planValue() ? `plan ${planValue()}` : 'no plan';
+    show($('preview'),
+      el('img', { id: 'label-preview', src: previewUrl, alt: `Label for ${selected}${office ? ` (${office})` : ''}` }),
+      el('figcaption', { class: 'small muted', style: 'margin-top:0.6rem' },
+        `${selected} · ${sizeText[sizeValue()] || sizeValue()} · ${plan}`));
+  } catch (error) {
+    if (request !== previewRequest) return;
+    if (previewUrl) URL.revokeObjectURL(previewUrl);
+    previewUrl = null;
+    show($('preview'), problemBox(error));
+  } finally {
+    if (request === previewRequest) $('preview').removeAttribute('aria-busy');
+  }
+}
+
+async function labelPdf() {
+  return api(`/api/v1/labels/${selected}.pdf${labelQuery()}`, { token: token(), as: 'blob' });
+}
+
+function needToken() {
+  if (token()) return false;
+  show($('print-msg'), messageBox('info', 'Paste a counter token above first.'));
+  $('token').focus();
+  return true;
+}
+
+$('lookup-form').addEventListener('submit', (event) => {
+  event.preventDefault();
+  busy($('lookup'), lookup);
+});
+$('pins').addEventListener('keydown', (event) => {
+  if (event.key === 'Enter' && (event.ctrlKey || event.metaKey)) {
+    event.preventDefault();
+    $('lookup-form').requestSubmit();
+  }
+});
+
+$('download-pdf').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+  if (needToken()) return;
+  show($('print-msg'));
+  try {
+    downloadBlob(await labelPdf(), `label-${selected}.pdf`);
+    show($('print-msg'), messageBox('ok', `Label for ${selected} downloaded (label-${selected}.pdf).`));
+  } catch (error) {
+    show($('print-msg'), problemBox(error));
+  }
+}));
+
+$('print-pdf').addEventListener('click', (event) => {
+  if (needToken()) return;
+  // Opened before the request so that pop-up blockers see a click; filled in when the PDF arrives.
+  const win = window.open('', '_blank');
+  busy(event.currentTarget, async () => {
+    show($('print-msg'));
+    try {
+      const url = URL.createObjectURL(await labelPdf());
+      if (win) win.location.href = url;
+      else window.location.href = url;
+      show($('print-msg'), messageBox('ok', 'The PDF opened in a new tab: print it from there at 100 % (actual size).'));
+    } catch (error) {
+      if (win) win.close();
+      show($('print-msg'), problemBox(error));
+    }
+  });
+});
+
+$('batch-pdf').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+  if (needToken()) return;
+  const pins = printable().map((r) => r.text);
+  show($('print-msg'));
+  try {
+    const body = { pincodes: pins, size: sizeValue() };
+    if (planValue()) body.plan = planValue();
+    const blob = await api('/api/v1/labels', { method: 'POST', token: token(), json: body, as: 'blob' });
+    const name = `labels-${pins.length}.pdf`;
+    downloadBlob(blob, name);
+    show($('print-msg'), messageBox('ok', `${pins.length} ${pins.length === 1 ? 'label' : 'labels'} in one PDF downloaded (${name}).`));
+  } catch (error) {
+    show($('print-msg'), problemBox(error));
+  }
+}));
+
+for (const input of document.querySelectorAll('input[name="size"]')) input.addEventListener('change', refreshPreview);
+$('plan').addEventListener('change', refreshPreview);
+$('token').addEventListener('change', refreshPreview);
+
+loadPlans($('plan'), 'default');
+updateButtons();
