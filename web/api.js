@@ -91,7 +91,7 @@ export function el(tag, attrs = {}, ...children) {
     else if (name === 'text') node.textContent = value;
     else node.setAttribute(name, value === true ? '' : String(value));
   }
-  for (const child of children.flat()) {
+  for (const child of children.flat(Infinity)) {
     if (child === undefined || child === null || child === false) continue;
     node.append(child instanceof Node ? child : document.createTextNode(String(child)));
   }
@@ -100,7 +100,7 @@ export function el(tag, attrs = {}, ...children) {
 
 /** Replaces the content of `container` with `nodes`. */
 export function show(container, ...nodes) {
-  container.replaceChildren(...nodes.flat().filter((n) => n !== null && n !== undefined && n !== false));
+  container.replaceChildren(...nodes.flat(Infinity).filter((n) => n !== null && n !== undefined && n !== false));
 }
 
 const kAuthHints = {

@@ -1,0 +1,93 @@
+// Dispatch counter: lookup, label preview, single and batch PDF downloads, and a bad token.
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import { readFile } from 'node:fs/promises';
+import { after, before, test } from 'node:test';
+import { createToken, launchBrowser, newPage, screenshot, startServer } from './harness.js';
+
+let server;
+let browser;
+let counterToken;
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+  counterToken = await createToken(server, 'counter');
+});
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+});
+
+function pdfPageSize(path) {
+  try {
+    const info = execFileSync('pdfinfo', [path], { encoding: 'utf8' });
+    return { pages: Number(info.match(/^Pages:\s+(\d+)/m)[1]), size: info.match(/^Page size:\s+(.*?) pts/m)[1] };
+  } catch {
+    return null;  // no pdfinfo: the %PDF check still holds
+  }
+}
+
+test('counter looks up pincodes, previews a label and downloads single and batch PDFs', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001\n560001, 999999 12345');
+  await page.getByRole('button', { name: 'Look up' }).click();
+
+  const row = page.locator('tr[data-pincode="110001"]');
+  await row.waitFor();
+  assert.match(await row.textContent(), /Bengali Market/);
+  assert.equal((await row.locator('td.district').textContent()).trim(), 'Central Delhi');
+  assert.match(await page.locator('tr.is-error').first().textContent(), /999999 is not in the registry/);
+  assert.match(await page.locator('tr.is-error').nth(1).textContent(), /Not a pincode/);
+
+  const preview = page.locator('#label-preview');
+  await preview.waitFor();
+  await page.waitForFunction(() => document.getElementById('label-preview')?.naturalWidth > 0);
+  const size = await preview.evaluate((img) => [img.naturalWidth, img.naturalHeight]);
+  assert.ok(Math.abs(size[1] / size[0] - 1.5) < 0.01, `100x150 mm preview aspect, got ${size}`);
+  await screenshot(page, 'counter');
+
+  const [single] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: 'Download PDF' }).click()]);
+  assert.equal(single.suggestedFilename(), 'label-110001.pdf');
+  const singlePath = await single.path();
+  assert.equal((await readFile(singlePath)).subarray(0, 5).toString(), '%PDF-');
+  const singleInfo = pdfPageSize(singlePath);
+  if (singleInfo) assert.deepEqual(singleInfo, { pages: 1, size: '283.465 x 425.197' });
+
+  await page.getByLabel('A6').check();
+  await page.waitForFunction(() => /A6/.test(document.querySelector('#preview figcaption')?.textContent || ''));
+  const batchButton = page.getByRole('button', { name: /Batch PDF \(2 labels\)/ });
+  const [batch] = await Promise.all([page.waitForEvent('download'), batchButton.click()]);
+  const batchPath = await batch.path();
+  assert.equal((await readFile(batchPath)).subarray(0, 5).toString(), '%PDF-');
+  const batchInfo = pdfPageSize(batchPath);
+  if (batchInfo) assert.deepEqual(batchInfo, { pages: 2, size: '297.638 x 419.528' });
+  await page.getByText('2 labels in one PDF downloaded').waitFor();
+  assert.deepEqual(page.problems, []);
+});
+
+test('counter shows the problem detail for a wrong token', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill('pt_999_notarealtokennotarealtokennotarealtokenxx');
+  await page.locator('#pins').fill('110001');
+  await page.locator('#pins').press('Control+Enter');
+  const alert = page.locator('#preview [role="alert"]');
+  await alert.waitFor();
+  assert.match(await alert.textContent(), /HTTP 401/);
+  assert.match(await alert.textContent(), /token/i);
+});
+
+test('the counter page fits a phone screen', async () => {
+  const page = await newPage(browser, { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('400001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+  assert.ok(overflow <= 0, `page is ${overflow}px wider than the phone screen`);
+  await screenshot(page, 'counter-phone');
+});

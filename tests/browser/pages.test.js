@@ -1,0 +1,47 @@
+// Every page loads from the server without errors, links the others, and labels its fields.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+
+let server;
+let browser;
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+});
+
+test('the home page links the three pages and reports the server ready', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/`);
+  await page.locator('#ready').filter({ hasText: 'Ready' }).waitFor();
+  for (const name of ['Dispatch counter', 'Handheld scanner', 'Registry']) {
+    assert.equal(await page.getByRole('link', { name: new RegExp(name) }).count() >= 1, true, name);
+  }
+  await page.getByRole('link', { name: /Dispatch counter/ }).click();
+  await page.waitForURL(/counter\.html$/);
+  await page.goto(`${server.url}/`);
+  await screenshot(page, 'home');
+  assert.deepEqual(page.problems, []);
+});
+
+for (const name of ['counter', 'scanner', 'registry']) {
+  test(`${name}.html loads cleanly and every form field has a label`, async () => {
+    const page = await newPage(browser);
+    const failed = [];
+    page.on('response', (r) => { if (r.status() >= 400) failed.push(`${r.status()} ${r.url()}`); });
+    await page.goto(`${server.url}/${name}.html`);
+    await page.waitForLoadState('networkidle');
+    assert.deepEqual(failed, []);
+    const unlabelled = await page.evaluate(() => [...document.querySelectorAll('input, select, textarea')]
+      .filter((e) => e.type !== 'hidden' && !(e.labels && e.labels.length) && !e.getAttribute('aria-label'))
+      .map((e) => e.id || e.name));
+    assert.deepEqual(unlabelled, []);
+    assert.equal(await page.locator('nav a[aria-current="page"]').getAttribute('href'), `${name}.html`);
+    assert.deepEqual(page.problems, []);
+  });
+}

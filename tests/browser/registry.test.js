@@ -1,0 +1,99 @@
+// Registry: search with paging, key lookup, admin add and retire, and an error from the server.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+
+let server;
+let browser;
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+});
+
+test('registry search finds offices by district and pages through them', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.getByLabel('District').first().fill('Central Delhi');
+  await page.getByLabel('Per page').selectOption('20');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  const caption = page.locator('#results-caption');
+  await caption.filter({ hasText: /Offices 1–20 of \d+/ }).waitFor();
+  const total = Number((await caption.textContent()).match(/of (\d+)/)[1]);
+  assert.ok(total > 20, `Central Delhi has more than 20 offices, got ${total}`);
+  assert.equal(await page.locator('#results-body tr').count(), 20);
+  const firstPage = await page.locator('#results-body tr').first().textContent();
+  assert.match(firstPage, /Central Delhi/);
+  assert.ok(await page.getByRole('button', { name: '← Previous' }).isDisabled());
+  await page.getByRole('button', { name: 'Next →' }).click();
+  await caption.filter({ hasText: `Offices 21–40 of ${total}` }).waitFor();
+  assert.notEqual(await page.locator('#results-body tr').first().textContent(), firstPage);
+  assert.match(await page.locator('#page-info').textContent(), /Page 2 of/);
+  await page.getByRole('button', { name: '← Previous' }).click();
+  await caption.filter({ hasText: `Offices 1–20 of ${total}` }).waitFor();
+  await page.getByRole('button', { name: 'Details of 110001' }).first().click().catch(() => {});
+  await screenshot(page, 'registry-search');
+  assert.deepEqual(page.problems, []);
+});
+
+test('registry looks up a key, and shows the problem for an unknown one', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#key').fill('11684');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#detail-pincode').filter({ hasText: '110001' }).waitFor();
+  assert.match(await page.locator('#key-msg').textContent(), /Key 11684 belongs to 110001/);
+  await page.locator('#key').fill('40000');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const alert = page.locator('#key-msg [role="alert"]');
+  await alert.waitFor();
+  assert.match(await alert.textContent(), /Malformed Key/);
+  assert.match(await alert.textContent(), /0 to 32767/);
+});
+
+test('admin adds a pincode, gets its key, then retires it', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#a-pin').fill('999001');
+  await page.locator('#a-office').fill('Test Nagar');
+  await page.locator('#a-district').fill('Testpur');
+  await page.locator('#a-state').fill('Test State');
+  await page.locator('#a-division').fill('TD');
+  await page.locator('#a-region').fill('T');
+  await page.locator('#a-circle').fill('Test');
+  await page.getByRole('button', { name: 'Add pincode' }).click();
+  const key = page.locator('#added-key');
+  await key.waitFor();
+  const added = Number(await key.textContent());
+  assert.ok(Number.isInteger(added) && added >= 0 && added <= 32767);
+  const record = await (await fetch(`${server.url}/api/v1/pincodes/999001`)).json();
+  assert.equal(record.key, added);
+  assert.equal(record.office, 'Test Nagar');
+
+  await page.getByRole('button', { name: 'Add pincode' }).click();
+  await page.locator('#add-msg [role="alert"]').filter({ hasText: 'Pincode Exists' }).waitFor();
+
+  await page.locator('#r-pin').fill('999001');
+  await page.getByRole('button', { name: 'Retire…' }).click();
+  await page.getByRole('button', { name: 'Retire 999001' }).click();
+  await page.locator('#retire-msg').filter({ hasText: `999001 is retired. It keeps key ${added}.` }).waitFor();
+  const retired = await (await fetch(`${server.url}/api/v1/pincodes/999001`)).json();
+  assert.equal(retired.status, 'retired');
+  await screenshot(page, 'registry-admin');
+  assert.deepEqual(page.problems, []);
+});
+
+test('adding without an admin token shows the 401 problem', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#a-pin').fill('999002');
+  await page.getByRole('button', { name: 'Add pincode' }).click();
+  const alert = page.locator('#add-msg [role="alert"]');
+  await alert.waitFor();
+  assert.match(await alert.textContent(), /HTTP 401/);
+});

@@ -1,0 +1,172 @@
+// Registry: search offices, look up pincodes and keys; admins add and retire pincodes.
+import { api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode } from './api.js';
+
+const $ = (id) => document.getElementById(id);
+
+const token = bindToken({
+  name: 'admin', input: $('token'), status: $('token-status'), forget: $('token-forget'), toggle: $('token-toggle'),
+});
+
+let search = null;  // {q, district, state, limit, offset}
+
+function showRecord(record, note) {
+  const offices = record.offices || [];
+  show($('detail'),
+    note ? messageBox('ok', note) : null,
+    el('div', { class: 'row', style: 'align-items:center;margin:0.6rem 0' },
+      el('span', { class: 'big-pin', id: 'detail-pincode' }, record.pincode), badge(record.status)),
+    el('dl', { class: 'kv' },
+      [['Key', el('span', { id: 'detail-key', class: 'mono' }, String(record.key))], ['Office', record.office || '—'],
+        ['District', record.district], ['State', record.state], ['Division', record.division || '—'],
+        ['Region', record.region || '—'], ['Circle', record.circle || '—'],
+        record.retired_at ? ['Retired', record.retired_at] : null]
+        .filter(Boolean).map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])),
+    offices.length > 1 ? el('details', { class: 'more', style: 'margin-top:0.6rem' },
+      el('summary', {}, `All ${offices.length} offices`),
+      el('ul', { class: 'small' }, offices.map((o) => el('li', {}, `${o.name} — ${o.district}`)))) : null);
+}
+
+async function showPincode(pin) {
+  try {
+    showRecord(await api(`/api/v1/pincodes/${pin}`));
+  } catch (error) {
+    show($('detail'), problemBox(error));
+  }
+}
+
+async function runSearch() {
+  show($('search-msg'));
+  try {
+    const page = await api(`/api/v1/pincodes${query(search)}`);
+    const body = $('results-body');
+    show(body, page.results.map((hit) => el('tr', {},
+      el('td', { class: 'mono nowrap' },
+        el('button', { type: 'button', class: 'link', onclick: () => showPincode(hit.pincode),
+          'aria-label': `Details of ${hit.pincode}` }, hit.pincode)),
+      el('td', {}, hit.office.name),
+      el('td', {}, hit.office.district),
+      el('td', { class: 'hide-narrow' }, hit.office.state),
+      el('td', { class: 'num mono hide-narrow' }, hit.key),
+      el('td', {}, badge(hit.status)))));
+    const first = page.total === 0 ? 0 : page.offset + 1;
+    const last = page.offset + page.results.length;
+    const pages = Math.max(1, Math.ceil(page.total / page.limit));
+    const current = Math.floor(page.offset / page.limit) + 1;
+    $('results-caption').textContent = page.total === 0
+      ? 'No office matches.' : `Offices ${first}–${last} of ${page.total}`;
+    $('page-info').textContent = `Page ${current} of ${pages}`;
+    $('prev').disabled = page.offset === 0;
+    $('next').disabled = last >= page.total;
+    $('search-results').hidden = false;
+  } catch (error) {
+    $('search-results').hidden = true;
+    show($('search-msg'), problemBox(error));
+  }
+}
+
+$('search-form').addEventListener('submit', (event) => {
+  event.preventDefault();
+  const pin = $('s-pin').value.trim();
+  busy($('search'), async () => {
+    if (pin) {
+      if (!isPincode(pin)) {
+        show($('search-msg'), problemBox({ message: 'A pincode is six digits, the first 1–9.' }));
+        return;
+      }
+      show($('search-msg'));
+      await showPincode(pin);
+      $('detail-card').scrollIntoView({ block: 'nearest' });
+      return;
+    }
+    search = { q: $('s-q').value.trim(), district: $('s-district').value.trim(), state: $('s-state').value.trim(),
+      limit: Number($('s-limit').value), offset: 0 };
+    if (!search.q && !search.district && !search.state) {
+      show($('search-msg'), messageBox('info', 'Fill in a pincode, an office name, a district or a state.'));
+      return;
+    }
+    await runSearch();
+  });
+});
+$('prev').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+  search.offset = Math.max(0, search.offset - search.limit);
+  await runSearch();
+}));
+$('next').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+  search.offset += search.limit;
+  await runSearch();
+}));
+
+$('key-form').addEventListener('submit', (event) => {
+  event.preventDefault();
+  const key = $('key').value.trim();
+  busy($('key-lookup'), async () => {
+    show($('key-msg'));
+    try {
+      const record = await api(`/api/v1/keys/${encodeURIComponent(key)}`);
+      showRecord(record);
+      show($('key-msg'), messageBox('ok', `Key ${key} belongs to ${record.pincode} (${record.office || record.district}).`));
+    } catch (error) {
+      show($('key-msg'), problemBox(error));
+    }
+  });
+});
+
+$('add-form').addEventListener('submit', (event) => {
+  event.preventDefault();
+  busy($('add'), async () => {
+    show($('add-msg'));
+    const value = (id) => $(id).value.trim();
+    const body = { pincode: value('a-pin') };
+    if (value('a-office') || value('a-district') || value('a-state')) {
+      const office = { name: value('a-office'), district: value('a-district'), state: value('a-state') };
+      for (const [field, id] of [['circle', 'a-circle'], ['region', 'a-region'], ['division', 'a-division'], ['branch_type', 'a-branch']]) {
+        if (value(id)) office[field] = value(id);
+      }
+      body.offices = [office];
+    }
+    try {
+      const record = await api('/api/v1/pincodes', { method: 'POST', token: token(), json: body });
+      show($('add-msg'), messageBox('ok', 'Added ', el('strong', {}, record.pincode), ' with key ',
+        el('strong', { id: 'added-key' }, String(record.key)), '.'));
+      showRecord(record, `Pincode ${record.pincode} added.`);
+    } catch (error) {
+      show($('add-msg'), problemBox(error));
+    }
+  });
+});
+
+$('retire-form').addEventListener('submit', (event) => {
+  event.preventDefault();
+  const pin = $('r-pin').value.trim();
+  show($('retire-msg'));
+  show($('retire-confirm'));
+  busy($('retire'), async () => {
+    let record;
+    try {
+      record = await api(`/api/v1/pincodes/${encodeURIComponent(pin)}`);
+    } catch (error) {
+      show($('retire-msg'), problemBox(error));
+      return;
+    }
+    if (record.status === 'retired') {
+      show($('retire-msg'), messageBox('info', `${pin} is already retired.`));
+      return;
+    }
+    const confirm = el('button', { type: 'button', class: 'danger', id: 'retire-yes' }, `Retire ${pin}`);
+    const cancel = el('button', { type: 'button', class: 'secondary', onclick: () => show($('retire-confirm')) }, 'Cancel');
+    confirm.addEventListener('click', () => busy(confirm, async () => {
+      try {
+        const retired = await api(`/api/v1/pincodes/${pin}/retire`, { method: 'POST', token: token() });
+        show($('retire-confirm'));
+        show($('retire-msg'), messageBox('ok', `${pin} is retired. It keeps key ${retired.key}.`));
+        showRecord(retired);
+      } catch (error) {
+        show($('retire-msg'), problemBox(error));
+      }
+    }));
+    show($('retire-confirm'), el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': 'Confirm retiring' },
+      el('p', {}, `Retire ${pin} (${record.office || record.district}, key ${record.key})? No new labels will be issued for it.`),
+      el('div', { class: 'actions' }, confirm, cancel)));
+    confirm.focus();
+  });
+});

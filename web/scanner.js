@@ -1,0 +1,111 @@
+// Handheld scanner: a photo in, every tag's pincode, office, bin and distance out, and the photo
+// with the tags outlined (?overlay=1).
+import { api, query, el, show, problemBox, badge, busy, bindToken, loadPlans } from './api.js';
+
+const $ = (id) => document.getElementById(id);
+
+const token = bindToken({
+  name: 'scanner', input: $('token'), status: $('token-status'), forget: $('token-forget'), toggle: $('token-toggle'),
+});
+
+let photoUrl = null;
+let overlayUrl = null;
+let scanCount = 0;
+
+function detectPath(extra = {}) {
+  return `/api/v1/detect${query({ plan: $('plan').value, tag_size_mm: $('label-size').value, ...extra })}`;
+}
+
+function form(file) {
+  const data = new FormData();
+  data.append('image', file, file.name || 'photo');
+  return data;
+}
+
+function showPhoto(url, caption, alt) {
+  $('overlay').src = url;
+  $('overlay').alt = alt;
+  $('photo-caption').textContent = caption;
+  $('photo-figure').hidden = false;
+}
+
+function tagCard(tag, approximate) {
+  const known = tag.status !== 'unknown_key';
+  const distance = tag.pose && Number.isFinite(tag.pose.distance_m)
+    ? `${tag.pose.distance_m.toFixed(2)} m${approximate ? ' (approx.)' : ''}` : '—';
+  const rows = known
+    ? [['Office', tag.office || '—'], ['District', tag.district], ['State', tag.state],
+      ['Bin', el('span', { class: 'bin' }, tag.bin ?? '—')], ['Distance', distance], ['Key', tag.key]]
+    : [['Key', tag.key], ['Distance', distance],
+      ['Note', 'This key belongs to no pincode in the registry. Sort the parcel by hand.']];
+  return el('li', { class: `tag-card ${tag.status}`, 'data-pincode': tag.pincode || '' },
+    el('header', {},
+      el('span', { class: 'big-pin' }, known ? tag.pincode : 'Unknown'),
+      badge(tag.status)),
+    el('dl', { class: 'kv' }, rows.map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])));
+}
+
+async function scan() {
+  const file = $('photo').files[0];
+  if (!file) return;
+  const run = ++scanCount;
+  show($('scan-msg'));
+  show($('tags'));
+  if (!token()) {
+    show($('scan-msg'), problemBox({ message: 'Paste a scanner token above first.' }, {}));
+    $('token').focus();
+    return;
+  }
+  if (photoUrl) URL.revokeObjectURL(photoUrl);
+  photoUrl = URL.createObjectURL(file);
+  showPhoto(photoUrl, 'Your photo. Reading…', 'The photo being read');
+  $('summary').textContent = 'Reading the photo…';
+  let answer;
+  try {
+    answer = await api(detectPath(), { method: 'POST', token: token(), body: form(file) });
+  } catch (error) {
+    if (run !== scanCount) return;
+    $('summary').textContent = 'The photo could not be read.';
+    $('photo-caption').textContent = 'Your photo.';
+    show($('scan-msg'), problemBox(error));
+    return;
+  }
+  if (run !== scanCount) return;
+  const approximate = answer.intrinsics && answer.intrinsics.source === 'assumed';
+  const n = answer.tag_count;
+  $('summary').textContent = `${n === 0 ? 'No tag' : n === 1 ? '1 tag' : `${n} tags`} read in `
+    + `${Math.round(answer.time_ms.total)} ms · photo ${answer.image.width} × ${answer.image.height}`
+    + `${approximate ? ' · distances approximate (camera field of view assumed)' : ''}`;
+  show($('tags'), answer.tags.map((tag) => tagCard(tag, approximate)));
+  if (n === 0) {
+    show($('tags'), el('li', { class: 'alert alert-info' },
+      'No PinTag found. Hold the camera steady, fill more of the frame with the label and avoid glare.'));
+  }
+  // The outlined photo: a second call, so that the answer above is not held back by it.
+  $('photo-caption').textContent = 'Your photo. Outlining the tags…';
+  try {
+    const blob = await api(detectPath({ overlay: 1 }), { method: 'POST', token: token(), body: form(file), as: 'blob' });
+    if (run !== scanCount) return;
+    if (overlayUrl) URL.revokeObjectURL(overlayUrl);
+    overlayUrl = URL.createObjectURL(blob);
+    showPhoto(overlayUrl, `The photo with ${n === 1 ? 'the tag' : 'the tags'} outlined.`,
+      `The photo with ${n} ${n === 1 ? 'tag' : 'tags'} outlined${n ? `: ${answer.tags.map((t) => t.pincode || 'unknown key').join(', ')}` : ''}`);
+    $('overlay').dataset.overlay = '1';
+  } catch (error) {
+    if (run !== scanCount) return;
+    $('photo-caption').textContent = 'Your photo (the outlined version could not be made).';
+    show($('scan-msg'), problemBox(error));
+  }
+}
+
+$('photo').addEventListener('change', () => {
+  $('scan').disabled = !$('photo').files.length;
+  $('overlay').removeAttribute('data-overlay');
+  busy($('scan'), scan);
+});
+$('scan-form').addEventListener('submit', (event) => {
+  event.preventDefault();
+  busy($('scan'), scan);
+});
+
+loadPlans($('plan'), 'default');
