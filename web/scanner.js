@@ -98,6 +98,9 @@ async function scan() {
   }
 }
 
+// A file the browser cannot show (not an image): no broken picture, the problem box says why.
+$('overlay').addEventListener('error', () => { $('photo-figure').hidden = true; });
+
 $('photo').addEventListener('change', () => {
   $('scan').disabled = !$('photo').files.length;
   $('overlay').removeAttribute('data-overlay');

@@ -63,6 +63,7 @@ test('scanner shows the problem for a non-image file and for a token of the wron
   await alert.waitFor();
   assert.match(await alert.textContent(), /Unsupported Image Format/);
   assert.match(await alert.textContent(), /not a JPEG, PNG, TIFF or WebP image/);
+  await page.locator('#photo-figure').waitFor({ state: 'hidden' });  // no broken picture
   await screenshot(page, 'scanner-error');
 
   await page.locator('#token').fill(counterToken);
