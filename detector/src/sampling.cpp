@@ -13,9 +13,9 @@ namespace {
 // Sample positions inside a cell, kept well away from its borders so that blur and a slightly
 // wrong homography still land on the cell's own colour.
 constexpr double kGreenRadii[] = {0.135, 0.15, 0.165};
-constexpr double kGreenAngles[] = {-11, 0, 11};  // degrees around the sector's mid-angle
+constexpr double kGreenAngles[] = {-6, 0, 6};  // degrees around the sector's mid-angle
 constexpr double kRedRadii[] = {0.05, 0.065};
-constexpr double kRedAngles[] = {-12, 0, 12};
+constexpr double kRedAngles[] = {-8, 0, 8};
 
 bool SampleRgb(const cv::Mat& bgr, cv::Point2d p, int rgb[3]) {
   const int x0 = static_cast<int>(std::floor(p.x)), y0 = static_cast<int>(std::floor(p.y));
