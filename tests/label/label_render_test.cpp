@@ -108,9 +108,9 @@ TEST(LabelPdf, RefusesAnEmptyBatchAndBadSizes) {
 TEST(LabelPng, RecordsDpiAndHasThePixelSizeOfSizeTimesDpi) {
   struct Case {
     LabelSize size;
-    double dpi;
-    int width;
-    int height;
+    double dpi = 0;
+    int width = 0;
+    int height = 0;
   };
   for (const Case& c :
        {Case{kLabel100x150, 300, 1181, 1772}, Case{kLabel4x6In, 203, 812, 1218},

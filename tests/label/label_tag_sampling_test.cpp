@@ -91,7 +91,7 @@ void ExpectQuietZoneWhite(const RgbImage& image, const LabelTagPixels& tag) {
 TEST(LabelTag, PngTagDecodesBackToItsKey) {
   struct Case {
     LabelSize size;
-    double dpi;
+    double dpi = 0;
   };
   const std::array<std::uint16_t, 6> keys = {0, 1, 12345, 21845, 27306, 32767};
   for (const Case& c : {Case{kLabel100x150, 300}, Case{kLabelA6, 150}, Case{kLabel4x6In, 203},

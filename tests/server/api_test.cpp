@@ -19,7 +19,7 @@ class ApiTest : public ::testing::Test {
             test::TestRouter(metrics_), test::FakeVerifier(), [this] { return health_; }, metrics_,
             ApiOptions{1024, std::nullopt, {}}) {}
 
-  void ExpectProblem(const HttpResponse& r, int status) {
+  void expectProblem(const HttpResponse& r, int status) {
     EXPECT_EQ(r.status, status) << r.body;
     EXPECT_EQ(r.content_type, "application/problem+json");
     const nlohmann::json body = Json(r);
@@ -42,14 +42,14 @@ TEST_F(ApiTest, RoutesWithPathAndQueryParameters) {
 }
 
 TEST_F(ApiTest, UnknownPathIs404Problem) {
-  ExpectProblem(api_.handle(Get("/api/v1/nope")), 404);
+  expectProblem(api_.handle(Get("/api/v1/nope")), 404);
 }
 
 TEST_F(ApiTest, WrongMethodIs405ProblemWithAllow) {
   HttpRequest r = Get("/livez");
   r.method = "POST";
   const HttpResponse response = api_.handle(r);
-  ExpectProblem(response, 405);
+  expectProblem(response, 405);
   ASSERT_EQ(response.headers.size(), 1U);
   EXPECT_EQ(response.headers[0].first, "Allow");
   EXPECT_EQ(response.headers[0].second, "GET, HEAD");
@@ -59,7 +59,7 @@ TEST_F(ApiTest, MissingTokenIs401WithChallenge) {
   HttpRequest r = Get("/api/v1/upload");
   r.method = "POST";
   const HttpResponse response = api_.handle(r);
-  ExpectProblem(response, 401);
+  expectProblem(response, 401);
   ASSERT_FALSE(response.headers.empty());
   EXPECT_EQ(response.headers[0].first, "WWW-Authenticate");
   EXPECT_EQ(response.headers[0].second, R"(Bearer realm="pintag")");
@@ -71,17 +71,17 @@ TEST_F(ApiTest, BadTokensAre401) {
     HttpRequest r = Get("/api/v1/admin/thing");
     r.method = "PUT";
     r.headers.emplace("Authorization", header);
-    ExpectProblem(api_.handle(r), 401);
+    expectProblem(api_.handle(r), 401);
   }
 }
 
 TEST_F(ApiTest, WrongRoleIs403AndAdminMayDoAnything) {
   HttpRequest r = Get("/api/v1/admin/thing", test::kCounterToken);
   r.method = "PUT";
-  ExpectProblem(api_.handle(r), 403);
+  expectProblem(api_.handle(r), 403);
   r = Get("/api/v1/upload", test::kCounterToken);
   r.method = "POST";
-  ExpectProblem(api_.handle(r), 403);
+  expectProblem(api_.handle(r), 403);
 
   r = Get("/api/v1/admin/thing", test::kAdminToken);
   r.method = "PUT";
@@ -107,7 +107,7 @@ TEST_F(ApiTest, OversizedBodyIs413BeforeAndAfterReading) {
   r.method = "POST";
   r.headers.emplace("Content-Type", "application/octet-stream");
   r.body = std::string(1025, 'x');
-  ExpectProblem(api_.handle(r), 413);
+  expectProblem(api_.handle(r), 413);
   // Declared too large: refused from the headers alone.
   HeaderMap headers = r.headers;
   headers.emplace("Content-Length", "1025");
@@ -136,7 +136,7 @@ TEST_F(ApiTest, WrongContentTypeIs415) {
   r.headers.emplace("Content-Type", "text/plain");
   r.headers.emplace("Content-Length", "3");
   r.body = "abc";
-  ExpectProblem(api_.handle(r), 415);
+  expectProblem(api_.handle(r), 415);
   r.headers.erase("Content-Type");
   r.headers.emplace("Content-Type", "IMAGE/JPEG; foo=bar");
   const HttpResponse ok = api_.handle(r);
@@ -146,13 +146,13 @@ TEST_F(ApiTest, WrongContentTypeIs415) {
 
 TEST_F(ApiTest, ExceptionsBecome500WithoutLeakingTheMessage) {
   const HttpResponse r = api_.handle(Get("/api/v1/boom"));
-  ExpectProblem(r, 500);
+  expectProblem(r, 500);
   EXPECT_EQ(r.body.find("/etc/db"), std::string::npos);
 }
 
 TEST_F(ApiTest, HttpErrorBecomesItsProblem) {
   const HttpResponse r = api_.handle(Get("/api/v1/teapot"));
-  ExpectProblem(r, 418);
+  expectProblem(r, 418);
   EXPECT_EQ(Json(r)["title"], "Teapot");
   EXPECT_EQ(Json(r)["detail"], "short and stout");
 }
@@ -160,7 +160,7 @@ TEST_F(ApiTest, HttpErrorBecomesItsProblem) {
 TEST_F(ApiTest, ErrorStatusWithEmptyBodyBecomesAProblem) {
   const HttpResponse r =
       InvokeHandler([](const HttpRequest&) { return HttpResponse::Json("", 409); }, {});
-  ExpectProblem(r, 409);
+  expectProblem(r, 409);
   EXPECT_EQ(Json(r)["title"], "Conflict");
 }
 
@@ -169,7 +169,7 @@ TEST_F(ApiTest, LivezAndReadyz) {
   EXPECT_EQ(Json(api_.handle(Get("/readyz")))["status"], "ready");
   health_ = "database unreachable: disk I/O error";
   const HttpResponse r = api_.handle(Get("/readyz"));
-  ExpectProblem(r, 503);
+  expectProblem(r, 503);
   EXPECT_EQ(Json(r)["detail"], "database unreachable: disk I/O error");
   EXPECT_EQ(api_.handle(Get("/livez")).status, 200);  // alive, just not ready
 }

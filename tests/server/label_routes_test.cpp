@@ -15,9 +15,9 @@ class LabelRoutesTest : public ::testing::Test {
       : metrics_(std::make_shared<Metrics>()),
         api_(test::TestRouter(metrics_), test::FakeVerifier(), nullptr, metrics_) {}
 
-  HttpResponse Call(const std::string& path) { return api_.handle(Get(path, test::kCounterToken)); }
+  HttpResponse call(const std::string& path) { return api_.handle(Get(path, test::kCounterToken)); }
 
-  HttpResponse Batch(const std::string& json) {
+  HttpResponse batch(const std::string& json) {
     HttpRequest r = Get("/api/v1/labels", test::kCounterToken);
     r.method = "POST";
     r.headers.emplace("Content-Type", "application/json");
@@ -26,7 +26,7 @@ class LabelRoutesTest : public ::testing::Test {
     return api_.handle(r);
   }
 
-  void ExpectProblem(const HttpResponse& r, int status, const std::string& fragment) {
+  void expectProblem(const HttpResponse& r, int status, const std::string& fragment) {
     EXPECT_EQ(r.status, status) << r.body;
     EXPECT_EQ(r.content_type, "application/problem+json");
     EXPECT_NE(r.body.find(fragment), std::string::npos) << r.body;
@@ -46,13 +46,13 @@ OIIO::ImageSpec PngSpec(const std::string& bytes) {
 }
 
 TEST_F(LabelRoutesTest, LabelInEachFormat) {
-  HttpResponse r = Call("/api/v1/labels/110001.pdf?plan=north");
+  HttpResponse r = call("/api/v1/labels/110001.pdf?plan=north");
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.content_type, "application/pdf");
   EXPECT_EQ(r.body.rfind("%PDF-", 0), 0U);
   EXPECT_NE(r.body.find("/MediaBox [ 0 0 283.464567 425.19685 ]"), std::string::npos);
 
-  r = Call("/api/v1/labels/110001.png?size=a6&dpi=150");
+  r = call("/api/v1/labels/110001.png?size=a6&dpi=150");
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.content_type, "image/png");
   const OIIO::ImageSpec spec = PngSpec(r.body);
@@ -60,7 +60,7 @@ TEST_F(LabelRoutesTest, LabelInEachFormat) {
   EXPECT_EQ(spec.height, 874);
   EXPECT_NEAR(spec.get_float_attribute("XResolution"), 150, 0.03);
 
-  r = Call("/api/v1/labels/560001.svg?size=4x6in");
+  r = call("/api/v1/labels/560001.svg?size=4x6in");
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.content_type, "image/svg+xml");
   EXPECT_NE(r.body.find("width=\"101.6000mm\""), std::string::npos);
@@ -68,30 +68,30 @@ TEST_F(LabelRoutesTest, LabelInEachFormat) {
 }
 
 TEST_F(LabelRoutesTest, TagImages) {
-  HttpResponse r = Call("/api/v1/tags/110001.png?px=128&dpi=600");
+  HttpResponse r = call("/api/v1/tags/110001.png?px=128&dpi=600");
   ASSERT_EQ(r.status, 200) << r.body;
   const OIIO::ImageSpec spec = PngSpec(r.body);
   EXPECT_EQ(spec.width, 128 + 2 * 20);  // ceil(0.15 × 128) = 20 px quiet zone each side
   EXPECT_NEAR(spec.get_float_attribute("XResolution"), 600, 0.03);
-  r = Call("/api/v1/tags/110001.svg?mm=30");
+  r = call("/api/v1/tags/110001.svg?mm=30");
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_NE(r.body.find("key 12345"), std::string::npos);
   EXPECT_EQ(metrics_->counter(kTagsRenderedCounter), 2);
 }
 
 TEST_F(LabelRoutesTest, ClearProblems) {
-  ExpectProblem(Call("/api/v1/labels/11001.pdf"), 400, "6 digits");
-  ExpectProblem(Call("/api/v1/labels/011001.pdf"), 400, "Malformed Pincode");
-  ExpectProblem(Call("/api/v1/labels/999999.pdf"), 404, "not in the registry");
-  ExpectProblem(Call("/api/v1/labels/110002.pdf"), 410, "retired");
-  ExpectProblem(Call("/api/v1/labels/110001.pdf?plan=south"), 404, "no sort plan");
-  ExpectProblem(Call("/api/v1/labels/110001.pdf?size=100x150"), 400, "needs a unit");
-  ExpectProblem(Call("/api/v1/labels/110001.pdf?size=10x10mm"), 400, "50 to 300 mm");
-  ExpectProblem(Call("/api/v1/labels/110001.png?dpi=5000"), 400, "'dpi'");
-  ExpectProblem(Call("/api/v1/labels/110001.png?dpi=abc"), 400, "'dpi'");
-  ExpectProblem(Call("/api/v1/labels/110001.png?size=300x300mm&dpi=1200"), 400, "megapixels");
-  ExpectProblem(Call("/api/v1/tags/110001.png?px=5000"), 400, "'px'");
-  ExpectProblem(Call("/api/v1/tags/110001.svg?px=100&mm=10"), 400, "at most one");
+  expectProblem(call("/api/v1/labels/11001.pdf"), 400, "6 digits");
+  expectProblem(call("/api/v1/labels/011001.pdf"), 400, "Malformed Pincode");
+  expectProblem(call("/api/v1/labels/999999.pdf"), 404, "not in the registry");
+  expectProblem(call("/api/v1/labels/110002.pdf"), 410, "retired");
+  expectProblem(call("/api/v1/labels/110001.pdf?plan=south"), 404, "no sort plan");
+  expectProblem(call("/api/v1/labels/110001.pdf?size=100x150"), 400, "needs a unit");
+  expectProblem(call("/api/v1/labels/110001.pdf?size=10x10mm"), 400, "50 to 300 mm");
+  expectProblem(call("/api/v1/labels/110001.png?dpi=5000"), 400, "'dpi'");
+  expectProblem(call("/api/v1/labels/110001.png?dpi=abc"), 400, "'dpi'");
+  expectProblem(call("/api/v1/labels/110001.png?size=300x300mm&dpi=1200"), 400, "megapixels");
+  expectProblem(call("/api/v1/tags/110001.png?px=5000"), 400, "'px'");
+  expectProblem(call("/api/v1/tags/110001.svg?px=100&mm=10"), 400, "at most one");
   EXPECT_EQ(metrics_->counter(kLabelsRenderedCounter), 0);
 }
 
@@ -106,7 +106,7 @@ TEST_F(LabelRoutesTest, BatchPdfHasAPagePerPincode) {
   for (int i = 0; i < 50; ++i)
     json += std::string(i ? "," : "") + (i % 2 ? "\"110001\"" : "560001");
   json += "]}";
-  const HttpResponse r = Batch(json);
+  const HttpResponse r = batch(json);
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(r.content_type, "application/pdf");
   int pages = 0;
@@ -117,20 +117,20 @@ TEST_F(LabelRoutesTest, BatchPdfHasAPagePerPincode) {
   }
   EXPECT_EQ(pages, 50);
   EXPECT_EQ(metrics_->counter(kLabelsRenderedCounter), 50);
-  EXPECT_EQ(Batch(R"(["110001", "560001"])").status, 200);  // a bare array works too
+  EXPECT_EQ(batch(R"(["110001", "560001"])").status, 200);  // a bare array works too
 }
 
 TEST_F(LabelRoutesTest, BatchProblems) {
-  ExpectProblem(Batch("not json"), 400, "not valid JSON");
-  ExpectProblem(Batch(R"({"pincodes": []})"), 400, "empty");
-  ExpectProblem(Batch(R"({"pins": ["110001"]})"), 400, "expected");
-  ExpectProblem(Batch(R"({"pincodes": [110001.5]})"), 400, "pincodes[0]");
-  ExpectProblem(Batch(R"({"pincodes": ["110001", "abc"]})"), 400, "pincodes[1]");
-  ExpectProblem(Batch(R"({"pincodes": ["110001", "110002"]})"), 410, "retired");
-  ExpectProblem(Batch(R"({"pincodes": ["110001"], "size": 5})"), 400, "'size' must be a string");
+  expectProblem(batch("not json"), 400, "not valid JSON");
+  expectProblem(batch(R"({"pincodes": []})"), 400, "empty");
+  expectProblem(batch(R"({"pins": ["110001"]})"), 400, "expected");
+  expectProblem(batch(R"({"pincodes": [110001.5]})"), 400, "pincodes[0]");
+  expectProblem(batch(R"({"pincodes": ["110001", "abc"]})"), 400, "pincodes[1]");
+  expectProblem(batch(R"({"pincodes": ["110001", "110002"]})"), 410, "retired");
+  expectProblem(batch(R"({"pincodes": ["110001"], "size": 5})"), 400, "'size' must be a string");
   std::string many = "[";
   for (int i = 0; i < 61; ++i) many += std::string(i ? "," : "") + "\"110001\"";
-  ExpectProblem(Batch(many + "]"), 413, "at most 60 labels");
+  expectProblem(batch(many + "]"), 413, "at most 60 labels");
 }
 
 }  // namespace

@@ -86,7 +86,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
       "/api/v1/detect?plan=default&tag_size_mm=" + std::to_string(photo.square_mm) +
       "&fx=1400&fy=1400&cx=960&cy=540";
   httplib::MultipartFormDataItems form = {{"image", photo.jpeg, "photo.jpg", "image/jpeg"}};
-  const json out = ExpectJson(client().Post(query.c_str(), scanner(), form));
+  const json out = ExpectJson(client().Post(query, scanner(), form));
   ASSERT_EQ(out["tags"].size(), 1U) << out.dump(1);
   const json& tag = out["tags"][0];
   EXPECT_EQ(tag["pincode"], "110001");
@@ -127,7 +127,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_NEAR(raw["tag_size_mm"].get<double>(), TagPlacement(kLabel100x150).square_side_mm, 1e-9);
 
   // ?overlay=1: the photo annotated, as PNG of the same size.
-  auto r = client().Post((query + "&overlay=1").c_str(), admin(), form);
+  auto r = client().Post(query + "&overlay=1", admin(), form);
   ASSERT_TRUE(r);
   ASSERT_EQ(r->status, 200) << r->body.substr(0, 300);
   EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
@@ -369,8 +369,9 @@ TEST_F(ServeTest, BodyAndPixelLimitsAreFlags) {
   // Smaller limits from the command line: a 60 KiB body over a 50 KiB limit, a 2 MP photo over a
   // 1 MP limit, a batch of 3 labels over a limit of 2.
   startServer({"--max-body-mb", "0.05", "--max-pixels", "1000000", "--max-batch", "2"});
-  ExpectProblem(
-      client().Post("/api/v1/detect", scanner(), std::string(60 * 1024, 'x'), "image/jpeg"), 413);
+  ExpectProblem(client().Post("/api/v1/detect", scanner(), std::string(std::size_t{60} * 1024, 'x'),
+                              "image/jpeg"),
+                413);
   const std::string photo = SmallJpeg(1920, 1080);
   ASSERT_LT(photo.size(), 50U * 1024);
   json p = ExpectProblem(client().Post("/api/v1/detect", scanner(), photo, "image/jpeg"), 413);
