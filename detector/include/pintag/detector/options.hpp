@@ -51,8 +51,10 @@ struct DetectorOptions {
   // --- sizes, relative to the image unless stated ---
   int min_element_area_px = 6;           ///< smallest red blob kept, pixels
   double max_element_area_ratio = 0.02;  ///< largest red blob, fraction of the image area
-  int min_square_px = 20;                ///< smallest black-square side accepted, pixels
-  int max_blobs = 4000;                  ///< red blobs beyond this (by area) are ignored
+  /// Quad size scale N, pixels: a square needs area >= (N/2)^2 and shortest side >= 0.3 N (slack
+  /// for steep views), so the smallest accepted side is well below N.
+  int min_square_px = 20;
+  int max_blobs = 4000;  ///< red blobs beyond this (by area) are ignored
 
   // --- execution and diagnostics ---
   int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread
