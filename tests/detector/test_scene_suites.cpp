@@ -6,12 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
-#include <opencv2/aruco.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -349,71 +347,6 @@ TEST(SceneSuite, SeveralTagsPerFrame) {
   EXPECT_GE(tally.tags, 200);
   EXPECT_GE(tally.found, 0.98 * tally.tags);
   EXPECT_EQ(tally.misreads, 0);
-}
-
-}  // namespace
-}  // namespace pintag
-
-// --- speed: one 1080p frame, single thread, next to cv::aruco::detectMarkers -------------------
-
-namespace pintag {
-namespace {
-
-TEST(SceneSuite, TimePer1080pFrameNextToAruco) {
-  const scene::Camera camera;  // 1920 × 1080
-  std::vector<double> ours, aruco, redness;
-  cv::setNumThreads(1);
-  const cv::Ptr<cv::aruco::Dictionary> dictionary =
-      cv::aruco::getPredefinedDictionary(cv::aruco::DICT_5X5_1000);
-  const cv::Ptr<cv::aruco::DetectorParameters> parameters = cv::aruco::DetectorParameters::create();
-  int pintags = 0, arucos = 0;
-  for (std::uint64_t seed = 9000; seed < 9010; ++seed) {
-    TagRange range;
-    range.min_px = 60;
-    range.max_px = 140;
-    range.count = 3;
-    scene::SceneSpec spec = MakeSpec(seed, camera, range, false, true);
-    for (int i = 0; i < 2; ++i) {  // and two ArUco markers, so both detectors have work
-      scene::PlacedMarker m;
-      m.id = 10 + i;
-      m.texture = scene::ArucoTexture(m.id, 350);
-      m.pose = scene::MakePose(camera, {300.0 + 1300 * i, 900}, 0.6, 20, 0, 10);
-      spec.markers.push_back(std::move(m));
-    }
-    const scene::Scene s = scene::RenderScene(spec);
-    const Detector detector(OptionsFor(camera));
-    cv::Mat gray;
-    for (int rep = 0; rep < 3; ++rep) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const DetectResult r = detector.detect(s.bgr);
-      const auto t1 = std::chrono::steady_clock::now();
-      cv::cvtColor(s.bgr, gray, cv::COLOR_BGR2GRAY);
-      std::vector<std::vector<cv::Point2f>> corners;
-      std::vector<int> ids;
-      cv::aruco::detectMarkers(gray, dictionary, corners, ids, parameters);
-      const auto t2 = std::chrono::steady_clock::now();
-      if (rep == 2) {
-        ours.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-        aruco.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
-        redness.push_back(r.timings.redness_ms);
-        std::printf(
-            "  frame: total %.2f redness %.2f blobs %.2f quads %.2f decode %.2f pose %.2f | "
-            "aruco %.2f\n",
-            r.timings.total_ms, r.timings.redness_ms, r.timings.blobs_ms, r.timings.quads_ms,
-            r.timings.decode_ms, r.timings.pose_ms, aruco.back());
-        pintags += static_cast<int>(r.detections.size());
-        arucos += static_cast<int>(ids.size());
-      }
-    }
-  }
-  std::sort(ours.begin(), ours.end());
-  std::sort(aruco.begin(), aruco.end());
-  std::sort(redness.begin(), redness.end());
-  std::printf(
-      "1080p, one thread, median of 10 frames: PinTag %.2f ms (redness pass %.2f ms, %d "
-      "tags), ArUco 5x5_1000 %.2f ms (incl. grey conversion, %d markers); ratio %.2f\n",
-      ours[5], redness[5], pintags, aruco[5], arucos, ours[5] / aruco[5]);
-  cv::setNumThreads(-1);
 }
 
 }  // namespace
