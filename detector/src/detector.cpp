@@ -9,6 +9,7 @@
 #include <mutex>
 #include <thread>
 
+#include "blur_model.hpp"
 #include "camera_model.hpp"
 #include "debug_images.hpp"
 #include "grouping.hpp"
@@ -81,14 +82,29 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
       reject("red blobs do not match the elements");
       continue;
     }
-    const stage::CellSamples samples = stage::SampleCells(bgr, h);
-    const stage::OrientationResult orientation = stage::ReadOrientation(samples, thresholds);
+    stage::OrientationResult orientation =
+        stage::ReadOrientation(stage::SampleCells(bgr, h), thresholds);
+    stage::PayloadResult payload;
+    if (orientation.ok) payload = stage::DecodePayload(orientation.reading);
+    if (!payload.key) {
+      // Direct samples failed: small or blurred cells mix. Read them through a blur model.
+      const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, h);
+      if (fit.ok) {
+        stage::OrientationResult modelled = stage::ReadOrientation(fit.cells, thresholds);
+        stage::PayloadResult modelled_payload;
+        if (modelled.ok) modelled_payload = stage::DecodePayload(modelled.reading);
+        if (modelled_payload.key) {
+          orientation = std::move(modelled);
+          payload = std::move(modelled_payload);
+          d.read_through_blur_model = true;
+        }
+      }
+    }
     out->decode_ms += Ms(t2, Clock::now());
     if (!orientation.ok) {
       reject(orientation.error);
       continue;
     }
-    const stage::PayloadResult payload = stage::DecodePayload(orientation.reading);
     if (!payload.key) {
       d.cells = orientation.reading;
       d.margins = orientation.margins;

@@ -9,9 +9,12 @@
 namespace pintag::stage {
 namespace {
 
-constexpr double kLinkDiameters = 3.2;   // neighbouring elements: 2.5 disk diameters apart
+// Neighbouring elements are 2.5 disk diameters apart, but a blurred small disk passes the redness
+// test only in its core, which can be half the disk or less: links reach 6 core diameters.
+constexpr double kLinkDiameters = 6.0;
 constexpr double kMaxAreaRatio = 8;      // perspective can shrink a far element
 constexpr double kRoiDiameters = 2.6;    // element centre -> square edge + quiet zone: 2.0
+constexpr double kRoiSpacings = 1.0;     // the same in element spacings (0.5 S): 0.8
 constexpr double kSlotTolerance = 0.08;  // tag units
 
 int Find(std::vector<int>& parent, int i) {
@@ -83,7 +86,16 @@ std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Siz
         }
       }
     }
-    const double m = kRoiDiameters * major;
+    // Blob sizes understate a blurred tag; the spacing of its elements does not.
+    double spacing = 0;
+    for (int i : group) {
+      double nearest = 1e300;
+      for (int j : group) {
+        if (j != i) nearest = std::min(nearest, cv::norm(blobs[j].centroid - blobs[i].centroid));
+      }
+      spacing = std::max(spacing, nearest);
+    }
+    const double m = std::max(kRoiDiameters * major, kRoiSpacings * spacing);
     const cv::Rect roi(cv::Point(static_cast<int>(x0 - m), static_cast<int>(y0 - m)),
                        cv::Point(static_cast<int>(x1 + m) + 1, static_cast<int>(y1 + m) + 1));
     BlobCluster cluster{std::move(group), roi & frame};

@@ -76,6 +76,7 @@ json ToJson(const Detection& d) {
   j["unknown_bits"] = d.unknown_bits;
   j["bits_from_second_copy"] = d.bits_from_second_copy;
   j["bit_from_parity"] = d.bit_from_parity;
+  j["read_through_blur_model"] = d.read_through_blur_model;
   j["min_known_margin"] = d.min_known_margin;
   return j;
 }

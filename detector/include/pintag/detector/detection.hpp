@@ -55,6 +55,8 @@ struct Detection {
   int unknown_bits = 0;           ///< cells read as unknown
   int bits_from_second_copy = 0;  ///< payload bits taken from the other copy
   bool bit_from_parity = false;   ///< one code bit solved from the parity
+  /// The cells were read by fitting a blur model to the pixels (the direct samples did not decode).
+  bool read_through_blur_model = false;
   double min_known_margin = 0;    ///< smallest |margin| among bits that were read
 };
 

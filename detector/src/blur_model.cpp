@@ -1,0 +1,307 @@
+#include "blur_model.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "lab_approx.hpp"
+#include "pintag/codec/cielab.hpp"
+#include "pintag/codec/geometry.hpp"
+
+namespace pintag::stage {
+namespace {
+
+constexpr int kCellsPerElement = kRedQuadrants + kGreenSectors;
+constexpr int kRegions = 2 + kElements * kCellsPerElement;
+constexpr int kOutsideRegion = 0;
+constexpr int kBlackRegion = 1;
+constexpr int kSubsamples = 4;            // per pixel side, for each pixel's region coverage
+constexpr double kMaxSigmaPx = 2.5;       // widest blur tried (5 px of motion with defocus 2 px)
+constexpr int kMaxKernelRadius = 7;       // px: about 3 kMaxSigmaPx
+constexpr double kObservedMargin = 0.06;  // tag units of quiet zone observed beyond the square
+constexpr int kMaxObserved = 1500;        // pixels used while searching the blur (a stride beyond)
+constexpr double kRidge = 0.01;  // regularisation, relative to the mean of AᵀA's diagonal
+
+int RegionIndex(const geometry::CellAt& cell) {
+  switch (cell.region) {
+    case geometry::Region::kOutside:
+      return kOutsideRegion;
+    case geometry::Region::kBlack:
+      return kBlackRegion;
+    case geometry::Region::kRed:
+      return 2 + cell.element * kCellsPerElement + cell.index;
+    case geometry::Region::kGreen:
+      return 2 + cell.element * kCellsPerElement + kRedQuadrants + cell.index;
+  }
+  return kOutsideRegion;
+}
+
+// How much of each region a pixel's area holds (fractions summing to 1).
+struct Coverage {
+  std::uint32_t first = 0;  // into Geometry::parts
+  std::uint32_t count = 0;
+};
+struct Part {
+  int region;
+  float weight;
+};
+
+struct Blur {
+  double major = 1;
+  double minor = 1;
+  double angle_deg = 0;
+};
+
+// The tag's regions on the pixel grid around it, and the pixels observed.
+class TagOnGrid {
+ public:
+  TagOnGrid(const cv::Mat& bgr, const cv::Matx33d& tag_to_image) {
+    const cv::Matx33d to_tag = tag_to_image.inv();
+    double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+    for (const double u : {-kObservedMargin, 1 + kObservedMargin}) {
+      for (const double v : {-kObservedMargin, 1 + kObservedMargin}) {
+        const cv::Vec3d p = tag_to_image * cv::Vec3d(u, v, 1);
+        x0 = std::min(x0, p[0] / p[2]), x1 = std::max(x1, p[0] / p[2]);
+        y0 = std::min(y0, p[1] / p[2]), y1 = std::max(y1, p[1] / p[2]);
+      }
+    }
+    origin_ = {static_cast<int>(std::floor(x0)) - kMaxKernelRadius,
+               static_cast<int>(std::floor(y0)) - kMaxKernelRadius};
+    size_ = {static_cast<int>(std::ceil(x1)) + kMaxKernelRadius + 1 - origin_.x,
+             static_cast<int>(std::ceil(y1)) + kMaxKernelRadius + 1 - origin_.y};
+    coverage_.resize(static_cast<std::size_t>(size_.area()));
+    std::array<int, kRegions> hits{};
+    for (int gy = 0; gy < size_.height; ++gy) {
+      for (int gx = 0; gx < size_.width; ++gx) {
+        // Pixel (x, y) has its centre at integer coordinates and covers ±0.5 around it.
+        const double x = origin_.x + gx, y = origin_.y + gy;
+        std::vector<int> touched;
+        for (int sy = 0; sy < kSubsamples; ++sy) {
+          for (int sx = 0; sx < kSubsamples; ++sx) {
+            const double px = x - 0.5 + (sx + 0.5) / kSubsamples;
+            const double py = y - 0.5 + (sy + 0.5) / kSubsamples;
+            const cv::Vec3d t = to_tag * cv::Vec3d(px, py, 1);
+            const int region = RegionIndex(geometry::LocateCell(t[0] / t[2], t[1] / t[2]));
+            if (hits[region]++ == 0) touched.push_back(region);
+          }
+        }
+        Coverage& c = coverage_[static_cast<std::size_t>(gy * size_.width + gx)];
+        c.first = static_cast<std::uint32_t>(parts_.size());
+        c.count = static_cast<std::uint32_t>(touched.size());
+        for (int region : touched) {
+          parts_.push_back(
+              {region, static_cast<float>(hits[region]) / (kSubsamples * kSubsamples)});
+          hits[region] = 0;
+        }
+        const cv::Vec3d t = to_tag * cv::Vec3d(x, y, 1);
+        const double u = t[0] / t[2], v = t[1] / t[2];
+        const bool observed = u >= -kObservedMargin && u <= 1 + kObservedMargin &&
+                              v >= -kObservedMargin && v <= 1 + kObservedMargin && x >= 0 &&
+                              y >= 0 && x < bgr.cols && y < bgr.rows && gx >= kMaxKernelRadius &&
+                              gy >= kMaxKernelRadius && gx < size_.width - kMaxKernelRadius &&
+                              gy < size_.height - kMaxKernelRadius;
+        if (observed) observed_.push_back({gx, gy});
+      }
+    }
+    linear_.reserve(observed_.size());
+    for (const cv::Point g : observed_) {
+      const std::uint8_t* p = bgr.ptr<std::uint8_t>(origin_.y + g.y) + 3 * (origin_.x + g.x);
+      linear_.push_back({SrgbLinear(p[2]), SrgbLinear(p[1]), SrgbLinear(p[0])});
+    }
+  }
+
+  std::size_t observed() const { return observed_.size(); }
+
+  struct Solution {
+    double residual = 1e300;  // sum of squares over the pixels used and the 3 channels
+    std::size_t pixels = 0;
+    std::array<std::array<double, 3>, kRegions> colour{};
+    std::array<double, kRegions> support{};  // AᵀA's diagonal: how much each region was seen
+  };
+
+  /// Least-squares region colours under `blur`, from every `stride`-th observed pixel.
+  Solution solve(const Blur& blur, std::size_t stride) const {
+    const std::vector<std::pair<cv::Point, double>> kernel = Kernel(blur);
+    cv::Matx<double, kRegions, kRegions> ata = cv::Matx<double, kRegions, kRegions>::zeros();
+    cv::Matx<double, kRegions, 3> aty = cv::Matx<double, kRegions, 3>::zeros();
+    double yty = 0;
+    std::array<double, 3> mean{};
+    std::array<double, kRegions> row{};
+    std::vector<int> nonzero;
+    Solution s;
+    for (std::size_t i = 0; i < observed_.size(); i += stride) {
+      const cv::Point g = observed_[i];
+      nonzero.clear();
+      for (const auto& [offset, weight] : kernel) {
+        const Coverage& c =
+            coverage_[static_cast<std::size_t>((g.y + offset.y) * size_.width + g.x + offset.x)];
+        for (std::uint32_t k = 0; k < c.count; ++k) {
+          const Part& part = parts_[c.first + k];
+          if (row[part.region] == 0) nonzero.push_back(part.region);
+          row[part.region] += weight * part.weight;
+        }
+      }
+      const std::array<double, 3>& y = linear_[i];
+      for (std::size_t a = 0; a < nonzero.size(); ++a) {
+        const int ra = nonzero[a];
+        for (std::size_t b = a; b < nonzero.size(); ++b) {
+          const int rb = nonzero[b];
+          ata(std::min(ra, rb), std::max(ra, rb)) += row[ra] * row[rb];
+        }
+        for (int ch = 0; ch < 3; ++ch) aty(ra, ch) += row[ra] * y[ch];
+      }
+      for (int ch = 0; ch < 3; ++ch) yty += y[ch] * y[ch], mean[ch] += y[ch];
+      for (int r : nonzero) row[r] = 0;
+      ++s.pixels;
+    }
+    if (s.pixels == 0) return s;
+    for (int a = 0; a < kRegions; ++a) {
+      for (int b = 0; b < a; ++b) ata(a, b) = ata(b, a);
+    }
+    double trace = 0;
+    for (int r = 0; r < kRegions; ++r) trace += ata(r, r), s.support[r] = ata(r, r);
+    // A little ridge towards the mean colour keeps regions the pixels barely see from swinging.
+    const double ridge = kRidge * trace / kRegions;
+    cv::Matx<double, kRegions, kRegions> m = ata;
+    cv::Matx<double, kRegions, 3> rhs = aty;
+    for (int r = 0; r < kRegions; ++r) {
+      m(r, r) += ridge;
+      for (int ch = 0; ch < 3; ++ch) {
+        rhs(r, ch) += ridge * mean[ch] / static_cast<double>(s.pixels);
+      }
+    }
+    cv::Matx<double, kRegions, 3> x;
+    if (!cv::solve(m, rhs, x, cv::DECOMP_CHOLESKY)) return s;
+    // |Ax − y|² = yᵀy − 2 xᵀAᵀy + xᵀAᵀA x, per channel.
+    double residual = yty;
+    const cv::Matx<double, kRegions, 3> ata_x = ata * x;
+    for (int r = 0; r < kRegions; ++r) {
+      for (int ch = 0; ch < 3; ++ch) {
+        residual += x(r, ch) * (ata_x(r, ch) - 2 * aty(r, ch));
+        s.colour[r][ch] = x(r, ch);
+      }
+    }
+    s.residual = std::max(0.0, residual);
+    return s;
+  }
+
+ private:
+  static double SrgbLinear(std::uint8_t code) {
+    static const std::array<double, 256> table = [] {
+      std::array<double, 256> t{};
+      for (int i = 0; i < 256; ++i) t[i] = SrgbToLinear(static_cast<std::uint8_t>(i));
+      return t;
+    }();
+    return table[code];
+  }
+
+  // Gaussian taps (weights summing to 1) for the blur, small tails dropped.
+  static std::vector<std::pair<cv::Point, double>> Kernel(const Blur& blur) {
+    const double angle = blur.angle_deg * std::numbers::pi / 180;
+    const double c = std::cos(angle), s = std::sin(angle);
+    const int radius = std::min(kMaxKernelRadius, static_cast<int>(std::ceil(3 * blur.major)));
+    std::vector<std::pair<cv::Point, double>> taps;
+    double total = 0;
+    for (int dy = -radius; dy <= radius; ++dy) {
+      for (int dx = -radius; dx <= radius; ++dx) {
+        const double along = c * dx + s * dy, across = -s * dx + c * dy;
+        const double w = std::exp(-0.5 * (along * along / (blur.major * blur.major) +
+                                          across * across / (blur.minor * blur.minor)));
+        if (w < 2e-3) continue;
+        taps.push_back({{dx, dy}, w});
+        total += w;
+      }
+    }
+    for (auto& tap : taps) tap.second /= total;
+    return taps;
+  }
+
+  cv::Point origin_;
+  cv::Size size_;
+  std::vector<Coverage> coverage_;
+  std::vector<Part> parts_;
+  std::vector<cv::Point> observed_;
+  std::vector<std::array<double, 3>> linear_;
+};
+
+CellSample ToSample(const std::array<double, 3>& linear_rgb, double support) {
+  CellSample s;
+  // A cell that no observed pixel sees enough of is unread, not read as its ridge prior.
+  if (support < 0.5) return s;
+  const LabApprox& lab = LabApprox::Get();
+  int a = 0, b = 0;
+  lab.Ab(LinearToSrgb(linear_rgb[0]), LinearToSrgb(linear_rgb[1]), LinearToSrgb(linear_rgb[2]), &a,
+         &b);
+  s.a = static_cast<double>(a) / kLabScale;
+  s.b = static_cast<double>(b) / kLabScale;
+  s.valid = true;
+  return s;
+}
+
+}  // namespace
+
+BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image) {
+  BlurFit fit;
+  double side = 0;
+  for (int i = 0; i < 4; ++i) {
+    const geometry::Point a = geometry::kSquareCorners[i],
+                          b = geometry::kSquareCorners[(i + 1) % 4];
+    const cv::Vec3d pa = tag_to_image * cv::Vec3d(a.x, a.y, 1);
+    const cv::Vec3d pb = tag_to_image * cv::Vec3d(b.x, b.y, 1);
+    side += std::hypot(pa[0] / pa[2] - pb[0] / pb[2], pa[1] / pa[2] - pb[1] / pb[2]) / 4;
+  }
+  if (side > kBlurFitMaxSidePx || side < 8) return fit;
+  const TagOnGrid grid(bgr, tag_to_image);
+  if (grid.observed() < 64) return fit;
+  const std::size_t stride = std::max<std::size_t>(1, grid.observed() / kMaxObserved);
+
+  Blur best;
+  double best_residual = 1e300;
+  const auto consider = [&](Blur blur) {
+    blur.major = std::min(blur.major, kMaxSigmaPx);
+    blur.minor = std::min(blur.minor, blur.major);
+    ++fit.evaluations;
+    const double r = grid.solve(blur, stride).residual;
+    if (r < best_residual) best_residual = r, best = blur;
+  };
+  // Round blurs first, then elongated ones around the best, then small steps.
+  for (const double sigma : {0.45, 0.75, 1.1, 1.6, 2.2}) consider({sigma, sigma, 0});
+  const Blur round = best;
+  for (const double angle : {0.0, 45.0, 90.0, 135.0}) {
+    consider({round.major * 1.7, round.minor / 1.3, angle});
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    const Blur centre = best;
+    for (const double f : {1.25, 0.8}) {
+      consider({centre.major * f, centre.minor, centre.angle_deg});
+      consider({centre.major, centre.minor * f, centre.angle_deg});
+    }
+    if (centre.major > centre.minor * 1.1) {
+      consider({centre.major, centre.minor, centre.angle_deg + 22.5});
+      consider({centre.major, centre.minor, centre.angle_deg - 22.5});
+    }
+  }
+
+  const TagOnGrid::Solution s = grid.solve(best, 1);
+  if (s.pixels == 0 || s.residual >= 1e299) return fit;
+  for (int e = 0; e < kElements; ++e) {
+    for (int q = 0; q < kRedQuadrants; ++q) {
+      const int r = 2 + e * kCellsPerElement + q;
+      fit.cells.red[e][q] = ToSample(s.colour[r], s.support[r]);
+    }
+    for (int g = 0; g < kGreenSectors; ++g) {
+      const int r = 2 + e * kCellsPerElement + kRedQuadrants + g;
+      fit.cells.green[e][g] = ToSample(s.colour[r], s.support[r]);
+    }
+  }
+  fit.sigma_major_px = best.major;
+  fit.sigma_minor_px = best.minor;
+  fit.angle_deg = best.angle_deg;
+  fit.rms = std::sqrt(s.residual / (3.0 * static_cast<double>(s.pixels)));
+  fit.ok = true;
+  return fit;
+}
+
+}  // namespace pintag::stage

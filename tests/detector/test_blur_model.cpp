@@ -1,0 +1,82 @@
+// Stage 5b: cells read through a blur model, where direct samples of a small blurred tag mix.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <optional>
+
+#include "blur_model.hpp"
+#include "homography.hpp"
+#include "orientation.hpp"
+#include "payload.hpp"
+#include "synthetic.hpp"
+
+namespace pintag::stage {
+namespace {
+
+std::optional<TagKey> Decode(const CellSamples& samples) {
+  const OrientationResult orientation = ReadOrientation(samples, BitThresholds{});
+  if (!orientation.ok) return std::nullopt;
+  const PayloadResult payload = DecodePayload(orientation.reading);
+  if (!payload.key) return std::nullopt;
+  return payload.key;
+}
+
+cv::Matx33d TrueHomography(const testing::SyntheticTruth& truth) {
+  Quad quad;
+  for (int i = 0; i < 4; ++i) quad[i] = truth.corners[i];
+  return HomographyFromQuad(quad);
+}
+
+TEST(BlurModel, ReadsSmallBlurredTagsThatDirectSamplesCannot) {
+  int direct = 0, fitted = 0, cases = 0;
+  for (const int key : {0, 1, 4660, 13107, 21845, 32767}) {
+    for (const double roll : {0.0, 33.0}) {
+      testing::SyntheticOptions o;
+      o.seed = static_cast<std::uint64_t>(key) * 7 + static_cast<std::uint64_t>(roll);
+      o.blur_sigma = 1.6;
+      o.noise_sigma = 2;
+      const auto scene =
+          testing::MakeScene({{.key = key, .square_px = 30, .tilt_deg = 20, .roll_deg = roll}}, o);
+      const cv::Matx33d h = TrueHomography(scene.truth[0]);
+      ++cases;
+      const std::optional<TagKey> read = Decode(SampleCells(scene.bgr, h));
+      if (read) {
+        EXPECT_EQ(read->value(), key);
+        ++direct;
+      }
+      const BlurFit fit = FitCellsThroughBlur(scene.bgr, h);
+      ASSERT_TRUE(fit.ok) << key;
+      const std::optional<TagKey> modelled = Decode(fit.cells);
+      ASSERT_TRUE(modelled.has_value()) << "key " << key << " roll " << roll;
+      EXPECT_EQ(modelled->value(), key);
+      ++fitted;
+      // The blur found explains the one applied (σ 1.6 px, round) within the search's steps.
+      EXPECT_NEAR(fit.sigma_major_px, 1.6, 0.6) << key;
+      EXPECT_NEAR(fit.sigma_minor_px, 1.6, 0.6) << key;
+    }
+  }
+  EXPECT_EQ(fitted, cases);
+  EXPECT_LE(2 * direct, cases) << "these scenes should defeat direct sampling mostly";
+}
+
+TEST(BlurModel, ABlackSquareWithoutElementsGivesNoKey) {
+  cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
+  cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
+  cv::GaussianBlur(bgr, bgr, {}, 1.2);
+  const Quad quad = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
+  const BlurFit fit = FitCellsThroughBlur(bgr, HomographyFromQuad(quad));
+  ASSERT_TRUE(fit.ok);
+  EXPECT_FALSE(Decode(fit.cells).has_value());
+}
+
+TEST(BlurModel, LargeTagsAndTagsOffTheImageAreLeftToDirectSampling) {
+  const cv::Mat bgr(400, 400, CV_8UC3, cv::Scalar(200, 200, 200));
+  const Quad large = {cv::Point2d(50, 50), {250, 50}, {250, 250}, {50, 250}};
+  EXPECT_FALSE(FitCellsThroughBlur(bgr, HomographyFromQuad(large)).ok);
+  const Quad outside = {cv::Point2d(-500, -500), {-460, -500}, {-460, -460}, {-500, -460}};
+  EXPECT_FALSE(FitCellsThroughBlur(bgr, HomographyFromQuad(outside)).ok);
+}
+
+}  // namespace
+}  // namespace pintag::stage
