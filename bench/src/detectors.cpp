@@ -43,14 +43,17 @@ void PoseFromCorners(const scene::Camera& camera, Found* found) {
 
 class PinTagDetector final : public MarkerDetector {
  public:
-  explicit PinTagDetector(const scene::Camera& camera) {
+  PinTagDetector(const scene::Camera& camera, DetectorOptions options, bool tuned)
+      : options_(std::move(options)), tuned_(tuned) {
     options_.intrinsics = CameraIntrinsics{camera.fx, camera.fy, camera.cx, camera.cy, {}};
     options_.tag_size_m = kTagSideM;
     detector_ = Detector(options_);
   }
   std::string name() const override { return "PinTag"; }
   std::string description() const override {
-    return "pintag::Detector, default options, intrinsics given, 50 mm tag";
+    return std::string("pintag::Detector, ") +
+           (tuned_ ? "options from --pintag-options" : "default options") +
+           ", intrinsics given, 50 mm tag";
   }
   Marker marker() const override { return Marker::kPinTag; }
   void setThreads(int threads) override {
@@ -87,6 +90,7 @@ class PinTagDetector final : public MarkerDetector {
 
  private:
   DetectorOptions options_;
+  bool tuned_ = false;
   Detector detector_;
   StageTimings timings_;
 };
@@ -169,8 +173,9 @@ class AprilTagDetector final : public MarkerDetector {
 
 }  // namespace
 
-std::unique_ptr<MarkerDetector> MakePinTagDetector(const scene::Camera& camera) {
-  return std::make_unique<PinTagDetector>(camera);
+std::unique_ptr<MarkerDetector> MakePinTagDetector(const scene::Camera& camera,
+                                                   const DetectorOptions& options, bool tuned) {
+  return std::make_unique<PinTagDetector>(camera, options, tuned);
 }
 std::unique_ptr<MarkerDetector> MakeArucoDetector(const scene::Camera& camera) {
   return std::make_unique<ArucoDetector>(camera);

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "pintag/detector/options.hpp"
 #include "pintag/scene/scene.hpp"
 #include "sweep.hpp"
 
@@ -39,7 +40,11 @@ class MarkerDetector {
   virtual std::vector<std::pair<std::string, double>> lastStageTimes() const { return {}; }
 };
 
-std::unique_ptr<MarkerDetector> MakePinTagDetector(const scene::Camera& camera);
+/// pintag::Detector with `options` (intrinsics and tag size are set here); `tuned` says in the
+/// report that they are not the defaults.
+std::unique_ptr<MarkerDetector> MakePinTagDetector(const scene::Camera& camera,
+                                                   const DetectorOptions& options = {},
+                                                   bool tuned = false);
 /// cv::aruco::detectMarkers, DICT_5X5_1000, default DetectorParameters (no corner refinement).
 std::unique_ptr<MarkerDetector> MakeArucoDetector(const scene::Camera& camera);
 /// libapriltag tag36h10 with its defaults except quad_decimate; includes the BGR->gray conversion

@@ -6,12 +6,15 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <thread>
 #include <vector>
@@ -20,6 +23,7 @@
 #include "explain.hpp"
 #include "machine.hpp"
 #include "metrics.hpp"
+#include "pintag/detector/json.hpp"
 #include "progress.hpp"
 #include "report.hpp"
 #include "sweep.hpp"
@@ -50,6 +54,8 @@ struct Args {
   bool require_zero_misreads = false;
   bool quiet = false;
   std::string detectors = "pintag,aruco,apriltag-d1,apriltag-d2";
+  std::string pintag_options;  ///< JSON object of DetectorOptions fields, for tuning runs
+  std::string dump_misses;     ///< directory for crops of the tags PinTag missed
   int chunk = 24;
 };
 
@@ -71,6 +77,10 @@ void Usage(FILE* to) {
       "tagless frame\n"
       "  --detectors LIST      which of pintag,aruco,apriltag-d1,apriltag-d2 to run (default "
       "all; PinTag always runs)\n"
+      "  --pintag-options JSON DetectorOptions fields for PinTag, e.g. '{\"red_min_a\":15}' "
+      "(tuning; the report says so)\n"
+      "  --dump-misses DIR     write a PNG crop of every tag PinTag missed, named by bin and "
+      "the stage that lost it\n"
       "  --quiet               no progress on stderr\n");
 }
 
@@ -118,6 +128,14 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--detectors");
       if (v == nullptr) return false;
       args->detectors = v;
+    } else if (a == "--pintag-options") {
+      const char* v = value("--pintag-options");
+      if (v == nullptr) return false;
+      args->pintag_options = v;
+    } else if (a == "--dump-misses") {
+      const char* v = value("--dump-misses");
+      if (v == nullptr) return false;
+      args->dump_misses = v;
     } else if (a == "--quiet") {
       args->quiet = true;
     } else if (a == "--help" || a == "-h") {
@@ -143,6 +161,31 @@ struct Rendered {
     return truth[f.tagless() ? 0 : static_cast<int>(m)];
   }
 };
+
+// A crop around the missed tag (its quiet zone and some background) as it is, for re-running the
+// detector on, and enlarged 4x with nearest neighbour so that single pixels stay visible.
+void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
+              const scene::MarkerTruth& truth, const std::string& why) {
+  cv::Rect box =
+      cv::boundingRect(std::vector<cv::Point2f>(truth.corners_px.begin(), truth.corners_px.end()));
+  const int pad = static_cast<int>(truth.square_px * 0.5) + 4;
+  box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
+        cv::Rect(0, 0, bgr.cols, bgr.rows);
+  cv::Mat enlarged;
+  cv::resize(bgr(box), enlarged, {}, 4, 4, cv::INTER_NEAREST);
+  std::string reason = why.substr(0, why.find(':'));
+  for (char& c : reason) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '-';
+  }
+  char name[256];
+  for (const bool large : {false, true}) {
+    std::snprintf(name, sizeof name, "%s/%03dpx-%02ddeg-%s-f%04d-%s%s.png", dir.c_str(),
+                  kSizesPx[static_cast<std::size_t>(f.size_index)],
+                  kTiltsDeg[static_cast<std::size_t>(f.tilt_index)], f.hard ? "hard" : "mod",
+                  f.index, reason.c_str(), large ? "-x4" : "");
+    cv::imwrite(name, large ? enlarged : bgr(box));
+  }
+}
 
 struct CsvRow {
   int frame = 0;
@@ -173,7 +216,17 @@ int Main(int argc, char** argv) {
   const auto wanted = [&](const std::string& key) {
     return ("," + args.detectors + ",").find("," + key + ",") != std::string::npos;
   };
-  detectors.push_back(MakePinTagDetector(camera));
+  DetectorOptions pintag_options;
+  if (!args.pintag_options.empty()) {
+    std::string error;
+    const nlohmann::json json = nlohmann::json::parse(args.pintag_options, nullptr, false);
+    if (json.is_discarded() || !OptionsFromJson(json, &pintag_options, &error)) {
+      std::fprintf(stderr, "pintag_bench: --pintag-options: %s\n",
+                   json.is_discarded() ? "not valid JSON" : error.c_str());
+      return 2;
+    }
+  }
+  detectors.push_back(MakePinTagDetector(camera, pintag_options, !args.pintag_options.empty()));
   if (wanted("aruco")) detectors.push_back(MakeArucoDetector(camera));
   if (wanted("apriltag-d1")) detectors.push_back(MakeAprilTagDetector(camera, 1));
   if (wanted("apriltag-d2")) detectors.push_back(MakeAprilTagDetector(camera, 2));
@@ -281,6 +334,10 @@ int Main(int argc, char** argv) {
             const std::string why =
                 ExplainMiss(r.image(f, d.marker()), r.truthFor(f, d.marker()).front(), camera);
             ++stats.misses[why][f.hard][static_cast<std::size_t>(f.size_index)];
+            if (!args.dump_misses.empty()) {
+              DumpMiss(args.dump_misses, f, r.image(f, d.marker()),
+                       r.truthFor(f, d.marker()).front(), why);
+            }
           }
           const auto stages = d.lastStageTimes();
           if (!stages.empty()) {
