@@ -14,7 +14,7 @@ namespace pintag::stage {
 namespace {
 
 constexpr int kCellsPerElement = kRedQuadrants + kGreenSectors;
-constexpr int kRegions = 2 + kElements * kCellsPerElement;
+constexpr int kRegions = kModelRegions;
 constexpr int kOutsideRegion = 0;
 constexpr int kBlackRegion = 1;
 constexpr int kSubsamples = 4;            // per pixel side, for each pixel's region coverage
@@ -119,6 +119,7 @@ class TagOnGrid {
     std::size_t pixels = 0;
     std::array<std::array<double, 3>, kRegions> colour{};
     std::array<double, kRegions> support{};  // AᵀA's diagonal: how much each region was seen
+    NormalEquations equations;
   };
 
   /// Least-squares region colours under `blur`, from every `stride`-th observed pixel.
@@ -184,6 +185,12 @@ class TagOnGrid {
       }
     }
     s.residual = std::max(0.0, residual);
+    for (int a = 0; a < kRegions; ++a) {
+      for (int b = 0; b < kRegions; ++b) s.equations.ata[a * kRegions + b] = ata(a, b);
+      for (int ch = 0; ch < 3; ++ch) s.equations.aty[a * 3 + ch] = aty(a, ch);
+    }
+    s.equations.yty = yty;
+    s.equations.pixels = s.pixels;
     return s;
   }
 
@@ -300,8 +307,221 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
   fit.sigma_minor_px = best.minor;
   fit.angle_deg = best.angle_deg;
   fit.rms = std::sqrt(s.residual / (3.0 * static_cast<double>(s.pixels)));
+  fit.equations = s.equations;
   fit.ok = true;
   return fit;
+}
+
+namespace {
+
+// The six colours of the constrained model, and which one each region takes.
+enum Level { kQuietLevel, kBlackLevel, kRed0, kRed1, kGreen0, kGreen1, kLevels };
+using Labels = std::array<int, kRegions>;
+using Colour = std::array<double, 3>;
+using Colours = std::array<Colour, kLevels>;
+
+int RedRegion(int e, int q) {
+  return 2 + e * kCellsPerElement + q;
+}
+int GreenRegion(int e, int s) {
+  return 2 + e * kCellsPerElement + kRedQuadrants + s;
+}
+int Flipped(int level) {
+  return level == kRed0 ? kRed1 : level == kRed1 ? kRed0 : level == kGreen0 ? kGreen1 : kGreen0;
+}
+
+class ConstrainedModel {
+ public:
+  explicit ConstrainedModel(const NormalEquations& eq) : eq_(eq) {}
+
+  // Least-squares colours for the labels; a level nobody takes stays at zero.
+  Colours fitColours(const Labels& labels) const {
+    cv::Matx<double, kLevels, kLevels> btb = cv::Matx<double, kLevels, kLevels>::zeros();
+    cv::Matx<double, kLevels, 3> bty = cv::Matx<double, kLevels, 3>::zeros();
+    for (int j = 0; j < kRegions; ++j) {
+      for (int k = 0; k < kRegions; ++k) btb(labels[j], labels[k]) += eq_.ata[j * kRegions + k];
+      for (int ch = 0; ch < 3; ++ch) bty(labels[j], ch) += eq_.aty[j * 3 + ch];
+    }
+    double trace = 0;
+    for (int l = 0; l < kLevels; ++l) trace += btb(l, l);
+    for (int l = 0; l < kLevels; ++l) btb(l, l) += 1e-9 * trace + 1e-12;
+    cv::Matx<double, kLevels, 3> x;
+    cv::solve(btb, bty, x, cv::DECOMP_CHOLESKY);
+    Colours colours{};
+    for (int l = 0; l < kLevels; ++l) {
+      for (int ch = 0; ch < 3; ++ch) colours[l][ch] = x(l, ch);
+    }
+    return colours;
+  }
+
+  double residual(const Labels& labels, const Colours& colours) const {
+    double r = eq_.yty;
+    for (int j = 0; j < kRegions; ++j) {
+      const Colour& cj = colours[labels[j]];
+      for (int ch = 0; ch < 3; ++ch) r -= 2 * cj[ch] * eq_.aty[j * 3 + ch];
+      for (int k = 0; k < kRegions; ++k) {
+        const double a = eq_.ata[j * kRegions + k];
+        if (a == 0) continue;
+        const Colour& ck = colours[labels[k]];
+        r += a * (cj[0] * ck[0] + cj[1] * ck[1] + cj[2] * ck[2]);
+      }
+    }
+    return std::max(0.0, r);
+  }
+
+  // Change of the residual if region j took the other colour of its class (colours fixed).
+  double flipCost(const Labels& labels, const Colours& colours, int j) const {
+    const Colour& now = colours[labels[j]];
+    const Colour& other = colours[Flipped(labels[j])];
+    const Colour d = {other[0] - now[0], other[1] - now[1], other[2] - now[2]};
+    double cost = 0;
+    for (int ch = 0; ch < 3; ++ch) {
+      double g = 0;
+      for (int k = 0; k < kRegions; ++k) g += eq_.ata[j * kRegions + k] * colours[labels[k]][ch];
+      cost += d[ch] * (2 * g - 2 * eq_.aty[j * 3 + ch] + d[ch] * eq_.ata[j * kRegions + j]);
+    }
+    return cost;
+  }
+
+  // Iterated conditional modes: flip any free cell that lowers the residual, refit the colours,
+  // until nothing changes.
+  void settle(Labels* labels, const std::array<bool, kRegions>& fixed, Colours* colours) const {
+    *colours = fitColours(*labels);
+    for (int round = 0; round < 8; ++round) {
+      bool changed = false;
+      for (int sweep = 0; sweep < 8; ++sweep) {
+        bool flipped = false;
+        for (int j = 2; j < kRegions; ++j) {
+          if (fixed[j] || flipCost(*labels, *colours, j) >= 0) continue;
+          (*labels)[j] = Flipped((*labels)[j]);
+          flipped = changed = true;
+        }
+        if (!flipped) break;
+      }
+      if (!changed) break;
+      *colours = fitColours(*labels);
+    }
+  }
+
+ private:
+  const NormalEquations& eq_;
+};
+
+double Bstar(const Colour& linear) {
+  int a = 0, b = 0;
+  LabApprox::Get().Ab(LinearToSrgb(linear[0]), LinearToSrgb(linear[1]), LinearToSrgb(linear[2]), &a,
+                      &b);
+  return static_cast<double>(b) / kLabScale;
+}
+
+}  // namespace
+
+ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
+  ModelReading result;
+  if (!fit.ok || fit.equations.pixels == 0) {
+    result.error = "no blur fit";
+    return result;
+  }
+  const ConstrainedModel model(fit.equations);
+  struct Hypothesis {
+    Labels labels;
+    Colours colours;
+    double residual = 1e300;
+  };
+  std::array<Hypothesis, 4> hypotheses;
+  for (int r = 0; r < 4; ++r) {
+    // Sampled element (e + r) % 4 is canonical element e; quadrants turn with it.
+    Labels labels{};
+    std::array<bool, kRegions> fixed{};
+    labels[0] = kQuietLevel, labels[1] = kBlackLevel;
+    fixed[0] = fixed[1] = true;
+    std::vector<double> ones, zeros;
+    for (int e = 0; e < kElements; ++e) {
+      for (int q = 0; q < kRedQuadrants; ++q) {
+        if (q == InnerQuadrant(e)) continue;
+        const int j = RedRegion((e + r) % kElements, (q + r) % kRedQuadrants);
+        labels[j] = e == 0 ? kRed0 : kRed1;
+        fixed[j] = true;
+        const CellSample& c = fit.cells.red[(e + r) % kElements][(q + r) % kRedQuadrants];
+        if (c.valid) (e == 0 ? zeros : ones).push_back(c.b);
+      }
+    }
+    // Free cells start from the unconstrained fit, split at the middle of the orientation
+    // cells' b* levels (the palette gives red and green the same two b* levels).
+    const auto median = [](std::vector<double> v) {
+      if (v.empty()) return 0.0;
+      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+      return v[v.size() / 2];
+    };
+    const double mid = (median(ones) + median(zeros)) / 2;
+    for (int e = 0; e < kElements; ++e) {
+      for (int q = 0; q < kRedQuadrants; ++q) {
+        const int j = RedRegion(e, q);
+        if (!fixed[j]) labels[j] = fit.cells.red[e][q].b > mid ? kRed1 : kRed0;
+      }
+      for (int s = 0; s < kGreenSectors; ++s) {
+        labels[GreenRegion(e, s)] = fit.cells.green[e][s].b > mid ? kGreen1 : kGreen0;
+      }
+    }
+    Hypothesis& h = hypotheses[r];
+    model.settle(&labels, fixed, &h.colours);
+    h.labels = labels;
+    h.residual = model.residual(labels, h.colours);
+  }
+  int best = 0;
+  for (int r = 1; r < 4; ++r) {
+    if (hypotheses[r].residual < hypotheses[best].residual) best = r;
+  }
+  const double noise = std::max(hypotheses[best].residual, 1e-12) /
+                       (3.0 * static_cast<double>(fit.equations.pixels));
+  for (int r = 0; r < 4; ++r) {
+    if (r != best &&
+        hypotheses[r].residual - hypotheses[best].residual < min_significance * noise) {
+      result.error = "orientation ambiguous in the blur model";
+      return result;
+    }
+  }
+
+  // Now every cell is free, the orientation cells too: the format must hold on its own.
+  Hypothesis h = hypotheses[best];
+  model.settle(&h.labels, std::array<bool, kRegions>{true, true}, &h.colours);
+  const Colours& c = h.colours;
+  // The colours found must look like the palette: two distinct b* levels per class.
+  if (Bstar(c[kRed1]) - Bstar(c[kRed0]) < 20) {
+    result.error = "blur model: red levels not apart in b*";
+    return result;
+  }
+  std::array<int, kLevels> used{};
+  for (int j = 0; j < kRegions; ++j) ++used[h.labels[j]];
+  const bool greens_apart =
+      used[kGreen0] > 0 && used[kGreen1] > 0 && Bstar(c[kGreen1]) - Bstar(c[kGreen0]) >= 20;
+
+  const auto read = [&](int j, bool green, Bit* bit, double* margin) {
+    const bool one = h.labels[j] == kRed1 || h.labels[j] == kGreen1;
+    const double cost = model.flipCost(h.labels, c, j) / noise;
+    *margin = (one ? 1 : -1) * std::min(1.0, cost / (4 * min_significance));
+    if ((green && !greens_apart) || cost < min_significance) {
+      *bit = Bit::kUnknown;
+      ++result.unknown;
+      return;
+    }
+    *bit = one ? Bit::kOne : Bit::kZero;
+    result.min_known_margin = std::min(result.min_known_margin, std::abs(*margin));
+  };
+  for (int e = 0; e < kElements; ++e) {
+    const int from = (e + best) % kElements;
+    for (int s = 0; s < kGreenSectors; ++s) {
+      read(GreenRegion(from, (s + 2 * best) % kGreenSectors), true, &result.reading.green[e][s],
+           &result.margins.green[e][s]);
+    }
+    for (int q = 0; q < kRedQuadrants; ++q) {
+      read(RedRegion(from, (q + best) % kRedQuadrants), false, &result.reading.red[e][q],
+           &result.margins.red[e][q]);
+    }
+  }
+  result.quarter_turns = best;
+  result.ok = true;
+  return result;
 }
 
 }  // namespace pintag::stage

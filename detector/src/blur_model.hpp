@@ -10,11 +10,28 @@
 // The estimates come back as cell samples for the same orientation and codec checks as direct
 // samples: nothing here decides a bit, so a tag read this way meets the same bar.
 
+#include <array>
 #include <opencv2/core.hpp>
+#include <string>
 
+#include "pintag/codec/cells.hpp"
+#include "pintag/detector/detection.hpp"
 #include "sampling.hpp"
 
 namespace pintag::stage {
+
+/// The tag's regions in the model: the quiet zone, the black square, then per element its 4 red
+/// quadrants and 8 green sectors.
+inline constexpr int kModelRegions = 2 + kElements * (kRedQuadrants + kGreenSectors);
+
+/// The least-squares problem of the chosen blur, AᵀA x = Aᵀy over pixels × regions, kept so that
+/// constrained readings (ReadBitsThroughBlur) can be scored without touching the pixels again.
+struct NormalEquations {
+  std::array<double, kModelRegions * kModelRegions> ata{};
+  std::array<double, kModelRegions * 3> aty{};
+  double yty = 0;
+  std::size_t pixels = 0;
+};
 
 struct BlurFit {
   bool ok = false;
@@ -24,6 +41,7 @@ struct BlurFit {
   double angle_deg = 0;       ///< direction of the long axis (image x towards y)
   double rms = 0;             ///< residual per pixel and channel, linear light (0 … 1)
   int evaluations = 0;        ///< blur candidates tried
+  NormalEquations equations;  ///< of the chosen blur, over all observed pixels
 };
 
 /// Largest square side (px) the fit is tried on: above it cells are several pixels wide, direct
@@ -32,5 +50,24 @@ inline constexpr double kBlurFitMaxSidePx = 100;
 
 /// Fits the cells of the tag whose unit square maps to the image by `tag_to_image`.
 BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image);
+
+/// Bits read from a blur fit by a stronger model: every cell takes one of its class's two colours,
+/// so the whole tag has only six (quiet zone, black, red 0/1, green 0/1) besides 48 binary
+/// choices. For each of the four orientations the orientation cells are fixed to the format's
+/// bits, the others chosen (iterated conditional modes, colours refitted in turn), and the
+/// orientation explaining the pixels best wins if clearly better than the next. A bit is known
+/// only when flipping it costs at least `min_significance` times the residual noise per value;
+/// its margin is that cost over 4 × min_significance (capped at 1), signed.
+struct ModelReading {
+  bool ok = false;
+  std::string error;
+  int quarter_turns = 0;  ///< element `quarter_turns` of the sampled frame is C0
+  CellReading reading;    ///< canonical orientation
+  BitMargins margins;     ///< canonical orientation
+  int unknown = 0;
+  double min_known_margin = 1e9;
+};
+
+ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance = 9);
 
 }  // namespace pintag::stage

@@ -97,6 +97,22 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
           orientation = std::move(modelled);
           payload = std::move(modelled_payload);
           d.read_through_blur_model = true;
+        } else {
+          // Stronger still: each cell one of its class's two colours, bits chosen to fit.
+          const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit);
+          stage::PayloadResult bits_payload;
+          if (bits.ok) bits_payload = stage::DecodePayload(bits.reading);
+          if (bits_payload.key) {
+            orientation.ok = true;
+            orientation.error.clear();
+            orientation.quarter_turns = bits.quarter_turns;
+            orientation.reading = bits.reading;
+            orientation.margins = bits.margins;
+            orientation.unknown = bits.unknown;
+            orientation.min_known_margin = bits.min_known_margin;
+            payload = std::move(bits_payload);
+            d.read_through_blur_model = true;
+          }
         }
       }
     }

@@ -60,6 +60,32 @@ TEST(BlurModel, ReadsSmallBlurredTagsThatDirectSamplesCannot) {
   EXPECT_LE(2 * direct, cases) << "these scenes should defeat direct sampling mostly";
 }
 
+// The two-colours-per-class reading (the detector's last resort) on small blurred tags: it must
+// decode a good share and never give another key.
+TEST(BlurModel, BitsModelNeverGivesAnotherKey) {
+  int decoded = 0, cases = 0;
+  for (const int key : {1, 4660, 13107, 21845, 30000}) {
+    for (const double roll : {10.0, 55.0}) {
+      testing::SyntheticOptions o;
+      o.seed = static_cast<std::uint64_t>(key) * 3 + static_cast<std::uint64_t>(roll);
+      o.blur_sigma = 1.9;
+      o.noise_sigma = 3;
+      const auto scene =
+          testing::MakeScene({{.key = key, .square_px = 30, .tilt_deg = 30, .roll_deg = roll}}, o);
+      const BlurFit fit = FitCellsThroughBlur(scene.bgr, TrueHomography(scene.truth[0]));
+      ASSERT_TRUE(fit.ok);
+      ++cases;
+      const ModelReading bits = ReadBitsThroughBlur(fit);
+      if (!bits.ok) continue;
+      const PayloadResult payload = DecodePayload(bits.reading);
+      if (!payload.key) continue;
+      EXPECT_EQ(payload.key->value(), key) << "roll " << roll;
+      ++decoded;
+    }
+  }
+  EXPECT_GE(2 * decoded, cases - 2);
+}
+
 TEST(BlurModel, ABlackSquareWithoutElementsGivesNoKey) {
   cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
   cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
@@ -68,6 +94,8 @@ TEST(BlurModel, ABlackSquareWithoutElementsGivesNoKey) {
   const BlurFit fit = FitCellsThroughBlur(bgr, HomographyFromQuad(quad));
   ASSERT_TRUE(fit.ok);
   EXPECT_FALSE(Decode(fit.cells).has_value());
+  const ModelReading bits = ReadBitsThroughBlur(fit);
+  EXPECT_FALSE(bits.ok && DecodePayload(bits.reading).key.has_value());
 }
 
 TEST(BlurModel, LargeTagsAndTagsOffTheImageAreLeftToDirectSampling) {
