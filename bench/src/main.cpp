@@ -179,10 +179,10 @@ void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
   }
   char name[256];
   for (const bool large : {false, true}) {
-    std::snprintf(name, sizeof name, "%s/%03dpx-%02ddeg-%s-f%04d-%s%s.png", dir.c_str(),
+    std::snprintf(name, sizeof name, "%s/%03dpx-%02ddeg-%s-f%04d-key%d-%s%s.png", dir.c_str(),
                   kSizesPx[static_cast<std::size_t>(f.size_index)],
                   kTiltsDeg[static_cast<std::size_t>(f.tilt_index)], f.hard ? "hard" : "mod",
-                  f.index, reason.c_str(), large ? "-x4" : "");
+                  f.index, truth.id, reason.c_str(), large ? "-x4" : "");
     cv::imwrite(name, large ? enlarged : bgr(box));
   }
 }
