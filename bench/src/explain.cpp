@@ -55,8 +55,10 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
       if (e >= 0) red_at[static_cast<std::size_t>(e)] = true;
     }
   }
-  if (std::count(red_at.begin(), red_at.end(), true) < 3)
-    return "1 red: < 3 elements have a red pixel";
+  const auto red_elements = std::count(red_at.begin(), red_at.end(), true);
+  if (red_elements < 3) {
+    return "1 red: only " + std::to_string(red_elements) + " of 4 elements have a red pixel";
+  }
 
   // Stage 2: blobs kept by the size and shape limits near each element.
   stage::BlobLimits limits;

@@ -59,6 +59,75 @@ stage::PayloadResult Decode(const stage::OrientationResult& orientation) {
   return payload;
 }
 
+// What the readers made of one candidate: direct samples first, then the blur model's colours,
+// then its two-colours-per-class bits; the first that the codec accepts wins.
+struct TagReading {
+  stage::OrientationResult orientation;
+  stage::PayloadResult payload;
+  bool through_blur_model = false;
+};
+
+TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThresholds& t,
+                   bool direct) {
+  TagReading r;
+  if (direct) {
+    r.orientation = stage::ReadOrientation(stage::SampleCells(bgr, h), t);
+    if (r.orientation.ok) r.payload = Decode(r.orientation);
+    if (r.payload.key) return r;
+  } else {
+    r.orientation.error = "no orientation fits the red quadrants";
+  }
+  // Small or blurred cells mix: read them through a blur model.
+  const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, h);
+  if (!fit.ok) return r;
+  stage::OrientationResult modelled = stage::ReadOrientation(fit.cells, t);
+  if (modelled.ok) {
+    stage::PayloadResult payload = Decode(modelled);
+    if (payload.key) return {std::move(modelled), std::move(payload), true};
+  }
+  const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit);
+  if (!bits.ok) return r;
+  stage::OrientationResult as_read;
+  as_read.ok = true;
+  as_read.quarter_turns = bits.quarter_turns;
+  as_read.reading = bits.reading;
+  as_read.margins = bits.margins;
+  as_read.unknown = bits.unknown;
+  as_read.min_known_margin = bits.min_known_margin;
+  stage::PayloadResult payload = Decode(as_read);
+  if (payload.key) return {std::move(as_read), std::move(payload), true};
+  return r;
+}
+
+// A decoded candidate as a Detection (corners turned so that C0 comes first).
+Detection MakeDetection(stage::Quad quad, const TagReading& reading,
+                        const std::array<bool, 4>& blob_at_sampled_element) {
+  Detection d;
+  const stage::OrientationResult& o = reading.orientation;
+  const int r = o.quarter_turns;
+  quad = stage::RotateQuad(quad, r);
+  const cv::Matx33d h = stage::HomographyFromQuad(quad);
+  d.key = reading.payload.key;
+  double perimeter = 0;
+  for (int i = 0; i < 4; ++i) {
+    d.corners[i] = ToPoint(quad[i]);
+    const geometry::Point c = geometry::kElementCentres[i];
+    d.element_centres[i] = ToPoint(stage::Apply(h, c.x, c.y));
+    d.element_seen[i] = blob_at_sampled_element[(i + r) % 4];
+    perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
+  }
+  for (int i = 0; i < 9; ++i) d.homography[i] = h.val[i];
+  d.square_px = perimeter / 4;
+  d.cells = o.reading;
+  d.margins = o.margins;
+  d.unknown_bits = o.unknown;
+  d.min_known_margin = o.min_known_margin;
+  d.bits_from_second_copy = reading.payload.bits_from_second_copy;
+  d.bit_from_parity = reading.payload.bit_from_parity;
+  d.read_through_blur_model = reading.through_blur_model;
+  return d;
+}
+
 void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs,
                     const stage::BlobCluster& cluster, const DetectorOptions& options,
                     ClusterOutput* out) {
@@ -78,16 +147,21 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
     const stage::ElementAssignment rough =
         stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs);
     if (rough.found < 3) continue;
-    Detection d;
     const bool refined = stage::RefineCorners(dark, cluster.roi.tl(), &quad);
-    cv::Matx33d h = stage::HomographyFromQuad(quad);
+    const cv::Matx33d h = stage::HomographyFromQuad(quad);
     const stage::ElementAssignment assignment = stage::AssignElements(h, blobs, cluster.blobs);
     const auto t2 = Clock::now();
     out->quads_ms += Ms(t1, t2);
-    const auto reject = [&](std::string reason) {
+    const auto reject = [&](std::string reason, const stage::OrientationResult* o = nullptr) {
       if (!options.return_rejected) return;
+      Detection d;
       d.reject_reason = std::move(reason);
       for (int i = 0; i < 4; ++i) d.corners[i] = ToPoint(quad[i]);
+      if (o != nullptr) {
+        d.cells = o->reading;
+        d.margins = o->margins;
+        d.unknown_bits = o->unknown;
+      }
       out->detections.push_back(d);
     };
     if (!refined) {
@@ -98,78 +172,19 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
       reject("red blobs do not match the elements");
       continue;
     }
-    stage::OrientationResult orientation =
-        stage::ReadOrientation(stage::SampleCells(bgr, h), thresholds);
-    stage::PayloadResult payload;
-    if (orientation.ok) payload = Decode(orientation);
-    if (!payload.key) {
-      // Direct samples failed: small or blurred cells mix. Read them through a blur model.
-      const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, h);
-      if (fit.ok) {
-        stage::OrientationResult modelled = stage::ReadOrientation(fit.cells, thresholds);
-        stage::PayloadResult modelled_payload;
-        if (modelled.ok) modelled_payload = Decode(modelled);
-        if (modelled_payload.key) {
-          orientation = std::move(modelled);
-          payload = std::move(modelled_payload);
-          d.read_through_blur_model = true;
-        } else {
-          // Stronger still: each cell one of its class's two colours, bits chosen to fit.
-          const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit);
-          stage::PayloadResult bits_payload;
-          if (bits.ok) {
-            stage::OrientationResult as_orientation;
-            as_orientation.reading = bits.reading;
-            as_orientation.min_known_margin = bits.min_known_margin;
-            bits_payload = Decode(as_orientation);
-          }
-          if (bits_payload.key) {
-            orientation.ok = true;
-            orientation.error.clear();
-            orientation.quarter_turns = bits.quarter_turns;
-            orientation.reading = bits.reading;
-            orientation.margins = bits.margins;
-            orientation.unknown = bits.unknown;
-            orientation.min_known_margin = bits.min_known_margin;
-            payload = std::move(bits_payload);
-            d.read_through_blur_model = true;
-          }
-        }
-      }
-    }
+    const TagReading reading = ReadTag(bgr, h, thresholds, true);
     out->decode_ms += Ms(t2, Clock::now());
-    if (!orientation.ok) {
-      reject(orientation.error);
+    if (!reading.orientation.ok) {
+      reject(reading.orientation.error);
       continue;
     }
-    if (!payload.key) {
-      d.cells = orientation.reading;
-      d.margins = orientation.margins;
-      d.unknown_bits = orientation.unknown;
-      reject(payload.error);
+    if (!reading.payload.key) {
+      reject(reading.payload.error, &reading.orientation);
       continue;
     }
-    const int r = orientation.quarter_turns;
-    quad = stage::RotateQuad(quad, r);
-    h = stage::HomographyFromQuad(quad);
-    d.key = payload.key;
-    double perimeter = 0;
-    for (int i = 0; i < 4; ++i) {
-      d.corners[i] = ToPoint(quad[i]);
-      const geometry::Point c = geometry::kElementCentres[i];
-      d.element_centres[i] = ToPoint(stage::Apply(h, c.x, c.y));
-      d.element_seen[i] = assignment.blob[(i + r) % 4] >= 0;
-      perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
-    }
-    for (int i = 0; i < 9; ++i) d.homography[i] = h.val[i];
-    d.square_px = perimeter / 4;
-    d.cells = orientation.reading;
-    d.margins = orientation.margins;
-    d.unknown_bits = orientation.unknown;
-    d.min_known_margin = orientation.min_known_margin;
-    d.bits_from_second_copy = payload.bits_from_second_copy;
-    d.bit_from_parity = payload.bit_from_parity;
-    out->detections.push_back(d);
+    std::array<bool, 4> seen{};
+    for (int e = 0; e < 4; ++e) seen[e] = assignment.blob[e] >= 0;
+    out->detections.push_back(MakeDetection(quad, reading, seen));
   }
 }
 
