@@ -46,7 +46,7 @@ struct BlurFit {
 
 /// Largest square side (px) the fit is tried on: above it cells are several pixels wide, direct
 /// samples read them, and the fit's cost grows with the area.
-inline constexpr double kBlurFitMaxSidePx = 100;
+inline constexpr double kBlurFitMaxSidePx = 170;
 
 /// Fits the cells of the tag whose unit square maps to the image by `tag_to_image`.
 BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image);
