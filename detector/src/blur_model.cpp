@@ -52,7 +52,23 @@ struct Blur {
   double major = 1;
   double minor = 1;
   double angle_deg = 0;
+  // Extra blur of the colour-difference channels, px: JPEG (and most cameras' video paths) keep
+  // colour at half resolution (4:2:0), so colour is blurred more than brightness.
+  double chroma_extra = 0.8;
 };
+
+// Observations and region colours are modelled as brightness Y and two colour differences
+// (B − Y, R − Y) in linear light; Y sees the lens blur, the differences that blur and chroma
+// subsampling. The transform is linear, so least squares carries over unchanged.
+constexpr double kYr = 0.2126, kYg = 0.7152, kYb = 0.0722;
+std::array<double, 3> ToOpponent(double r, double g, double b) {
+  const double y = kYr * r + kYg * g + kYb * b;
+  return {y, b - y, r - y};
+}
+std::array<double, 3> ToLinearRgb(const std::array<double, 3>& o) {
+  const double y = o[0], b = o[1] + y, r = o[2] + y;
+  return {r, (y - kYr * r - kYb * b) / kYg, b};
+}
 
 // The tag's regions on the pixel grid around it, and the pixels observed.
 class TagOnGrid {
@@ -108,7 +124,7 @@ class TagOnGrid {
     linear_.reserve(observed_.size());
     for (const cv::Point g : observed_) {
       const std::uint8_t* p = bgr.ptr<std::uint8_t>(origin_.y + g.y) + 3 * (origin_.x + g.x);
-      linear_.push_back({SrgbLinear(p[2]), SrgbLinear(p[1]), SrgbLinear(p[0])});
+      linear_.push_back(ToOpponent(SrgbLinear(p[2]), SrgbLinear(p[1]), SrgbLinear(p[0])));
     }
   }
 
@@ -124,69 +140,90 @@ class TagOnGrid {
 
   /// Least-squares region colours under `blur`, from every `stride`-th observed pixel.
   Solution solve(const Blur& blur, std::size_t stride) const {
-    const std::vector<std::pair<cv::Point, double>> kernel = Kernel(blur);
-    cv::Matx<double, kRegions, kRegions> ata = cv::Matx<double, kRegions, kRegions>::zeros();
+    const std::vector<std::pair<cv::Point, double>> luma_kernel = Kernel(blur);
+    Blur wider = blur;
+    wider.major = std::sqrt(blur.major * blur.major + blur.chroma_extra * blur.chroma_extra);
+    wider.minor = std::sqrt(blur.minor * blur.minor + blur.chroma_extra * blur.chroma_extra);
+    const std::vector<std::pair<cv::Point, double>> chroma_kernel = Kernel(wider);
+    using Square = cv::Matx<double, kRegions, kRegions>;
+    std::array<Square, 2> ata = {Square::zeros(), Square::zeros()};  // luma, chroma
     cv::Matx<double, kRegions, 3> aty = cv::Matx<double, kRegions, 3>::zeros();
     double yty = 0;
     std::array<double, 3> mean{};
-    std::array<double, kRegions> row{};
-    std::vector<int> nonzero;
+    std::array<std::array<double, kRegions>, 2> row{};
+    std::array<std::vector<int>, 2> nonzero;
     Solution s;
     for (std::size_t i = 0; i < observed_.size(); i += stride) {
       const cv::Point g = observed_[i];
-      nonzero.clear();
-      for (const auto& [offset, weight] : kernel) {
-        const Coverage& c =
-            coverage_[static_cast<std::size_t>((g.y + offset.y) * size_.width + g.x + offset.x)];
-        for (std::uint32_t k = 0; k < c.count; ++k) {
-          const Part& part = parts_[c.first + k];
-          if (row[part.region] == 0) nonzero.push_back(part.region);
-          row[part.region] += weight * part.weight;
-        }
-      }
       const std::array<double, 3>& y = linear_[i];
-      for (std::size_t a = 0; a < nonzero.size(); ++a) {
-        const int ra = nonzero[a];
-        for (std::size_t b = a; b < nonzero.size(); ++b) {
-          const int rb = nonzero[b];
-          ata(std::min(ra, rb), std::max(ra, rb)) += row[ra] * row[rb];
+      for (int system = 0; system < 2; ++system) {
+        std::array<double, kRegions>& w = row[system];
+        std::vector<int>& nz = nonzero[system];
+        nz.clear();
+        for (const auto& [offset, weight] : system == 0 ? luma_kernel : chroma_kernel) {
+          const Coverage& c =
+              coverage_[static_cast<std::size_t>((g.y + offset.y) * size_.width + g.x + offset.x)];
+          for (std::uint32_t k = 0; k < c.count; ++k) {
+            const Part& part = parts_[c.first + k];
+            if (w[part.region] == 0) nz.push_back(part.region);
+            w[part.region] += weight * part.weight;
+          }
         }
-        for (int ch = 0; ch < 3; ++ch) aty(ra, ch) += row[ra] * y[ch];
+        for (std::size_t a = 0; a < nz.size(); ++a) {
+          const int ra = nz[a];
+          for (std::size_t b = a; b < nz.size(); ++b) {
+            const int rb = nz[b];
+            ata[system](std::min(ra, rb), std::max(ra, rb)) += w[ra] * w[rb];
+          }
+          if (system == 0) {
+            aty(ra, 0) += w[ra] * y[0];
+          } else {
+            aty(ra, 1) += w[ra] * y[1];
+            aty(ra, 2) += w[ra] * y[2];
+          }
+        }
+        for (int r : nz) w[r] = 0;
       }
       for (int ch = 0; ch < 3; ++ch) yty += y[ch] * y[ch], mean[ch] += y[ch];
-      for (int r : nonzero) row[r] = 0;
       ++s.pixels;
     }
     if (s.pixels == 0) return s;
-    for (int a = 0; a < kRegions; ++a) {
-      for (int b = 0; b < a; ++b) ata(a, b) = ata(b, a);
-    }
-    double trace = 0;
-    for (int r = 0; r < kRegions; ++r) trace += ata(r, r), s.support[r] = ata(r, r);
-    // A little ridge towards the mean colour keeps regions the pixels barely see from swinging.
-    const double ridge = kRidge * trace / kRegions;
-    cv::Matx<double, kRegions, kRegions> m = ata;
-    cv::Matx<double, kRegions, 3> rhs = aty;
-    for (int r = 0; r < kRegions; ++r) {
-      m(r, r) += ridge;
-      for (int ch = 0; ch < 3; ++ch) {
-        rhs(r, ch) += ridge * mean[ch] / static_cast<double>(s.pixels);
+    for (Square& m : ata) {
+      for (int a = 0; a < kRegions; ++a) {
+        for (int b = 0; b < a; ++b) m(a, b) = m(b, a);
       }
     }
-    cv::Matx<double, kRegions, 3> x;
-    if (!cv::solve(m, rhs, x, cv::DECOMP_CHOLESKY)) return s;
-    // |Ax − y|² = yᵀy − 2 xᵀAᵀy + xᵀAᵀA x, per channel.
+    for (int r = 0; r < kRegions; ++r) s.support[r] = ata[0](r, r);
     double residual = yty;
-    const cv::Matx<double, kRegions, 3> ata_x = ata * x;
-    for (int r = 0; r < kRegions; ++r) {
-      for (int ch = 0; ch < 3; ++ch) {
-        residual += x(r, ch) * (ata_x(r, ch) - 2 * aty(r, ch));
-        s.colour[r][ch] = x(r, ch);
+    for (int system = 0; system < 2; ++system) {
+      const Square& m0 = ata[system];
+      double trace = 0;
+      for (int r = 0; r < kRegions; ++r) trace += m0(r, r);
+      // A little ridge towards the mean colour keeps regions the pixels barely see from swinging.
+      const double ridge = kRidge * trace / kRegions;
+      Square m = m0;
+      for (int r = 0; r < kRegions; ++r) m(r, r) += ridge;
+      const int first = system == 0 ? 0 : 1, count = system == 0 ? 1 : 2;
+      for (int ch = first; ch < first + count; ++ch) {
+        cv::Matx<double, kRegions, 1> rhs, x;
+        for (int r = 0; r < kRegions; ++r) {
+          rhs(r) = aty(r, ch) + ridge * mean[ch] / static_cast<double>(s.pixels);
+        }
+        if (!cv::solve(m, rhs, x, cv::DECOMP_CHOLESKY)) return s;
+        // |Ax − y|² = yᵀy − 2 xᵀAᵀy + xᵀAᵀA x.
+        const cv::Matx<double, kRegions, 1> ata_x = m0 * x;
+        for (int r = 0; r < kRegions; ++r) {
+          residual += x(r) * (ata_x(r) - 2 * aty(r, ch));
+          s.colour[r][ch] = x(r);
+        }
       }
     }
     s.residual = std::max(0.0, residual);
     for (int a = 0; a < kRegions; ++a) {
-      for (int b = 0; b < kRegions; ++b) s.equations.ata[a * kRegions + b] = ata(a, b);
+      for (int b = 0; b < kRegions; ++b) {
+        s.equations.ata[a * kRegions + b] = ata[0](a, b);
+        s.equations.ata_chroma[a * kRegions + b] = ata[1](a, b);
+      }
       for (int ch = 0; ch < 3; ++ch) s.equations.aty[a * 3 + ch] = aty(a, ch);
     }
     s.equations.yty = yty;
@@ -233,8 +270,9 @@ class TagOnGrid {
   std::vector<std::array<double, 3>> linear_;
 };
 
-CellSample ToSample(const std::array<double, 3>& linear_rgb, double support) {
+CellSample ToSample(const std::array<double, 3>& opponent, double support) {
   CellSample s;
+  const std::array<double, 3> linear_rgb = ToLinearRgb(opponent);
   // A cell that no observed pixel sees enough of is unread, not read as its ridge prior.
   if (support < 0.5) return s;
   const LabApprox& lab = LabApprox::Get();
@@ -274,21 +312,28 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
     if (r < best_residual) best_residual = r, best = blur;
   };
   // Round blurs first, then elongated ones around the best, then small steps.
-  for (const double sigma : {0.45, 0.75, 1.1, 1.6, 2.2}) consider({sigma, sigma, 0});
+  for (const double sigma : {0.45, 0.75, 1.1, 1.6, 2.2}) consider({sigma, sigma, 0, 0.8});
   const Blur round = best;
   for (const double angle : {0.0, 45.0, 90.0, 135.0}) {
-    consider({round.major * 1.7, round.minor / 1.3, angle});
+    consider({round.major * 1.7, round.minor / 1.3, angle, round.chroma_extra});
   }
   for (int pass = 0; pass < 2; ++pass) {
     const Blur centre = best;
     for (const double f : {1.25, 0.8}) {
-      consider({centre.major * f, centre.minor, centre.angle_deg});
-      consider({centre.major, centre.minor * f, centre.angle_deg});
+      consider({centre.major * f, centre.minor, centre.angle_deg, centre.chroma_extra});
+      consider({centre.major, centre.minor * f, centre.angle_deg, centre.chroma_extra});
     }
     if (centre.major > centre.minor * 1.1) {
-      consider({centre.major, centre.minor, centre.angle_deg + 22.5});
-      consider({centre.major, centre.minor, centre.angle_deg - 22.5});
+      consider({centre.major, centre.minor, centre.angle_deg + 22.5, centre.chroma_extra});
+      consider({centre.major, centre.minor, centre.angle_deg - 22.5, centre.chroma_extra});
     }
+  }
+
+  const Blur luma_best = best;
+  for (const double extra : {0.0, 0.45, 1.2}) {
+    Blur b = luma_best;
+    b.chroma_extra = extra;
+    consider(b);
   }
 
   const TagOnGrid::Solution s = grid.solve(best, 1);
@@ -306,6 +351,7 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
   fit.sigma_major_px = best.major;
   fit.sigma_minor_px = best.minor;
   fit.angle_deg = best.angle_deg;
+  fit.chroma_extra_px = best.chroma_extra;
   fit.rms = std::sqrt(s.residual / (3.0 * static_cast<double>(s.pixels)));
   fit.equations = s.equations;
   fit.ok = true;
@@ -334,22 +380,27 @@ class ConstrainedModel {
  public:
   explicit ConstrainedModel(const NormalEquations& eq) : eq_(eq) {}
 
-  // Least-squares colours for the labels; a level nobody takes stays at zero.
+  // Brightness (channel 0) and the colour differences see different blurs.
+  double ata(int channel, int j, int k) const {
+    return (channel == 0 ? eq_.ata : eq_.ata_chroma)[j * kRegions + k];
+  }
+
+  // Least-squares colours for the labels, channel by channel; a level nobody takes stays at zero.
   Colours fitColours(const Labels& labels) const {
-    cv::Matx<double, kLevels, kLevels> btb = cv::Matx<double, kLevels, kLevels>::zeros();
-    cv::Matx<double, kLevels, 3> bty = cv::Matx<double, kLevels, 3>::zeros();
-    for (int j = 0; j < kRegions; ++j) {
-      for (int k = 0; k < kRegions; ++k) btb(labels[j], labels[k]) += eq_.ata[j * kRegions + k];
-      for (int ch = 0; ch < 3; ++ch) bty(labels[j], ch) += eq_.aty[j * 3 + ch];
-    }
-    double trace = 0;
-    for (int l = 0; l < kLevels; ++l) trace += btb(l, l);
-    for (int l = 0; l < kLevels; ++l) btb(l, l) += 1e-9 * trace + 1e-12;
-    cv::Matx<double, kLevels, 3> x;
-    cv::solve(btb, bty, x, cv::DECOMP_CHOLESKY);
     Colours colours{};
-    for (int l = 0; l < kLevels; ++l) {
-      for (int ch = 0; ch < 3; ++ch) colours[l][ch] = x(l, ch);
+    for (int ch = 0; ch < 3; ++ch) {
+      cv::Matx<double, kLevels, kLevels> btb = cv::Matx<double, kLevels, kLevels>::zeros();
+      cv::Matx<double, kLevels, 1> bty = cv::Matx<double, kLevels, 1>::zeros();
+      for (int j = 0; j < kRegions; ++j) {
+        for (int k = 0; k < kRegions; ++k) btb(labels[j], labels[k]) += ata(ch, j, k);
+        bty(labels[j]) += eq_.aty[j * 3 + ch];
+      }
+      double trace = 0;
+      for (int l = 0; l < kLevels; ++l) trace += btb(l, l);
+      for (int l = 0; l < kLevels; ++l) btb(l, l) += 1e-9 * trace + 1e-12;
+      cv::Matx<double, kLevels, 1> x;
+      cv::solve(btb, bty, x, cv::DECOMP_CHOLESKY);
+      for (int l = 0; l < kLevels; ++l) colours[l][ch] = x(l);
     }
     return colours;
   }
@@ -358,12 +409,12 @@ class ConstrainedModel {
     double r = eq_.yty;
     for (int j = 0; j < kRegions; ++j) {
       const Colour& cj = colours[labels[j]];
-      for (int ch = 0; ch < 3; ++ch) r -= 2 * cj[ch] * eq_.aty[j * 3 + ch];
-      for (int k = 0; k < kRegions; ++k) {
-        const double a = eq_.ata[j * kRegions + k];
-        if (a == 0) continue;
-        const Colour& ck = colours[labels[k]];
-        r += a * (cj[0] * ck[0] + cj[1] * ck[1] + cj[2] * ck[2]);
+      for (int ch = 0; ch < 3; ++ch) {
+        r -= 2 * cj[ch] * eq_.aty[j * 3 + ch];
+        for (int k = 0; k < kRegions; ++k) {
+          const double a = ata(ch, j, k);
+          if (a != 0) r += a * cj[ch] * colours[labels[k]][ch];
+        }
       }
     }
     return std::max(0.0, r);
@@ -373,12 +424,12 @@ class ConstrainedModel {
   double flipCost(const Labels& labels, const Colours& colours, int j) const {
     const Colour& now = colours[labels[j]];
     const Colour& other = colours[Flipped(labels[j])];
-    const Colour d = {other[0] - now[0], other[1] - now[1], other[2] - now[2]};
     double cost = 0;
     for (int ch = 0; ch < 3; ++ch) {
+      const double d = other[ch] - now[ch];
       double g = 0;
-      for (int k = 0; k < kRegions; ++k) g += eq_.ata[j * kRegions + k] * colours[labels[k]][ch];
-      cost += d[ch] * (2 * g - 2 * eq_.aty[j * 3 + ch] + d[ch] * eq_.ata[j * kRegions + j]);
+      for (int k = 0; k < kRegions; ++k) g += ata(ch, j, k) * colours[labels[k]][ch];
+      cost += d * (2 * g - 2 * eq_.aty[j * 3 + ch] + d * ata(ch, j, j));
     }
     return cost;
   }
@@ -407,7 +458,8 @@ class ConstrainedModel {
   const NormalEquations& eq_;
 };
 
-double Bstar(const Colour& linear) {
+double Bstar(const Colour& opponent) {
+  const Colour linear = ToLinearRgb(opponent);
   int a = 0, b = 0;
   LabApprox::Get().Ab(LinearToSrgb(linear[0]), LinearToSrgb(linear[1]), LinearToSrgb(linear[2]), &a,
                       &b);

@@ -26,8 +26,11 @@ inline constexpr int kModelRegions = 2 + kElements * (kRedQuadrants + kGreenSect
 
 /// The least-squares problem of the chosen blur, AᵀA x = Aᵀy over pixels × regions, kept so that
 /// constrained readings (ReadBitsThroughBlur) can be scored without touching the pixels again.
+/// Channels: brightness Y, then B − Y and R − Y (linear light); the colour differences see a wider
+/// blur (chroma subsampling), hence their own AᵀA.
 struct NormalEquations {
-  std::array<double, kModelRegions * kModelRegions> ata{};
+  std::array<double, kModelRegions * kModelRegions> ata{};         ///< brightness
+  std::array<double, kModelRegions * kModelRegions> ata_chroma{};  ///< colour differences
   std::array<double, kModelRegions * 3> aty{};
   double yty = 0;
   std::size_t pixels = 0;
@@ -35,13 +38,14 @@ struct NormalEquations {
 
 struct BlurFit {
   bool ok = false;
-  CellSamples cells;          ///< each cell's fitted colour, as a*, b*
-  double sigma_major_px = 0;  ///< the chosen blur: standard deviation along its long axis, px
-  double sigma_minor_px = 0;  ///< … and across it, px
-  double angle_deg = 0;       ///< direction of the long axis (image x towards y)
-  double rms = 0;             ///< residual per pixel and channel, linear light (0 … 1)
-  int evaluations = 0;        ///< blur candidates tried
-  NormalEquations equations;  ///< of the chosen blur, over all observed pixels
+  CellSamples cells;           ///< each cell's fitted colour, as a*, b*
+  double sigma_major_px = 0;   ///< the chosen blur: standard deviation along its long axis, px
+  double sigma_minor_px = 0;   ///< … and across it, px
+  double angle_deg = 0;        ///< direction of the long axis (image x towards y)
+  double chroma_extra_px = 0;  ///< extra blur of colour over brightness (chroma subsampling), px
+  double rms = 0;              ///< residual per pixel and channel, linear light (0 … 1)
+  int evaluations = 0;         ///< blur candidates tried
+  NormalEquations equations;   ///< of the chosen blur, over all observed pixels
 };
 
 /// Largest square side (px) the fit is tried on: above it cells are several pixels wide, direct
