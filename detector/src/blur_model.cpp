@@ -11,6 +11,7 @@
 #include "pintag/codec/geometry.hpp"
 
 namespace pintag::stage {
+
 namespace {
 
 constexpr int kCellsPerElement = kRedQuadrants + kGreenSectors;
@@ -21,26 +22,40 @@ constexpr int kSubsamples = 4;            // per pixel side, for each pixel's re
 constexpr double kMaxSigmaPx = 2.5;       // widest blur tried (5 px of motion with defocus 2 px)
 constexpr int kMaxKernelRadius = 7;       // px: about 3 kMaxSigmaPx
 constexpr double kObservedMargin = 0.06;  // tag units of quiet zone observed beyond the square
-constexpr int kMaxObserved = 1500;        // pixels used while searching the blur (a stride beyond)
+constexpr int kSearchPixels = 600;        // pixels used while searching the blur (a stride beyond)
+constexpr int kFinalPixels = 2500;        // pixels of the final solve: 50 colours need far fewer
 constexpr double kRidge = 0.01;  // regularisation, relative to the mean of AᵀA's diagonal
 
-int RegionIndex(const geometry::CellAt& cell) {
-  switch (cell.region) {
-    case geometry::Region::kOutside:
-      return kOutsideRegion;
-    case geometry::Region::kBlack:
-      return kBlackRegion;
-    case geometry::Region::kRed:
-      return 2 + cell.element * kCellsPerElement + cell.index;
-    case geometry::Region::kGreen:
-      return 2 + cell.element * kCellsPerElement + kRedQuadrants + cell.index;
+}  // namespace
+
+// The region of a point in tag units: geometry::LocateCell's answer without its atan2 (this runs
+// 16 times per pixel of the tag's surroundings). Sector boundaries are the diagonals and axes, so
+// comparisons of the offsets decide them.
+int ModelRegionAt(double x, double y) {
+  if (x < 0 || y < 0 || x >= 1 || y >= 1) return kOutsideRegion;
+  const int column = x < 0.5 ? 0 : 1, row = y < 0.5 ? 0 : 1;
+  const int element = row == 0 ? column : 3 - column;
+  const geometry::Point c = geometry::kElementCentres[element];
+  const double right = x - c.x, up = c.y - y;  // clockwise angles from up
+  const double r2 = right * right + up * up;
+  constexpr double kOuter2 = geometry::kGreenOuterRadius * geometry::kGreenOuterRadius;
+  constexpr double kRed2 = geometry::kRedRadius * geometry::kRedRadius;
+  if (r2 >= kOuter2) return kBlackRegion;
+  int sector;
+  if (right >= 0) {
+    sector = up > 0 ? (right < up ? 0 : 1) : (right > -up ? 2 : 3);
+  } else {
+    sector = up < 0 ? (-right < -up ? 4 : 5) : (-right > up ? 6 : 7);
   }
-  return kOutsideRegion;
+  const int base = 2 + element * kCellsPerElement;
+  return r2 < kRed2 ? base + sector / 2 : base + kRedQuadrants + sector;
 }
+
+namespace {
 
 // How much of each region a pixel's area holds (fractions summing to 1).
 struct Coverage {
-  std::uint32_t first = 0;  // into Geometry::parts
+  std::uint32_t first = 0;  // into TagOnGrid::parts_
   std::uint32_t count = 0;
 };
 struct Part {
@@ -99,7 +114,7 @@ class TagOnGrid {
             const double px = x - 0.5 + (sx + 0.5) / kSubsamples;
             const double py = y - 0.5 + (sy + 0.5) / kSubsamples;
             const cv::Vec3d t = to_tag * cv::Vec3d(px, py, 1);
-            const int region = RegionIndex(geometry::LocateCell(t[0] / t[2], t[1] / t[2]));
+            const int region = ModelRegionAt(t[0] / t[2], t[1] / t[2]);
             if (hits[region]++ == 0) touched.push_back(region);
           }
         }
@@ -300,7 +315,7 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
   if (side > kBlurFitMaxSidePx || side < 8) return fit;
   const TagOnGrid grid(bgr, tag_to_image);
   if (grid.observed() < 64) return fit;
-  const std::size_t stride = std::max<std::size_t>(1, grid.observed() / kMaxObserved);
+  const std::size_t stride = std::max<std::size_t>(1, grid.observed() / kSearchPixels);
 
   Blur best;
   double best_residual = 1e300;
@@ -336,7 +351,8 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
     consider(b);
   }
 
-  const TagOnGrid::Solution s = grid.solve(best, 1);
+  const TagOnGrid::Solution s =
+      grid.solve(best, std::max<std::size_t>(1, grid.observed() / kFinalPixels));
   if (s.pixels == 0 || s.residual >= 1e299) return fit;
   for (int e = 0; e < kElements; ++e) {
     for (int q = 0; q < kRedQuadrants; ++q) {

@@ -24,6 +24,11 @@ namespace pintag::stage {
 /// quadrants and 8 green sectors.
 inline constexpr int kModelRegions = 2 + kElements * (kRedQuadrants + kGreenSectors);
 
+/// The model region of a point in tag units: 0 outside the square, 1 black, then element e's red
+/// quadrant q at 2 + 12 e + q and green sector s at 2 + 12 e + 4 + s (geometry::LocateCell's
+/// cells, found without trigonometry).
+int ModelRegionAt(double x, double y);
+
 /// The least-squares problem of the chosen blur, AᵀA x = Aᵀy over pixels × regions, kept so that
 /// constrained readings (ReadBitsThroughBlur) can be scored without touching the pixels again.
 /// Channels: brightness Y, then B − Y and R − Y (linear light); the colour differences see a wider

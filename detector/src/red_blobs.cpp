@@ -67,20 +67,27 @@ bool ToBlob(const Moments& m, const BlobLimits& limits, RedBlob* blob) {
 bool HasRing(const cv::Mat& bgr, const RedBlob& blob) {
   const LabApprox& lab = LabApprox::Get();
   const double ca = std::cos(blob.angle), sa = std::sin(blob.angle);
-  const double ra = 0.75 * blob.major, rb = 0.75 * blob.minor;  // 1.5 × the semi-axes
-  int ring = 0;
-  for (int k = 0; k < 8; ++k) {
-    const double t = k * std::numbers::pi / 4;
-    const double u = ra * std::cos(t), v = rb * std::sin(t);
-    const int x = static_cast<int>(std::lround(blob.centroid.x + u * ca - v * sa));
-    const int y = static_cast<int>(std::lround(blob.centroid.y + u * sa + v * ca));
-    if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
-    const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * x;
-    int a, b;
-    lab.Ab(p[2], p[1], p[0], &a, &b);
-    ring += a < 10 * kLabScale && lab.L(p[2], p[1], p[0]) < 85 * kLabScale;
+  // 1.5 × the semi-axes lands in the green ring when the blob is the whole red disk. A blurred
+  // small disk passes the redness test only in its core, and there 1.5 × is still red: look
+  // further out too (2.5 ×, 3.5 ×); red marks on white paper and orange textures fail at every
+  // radius.
+  for (const double scale : {0.75, 1.25, 1.75}) {
+    const double ra = scale * blob.major, rb = scale * blob.minor;
+    int ring = 0;
+    for (int k = 0; k < 8; ++k) {
+      const double t = k * std::numbers::pi / 4;
+      const double u = ra * std::cos(t), v = rb * std::sin(t);
+      const int x = static_cast<int>(std::lround(blob.centroid.x + u * ca - v * sa));
+      const int y = static_cast<int>(std::lround(blob.centroid.y + u * sa + v * ca));
+      if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
+      const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * x;
+      int a, b;
+      lab.Ab(p[2], p[1], p[0], &a, &b);
+      ring += a < 10 * kLabScale && lab.L(p[2], p[1], p[0]) < 85 * kLabScale;
+    }
+    if (ring >= 5) return true;
   }
-  return ring >= 5;
+  return false;
 }
 
 std::vector<RedBlob> FindRedBlobs(const RedRuns& red, const BlobLimits& limits) {

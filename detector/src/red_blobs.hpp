@@ -30,9 +30,10 @@ struct BlobLimits {
 /// 8-connected components of the runs, with their moments, filtered by `limits`.
 std::vector<RedBlob> FindRedBlobs(const RedRuns& runs, const BlobLimits& limits);
 /// Whether the blob sits in a ring that is neither red nor white, as a tag's red disk sits in its
-/// green ring: at 1.5 times the ellipse's semi-axes, in 8 directions, at least 5 samples must have
-/// a* < 10 and L* < 85. Orange textures and red marks on white paper fail; covered tags lose only
-/// the covered element.
+/// green ring: on an ellipse at 1.5, 2.5 or 3.5 times the blob's semi-axes (the larger ones for a
+/// blurred disk whose red core is smaller than the disk), in 8 directions, at least 5 samples must
+/// have a* < 10 and L* < 85. Orange textures and red marks on white paper fail; covered tags lose
+/// only the covered element.
 bool HasRing(const cv::Mat& bgr, const RedBlob& blob);
 
 /// Same from a mask (tests).

@@ -9,6 +9,7 @@
 #include "homography.hpp"
 #include "orientation.hpp"
 #include "payload.hpp"
+#include "pintag/codec/geometry.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::stage {
@@ -26,6 +27,35 @@ cv::Matx33d TrueHomography(const testing::SyntheticTruth& truth) {
   Quad quad;
   for (int i = 0; i < 4; ++i) quad[i] = truth.corners[i];
   return HomographyFromQuad(quad);
+}
+
+TEST(BlurModel, RegionsAreTheFormatsCells) {
+  int checked = 0;
+  for (int iy = -20; iy <= 420; ++iy) {
+    for (int ix = -20; ix <= 420; ++ix) {
+      // Offsets keep the points off the cell boundaries, where the two may round differently.
+      const double x = (ix + 0.37) / 400, y = (iy + 0.61) / 400;
+      const geometry::CellAt cell = geometry::LocateCell(x, y);
+      int expected = 0;
+      switch (cell.region) {
+        case geometry::Region::kOutside:
+          expected = 0;
+          break;
+        case geometry::Region::kBlack:
+          expected = 1;
+          break;
+        case geometry::Region::kRed:
+          expected = 2 + 12 * cell.element + cell.index;
+          break;
+        case geometry::Region::kGreen:
+          expected = 2 + 12 * cell.element + 4 + cell.index;
+          break;
+      }
+      ASSERT_EQ(ModelRegionAt(x, y), expected) << x << ", " << y;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 441 * 441);
 }
 
 TEST(BlurModel, ReadsSmallBlurredTagsThatDirectSamplesCannot) {
