@@ -118,7 +118,7 @@ class TagOnGrid {
             if (hits[region]++ == 0) touched.push_back(region);
           }
         }
-        Coverage& c = coverage_[static_cast<std::size_t>(gy * size_.width + gx)];
+        Coverage& c = coverage_[index(gx, gy)];
         c.first = static_cast<std::uint32_t>(parts_.size());
         c.count = static_cast<std::uint32_t>(touched.size());
         for (int region : touched) {
@@ -138,7 +138,8 @@ class TagOnGrid {
     }
     linear_.reserve(observed_.size());
     for (const cv::Point g : observed_) {
-      const std::uint8_t* p = bgr.ptr<std::uint8_t>(origin_.y + g.y) + 3 * (origin_.x + g.x);
+      const std::uint8_t* p =
+          bgr.ptr<std::uint8_t>(origin_.y + g.y) + 3 * static_cast<std::ptrdiff_t>(origin_.x + g.x);
       linear_.push_back(ToOpponent(SrgbLinear(p[2]), SrgbLinear(p[1]), SrgbLinear(p[0])));
     }
   }
@@ -176,8 +177,7 @@ class TagOnGrid {
         std::vector<int>& nz = nonzero[system];
         nz.clear();
         for (const auto& [offset, weight] : system == 0 ? luma_kernel : chroma_kernel) {
-          const Coverage& c =
-              coverage_[static_cast<std::size_t>((g.y + offset.y) * size_.width + g.x + offset.x)];
+          const Coverage& c = coverage_[index(g.x + offset.x, g.y + offset.y)];
           for (std::uint32_t k = 0; k < c.count; ++k) {
             const Part& part = parts_[c.first + k];
             if (w[part.region] == 0) nz.push_back(part.region);
@@ -247,6 +247,11 @@ class TagOnGrid {
   }
 
  private:
+  std::size_t index(int gx, int gy) const {
+    return static_cast<std::size_t>(gy) * static_cast<std::size_t>(size_.width) +
+           static_cast<std::size_t>(gx);
+  }
+
   static double SrgbLinear(std::uint8_t code) {
     static const std::array<double, 256> table = [] {
       std::array<double, 256> t{};
@@ -492,8 +497,8 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
   }
   const ConstrainedModel model(fit.equations);
   struct Hypothesis {
-    Labels labels;
-    Colours colours;
+    Labels labels{};
+    Colours colours{};
     double residual = 1e300;
   };
   std::array<Hypothesis, 4> hypotheses;

@@ -22,7 +22,7 @@ namespace pintag::stage {
 
 /// The tag's regions in the model: the quiet zone, the black square, then per element its 4 red
 /// quadrants and 8 green sectors.
-inline constexpr int kModelRegions = 2 + kElements * (kRedQuadrants + kGreenSectors);
+inline constexpr std::size_t kModelRegions = 2 + kElements * (kRedQuadrants + kGreenSectors);
 
 /// The model region of a point in tag units: 0 outside the square, 1 black, then element e's red
 /// quadrant q at 2 + 12 e + q and green sector s at 2 + 12 e + 4 + s (geometry::LocateCell's

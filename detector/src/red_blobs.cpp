@@ -80,7 +80,7 @@ bool HasRing(const cv::Mat& bgr, const RedBlob& blob) {
       const int x = static_cast<int>(std::lround(blob.centroid.x + u * ca - v * sa));
       const int y = static_cast<int>(std::lround(blob.centroid.y + u * sa + v * ca));
       if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
-      const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * x;
+      const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * static_cast<std::ptrdiff_t>(x);
       int a, b;
       lab.Ab(p[2], p[1], p[0], &a, &b);
       ring += a < 10 * kLabScale && lab.L(p[2], p[1], p[0]) < 85 * kLabScale;
