@@ -58,16 +58,24 @@ TEST(BlurModel, RegionsAreTheFormatsCells) {
   EXPECT_EQ(checked, 441 * 441);
 }
 
+// One 30 px tag, blurred (σ px, round) and noised, at a tilt and roll.
+testing::SyntheticScene SmallBlurredTag(int key, double tilt_deg, double roll_deg, double sigma,
+                                        double noise, std::uint64_t seed) {
+  testing::SyntheticOptions o;
+  o.seed = seed;
+  o.blur_sigma = sigma;
+  o.noise_sigma = noise;
+  return testing::MakeScene(
+      {{.key = key, .square_px = 30, .tilt_deg = tilt_deg, .roll_deg = roll_deg}}, o);
+}
+
 TEST(BlurModel, ReadsSmallBlurredTagsThatDirectSamplesCannot) {
   int direct = 0, fitted = 0, cases = 0;
   for (const int key : {0, 1, 4660, 13107, 21845, 32767}) {
     for (const double roll : {0.0, 33.0}) {
-      testing::SyntheticOptions o;
-      o.seed = static_cast<std::uint64_t>(key) * 7 + static_cast<std::uint64_t>(roll);
-      o.blur_sigma = 1.6;
-      o.noise_sigma = 2;
       const auto scene =
-          testing::MakeScene({{.key = key, .square_px = 30, .tilt_deg = 20, .roll_deg = roll}}, o);
+          SmallBlurredTag(key, 20, roll, 1.6, 2,
+                          static_cast<std::uint64_t>(key) * 7 + static_cast<std::uint64_t>(roll));
       const cv::Matx33d h = TrueHomography(scene.truth[0]);
       ++cases;
       const std::optional<TagKey> read = Decode(SampleCells(scene.bgr, h));
@@ -96,12 +104,9 @@ TEST(BlurModel, BitsModelNeverGivesAnotherKey) {
   int decoded = 0, cases = 0;
   for (const int key : {1, 4660, 13107, 21845, 30000}) {
     for (const double roll : {10.0, 55.0}) {
-      testing::SyntheticOptions o;
-      o.seed = static_cast<std::uint64_t>(key) * 3 + static_cast<std::uint64_t>(roll);
-      o.blur_sigma = 1.9;
-      o.noise_sigma = 3;
       const auto scene =
-          testing::MakeScene({{.key = key, .square_px = 30, .tilt_deg = 30, .roll_deg = roll}}, o);
+          SmallBlurredTag(key, 30, roll, 1.9, 3,
+                          static_cast<std::uint64_t>(key) * 3 + static_cast<std::uint64_t>(roll));
       const BlurFit fit = FitCellsThroughBlur(scene.bgr, TrueHomography(scene.truth[0]));
       ASSERT_TRUE(fit.ok);
       ++cases;
