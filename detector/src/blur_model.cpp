@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -489,18 +490,17 @@ double Bstar(const Colour& opponent) {
 
 }  // namespace
 
-ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
-  ModelReading result;
-  if (!fit.ok || fit.equations.pixels == 0) {
-    result.error = "no blur fit";
-    return result;
-  }
-  const ConstrainedModel model(fit.equations);
-  struct Hypothesis {
-    Labels labels{};
-    Colours colours{};
-    double residual = 1e300;
-  };
+namespace {
+
+struct Hypothesis {
+  Labels labels{};
+  Colours colours{};
+  double residual = 1e300;
+};
+
+// For each of the four orientations: the orientation cells fixed to the format's bits, the other
+// cells settled by iterated conditional modes.
+std::array<Hypothesis, 4> SettleOrientations(const ConstrainedModel& model, const BlurFit& fit) {
   std::array<Hypothesis, 4> hypotheses;
   for (int r = 0; r < 4; ++r) {
     // Sampled element (e + r) % 4 is canonical element e; quadrants turn with it.
@@ -541,6 +541,19 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
     h.labels = labels;
     h.residual = model.residual(labels, h.colours);
   }
+  return hypotheses;
+}
+
+}  // namespace
+
+ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
+  ModelReading result;
+  if (!fit.ok || fit.equations.pixels == 0) {
+    result.error = "no blur fit";
+    return result;
+  }
+  const ConstrainedModel model(fit.equations);
+  const std::array<Hypothesis, 4> hypotheses = SettleOrientations(model, fit);
   int best = 0;
   for (int r = 1; r < 4; ++r) {
     if (hypotheses[r].residual < hypotheses[best].residual) best = r;
@@ -594,6 +607,162 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
   }
   result.quarter_turns = best;
   result.ok = true;
+  return result;
+}
+
+namespace {
+
+// Canonical cell order for bit masks: green (e, s) at 8 e + s, red (e, q) at 32 + 4 e + q.
+constexpr int kCanonicalCells = kElements * kCellsPerElement;
+static_assert(kCanonicalCells <= 64);
+
+int SampledRegion(int canonical, int quarter_turns) {
+  const int r = quarter_turns;
+  if (canonical < 32) {
+    const int e = canonical / 8, s = canonical % 8;
+    return GreenRegion((e + r) % kElements, (s + 2 * r) % kGreenSectors);
+  }
+  const int e = (canonical - 32) / 4, q = (canonical - 32) % 4;
+  return RedRegion((e + r) % kElements, (q + r) % kRedQuadrants);
+}
+
+// Every key's 48 cells as a bit mask in canonical order, built once.
+const std::vector<std::uint64_t>& Codebook() {
+  static const std::vector<std::uint64_t> book = [] {
+    std::vector<std::uint64_t> b(kKeyCount);
+    for (int k = 0; k < kKeyCount; ++k) {
+      const TagCells cells = EncodeCells(TagKey(static_cast<std::uint16_t>(k)));
+      std::uint64_t mask = 0;
+      for (int e = 0; e < kElements; ++e) {
+        for (int g = 0; g < kGreenSectors; ++g) {
+          if (cells.green[e][g]) mask |= std::uint64_t{1} << (8 * e + g);
+        }
+        for (int q = 0; q < kRedQuadrants; ++q) {
+          if (cells.red[e][q]) mask |= std::uint64_t{1} << (32 + 4 * e + q);
+        }
+      }
+      b[static_cast<std::size_t>(k)] = mask;
+    }
+    return b;
+  }();
+  return book;
+}
+
+bool IsOneLevel(int level) {
+  return level == kRed1 || level == kGreen1;
+}
+
+}  // namespace
+
+CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, double min_margin) {
+  CodewordReading result;
+  if (!fit.ok || fit.equations.pixels == 0) {
+    result.error = "no blur fit";
+    return result;
+  }
+  const ConstrainedModel model(fit.equations);
+  const std::array<Hypothesis, 4> hypotheses = SettleOrientations(model, fit);
+  double free_best = 1e300;
+  for (const Hypothesis& h : hypotheses) free_best = std::min(free_best, h.residual);
+  const double noise =
+      std::max(free_best, 1e-12) / (3.0 * static_cast<double>(fit.equations.pixels));
+
+  // Rank every (key, orientation) by the summed cost of the cells where it disagrees with that
+  // orientation's settled reading (each cell's flip cost, colours held): cheap, and close to
+  // the exact residual when few cells differ.
+  struct Candidate {
+    double cost;
+    int key;
+    int turns;
+  };
+  constexpr std::size_t kExact = 8;  // best-ranked candidates whose exact residual is computed
+  std::vector<Candidate> ranked;
+  const std::vector<std::uint64_t>& book = Codebook();
+  for (int r = 0; r < 4; ++r) {
+    const Hypothesis& h = hypotheses[r];
+    std::array<double, kCanonicalCells> cost{};
+    std::uint64_t read = 0;
+    for (int c = 0; c < kCanonicalCells; ++c) {
+      const int j = SampledRegion(c, r);
+      cost[c] = model.flipCost(h.labels, h.colours, j);
+      if (IsOneLevel(h.labels[j])) read |= std::uint64_t{1} << c;
+    }
+    for (int k = 0; k < kKeyCount; ++k) {
+      std::uint64_t differ = book[static_cast<std::size_t>(k)] ^ read;
+      double total = 0;
+      while (differ != 0) {
+        total += cost[static_cast<std::size_t>(std::countr_zero(differ))];
+        differ &= differ - 1;
+      }
+      if (ranked.size() < kExact || total < ranked.back().cost) {
+        if (ranked.size() == kExact) ranked.pop_back();
+        const Candidate candidate{total, k, r};
+        ranked.insert(std::upper_bound(
+                          ranked.begin(), ranked.end(), candidate,
+                          [](const Candidate& x, const Candidate& y) { return x.cost < y.cost; }),
+                      candidate);
+      }
+    }
+  }
+
+  // Exact residuals of those, colours refitted to each.
+  struct Scored {
+    double residual;
+    Candidate candidate;
+    Labels labels;
+    Colours colours;
+  };
+  std::vector<Scored> scored;
+  for (const Candidate& c : ranked) {
+    Labels labels{};
+    labels[0] = kQuietLevel, labels[1] = kBlackLevel;
+    const std::uint64_t code = book[static_cast<std::size_t>(c.key)];
+    for (int cell = 0; cell < kCanonicalCells; ++cell) {
+      const bool one = ((code >> cell) & 1U) != 0;
+      const bool green = cell < 32;
+      labels[SampledRegion(cell, c.turns)] =
+          green ? (one ? kGreen1 : kGreen0) : (one ? kRed1 : kRed0);
+    }
+    const Colours colours = model.fitColours(labels);
+    scored.push_back({model.residual(labels, colours), c, labels, colours});
+  }
+  std::sort(scored.begin(), scored.end(),
+            [](const Scored& a, const Scored& b) { return a.residual < b.residual; });
+  if (scored.size() < 2) {
+    result.error = "blur model: no codeword candidates";
+    return result;
+  }
+  const Scored& best = scored[0];
+  const double lead = (scored[1].residual - best.residual) / noise;
+  const double excess = (best.residual - free_best) / noise;
+  // The winner must beat every other codeword clearly, and sit nearer the free reading than the
+  // runner-up sits to the winner; its colours must look like the palette.
+  if (lead < min_margin || excess > lead) {
+    result.error = "blur model: no codeword clearly nearest";
+    return result;
+  }
+  // (Both red levels are in every codeword, through the orientation cells; the green ones only
+  // when the payload has both bit values.)
+  const std::uint64_t greens = book[static_cast<std::size_t>(best.candidate.key)] & 0xFFFFFFFFU;
+  const bool both_greens = greens != 0 && greens != 0xFFFFFFFFU;
+  if (Bstar(best.colours[kRed1]) - Bstar(best.colours[kRed0]) < 20 ||
+      (both_greens && Bstar(best.colours[kGreen1]) - Bstar(best.colours[kGreen0]) < 20)) {
+    result.error = "blur model: codeword colours unlike the palette";
+    return result;
+  }
+  result.key = TagKey(static_cast<std::uint16_t>(best.candidate.key));
+  result.quarter_turns = best.candidate.turns;
+  result.lead = lead;
+  result.excess = excess;
+  const TagCells cells = EncodeCells(*result.key);
+  for (int e = 0; e < kElements; ++e) {
+    for (int g = 0; g < kGreenSectors; ++g) {
+      result.reading.green[e][g] = cells.green[e][g] ? Bit::kOne : Bit::kZero;
+    }
+    for (int q = 0; q < kRedQuadrants; ++q) {
+      result.reading.red[e][q] = cells.red[e][q] ? Bit::kOne : Bit::kZero;
+    }
+  }
   return result;
 }
 

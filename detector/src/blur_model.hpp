@@ -12,6 +12,7 @@
 
 #include <array>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 #include "pintag/codec/cells.hpp"
@@ -78,5 +79,23 @@ struct ModelReading {
 };
 
 ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance = 9);
+
+/// The format codeword nearest to a blur fit, for when no reading of single bits decodes: every
+/// (key, orientation) is ranked by the flip costs of the cells where it disagrees with the settled
+/// reading of that orientation, the best few are scored exactly (colours refitted), and the best
+/// is accepted only if it explains the pixels better than any other codeword by `min_margin`
+/// times the residual noise, lies nearer the free reading than that lead, and its colours look
+/// like the palette. This is a dictionary decode with a margin, as ArUco and AprilTag do, but on
+/// the fitted model rather than on thresholded bits.
+struct CodewordReading {
+  std::optional<TagKey> key;
+  std::string error;
+  int quarter_turns = 0;  ///< element `quarter_turns` of the sampled frame is C0
+  CellReading reading;    ///< the codeword, canonical
+  double lead = 0;        ///< runner-up's residual over the winner's, in noise units
+  double excess = 0;      ///< winner's residual over the free reading's, in noise units
+};
+
+CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, double min_margin = 25);
 
 }  // namespace pintag::stage

@@ -86,16 +86,29 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThr
     if (payload.key) return {std::move(modelled), std::move(payload), true};
   }
   const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit);
-  if (!bits.ok) return r;
+  if (bits.ok) {
+    stage::OrientationResult as_read;
+    as_read.ok = true;
+    as_read.quarter_turns = bits.quarter_turns;
+    as_read.reading = bits.reading;
+    as_read.margins = bits.margins;
+    as_read.unknown = bits.unknown;
+    as_read.min_known_margin = bits.min_known_margin;
+    stage::PayloadResult payload = Decode(as_read);
+    if (payload.key) return {std::move(as_read), std::move(payload), true};
+  }
+  // Single bits do not decode: the codeword that explains the pixels clearly best, if one does.
+  const stage::CodewordReading nearest = stage::NearestCodewordThroughBlur(fit);
+  if (!nearest.key) return r;
   stage::OrientationResult as_read;
   as_read.ok = true;
-  as_read.quarter_turns = bits.quarter_turns;
-  as_read.reading = bits.reading;
-  as_read.margins = bits.margins;
-  as_read.unknown = bits.unknown;
-  as_read.min_known_margin = bits.min_known_margin;
+  as_read.quarter_turns = nearest.quarter_turns;
+  as_read.reading = nearest.reading;
+  as_read.min_known_margin = 1;
   stage::PayloadResult payload = Decode(as_read);
-  if (payload.key) return {std::move(as_read), std::move(payload), true};
+  if (payload.key && *payload.key == *nearest.key) {
+    return {std::move(as_read), std::move(payload), true};
+  }
   return r;
 }
 

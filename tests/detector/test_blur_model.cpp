@@ -121,6 +121,29 @@ TEST(BlurModel, BitsModelNeverGivesAnotherKey) {
   EXPECT_GE(2 * decoded, cases - 2);
 }
 
+// The nearest-codeword decode (after the bit readers) on tags too blurred for them: whatever it
+// accepts must be the right key, and it must accept most.
+TEST(BlurModel, NearestCodewordIsTheRightKeyOrNone) {
+  int decoded = 0, cases = 0;
+  for (const int key : {0, 2, 9999, 17000, 24680, 32767}) {
+    for (const double roll : {5.0, 40.0}) {
+      const auto scene =
+          SmallBlurredTag(key, 35, roll, 2.2, 4,
+                          static_cast<std::uint64_t>(key) * 5 + static_cast<std::uint64_t>(roll));
+      const BlurFit fit = FitCellsThroughBlur(scene.bgr, TrueHomography(scene.truth[0]));
+      ASSERT_TRUE(fit.ok);
+      ++cases;
+      const CodewordReading nearest = NearestCodewordThroughBlur(fit);
+      if (!nearest.key) continue;
+      EXPECT_EQ(nearest.key->value(), key) << "roll " << roll;
+      EXPECT_GE(nearest.lead, 25);
+      EXPECT_LE(nearest.excess, nearest.lead);
+      ++decoded;
+    }
+  }
+  EXPECT_GE(2 * decoded, cases);
+}
+
 TEST(BlurModel, ABlackSquareWithoutElementsGivesNoKey) {
   cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
   cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
@@ -131,6 +154,27 @@ TEST(BlurModel, ABlackSquareWithoutElementsGivesNoKey) {
   EXPECT_FALSE(Decode(fit.cells).has_value());
   const ModelReading bits = ReadBitsThroughBlur(fit);
   EXPECT_FALSE(bits.ok && DecodePayload(bits.reading).key.has_value());
+  EXPECT_FALSE(NearestCodewordThroughBlur(fit).key.has_value());
+}
+
+// Squares that are not tags (random colourful blotches in a black square with a white margin)
+// must give no codeword.
+TEST(BlurModel, ColourfulNonTagsGiveNoCodeword) {
+  cv::RNG rng(7);
+  for (int trial = 0; trial < 12; ++trial) {
+    cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
+    cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
+    for (int blob = 0; blob < 6; ++blob) {
+      const cv::Point centre(rng.uniform(44, 76), rng.uniform(44, 76));
+      const cv::Scalar colour(rng.uniform(0, 256), rng.uniform(0, 256), rng.uniform(0, 256));
+      cv::circle(bgr, centre, rng.uniform(2, 7), colour, cv::FILLED);
+    }
+    cv::GaussianBlur(bgr, bgr, {}, 1.5);
+    const Quad quad = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
+    const BlurFit fit = FitCellsThroughBlur(bgr, HomographyFromQuad(quad));
+    ASSERT_TRUE(fit.ok);
+    EXPECT_FALSE(NearestCodewordThroughBlur(fit).key.has_value()) << "trial " << trial;
+  }
 }
 
 TEST(BlurModel, LargeTagsAndTagsOffTheImageAreLeftToDirectSampling) {
