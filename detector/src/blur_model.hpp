@@ -84,8 +84,8 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance = 9
 /// (key, orientation) is ranked by the flip costs of the cells where it disagrees with the settled
 /// reading of that orientation, the best few are scored exactly (colours refitted), and the best
 /// is accepted only if it explains the pixels better than any other codeword by `min_margin`
-/// times the residual noise, lies nearer the free reading than that lead, and its colours look
-/// like the palette. This is a dictionary decode with a margin, as ArUco and AprilTag do, but on
+/// times the residual noise, at least as well as the free reading, and its colours look like the
+/// palette. This is a dictionary decode with a margin, as ArUco and AprilTag do, but on
 /// the fitted model rather than on thresholded bits.
 struct CodewordReading {
   std::optional<TagKey> key;
