@@ -57,7 +57,7 @@ struct Detection {
   bool bit_from_parity = false;   ///< one code bit solved from the parity
   /// The cells were read by fitting a blur model to the pixels (the direct samples did not decode).
   bool read_through_blur_model = false;
-  double min_known_margin = 0;    ///< smallest |margin| among bits that were read
+  double min_known_margin = 0;  ///< smallest |margin| among bits that were read
 };
 
 /// Milliseconds spent per stage in one detect() call.
