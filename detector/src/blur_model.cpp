@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
+#include <type_traits>
 #include <vector>
 
 #include "lab_approx.hpp"
@@ -492,15 +493,13 @@ double Bstar(const Colour& opponent) {
 
 namespace {
 
-struct Hypothesis {
-  Labels labels{};
-  Colours colours{};
-  double residual = 1e300;
-};
+using Hypothesis = SettledOrientation;
+static_assert(std::is_same_v<decltype(Hypothesis::labels), Labels> &&
+              std::is_same_v<decltype(Hypothesis::colours), Colours>);
 
 // For each of the four orientations: the orientation cells fixed to the format's bits, the other
 // cells settled by iterated conditional modes.
-std::array<Hypothesis, 4> SettleOrientations(const ConstrainedModel& model, const BlurFit& fit) {
+std::array<Hypothesis, 4> Settle(const ConstrainedModel& model, const BlurFit& fit) {
   std::array<Hypothesis, 4> hypotheses;
   for (int r = 0; r < 4; ++r) {
     // Sampled element (e + r) % 4 is canonical element e; quadrants turn with it.
@@ -546,14 +545,19 @@ std::array<Hypothesis, 4> SettleOrientations(const ConstrainedModel& model, cons
 
 }  // namespace
 
-ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance) {
+SettledOrientations SettleOrientations(const BlurFit& fit) {
+  if (!fit.ok || fit.equations.pixels == 0) return {};
+  return Settle(ConstrainedModel(fit.equations), fit);
+}
+
+ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& hypotheses,
+                                 double min_significance) {
   ModelReading result;
   if (!fit.ok || fit.equations.pixels == 0) {
     result.error = "no blur fit";
     return result;
   }
   const ConstrainedModel model(fit.equations);
-  const std::array<Hypothesis, 4> hypotheses = SettleOrientations(model, fit);
   int best = 0;
   for (int r = 1; r < 4; ++r) {
     if (hypotheses[r].residual < hypotheses[best].residual) best = r;
@@ -654,14 +658,15 @@ bool IsOneLevel(int level) {
 
 }  // namespace
 
-CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, double min_margin) {
+CodewordReading NearestCodewordThroughBlur(const BlurFit& fit,
+                                           const SettledOrientations& hypotheses,
+                                           double min_margin) {
   CodewordReading result;
   if (!fit.ok || fit.equations.pixels == 0) {
     result.error = "no blur fit";
     return result;
   }
   const ConstrainedModel model(fit.equations);
-  const std::array<Hypothesis, 4> hypotheses = SettleOrientations(model, fit);
   double free_best = 1e300;
   for (const Hypothesis& h : hypotheses) free_best = std::min(free_best, h.residual);
   const double noise =

@@ -78,7 +78,20 @@ struct ModelReading {
   double min_known_margin = 1e9;
 };
 
-ModelReading ReadBitsThroughBlur(const BlurFit& fit, double min_significance = 9);
+/// The two-colours-per-class model settled in one orientation: each region's level (0 quiet
+/// zone, 1 black, 2/3 red 0/1, 4/5 green 0/1), the six colours (Y, B − Y, R − Y) and the residual.
+struct SettledOrientation {
+  std::array<int, kModelRegions> labels{};
+  std::array<std::array<double, 3>, 6> colours{};
+  double residual = 1e300;
+};
+/// All four orientations (element r of the sampled frame taken as C0), orientation cells fixed to
+/// the format's bits: the work both readers below start from, computed once for both.
+using SettledOrientations = std::array<SettledOrientation, 4>;
+SettledOrientations SettleOrientations(const BlurFit& fit);
+
+ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
+                                 double min_significance = 9);
 
 /// The format codeword nearest to a blur fit, for when no reading of single bits decodes: every
 /// (key, orientation) is ranked by the flip costs of the cells where it disagrees with the settled
@@ -96,6 +109,7 @@ struct CodewordReading {
   double excess = 0;      ///< winner's residual over the free reading's, in noise units
 };
 
-CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, double min_margin = 25);
+CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
+                                           double min_margin = 25);
 
 }  // namespace pintag::stage

@@ -60,23 +60,19 @@ stage::PayloadResult Decode(const stage::OrientationResult& orientation) {
 }
 
 // What the readers made of one candidate: direct samples first, then the blur model's colours,
-// then its two-colours-per-class bits; the first that the codec accepts wins.
+// then its two-colours-per-class bits, then the nearest codeword; the first that the codec
+// accepts wins.
 struct TagReading {
   stage::OrientationResult orientation;
   stage::PayloadResult payload;
   bool through_blur_model = false;
 };
 
-TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThresholds& t,
-                   bool direct) {
+TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThresholds& t) {
   TagReading r;
-  if (direct) {
-    r.orientation = stage::ReadOrientation(stage::SampleCells(bgr, h), t);
-    if (r.orientation.ok) r.payload = Decode(r.orientation);
-    if (r.payload.key) return r;
-  } else {
-    r.orientation.error = "no orientation fits the red quadrants";
-  }
+  r.orientation = stage::ReadOrientation(stage::SampleCells(bgr, h), t);
+  if (r.orientation.ok) r.payload = Decode(r.orientation);
+  if (r.payload.key) return r;
   // Small or blurred cells mix: read them through a blur model.
   const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, h);
   if (!fit.ok) return r;
@@ -85,7 +81,8 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThr
     stage::PayloadResult payload = Decode(modelled);
     if (payload.key) return {std::move(modelled), std::move(payload), true};
   }
-  const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit);
+  const stage::SettledOrientations settled = stage::SettleOrientations(fit);
+  const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit, settled);
   if (bits.ok) {
     stage::OrientationResult as_read;
     as_read.ok = true;
@@ -98,7 +95,7 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThr
     if (payload.key) return {std::move(as_read), std::move(payload), true};
   }
   // Single bits do not decode: the codeword that explains the pixels clearly best, if one does.
-  const stage::CodewordReading nearest = stage::NearestCodewordThroughBlur(fit);
+  const stage::CodewordReading nearest = stage::NearestCodewordThroughBlur(fit, settled);
   if (!nearest.key) return r;
   stage::OrientationResult as_read;
   as_read.ok = true;
@@ -185,7 +182,7 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
       reject("red blobs do not match the elements");
       continue;
     }
-    const TagReading reading = ReadTag(bgr, h, thresholds, true);
+    const TagReading reading = ReadTag(bgr, h, thresholds);
     out->decode_ms += Ms(t2, Clock::now());
     if (!reading.orientation.ok) {
       reject(reading.orientation.error);

@@ -110,7 +110,7 @@ TEST(BlurModel, BitsModelNeverGivesAnotherKey) {
       const BlurFit fit = FitCellsThroughBlur(scene.bgr, TrueHomography(scene.truth[0]));
       ASSERT_TRUE(fit.ok);
       ++cases;
-      const ModelReading bits = ReadBitsThroughBlur(fit);
+      const ModelReading bits = ReadBitsThroughBlur(fit, SettleOrientations(fit));
       if (!bits.ok) continue;
       const PayloadResult payload = DecodePayload(bits.reading);
       if (!payload.key) continue;
@@ -133,7 +133,7 @@ TEST(BlurModel, NearestCodewordIsTheRightKeyOrNone) {
       const BlurFit fit = FitCellsThroughBlur(scene.bgr, TrueHomography(scene.truth[0]));
       ASSERT_TRUE(fit.ok);
       ++cases;
-      const CodewordReading nearest = NearestCodewordThroughBlur(fit);
+      const CodewordReading nearest = NearestCodewordThroughBlur(fit, SettleOrientations(fit));
       if (!nearest.key) continue;
       EXPECT_EQ(nearest.key->value(), key) << "roll " << roll;
       EXPECT_GE(nearest.lead, 25);
@@ -152,9 +152,9 @@ TEST(BlurModel, ABlackSquareWithoutElementsGivesNoKey) {
   const BlurFit fit = FitCellsThroughBlur(bgr, HomographyFromQuad(quad));
   ASSERT_TRUE(fit.ok);
   EXPECT_FALSE(Decode(fit.cells).has_value());
-  const ModelReading bits = ReadBitsThroughBlur(fit);
+  const ModelReading bits = ReadBitsThroughBlur(fit, SettleOrientations(fit));
   EXPECT_FALSE(bits.ok && DecodePayload(bits.reading).key.has_value());
-  EXPECT_FALSE(NearestCodewordThroughBlur(fit).key.has_value());
+  EXPECT_FALSE(NearestCodewordThroughBlur(fit, SettleOrientations(fit)).key.has_value());
 }
 
 // Squares that are not tags (random colourful blotches in a black square with a white margin)
@@ -173,7 +173,8 @@ TEST(BlurModel, ColourfulNonTagsGiveNoCodeword) {
     const Quad quad = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
     const BlurFit fit = FitCellsThroughBlur(bgr, HomographyFromQuad(quad));
     ASSERT_TRUE(fit.ok);
-    EXPECT_FALSE(NearestCodewordThroughBlur(fit).key.has_value()) << "trial " << trial;
+    EXPECT_FALSE(NearestCodewordThroughBlur(fit, SettleOrientations(fit)).key.has_value())
+        << "trial " << trial;
   }
 }
 
