@@ -1,4 +1,5 @@
-// Scanner: a label photo is read (pincode, office, bin, overlay); wrong token and non-image fail clearly.
+// Scanner: a label photo is read with one upload (pincode, office, bin, outline); wrong token and
+// non-image fail clearly.
 import assert from 'node:assert/strict';
 import { mkdtemp, rm, writeFile } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
@@ -37,6 +38,10 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   await page.goto(`${server.url}/scanner.html`);
   assert.equal(await page.locator('#photo').getAttribute('capture'), 'environment');
   await page.locator('#token').fill(scannerToken);
+  const uploads = [];
+  page.on('request', (request) => {
+    if (request.url().includes('/api/v1/detect')) uploads.push(request.url());
+  });
   await page.locator('#photo').setInputFiles(labelPng);
   const card = page.locator('.tag-card[data-pincode="110001"]');
   await card.waitFor();
@@ -47,9 +52,45 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.match(text, /Bin11/);
   assert.match(text, /Distance\d+\.\d\d m/);
   assert.match(await page.locator('#summary').textContent(), /1 tag read/);
-  await page.locator('#overlay[data-overlay="1"]').waitFor();
-  await page.waitForFunction(() => document.getElementById('overlay').naturalWidth > 0);
-  assert.match(await page.locator('#overlay').getAttribute('alt'), /outlined: 110001/);
+  await page.locator('#scan-photo[data-outlined="1"]').waitFor();
+  await page.waitForFunction(() => document.getElementById('scan-photo').naturalWidth > 0);
+  assert.match(await page.locator('#scan-photo').getAttribute('alt'), /outlined: 110001/);
+  // The outline is drawn from the answer's corners: it must sit on the tag in the picture, i.e.
+  // inside the photo and around its dark square (the tag is the darkest thing on a label).
+  const outline = await page.evaluate(() => {
+    const img = document.getElementById('scan-photo');
+    const polygon = document.querySelector('#outlines g[data-pincode="110001"] polygon');
+    const box = polygon.getBoundingClientRect();
+    const frame = img.getBoundingClientRect();
+    const canvas = document.createElement('canvas');
+    canvas.width = img.naturalWidth;
+    canvas.height = img.naturalHeight;
+    const context = canvas.getContext('2d');
+    context.drawImage(img, 0, 0);
+    const sx = img.naturalWidth / frame.width;
+    const sy = img.naturalHeight / frame.height;
+    const luma = (x, y) => {
+      const [r, g, b] = context.getImageData(Math.round(x * sx), Math.round(y * sy), 1, 1).data;
+      return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    };
+    const cx = box.left + box.width / 2 - frame.left;
+    const cy = box.top + box.height / 2 - frame.top;
+    return {
+      inside: box.left >= frame.left - 1 && box.right <= frame.right + 1
+        && box.top >= frame.top - 1 && box.bottom <= frame.bottom + 1,
+      size: box.width / frame.width,
+      // just inside the outline's left edge (black square) and just outside it (quiet zone)
+      darkInside: luma(box.left - frame.left + box.width * 0.06, cy),
+      lightOutside: luma(box.left - frame.left - box.width * 0.06, cy),
+      centreX: cx / frame.width,
+      groups: document.querySelectorAll('#outlines g').length,
+    };
+  });
+  assert.equal(outline.groups, 1);
+  assert.ok(outline.inside, JSON.stringify(outline));
+  assert.ok(outline.size > 0.2 && outline.size < 1, JSON.stringify(outline));
+  assert.ok(outline.darkInside < 80 && outline.lightOutside > 170, JSON.stringify(outline));
+  assert.equal(uploads.length, 1, `one upload per scan, got ${uploads.join(', ')}`);
   await screenshot(page, 'scanner-phone');
   assert.deepEqual(page.problems, []);
 });
