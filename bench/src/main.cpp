@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -198,6 +199,15 @@ struct CsvRow {
 int Main(int argc, char** argv) {
   Args args;
   if (!ParseArgs(argc, argv, &args)) return 2;
+  if (!args.dump_misses.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(args.dump_misses, ec);
+    if (ec) {
+      std::fprintf(stderr, "pintag_bench: cannot create %s: %s\n", args.dump_misses.c_str(),
+                   ec.message().c_str());
+      return 2;
+    }
+  }
   const auto wall_start = Clock::now();
 
   BenchResult result;
@@ -338,6 +348,14 @@ int Main(int argc, char** argv) {
               DumpMiss(args.dump_misses, f, r.image(f, d.marker()),
                        r.truthFor(f, d.marker()).front(), why);
             }
+          }
+          if (d.marker() == Marker::kPinTag && !args.dump_misses.empty() &&
+              outcome.misreads + outcome.false_positives > 0) {
+            // The whole frame: a wrong answer has to be reproduced with `pintag detect`.
+            char name[256];
+            std::snprintf(name, sizeof name, "%s/wrong-f%04d.png", args.dump_misses.c_str(),
+                          f.index);
+            cv::imwrite(name, r.image(f, d.marker()));
           }
           const auto stages = d.lastStageTimes();
           if (!stages.empty()) {
