@@ -4,6 +4,7 @@
 #include "pintag/detector/detector.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -59,6 +60,35 @@ stage::PayloadResult Decode(const stage::OrientationResult& orientation) {
   return payload;
 }
 
+// A codeword chosen through the blur model must not hang on the exact corners. The fit is
+// repeated with the tag shifted by half a pixel each way and scaled by ±2 % (corner refinement is
+// good to a few tenths of a pixel); at least half of those fits must choose the same codeword
+// and none another. Measured on the benchmark: a 80 px tag at 78°, hard light, chose a codeword
+// one key bit from the truth with a lead of 334 noise units, but only 1 of the 6 shifted fits
+// agreed (5 chose none); correct nearest-codeword readings were confirmed by 2 to 6 of them.
+constexpr int kJitteredFits = 6;
+constexpr int kJitteredFitsToAgree = 3;
+
+bool NearestCodewordIsStable(const cv::Mat& bgr, const cv::Matx33d& h, TagKey key) {
+  constexpr std::array<std::array<double, 3>, kJitteredFits> kJitters{
+      {{0.5, 0, 1}, {-0.5, 0, 1}, {0, 0.5, 1}, {0, -0.5, 1}, {0, 0, 1.02}, {0, 0, 0.98}}};
+  const cv::Point2d centre = stage::Apply(h, 0.5, 0.5);
+  int agree = 0;
+  for (const auto& [dx, dy, scale] : kJitters) {
+    const cv::Matx33d moved(scale, 0, (1 - scale) * centre.x + dx,  //
+                            0, scale, (1 - scale) * centre.y + dy,  //
+                            0, 0, 1);
+    const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, moved * h);
+    if (!fit.ok) continue;
+    const stage::CodewordReading again =
+        stage::NearestCodewordThroughBlur(fit, stage::SettleOrientations(fit));
+    if (!again.key) continue;
+    if (*again.key != key) return false;
+    ++agree;
+  }
+  return agree >= kJitteredFitsToAgree;
+}
+
 // What the readers made of one candidate: direct samples first, then the blur model's colours,
 // then its two-colours-per-class bits, then the nearest codeword; the first that the codec
 // accepts wins.
@@ -103,7 +133,8 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThr
   as_read.reading = nearest.reading;
   as_read.min_known_margin = 1;
   stage::PayloadResult payload = Decode(as_read);
-  if (payload.key && *payload.key == *nearest.key) {
+  if (payload.key && *payload.key == *nearest.key &&
+      NearestCodewordIsStable(bgr, h, *nearest.key)) {
     return {std::move(as_read), std::move(payload), true};
   }
   return r;
