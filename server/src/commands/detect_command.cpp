@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "pintag/codec/label.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
 
@@ -20,7 +21,8 @@ namespace {
 
 struct DetectArgs {
   std::string photo;
-  double tag_size_mm = 50;
+  // As /api/v1/detect: the tag printed on the default 100 x 150 mm label.
+  double tag_size_mm = TagPlacement(kLabel100x150).square_side_mm;
   std::optional<double> fx, fy, cx, cy;
   std::vector<double> distortion;
   bool json = false;
@@ -132,7 +134,8 @@ void AddDetectCommand(CLI::App& app) {
   auto args = std::make_shared<DetectArgs>();
   CLI::App* cmd = app.add_subcommand("detect", "Find, decode and pose every PinTag in a photo");
   cmd->add_option("photo", args->photo, "JPEG, PNG, TIFF or WebP photo")->required();
-  cmd->add_option("--tag-size-mm", args->tag_size_mm, "side of the black square, millimetres")
+  cmd->add_option("--tag-size-mm", args->tag_size_mm,
+                  "side of the black square, millimetres (default: the tag of a 100x150mm label)")
       ->check(CLI::Range(1.0, 10000.0))
       ->capture_default_str();
   cmd->add_option("--fx", args->fx, "focal length x, pixels (with --fy: intrinsics given)")

@@ -1,0 +1,119 @@
+// `pintag detect` as a user runs it: the real binary on a photo file, its JSON on stdout, its
+// exit status and message on failure. The photo is a PinTag of the default label's size rendered
+// by the scene generator at a known pose.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "pintag/codec/label.hpp"
+#include "pintag/scene/scene.hpp"
+#include "pintag/test/files.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+struct CommandResult {
+  int status = -1;  ///< exit status, -1 if it did not exit normally
+  std::string out;  ///< stdout and stderr together
+};
+
+CommandResult RunPintag(const std::string& arguments) {
+  CommandResult result;
+  const std::string line = std::string(PINTAG_EXE) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(line.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  std::size_t n = 0;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    result.out.append(buffer.data(), n);
+  const int raw = pclose(pipe);
+  if (WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
+  return result;
+}
+
+struct RenderedPhoto {
+  std::string path;
+  scene::MarkerTruth truth;
+  scene::Camera camera;
+};
+
+constexpr int kKey = 11684;  // 110001's key in the seeded registry; any key reads the same
+
+RenderedPhoto RenderPhoto(const test::TempDir& dir) {
+  scene::SceneSpec spec;
+  spec.seed = 11;
+  spec.photometry.noise_sigma = 2;
+  scene::PlacedMarker marker;
+  marker.id = kKey;
+  marker.texture = scene::PinTagTexture(kKey);
+  marker.square_side_m = TagPlacement(kLabel100x150).square_side_mm / 1000;
+  const double distance = scene::DistanceForSquarePx(spec.camera, 160, marker.square_side_m);
+  marker.pose = scene::MakePose(spec.camera, {1100, 420}, distance, 25, 60, 15);
+  spec.markers.push_back(marker);
+  const scene::Scene rendered = scene::RenderScene(spec);
+  RenderedPhoto photo{(dir.path() / "photo.png").string(), rendered.truth.at(0), spec.camera};
+  EXPECT_TRUE(cv::imwrite(photo.path, rendered.bgr));
+  return photo;
+}
+
+std::string Intrinsics(const scene::Camera& c) {
+  return " --fx " + std::to_string(c.fx) + " --fy " + std::to_string(c.fy) + " --cx " +
+         std::to_string(c.cx) + " --cy " + std::to_string(c.cy);
+}
+
+TEST(CliDetect, ReadsKeyAndDistanceWithTheDefaultLabelsTagSize) {
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  const CommandResult run =
+      RunPintag("detect --json" + Intrinsics(photo.camera) + " " + photo.path);
+  ASSERT_EQ(run.status, 0) << run.out;
+  const json answer = json::parse(run.out);
+  ASSERT_EQ(answer["detections"].size(), 1U) << run.out;
+  const json& tag = answer["detections"][0];
+  EXPECT_EQ(tag["key"], kKey);
+  // No --tag-size-mm: the default is the 100 x 150 mm label's tag, as for /api/v1/detect, so
+  // the distance comes out right for the label the counter printed.
+  const double truth_m = cv::norm(photo.truth.pose.translation);
+  EXPECT_NEAR(tag["pose"]["distance_m"].get<double>(), truth_m, 0.02 * truth_m);
+}
+
+TEST(CliDetect, DistanceScalesWithTheGivenTagSize) {
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  const CommandResult run =
+      RunPintag("detect --json --tag-size-mm 50" + Intrinsics(photo.camera) + " " + photo.path);
+  ASSERT_EQ(run.status, 0) << run.out;
+  const json answer = json::parse(run.out);
+  ASSERT_EQ(answer["detections"].size(), 1U) << run.out;
+  const double truth_m =
+      cv::norm(photo.truth.pose.translation) * 50 / TagPlacement(kLabel100x150).square_side_mm;
+  EXPECT_NEAR(answer["detections"][0]["pose"]["distance_m"].get<double>(), truth_m, 0.02 * truth_m);
+}
+
+TEST(CliDetect, RefusesWhatIsNotAPhotoWithAClearMessage) {
+  const test::TempDir dir;
+  const std::string text = (dir.path() / "notes.txt").string();
+  test::WriteFile(text, "this is not a photo\n");
+  const CommandResult not_image = RunPintag("detect " + text);
+  EXPECT_NE(not_image.status, 0);
+  EXPECT_NE(not_image.out.find("notes.txt"), std::string::npos) << not_image.out;
+
+  const CommandResult missing = RunPintag("detect " + (dir.path() / "nowhere.jpg").string());
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.out.find("nowhere.jpg"), std::string::npos) << missing.out;
+
+  const CommandResult bad_size = RunPintag("detect --tag-size-mm 0 " + text);
+  EXPECT_NE(bad_size.status, 0);
+  EXPECT_NE(bad_size.out.find("tag-size-mm"), std::string::npos) << bad_size.out;
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
