@@ -34,8 +34,8 @@ int NearestElement(cv::Point2d square_point, double radius) {
 }  // namespace
 
 std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
-                        const scene::Camera& camera) {
-  DetectorOptions options;
+                        const scene::Camera& camera, const DetectorOptions& tuned) {
+  DetectorOptions options = tuned;
   options.intrinsics = CameraIntrinsics{camera.fx, camera.fy, camera.cx, camera.cy, {}};
   options.tag_size_m = kTagSideM;
   const cv::Matx33d to_square = truth.homography.inv();

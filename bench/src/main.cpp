@@ -341,8 +341,8 @@ int Main(int argc, char** argv) {
           const Outcome outcome = Score(f, r.truthFor(f, d.marker()), found);
           stats.add(f, outcome);
           if (d.marker() == Marker::kPinTag && outcome.counted && !outcome.found) {
-            const std::string why =
-                ExplainMiss(r.image(f, d.marker()), r.truthFor(f, d.marker()).front(), camera);
+            const std::string why = ExplainMiss(
+                r.image(f, d.marker()), r.truthFor(f, d.marker()).front(), camera, pintag_options);
             ++stats.misses[why][f.hard][static_cast<std::size_t>(f.size_index)];
             if (!args.dump_misses.empty()) {
               DumpMiss(args.dump_misses, f, r.image(f, d.marker()),
