@@ -24,7 +24,7 @@ constexpr int kSubsamples = 4;            // per pixel side, for each pixel's re
 constexpr double kMaxSigmaPx = 2.5;       // widest blur tried (5 px of motion with defocus 2 px)
 constexpr int kMaxKernelRadius = 7;       // px: about 3 kMaxSigmaPx
 constexpr double kObservedMargin = 0.06;  // tag units of quiet zone observed beyond the square
-constexpr int kSearchPixels = 600;        // pixels used while searching the blur (a stride beyond)
+constexpr int kSearchPixels = 400;        // pixels used while searching the blur (a stride beyond)
 constexpr int kFinalPixels = 2500;        // pixels of the final solve: 50 colours need far fewer
 constexpr double kRidge = 0.01;  // regularisation, relative to the mean of AᵀA's diagonal
 
@@ -156,8 +156,10 @@ class TagOnGrid {
     NormalEquations equations;
   };
 
-  /// Least-squares region colours under `blur`, from every `stride`-th observed pixel.
-  Solution solve(const Blur& blur, std::size_t stride) const {
+  /// Least-squares region colours under `blur`, from every `stride`-th observed pixel; only the
+  /// brightness channel when `luma_only` (residual and colours of that channel alone).
+  Solution solve(const Blur& blur, std::size_t stride, bool luma_only = false) const {
+    const int systems = luma_only ? 1 : 2;
     const std::vector<std::pair<cv::Point, double>> luma_kernel = Kernel(blur);
     Blur wider = blur;
     wider.major = std::sqrt(blur.major * blur.major + blur.chroma_extra * blur.chroma_extra);
@@ -174,7 +176,7 @@ class TagOnGrid {
     for (std::size_t i = 0; i < observed_.size(); i += stride) {
       const cv::Point g = observed_[i];
       const std::array<double, 3>& y = linear_[i];
-      for (int system = 0; system < 2; ++system) {
+      for (int system = 0; system < systems; ++system) {
         std::array<double, kRegions>& w = row[system];
         std::vector<int>& nz = nonzero[system];
         nz.clear();
@@ -201,7 +203,7 @@ class TagOnGrid {
         }
         for (int r : nz) w[r] = 0;
       }
-      for (int ch = 0; ch < 3; ++ch) yty += y[ch] * y[ch], mean[ch] += y[ch];
+      for (int ch = 0; ch < (luma_only ? 1 : 3); ++ch) yty += y[ch] * y[ch], mean[ch] += y[ch];
       ++s.pixels;
     }
     if (s.pixels == 0) return s;
@@ -212,7 +214,7 @@ class TagOnGrid {
     }
     for (int r = 0; r < kRegions; ++r) s.support[r] = ata[0](r, r);
     double residual = yty;
-    for (int system = 0; system < 2; ++system) {
+    for (int system = 0; system < systems; ++system) {
       const Square& m0 = ata[system];
       double trace = 0;
       for (int r = 0; r < kRegions; ++r) trace += m0(r, r);
@@ -330,7 +332,7 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
     blur.major = std::min(blur.major, kMaxSigmaPx);
     blur.minor = std::min(blur.minor, blur.major);
     ++fit.evaluations;
-    const double r = grid.solve(blur, stride).residual;
+    const double r = grid.solve(blur, stride, /*luma_only=*/true).residual;
     if (r < best_residual) best_residual = r, best = blur;
   };
   // Round blurs first, then elongated ones around the best, then small steps.
@@ -351,11 +353,16 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
     }
   }
 
+  // The lens blur is searched on brightness alone (its edges are sharpest there, and it halves
+  // the work); then the colour differences' extra blur, on all three channels.
   const Blur luma_best = best;
-  for (const double extra : {0.0, 0.45, 1.2}) {
+  best_residual = 1e300;
+  for (const double extra : {0.0, 0.45, 0.8, 1.2}) {
     Blur b = luma_best;
     b.chroma_extra = extra;
-    consider(b);
+    ++fit.evaluations;
+    const double r = grid.solve(b, stride).residual;
+    if (r < best_residual) best_residual = r, best = b;
   }
 
   const TagOnGrid::Solution s =
