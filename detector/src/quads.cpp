@@ -39,14 +39,13 @@ cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi) {
 }
 
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
-                            const std::vector<cv::Point2d>* anchors, cv::Mat* binary_out) {
+                            const std::vector<cv::Point2d>* anchors, bool close_gaps) {
   cv::Mat binary;
   cv::threshold(dark, binary, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
-  // Close one-pixel gaps: a cover over an element can leave only a thin, blurred band of black
-  // between it and the square's edge.
-  cv::morphologyEx(binary, binary, cv::MORPH_CLOSE,
-                   cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
-  if (binary_out) *binary_out = binary.clone();
+  if (close_gaps) {
+    cv::morphologyEx(binary, binary, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
+  }
   // Outer boundaries of every dark component, including those inside holes of others (a tag on
   // dark ground sits inside the hole its quiet zone makes).
   std::vector<std::vector<cv::Point>> contours;
@@ -81,6 +80,27 @@ std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_si
     quads.push_back(quad);
   }
   return quads;
+}
+
+cv::Rect AnchorsRegion(const std::vector<cv::Point2d>& anchors, const cv::Rect& within) {
+  if (anchors.empty()) return {};
+  double spacing = 0;
+  double x0 = anchors[0].x, y0 = anchors[0].y, x1 = x0, y1 = y0;
+  for (std::size_t i = 0; i < anchors.size(); ++i) {
+    double nearest = 1e300;
+    for (std::size_t j = 0; j < anchors.size(); ++j) {
+      if (j != i) nearest = std::min(nearest, cv::norm(anchors[i] - anchors[j]));
+    }
+    if (nearest < 1e300) spacing = std::max(spacing, nearest);
+    x0 = std::min(x0, anchors[i].x), y0 = std::min(y0, anchors[i].y);
+    x1 = std::max(x1, anchors[i].x), y1 = std::max(y1, anchors[i].y);
+  }
+  const double grow = 0.8 * spacing + 2;
+  const cv::Point tl(static_cast<int>(std::floor(x0 - grow)),
+                     static_cast<int>(std::floor(y0 - grow)));
+  const cv::Point br(static_cast<int>(std::ceil(x1 + grow)) + 1,
+                     static_cast<int>(std::ceil(y1 + grow)) + 1);
+  return cv::Rect(tl, br) & within;
 }
 
 }  // namespace pintag::stage

@@ -18,10 +18,17 @@ cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
 /// Quads in `dark` (MinChannel of the region at `origin`), returned in image coordinates.
 /// `min_side_px`: shorter quads are dropped. When `anchors` (image coordinates) is given, only
 /// contours whose bounding box holds at least 3 of them are fitted (a tag holds its red blobs),
-/// which keeps textured photo regions cheap.
+/// which keeps textured photo regions cheap. `close_gaps` bridges one-pixel gaps in the dark
+/// shape first (a cover can leave a thin band of black at the square's edge); without it, a
+/// quiet zone two pixels wide still separates the tag from dark ground (a steeply tilted tag).
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
                             const std::vector<cv::Point2d>* anchors = nullptr,
-                            cv::Mat* binary_out = nullptr);
+                            bool close_gaps = true);
+
+/// Where a tag holding `anchors` (its red blobs, image coordinates) can lie: their bounding box
+/// grown by 0.8 of the largest nearest-anchor distance (a square's edge is half an element
+/// spacing beyond its element centres; the rest is for perspective), clipped to `within`.
+cv::Rect AnchorsRegion(const std::vector<cv::Point2d>& anchors, const cv::Rect& within);
 
 /// Twice the signed area; positive when clockwise on screen.
 double SignedArea2(const Quad& quad);
