@@ -13,6 +13,7 @@
 #include "blur_model.hpp"
 #include "camera_model.hpp"
 #include "debug_images.hpp"
+#include "duplicates.hpp"
 #include "grouping.hpp"
 #include "homography.hpp"
 #include "orientation.hpp"
@@ -210,7 +211,12 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
       if (!options.return_rejected) return;
       Detection d;
       d.reject_reason = std::move(reason);
-      for (int i = 0; i < 4; ++i) d.corners[i] = ToPoint(quad[i]);
+      double perimeter = 0;
+      for (int i = 0; i < 4; ++i) {
+        d.corners[i] = ToPoint(quad[i]);
+        perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
+      }
+      d.square_px = perimeter / 4;
       if (o != nullptr) {
         d.cells = o->reading;
         d.margins = o->margins;
@@ -240,23 +246,6 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
     for (int e = 0; e < 4; ++e) seen[e] = assignment.blob[e] >= 0;
     out->detections.push_back(MakeDetection(quad, reading, seen));
   }
-}
-
-// The same tag reached twice (overlapping regions): keep the first.
-void RemoveDuplicates(std::vector<Detection>* detections) {
-  std::vector<Detection> kept;
-  for (Detection& d : *detections) {
-    const auto centre = [](const Detection& x) {
-      double cx = 0, cy = 0;
-      for (const Point2& p : x.corners) cx += p.x / 4, cy += p.y / 4;
-      return cv::Point2d(cx, cy);
-    };
-    const bool dup = std::any_of(kept.begin(), kept.end(), [&](const Detection& k) {
-      return cv::norm(centre(k) - centre(d)) < 0.25 * std::max(k.square_px, d.square_px);
-    });
-    if (!dup) kept.push_back(std::move(d));
-  }
-  *detections = std::move(kept);
 }
 
 }  // namespace
@@ -338,7 +327,7 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
     all_quads.insert(all_quads.end(), o.quads.begin(), o.quads.end());
   }
   debug.quads(bgr, all_quads);
-  RemoveDuplicates(&result.detections);
+  stage::RemoveDuplicates(&result.detections);
 
   const auto t_pose = Clock::now();
   for (Detection& d : result.detections) {
