@@ -82,8 +82,11 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
 
   // Stage 3, as detector.cpp runs it: the ring check, clusters, then quads per cluster.
   std::erase_if(blobs, [&](const stage::RedBlob& b) { return !stage::HasRing(bgr, b); });
-  const auto [kept, on_tag] = on_elements(blobs);
-  if (kept < 3) return "3a ring check: < 3 element blobs keep their green ring";
+  // (Not a structured binding: lambdas below capture on_tag, which C++20 allows and clang 14
+  // does not.)
+  const std::pair<int, std::vector<int>> ring_kept = on_elements(blobs);
+  const std::vector<int>& on_tag = ring_kept.second;
+  if (ring_kept.first < 3) return "3a ring check: < 3 element blobs keep their green ring";
   const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
   const stage::BlobCluster* cluster = nullptr;
   for (const stage::BlobCluster& c : clusters) {

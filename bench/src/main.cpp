@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -437,5 +438,10 @@ int Main(int argc, char** argv) {
 }  // namespace pintag::bench
 
 int main(int argc, char** argv) {
-  return pintag::bench::Main(argc, argv);
+  try {
+    return pintag::bench::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pintag_bench: %s\n", e.what());
+    return 1;
+  }
 }

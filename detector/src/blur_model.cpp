@@ -301,8 +301,8 @@ CellSample ToSample(const std::array<double, 3>& opponent, double support) {
   if (support < 0.5) return s;
   const LabApprox& lab = LabApprox::Get();
   int a = 0, b = 0;
-  lab.Ab(LinearToSrgb(linear_rgb[0]), LinearToSrgb(linear_rgb[1]), LinearToSrgb(linear_rgb[2]), &a,
-         &b);
+  lab.abStar(LinearToSrgb(linear_rgb[0]), LinearToSrgb(linear_rgb[1]), LinearToSrgb(linear_rgb[2]),
+             &a, &b);
   s.a = static_cast<double>(a) / kLabScale;
   s.b = static_cast<double>(b) / kLabScale;
   s.valid = true;
@@ -491,8 +491,8 @@ class ConstrainedModel {
 double Bstar(const Colour& opponent) {
   const Colour linear = ToLinearRgb(opponent);
   int a = 0, b = 0;
-  LabApprox::Get().Ab(LinearToSrgb(linear[0]), LinearToSrgb(linear[1]), LinearToSrgb(linear[2]), &a,
-                      &b);
+  LabApprox::Get().abStar(LinearToSrgb(linear[0]), LinearToSrgb(linear[1]), LinearToSrgb(linear[2]),
+                          &a, &b);
   return static_cast<double>(b) / kLabScale;
 }
 
@@ -507,7 +507,7 @@ static_assert(std::is_same_v<decltype(Hypothesis::labels), Labels> &&
 // For each of the four orientations: the orientation cells fixed to the format's bits, the other
 // cells settled by iterated conditional modes.
 std::array<Hypothesis, 4> Settle(const ConstrainedModel& model, const BlurFit& fit) {
-  std::array<Hypothesis, 4> hypotheses;
+  std::array<Hypothesis, 4> settled;
   for (int r = 0; r < 4; ++r) {
     // Sampled element (e + r) % 4 is canonical element e; quadrants turn with it.
     Labels labels{};
@@ -542,12 +542,12 @@ std::array<Hypothesis, 4> Settle(const ConstrainedModel& model, const BlurFit& f
         labels[GreenRegion(e, s)] = fit.cells.green[e][s].b > mid ? kGreen1 : kGreen0;
       }
     }
-    Hypothesis& h = hypotheses[r];
+    Hypothesis& h = settled[r];
     model.settle(&labels, fixed, &h.colours);
     h.labels = labels;
     h.residual = model.residual(labels, h.colours);
   }
-  return hypotheses;
+  return settled;
 }
 
 }  // namespace
@@ -557,7 +557,7 @@ SettledOrientations SettleOrientations(const BlurFit& fit) {
   return Settle(ConstrainedModel(fit.equations), fit);
 }
 
-ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& hypotheses,
+ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
                                  double min_significance) {
   ModelReading result;
   if (!fit.ok || fit.equations.pixels == 0) {
@@ -567,20 +567,19 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& 
   const ConstrainedModel model(fit.equations);
   int best = 0;
   for (int r = 1; r < 4; ++r) {
-    if (hypotheses[r].residual < hypotheses[best].residual) best = r;
+    if (settled[r].residual < settled[best].residual) best = r;
   }
-  const double noise = std::max(hypotheses[best].residual, 1e-12) /
-                       (3.0 * static_cast<double>(fit.equations.pixels));
+  const double noise =
+      std::max(settled[best].residual, 1e-12) / (3.0 * static_cast<double>(fit.equations.pixels));
   for (int r = 0; r < 4; ++r) {
-    if (r != best &&
-        hypotheses[r].residual - hypotheses[best].residual < min_significance * noise) {
+    if (r != best && settled[r].residual - settled[best].residual < min_significance * noise) {
       result.error = "orientation ambiguous in the blur model";
       return result;
     }
   }
 
   // Now every cell is free, the orientation cells too: the format must hold on its own.
-  Hypothesis h = hypotheses[best];
+  Hypothesis h = settled[best];
   model.settle(&h.labels, std::array<bool, kRegions>{true, true}, &h.colours);
   const Colours& c = h.colours;
   // The colours found must look like the palette: two distinct b* levels per class.
@@ -665,8 +664,7 @@ bool IsOneLevel(int level) {
 
 }  // namespace
 
-CodewordReading NearestCodewordThroughBlur(const BlurFit& fit,
-                                           const SettledOrientations& hypotheses,
+CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
                                            double min_margin) {
   CodewordReading result;
   if (!fit.ok || fit.equations.pixels == 0) {
@@ -675,7 +673,7 @@ CodewordReading NearestCodewordThroughBlur(const BlurFit& fit,
   }
   const ConstrainedModel model(fit.equations);
   double free_best = 1e300;
-  for (const Hypothesis& h : hypotheses) free_best = std::min(free_best, h.residual);
+  for (const Hypothesis& h : settled) free_best = std::min(free_best, h.residual);
   const double noise =
       std::max(free_best, 1e-12) / (3.0 * static_cast<double>(fit.equations.pixels));
 
@@ -691,7 +689,7 @@ CodewordReading NearestCodewordThroughBlur(const BlurFit& fit,
   std::vector<Candidate> ranked;
   const std::vector<std::uint64_t>& book = Codebook();
   for (int r = 0; r < 4; ++r) {
-    const Hypothesis& h = hypotheses[r];
+    const Hypothesis& h = settled[r];
     std::array<double, kCanonicalCells> cost{};
     std::uint64_t read = 0;
     for (int c = 0; c < kCanonicalCells; ++c) {

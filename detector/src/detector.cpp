@@ -310,6 +310,7 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   } else {
     std::atomic<std::size_t> next{0};
     std::vector<std::thread> pool;
+    pool.reserve(static_cast<std::size_t>(threads));
     for (int t = 0; t < threads; ++t) {
       pool.emplace_back([&] {
         for (std::size_t i; (i = next++) < clusters.size();) {

@@ -16,37 +16,37 @@ class LabApprox {
   static const LabApprox& Get();
 
   /// X/Xn, Y, Z/Zn in 0 … 65535 for sRGB codes.
-  void Xyz(int r, int g, int b, int* x, int* y, int* z) const {
+  void xyz(int r, int g, int b, int* x, int* y, int* z) const {
     const std::int32_t lr = linear_[r], lg = linear_[g], lb = linear_[b];
     *x = Clamp((kM[0][0] * lr + kM[0][1] * lg + kM[0][2] * lb + kRound) >> kShift);
     *y = Clamp((kM[1][0] * lr + kM[1][1] * lg + kM[1][2] * lb + kRound) >> kShift);
     *z = Clamp((kM[2][0] * lr + kM[2][1] * lg + kM[2][2] * lb + kRound) >> kShift);
   }
   /// a* × 16.
-  int A(int r, int g, int b) const {
+  int aStar(int r, int g, int b) const {
     int x, y, z;
-    Xyz(r, g, b, &x, &y, &z);
-    return (500 * (F(x) - F(y))) >> (kFShift - 4);
+    xyz(r, g, b, &x, &y, &z);
+    return (500 * (cubeRoot(x) - cubeRoot(y))) >> (kFShift - 4);
   }
   /// b* × 16.
-  int B(int r, int g, int b) const {
+  int bStar(int r, int g, int b) const {
     int x, y, z;
-    Xyz(r, g, b, &x, &y, &z);
-    return (200 * (F(y) - F(z))) >> (kFShift - 4);
+    xyz(r, g, b, &x, &y, &z);
+    return (200 * (cubeRoot(y) - cubeRoot(z))) >> (kFShift - 4);
   }
   /// L* × 16.
-  int L(int r, int g, int b) const {
+  int lStar(int r, int g, int b) const {
     const int y = Clamp(
         (kM[1][0] * linear_[r] + kM[1][1] * linear_[g] + kM[1][2] * linear_[b] + kRound) >> kShift);
-    return ((116 * F(y)) >> (kFShift - 4)) - 16 * 16;
+    return ((116 * cubeRoot(y)) >> (kFShift - 4)) - 16 * 16;
   }
   /// a*, b* (× 16) in one go.
-  void Ab(int r, int g, int b, int* a_out, int* b_out) const {
+  void abStar(int r, int g, int b, int* a_out, int* b_out) const {
     int x, y, z;
-    Xyz(r, g, b, &x, &y, &z);
-    const int fy = F(y);
-    *a_out = (500 * (F(x) - fy)) >> (kFShift - 4);
-    *b_out = (200 * (fy - F(z))) >> (kFShift - 4);
+    xyz(r, g, b, &x, &y, &z);
+    const int fy = cubeRoot(y);
+    *a_out = (500 * (cubeRoot(x) - fy)) >> (kFShift - 4);
+    *b_out = (200 * (fy - cubeRoot(z))) >> (kFShift - 4);
   }
 
  private:
@@ -59,7 +59,7 @@ class LabApprox {
   static constexpr std::int32_t kM[3][3] = {
       {7110, 6164, 3110}, {3484, 11717, 1183}, {291, 1793, 14300}};
   static int Clamp(std::int32_t v) { return v < 0 ? 0 : (v > 65535 ? 65535 : v); }
-  int F(int t) const {
+  int cubeRoot(int t) const {
     // Linear interpolation between table entries keeps the cube root's steep start accurate.
     const int i = t >> (16 - kFBits);
     const int frac = t & ((1 << (16 - kFBits)) - 1);

@@ -31,7 +31,8 @@ double SignedArea2(const Quad& q) {
 cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi) {
   cv::Mat out(roi.size(), CV_8U);
   for (int y = 0; y < roi.height; ++y) {
-    const std::uint8_t* p = bgr.ptr<std::uint8_t>(roi.y + y) + 3 * roi.x;
+    const std::uint8_t* p =
+        bgr.ptr<std::uint8_t>(roi.y + y) + 3 * static_cast<std::ptrdiff_t>(roi.x);
     std::uint8_t* o = out.ptr<std::uint8_t>(y);
     for (int x = 0; x < roi.width; ++x, p += 3) o[x] = std::min({p[0], p[1], p[2]});
   }

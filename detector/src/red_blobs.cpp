@@ -82,8 +82,8 @@ bool HasRing(const cv::Mat& bgr, const RedBlob& blob) {
       if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
       const std::uint8_t* p = bgr.ptr<std::uint8_t>(y) + 3 * static_cast<std::ptrdiff_t>(x);
       int a, b;
-      lab.Ab(p[2], p[1], p[0], &a, &b);
-      ring += a < 10 * kLabScale && lab.L(p[2], p[1], p[0]) < 85 * kLabScale;
+      lab.abStar(p[2], p[1], p[0], &a, &b);
+      ring += a < 10 * kLabScale && lab.lStar(p[2], p[1], p[0]) < 85 * kLabScale;
     }
     if (ring >= 5) return true;
   }

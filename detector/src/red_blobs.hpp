@@ -28,7 +28,7 @@ struct BlobLimits {
 };
 
 /// 8-connected components of the runs, with their moments, filtered by `limits`.
-std::vector<RedBlob> FindRedBlobs(const RedRuns& runs, const BlobLimits& limits);
+std::vector<RedBlob> FindRedBlobs(const RedRuns& red, const BlobLimits& limits);
 /// Whether the blob sits in a ring that is neither red nor white, as a tag's red disk sits in its
 /// green ring: on an ellipse at 1.5, 2.5 or 3.5 times the blob's semi-axes (the larger ones for a
 /// blurred disk whose red core is smaller than the disk), in 8 directions, at least 5 samples must

@@ -28,7 +28,7 @@ bool IsRedPixel(int r, int g, int b, const RednessThresholds& thresholds) {
   if (r - g < kRednessPrefilter) return false;
   const ScaledThresholds s = Scale(thresholds);
   int a_star, b_star;
-  LabApprox::Get().Ab(r, g, b, &a_star, &b_star);
+  LabApprox::Get().abStar(r, g, b, &a_star, &b_star);
   return a_star >= s.a && b_star >= s.b;
 }
 
@@ -42,12 +42,12 @@ RedRuns FindRedRuns(const cv::Mat& bgr, const RednessThresholds& thresholds) {
     const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
     int start = -1;
     for (int x = 0; x < bgr.cols; ++x) {
-      const std::uint8_t* p = row + 3 * x;
+      const std::uint8_t* p = row + 3 * static_cast<std::ptrdiff_t>(x);
       bool red = false;
       // Nearly every pixel stops at this integer comparison.
       if (p[2] >= p[1] + kRednessPrefilter) {
         int a_star, b_star;
-        lab.Ab(p[2], p[1], p[0], &a_star, &b_star);
+        lab.abStar(p[2], p[1], p[0], &a_star, &b_star);
         red = a_star >= s.a && b_star >= s.b;
       }
       if (red && start < 0) start = x;

@@ -21,8 +21,8 @@ bool SampleRgb(const cv::Mat& bgr, cv::Point2d p, int rgb[3]) {
   const int x0 = static_cast<int>(std::floor(p.x)), y0 = static_cast<int>(std::floor(p.y));
   if (x0 < 0 || y0 < 0 || x0 + 1 >= bgr.cols || y0 + 1 >= bgr.rows) return false;
   const int fx = static_cast<int>((p.x - x0) * 256), fy = static_cast<int>((p.y - y0) * 256);
-  const std::uint8_t* r0 = bgr.ptr<std::uint8_t>(y0) + 3 * x0;
-  const std::uint8_t* r1 = bgr.ptr<std::uint8_t>(y0 + 1) + 3 * x0;
+  const std::uint8_t* r0 = bgr.ptr<std::uint8_t>(y0) + 3 * static_cast<std::ptrdiff_t>(x0);
+  const std::uint8_t* r1 = bgr.ptr<std::uint8_t>(y0 + 1) + 3 * static_cast<std::ptrdiff_t>(x0);
   for (int c = 0; c < 3; ++c) {
     const int top = r0[c] * (256 - fx) + r0[c + 3] * fx;
     const int bottom = r1[c] * (256 - fx) + r1[c + 3] * fx;
@@ -52,7 +52,7 @@ CellSample SampleCell(const cv::Mat& bgr, const cv::Matx33d& h, geometry::Point 
       int rgb[3];
       if (!SampleRgb(bgr, {p[0] / p[2], p[1] / p[2]}, rgb)) return {};
       int a, b;
-      lab.Ab(rgb[0], rgb[1], rgb[2], &a, &b);
+      lab.abStar(rgb[0], rgb[1], rgb[2], &a, &b);
       as.push_back(static_cast<double>(a) / kLabScale);
       bs.push_back(static_cast<double>(b) / kLabScale);
     }

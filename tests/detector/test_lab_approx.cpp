@@ -67,9 +67,9 @@ TEST(LabApprox, WithinOneUnitOfExactOverTheSrgbCube) {
       for (int b = 0; b < 256; b += 5) {
         const Lab exact = SrgbToLab({static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
                                      static_cast<std::uint8_t>(b)});
-        worst_a = std::max(worst_a, std::abs(lab.A(r, g, b) / 16.0 - exact.a));
-        worst_b = std::max(worst_b, std::abs(lab.B(r, g, b) / 16.0 - exact.b));
-        worst_l = std::max(worst_l, std::abs(lab.L(r, g, b) / 16.0 - exact.l));
+        worst_a = std::max(worst_a, std::abs(lab.aStar(r, g, b) / 16.0 - exact.a));
+        worst_b = std::max(worst_b, std::abs(lab.bStar(r, g, b) / 16.0 - exact.b));
+        worst_l = std::max(worst_l, std::abs(lab.lStar(r, g, b) / 16.0 - exact.l));
       }
     }
   }
@@ -87,7 +87,7 @@ TEST(LabApprox, PaletteClassifiedAsExact) {
     EXPECT_EQ(IsRedLab(exact.a, exact.b, t), red) << p.name;
     EXPECT_EQ(IsRedPixel(p.srgb.r, p.srgb.g, p.srgb.b, t), red) << p.name;
     // Bits are read in b*: 1 high, 0 low, either side of ~30.
-    const double b = LabApprox::Get().B(p.srgb.r, p.srgb.g, p.srgb.b) / 16.0;
+    const double b = LabApprox::Get().bStar(p.srgb.r, p.srgb.g, p.srgb.b) / 16.0;
     EXPECT_NEAR(b, exact.b, 1.0) << p.name;
   }
 }
@@ -108,7 +108,7 @@ TEST(LabApprox, PhotoLikePixelsClassifiedAsExact) {
     ASSERT_EQ(IsRedPixel(c.r, c.g, c.b, t), IsRedLab(exact.a, exact.b, t))
         << int(c.r) << "," << int(c.g) << "," << int(c.b) << " a*=" << exact.a << " b*=" << exact.b;
     // The bit threshold in b* (palette mid-point ~30) classifies the same way too.
-    const double b = LabApprox::Get().B(c.r, c.g, c.b) / 16.0;
+    const double b = LabApprox::Get().bStar(c.r, c.g, c.b) / 16.0;
     if (std::abs(exact.b - 30) >= 1.0) ASSERT_EQ(b > 30, exact.b > 30);
   }
   std::printf("%d pixels compared (%d red), %d within 1 unit of a threshold skipped\n", compared,
