@@ -20,7 +20,7 @@ struct RedBlob {
 };
 
 struct BlobLimits {
-  int min_area = 6;        ///< px
+  int min_area = 3;        ///< px
   int max_area = 1 << 20;  ///< px
   double min_fill = 0.55;
   double max_elongation = 8;  ///< major / minor (a disk tilted 80° is ~5.8)

@@ -33,7 +33,7 @@ TEST(RedBlobs, LinesRingsAndSpecksAreDropped) {
   cv::Mat mask(300, 300, CV_8U, cv::Scalar(0));
   cv::line(mask, {10, 10}, {200, 30}, 255, 2);     // too elongated
   cv::circle(mask, {150, 150}, 40, 255, 3);        // a ring: its fill is far from 1
-  cv::rectangle(mask, {250, 250, 2, 2}, 255, -1);  // too small
+  cv::rectangle(mask, {250, 250, 2, 1}, 255, -1);  // too small (2 px; the minimum is 3)
   cv::rectangle(mask, {20, 200, 60, 5}, 255, -1);  // elongated bar
   EXPECT_TRUE(FindRedBlobs(mask, {}).empty());
 }

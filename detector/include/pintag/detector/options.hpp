@@ -49,7 +49,7 @@ struct DetectorOptions {
   double min_bit_margin = 0.30;  ///< |b* − mid| / half-span below this: the bit is read as unknown
 
   // --- sizes, relative to the image unless stated ---
-  int min_element_area_px = 6;           ///< smallest red blob kept, pixels
+  int min_element_area_px = 3;           ///< smallest red blob kept, pixels
   double max_element_area_ratio = 0.02;  ///< largest red blob, fraction of the image area
   /// Quad size scale N, pixels: a square needs area >= (N/2)^2 and shortest side >= 0.3 N (slack
   /// for steep views), so the smallest accepted side is well below N.
