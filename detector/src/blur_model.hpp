@@ -105,7 +105,8 @@ struct CodewordReading {
   std::string error;
   int quarter_turns = 0;  ///< element `quarter_turns` of the sampled frame is C0
   CellReading reading;    ///< the codeword, canonical
-  double lead = 0;        ///< runner-up's residual over the winner's, in noise units
+  double lead = 0;        ///< runner-up's residual over the winner's, in noise units (also set
+                          ///< when refused for the margin)
   double excess = 0;      ///< winner's residual over the free reading's, in noise units
 };
 
