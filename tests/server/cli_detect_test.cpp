@@ -69,15 +69,23 @@ std::string Intrinsics(const scene::Camera& c) {
          std::to_string(c.cx) + " --cy " + std::to_string(c.cy);
 }
 
+/// `pintag detect --json <options>` on the photo (intrinsics given): the one detection, or null
+/// after a failed assertion.
+json DetectOne(const RenderedPhoto& photo, const std::string& options) {
+  const CommandResult run =
+      RunPintag("detect --json " + options + Intrinsics(photo.camera) + " " + photo.path);
+  EXPECT_EQ(run.status, 0) << run.out;
+  if (run.status != 0) return nullptr;
+  const json answer = json::parse(run.out);
+  EXPECT_EQ(answer["detections"].size(), 1U) << run.out;
+  return answer["detections"].size() == 1 ? answer["detections"][0] : json(nullptr);
+}
+
 TEST(CliDetect, ReadsKeyAndDistanceWithTheDefaultLabelsTagSize) {
   const test::TempDir dir;
   const RenderedPhoto photo = RenderPhoto(dir);
-  const CommandResult run =
-      RunPintag("detect --json" + Intrinsics(photo.camera) + " " + photo.path);
-  ASSERT_EQ(run.status, 0) << run.out;
-  const json answer = json::parse(run.out);
-  ASSERT_EQ(answer["detections"].size(), 1U) << run.out;
-  const json& tag = answer["detections"][0];
+  const json tag = DetectOne(photo, "");
+  ASSERT_FALSE(tag.is_null());
   EXPECT_EQ(tag["key"], kKey);
   // No --tag-size-mm: the default is the 100 x 150 mm label's tag, as for /api/v1/detect, so
   // the distance comes out right for the label the counter printed.
@@ -88,14 +96,11 @@ TEST(CliDetect, ReadsKeyAndDistanceWithTheDefaultLabelsTagSize) {
 TEST(CliDetect, DistanceScalesWithTheGivenTagSize) {
   const test::TempDir dir;
   const RenderedPhoto photo = RenderPhoto(dir);
-  const CommandResult run =
-      RunPintag("detect --json --tag-size-mm 50" + Intrinsics(photo.camera) + " " + photo.path);
-  ASSERT_EQ(run.status, 0) << run.out;
-  const json answer = json::parse(run.out);
-  ASSERT_EQ(answer["detections"].size(), 1U) << run.out;
+  const json tag = DetectOne(photo, "--tag-size-mm 50");
+  ASSERT_FALSE(tag.is_null());
   const double truth_m =
       cv::norm(photo.truth.pose.translation) * 50 / TagPlacement(kLabel100x150).square_side_mm;
-  EXPECT_NEAR(answer["detections"][0]["pose"]["distance_m"].get<double>(), truth_m, 0.02 * truth_m);
+  EXPECT_NEAR(tag["pose"]["distance_m"].get<double>(), truth_m, 0.02 * truth_m);
 }
 
 TEST(CliDetect, RefusesWhatIsNotAPhotoWithAClearMessage) {
