@@ -105,7 +105,9 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
   const cv::Mat dark = stage::MinChannel(bgr, cluster->roi);
   std::vector<stage::Quad> quads = stage::FindQuads(dark, cluster->roi.tl(), options.min_square_px);
   const auto holds_elements = [&](const stage::Quad& q) {
-    return stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs).found >= 3;
+    return stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs,
+                                 stage::kRoughElementTolerance)
+               .found >= 3;
   };
   if (std::none_of(quads.begin(), quads.end(), holds_elements)) {
     std::vector<cv::Point2d> anchors;
@@ -119,8 +121,9 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
   for (const stage::Quad& q : quads) {
     if (cv::norm((q[0] + q[1] + q[2] + q[3]) * 0.25 - centre_px) >= 0.3 * truth.square_px) continue;
     quad_on_tag = true;
-    rough_ok |=
-        stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs).found >= 3;
+    rough_ok |= stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs,
+                                      stage::kRoughElementTolerance)
+                    .found >= 3;
   }
   if (!quad_on_tag) return "3c quad search: no quad on the tag in its cluster's region";
   if (!rough_ok) return "3d quad found, but < 3 blobs fall on its elements";

@@ -669,7 +669,7 @@ bool IsOneLevel(int level) {
 }  // namespace
 
 CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
-                                           double min_margin) {
+                                           double min_margin, bool excuse_small_excess) {
   CodewordReading result;
   if (!fit.ok || fit.equations.pixels == 0) {
     result.error = "no blur fit";
@@ -757,7 +757,8 @@ CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrie
   // (Allowing any excess below the lead gave a misread at seed 5: 48 px, 55°, hard light, lead 299
   // and excess 78 noise units. Logged on seeds 1 and 2, refused winners that were the wrong key
   // had excess / lead from 0.26 to 3.4, or a lead below 100; most right ones had it below 0.1.)
-  const bool excess_excused = lead >= kMinLeadToExcuseExcess && excess <= kMaxExcessPerLead * lead;
+  const bool excess_excused =
+      excuse_small_excess && lead >= kMinLeadToExcuseExcess && excess <= kMaxExcessPerLead * lead;
   if (lead < min_margin || (excess > 0 && !excess_excused)) {
     result.error = "blur model: no codeword clearly nearest";
     return result;

@@ -99,7 +99,9 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& 
 /// is accepted only if it explains the pixels better than any other codeword by `min_margin`
 /// times the residual noise, at least as well as the free reading, and its colours look like the
 /// palette. This is a dictionary decode with a margin, as ArUco and AprilTag do, but on
-/// the fitted model rather than on thresholded bits.
+/// the fitted model rather than on thresholded bits. With `excuse_small_excess`, a winner leading
+/// by at least 100 noise units may explain the pixels worse than the free reading by up to a
+/// tenth of its lead.
 struct CodewordReading {
   std::optional<TagKey> key;
   std::string error;
@@ -111,6 +113,6 @@ struct CodewordReading {
 };
 
 CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
-                                           double min_margin = 25);
+                                           double min_margin = 25, bool excuse_small_excess = true);
 
 }  // namespace pintag::stage

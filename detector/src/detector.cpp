@@ -82,8 +82,11 @@ bool NearestCodewordIsStable(const cv::Mat& bgr, const cv::Matx33d& h, TagKey ke
                             0, 0, 1);
     const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, moved * h);
     if (!fit.ok) continue;
-    const stage::CodewordReading again =
-        stage::NearestCodewordThroughBlur(fit, stage::SettleOrientations(fit));
+    // Confirmation must be clean: a shifted fit agrees only if its winner explains the pixels at
+    // least as well as its free reading (no excused excess). With the excuse, a frame once misread
+    // (bench/misread_regressions_test.cpp) found 4 of 6 shifted fits "agreeing" on the wrong key.
+    const stage::CodewordReading again = stage::NearestCodewordThroughBlur(
+        fit, stage::SettleOrientations(fit), 25, /*excuse_small_excess=*/false);
     if (!again.key) continue;
     if (*again.key != key) return false;
     ++agree;
@@ -181,7 +184,9 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   std::vector<stage::Quad> quads =
       stage::FindQuads(dark, cluster.roi.tl(), options.min_square_px, &anchors);
   const auto holds_elements = [&](const stage::Quad& quad) {
-    return stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs).found >= 3;
+    return stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs,
+                                 stage::kRoughElementTolerance)
+               .found >= 3;
   };
   if (std::none_of(quads.begin(), quads.end(), holds_elements)) {
     // Tilted steeply, a tag's quiet zone is about two pixels wide across the tilt; closing gaps
@@ -200,8 +205,8 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
   for (stage::Quad quad : quads) {
     t1 = Clock::now();
-    const stage::ElementAssignment rough =
-        stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs);
+    const stage::ElementAssignment rough = stage::AssignElements(
+        stage::HomographyFromQuad(quad), blobs, cluster.blobs, stage::kRoughElementTolerance);
     if (rough.found < 3) continue;
     const bool refined = stage::RefineCorners(dark, cluster.roi.tl(), &quad);
     const cv::Matx33d h = stage::HomographyFromQuad(quad);

@@ -12,10 +12,9 @@ namespace {
 // Neighbouring elements are 2.5 disk diameters apart, but a blurred small disk passes the redness
 // test only in its core, which can be half the disk or less: links reach 6 core diameters.
 constexpr double kLinkDiameters = 6.0;
-constexpr double kMaxAreaRatio = 8;      // perspective can shrink a far element
-constexpr double kRoiDiameters = 2.6;    // element centre -> square edge + quiet zone: 2.0
-constexpr double kRoiSpacings = 1.0;     // the same in element spacings (0.5 S): 0.8
-constexpr double kSlotTolerance = 0.08;  // tag units
+constexpr double kMaxAreaRatio = 8;    // perspective can shrink a far element
+constexpr double kRoiDiameters = 2.6;  // element centre -> square edge + quiet zone: 2.0
+constexpr double kRoiSpacings = 1.0;   // the same in element spacings (0.5 S): 0.8
 
 int Find(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -105,7 +104,7 @@ std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Siz
 }
 
 ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vector<RedBlob>& blobs,
-                                 const std::vector<int>& candidates) {
+                                 const std::vector<int>& candidates, double tolerance) {
   ElementAssignment result;
   const cv::Matx33d inverse = tag_to_image.inv();
   for (int i : candidates) {
@@ -116,7 +115,7 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
     bool placed = false;
     for (int e = 0; e < 4; ++e) {
       const geometry::Point c = geometry::kElementCentres[e];
-      if (std::abs(u - c.x) > kSlotTolerance || std::abs(v - c.y) > kSlotTolerance) continue;
+      if (std::abs(u - c.x) > tolerance || std::abs(v - c.y) > tolerance) continue;
       placed = true;
       if (result.blob[e] >= 0) {
         result.conflict = true;

@@ -27,8 +27,13 @@ struct ElementAssignment {
 };
 
 /// Maps blobs through `tag_to_image` (unit square -> px) and assigns each to the element whose
-/// nominal centre it lies near (within 0.08 tag units).
+/// nominal centre it lies near (within `tolerance` tag units in u and in v).
+inline constexpr double kElementTolerance = 0.08;
+/// For a quad before corner refinement: a blurred square's thresholded outline can be several
+/// pixels off along a steeply tilted side (slots are 0.5 apart, so still unambiguous).
+inline constexpr double kRoughElementTolerance = 0.15;
 ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vector<RedBlob>& blobs,
-                                 const std::vector<int>& candidates);
+                                 const std::vector<int>& candidates,
+                                 double tolerance = kElementTolerance);
 
 }  // namespace pintag::stage
