@@ -561,6 +561,25 @@ SettledOrientations SettleOrientations(const BlurFit& fit) {
   return Settle(ConstrainedModel(fit.equations), fit);
 }
 
+namespace {
+
+// The orientation whose settled labelling explains the pixels best.
+int BestSettled(const SettledOrientations& settled) {
+  int best = 0;
+  for (int r = 1; r < 4; ++r) {
+    if (settled[r].residual < settled[best].residual) best = r;
+  }
+  return best;
+}
+
+// A residual as mean squared error per observed value (3 channels per pixel): the unit in which
+// both readers' margins are stated.
+double NoisePerValue(const BlurFit& fit, double residual) {
+  return std::max(residual, 1e-12) / (3.0 * static_cast<double>(fit.equations.pixels));
+}
+
+}  // namespace
+
 ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
                                  double min_significance) {
   ModelReading result;
@@ -569,12 +588,8 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& 
     return result;
   }
   const ConstrainedModel model(fit.equations);
-  int best = 0;
-  for (int r = 1; r < 4; ++r) {
-    if (settled[r].residual < settled[best].residual) best = r;
-  }
-  const double noise =
-      std::max(settled[best].residual, 1e-12) / (3.0 * static_cast<double>(fit.equations.pixels));
+  const int best = BestSettled(settled);
+  const double noise = NoisePerValue(fit, settled[best].residual);
   for (int r = 0; r < 4; ++r) {
     if (r != best && settled[r].residual - settled[best].residual < min_significance * noise) {
       result.error = "orientation ambiguous in the blur model";
@@ -676,10 +691,8 @@ CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrie
     return result;
   }
   const ConstrainedModel model(fit.equations);
-  double free_best = 1e300;
-  for (const Hypothesis& h : settled) free_best = std::min(free_best, h.residual);
-  const double noise =
-      std::max(free_best, 1e-12) / (3.0 * static_cast<double>(fit.equations.pixels));
+  const double free_best = settled[BestSettled(settled)].residual;
+  const double noise = NoisePerValue(fit, free_best);
 
   // Rank every (key, orientation) by the summed cost of the cells where it disagrees with that
   // orientation's settled reading (each cell's flip cost, colours held): cheap, and close to
