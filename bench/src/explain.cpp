@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 
+#include "cluster_quads.hpp"
 #include "grouping.hpp"
 #include "homography.hpp"
 #include "pintag/codec/geometry.hpp"
@@ -100,24 +101,9 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
       (truth.corners_px[0] + truth.corners_px[1] + truth.corners_px[2] + truth.corners_px[3]) *
       0.25;
   bool quad_on_tag = false, rough_ok = false;
-  // As detector.cpp: quads with one-pixel gaps closed, and without when none of those holds
-  // three blobs on its elements.
-  const cv::Mat dark = stage::MinChannel(bgr, cluster->roi);
-  std::vector<stage::Quad> quads = stage::FindQuads(dark, cluster->roi.tl(), options.min_square_px);
-  const auto holds_elements = [&](const stage::Quad& q) {
-    return stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs,
-                                 stage::kRoughElementTolerance)
-               .found >= 3;
-  };
-  if (std::none_of(quads.begin(), quads.end(), holds_elements)) {
-    std::vector<cv::Point2d> anchors;
-    for (int b : cluster->blobs) anchors.push_back(blobs[static_cast<std::size_t>(b)].centroid);
-    const cv::Rect near = stage::AnchorsRegion(anchors, cluster->roi);
-    const std::vector<stage::Quad> open =
-        stage::FindQuads(dark(near - cluster->roi.tl()), near.tl(), options.min_square_px, nullptr,
-                         /*close_gaps=*/false);
-    quads.insert(quads.end(), open.begin(), open.end());
-  }
+  // The same quads as detector.cpp.
+  const std::vector<stage::Quad> quads = stage::ClusterQuads(
+      stage::MinChannel(bgr, cluster->roi), *cluster, blobs, options.min_square_px);
   for (const stage::Quad& q : quads) {
     if (cv::norm((q[0] + q[1] + q[2] + q[3]) * 0.25 - centre_px) >= 0.3 * truth.square_px) continue;
     quad_on_tag = true;

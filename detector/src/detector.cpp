@@ -12,6 +12,7 @@
 
 #include "blur_model.hpp"
 #include "camera_model.hpp"
+#include "cluster_quads.hpp"
 #include "debug_images.hpp"
 #include "duplicates.hpp"
 #include "grouping.hpp"
@@ -145,6 +146,12 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThr
   return r;
 }
 
+double MeanSide(const stage::Quad& quad) {
+  double perimeter = 0;
+  for (int i = 0; i < 4; ++i) perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
+  return perimeter / 4;
+}
+
 // A decoded candidate as a Detection (corners turned so that C0 comes first).
 Detection MakeDetection(stage::Quad quad, const TagReading& reading,
                         const std::array<bool, 4>& blob_at_sampled_element) {
@@ -154,16 +161,14 @@ Detection MakeDetection(stage::Quad quad, const TagReading& reading,
   quad = stage::RotateQuad(quad, r);
   const cv::Matx33d h = stage::HomographyFromQuad(quad);
   d.key = reading.payload.key;
-  double perimeter = 0;
   for (int i = 0; i < 4; ++i) {
     d.corners[i] = ToPoint(quad[i]);
     const geometry::Point c = geometry::kElementCentres[i];
     d.element_centres[i] = ToPoint(stage::Apply(h, c.x, c.y));
     d.element_seen[i] = blob_at_sampled_element[(i + r) % 4];
-    perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
   }
   for (int i = 0; i < 9; ++i) d.homography[i] = h.val[i];
-  d.square_px = perimeter / 4;
+  d.square_px = MeanSide(quad);
   d.cells = o.reading;
   d.margins = o.margins;
   d.unknown_bits = o.unknown;
@@ -179,25 +184,8 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
                     ClusterOutput* out) {
   const auto t0 = Clock::now();
   const cv::Mat dark = stage::MinChannel(bgr, cluster.roi);
-  std::vector<cv::Point2d> anchors;
-  for (int i : cluster.blobs) anchors.push_back(blobs[i].centroid);
-  std::vector<stage::Quad> quads =
-      stage::FindQuads(dark, cluster.roi.tl(), options.min_square_px, &anchors);
-  const auto holds_elements = [&](const stage::Quad& quad) {
-    return stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs,
-                                 stage::kRoughElementTolerance)
-               .found >= 3;
-  };
-  if (std::none_of(quads.begin(), quads.end(), holds_elements)) {
-    // Tilted steeply, a tag's quiet zone is about two pixels wide across the tilt; closing gaps
-    // bridges it and the tag merges with dark ground (48 px tags at 72° in the benchmark).
-    // Only around the blobs: the tag is there, and the rest of the region is photo.
-    const cv::Rect near = stage::AnchorsRegion(anchors, cluster.roi);
-    const std::vector<stage::Quad> open =
-        stage::FindQuads(dark(near - cluster.roi.tl()), near.tl(), options.min_square_px, &anchors,
-                         /*close_gaps=*/false);
-    quads.insert(quads.end(), open.begin(), open.end());
-  }
+  const std::vector<stage::Quad> quads =
+      stage::ClusterQuads(dark, cluster, blobs, options.min_square_px);
   out->quads.insert(out->quads.end(), quads.begin(), quads.end());
   auto t1 = Clock::now();
   out->quads_ms += Ms(t0, t1);
@@ -217,12 +205,8 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
       if (!options.return_rejected) return;
       Detection d;
       d.reject_reason = std::move(reason);
-      double perimeter = 0;
-      for (int i = 0; i < 4; ++i) {
-        d.corners[i] = ToPoint(quad[i]);
-        perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
-      }
-      d.square_px = perimeter / 4;
+      for (int i = 0; i < 4; ++i) d.corners[i] = ToPoint(quad[i]);
+      d.square_px = MeanSide(quad);
       if (o != nullptr) {
         d.cells = o->reading;
         d.margins = o->margins;

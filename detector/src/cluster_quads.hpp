@@ -1,0 +1,21 @@
+#pragma once
+// Stage 3b for one blob cluster: the quads its tag can be. Quads are searched in the thresholded
+// region with one-pixel gaps closed; when none of them places 3 of the cluster's blobs on its
+// elements (roughly, before corner refinement), again without the closing, around the blobs
+// only: tilted steeply, a tag's quiet zone is about two pixels wide across the tilt, the closing
+// bridges it, and on dark ground the tag merges with the ground (48 px tags at 72° in the
+// benchmark). The detector and the benchmark's miss explanation both call this.
+
+#include <vector>
+
+#include "grouping.hpp"
+#include "quads.hpp"
+#include "red_blobs.hpp"
+
+namespace pintag::stage {
+
+/// `dark`: MinChannel of `cluster.roi`. Quads in image coordinates, gaps-closed ones first.
+std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,
+                               const std::vector<RedBlob>& blobs, double min_square_px);
+
+}  // namespace pintag::stage
