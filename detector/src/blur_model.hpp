@@ -102,6 +102,9 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& 
 /// the fitted model rather than on thresholded bits. With `excuse_small_excess`, a winner leading
 /// by at least 100 noise units may explain the pixels worse than the free reading by up to a
 /// tenth of its lead.
+/// The lead (noise units) a nearest codeword needs over every other codeword.
+inline constexpr double kNearestCodewordMinLead = 25;
+
 struct CodewordReading {
   std::optional<TagKey> key;
   std::string error;
@@ -113,6 +116,7 @@ struct CodewordReading {
 };
 
 CodewordReading NearestCodewordThroughBlur(const BlurFit& fit, const SettledOrientations& settled,
-                                           double min_margin = 25, bool excuse_small_excess = true);
+                                           double min_margin = kNearestCodewordMinLead,
+                                           bool excuse_small_excess = true);
 
 }  // namespace pintag::stage

@@ -87,7 +87,8 @@ bool NearestCodewordIsStable(const cv::Mat& bgr, const cv::Matx33d& h, TagKey ke
     // least as well as its free reading (no excused excess). With the excuse, a frame once misread
     // (bench/misread_regressions_test.cpp) found 4 of 6 shifted fits "agreeing" on the wrong key.
     const stage::CodewordReading again = stage::NearestCodewordThroughBlur(
-        fit, stage::SettleOrientations(fit), 25, /*excuse_small_excess=*/false);
+        fit, stage::SettleOrientations(fit), stage::kNearestCodewordMinLead,
+        /*excuse_small_excess=*/false);
     if (!again.key) continue;
     if (*again.key != key) return false;
     ++agree;

@@ -73,7 +73,6 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
       const [r, g, b] = context.getImageData(Math.round(x * sx), Math.round(y * sy), 1, 1).data;
       return 0.2126 * r + 0.7152 * g + 0.0722 * b;
     };
-    const cx = box.left + box.width / 2 - frame.left;
     const cy = box.top + box.height / 2 - frame.top;
     return {
       inside: box.left >= frame.left - 1 && box.right <= frame.right + 1
@@ -82,7 +81,6 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
       // just inside the outline's left edge (black square) and just outside it (quiet zone)
       darkInside: luma(box.left - frame.left + box.width * 0.06, cy),
       lightOutside: luma(box.left - frame.left - box.width * 0.06, cy),
-      centreX: cx / frame.width,
       groups: document.querySelectorAll('#outlines g').length,
     };
   });
