@@ -64,13 +64,16 @@ stage::PayloadResult Decode(const stage::OrientationResult& orientation) {
 
 // A codeword chosen through the blur model must not hang on the exact corners. The fit is
 // repeated with the tag shifted by half a pixel each way and scaled by ±2 % (corner refinement is
-// good to a few tenths of a pixel); at least half of those fits must choose the same codeword
-// and none another. Measured on the benchmark: a 80 px tag at 78°, hard light, chose a codeword
-// one key bit from the truth with a lead of 334 noise units, but only 1 of the 6 shifted fits
-// agreed (5 chose none). Of the 33 right nearest-codeword readings of seeds 1 and 2, 26 were
-// confirmed by 3 to 6 shifted fits and 7 by only 1 or 2 (lost to this rule); none disagreed.
+// good to a few tenths of a pixel); at least two of those fits must choose the same codeword and
+// none another. Measured on the benchmark: a 80 px tag at 78°, hard light, chose a codeword one
+// key bit from the truth with a lead of 334 noise units, but only 1 of the 6 shifted fits agreed
+// (5 chose none). Logged over seeds 1 to 6 (4,704 tagged frames), 203 nearest-codeword readings
+// passed the lead and excess rules, all of them the right key: 41 were confirmed by exactly 2
+// shifted fits, 18 by 1, 3 by none, and 1 met a fit choosing another key. Requiring 2 rather
+// than 3 found 40 more tags in those sweeps, and their 12 runs (with and without the colour
+// cast) read no wrong key.
 constexpr int kJitteredFits = 6;
-constexpr int kJitteredFitsToAgree = 3;
+constexpr int kJitteredFitsToAgree = 2;
 
 bool NearestCodewordIsStable(const cv::Mat& bgr, const cv::Matx33d& h, TagKey key) {
   constexpr std::array<std::array<double, 3>, kJitteredFits> kJitters{
