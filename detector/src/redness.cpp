@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <utility>
 
 #include "lab_approx.hpp"
 
@@ -32,24 +36,46 @@ bool IsRedPixel(int r, int g, int b, const RednessThresholds& thresholds) {
   return a_star >= s.a && b_star >= s.b;
 }
 
+RedTable::RedTable(const RednessThresholds& thresholds) : least_red_r_(std::size_t{256} * 256) {
+  for (int g = 0; g < 256; ++g) {
+    for (int b = 0; b < 256; ++b) {
+      // Binary search for the least red R; exact because redness only grows with R (tested).
+      int lo = 0, hi = 256;
+      while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (IsRedPixel(mid, g, b, thresholds)) {
+          hi = mid;
+        } else {
+          lo = mid + 1;
+        }
+      }
+      least_red_r_[static_cast<std::size_t>((g << 8) | b)] = static_cast<std::uint16_t>(lo);
+    }
+  }
+}
+
+const RedTable& RedTable::For(const RednessThresholds& thresholds) {
+  // Keyed by the thresholds as LabApprox compares them; detectors are built with few distinct ones.
+  static std::mutex mutex;
+  static std::map<std::pair<int, int>, std::unique_ptr<RedTable>> tables;
+  const ScaledThresholds s = Scale(thresholds);
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::unique_ptr<RedTable>& table = tables[{s.a, s.b}];
+  if (!table) table.reset(new RedTable(thresholds));
+  return *table;
+}
+
 RedRuns FindRedRuns(const cv::Mat& bgr, const RednessThresholds& thresholds) {
   CV_Assert(bgr.type() == CV_8UC3);
   RedRuns out;
   out.size = bgr.size();
-  const ScaledThresholds s = Scale(thresholds);
-  const LabApprox& lab = LabApprox::Get();
+  const RedTable& table = RedTable::For(thresholds);
   for (int y = 0; y < bgr.rows; ++y) {
     const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
     int start = -1;
     for (int x = 0; x < bgr.cols; ++x) {
       const std::uint8_t* p = row + 3 * static_cast<std::ptrdiff_t>(x);
-      bool red = false;
-      // Nearly every pixel stops at this integer comparison.
-      if (p[2] >= p[1] + kRednessPrefilter) {
-        int a_star, b_star;
-        lab.abStar(p[2], p[1], p[0], &a_star, &b_star);
-        red = a_star >= s.a && b_star >= s.b;
-      }
+      const bool red = table.isRed(p[2], p[1], p[0]);
       if (red && start < 0) start = x;
       if (!red && start >= 0) {
         out.runs.push_back({y, start, x - 1});

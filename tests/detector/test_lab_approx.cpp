@@ -153,5 +153,27 @@ TEST(Redness, PrefilterNeverRejectsARedColourAtTheDefaultThreshold) {
   EXPECT_EQ(reds, 0);
 }
 
+TEST(Redness, TableAgreesWithLabApproxOnEveryColour) {
+  // The pass over the frame uses RedTable; it must call red exactly the colours IsRedPixel does,
+  // over all 2^24 of them, at the default thresholds and at others either side (so that a
+  // threshold tuned through DetectorOptions gets the same guarantee).
+  for (const RednessThresholds t :
+       {RednessThresholds{}, RednessThresholds{10, -30}, RednessThresholds{35, 0}}) {
+    const RedTable& table = RedTable::For(t);
+    long long reds = 0, wrong = 0;
+    for (int r = 0; r < 256; ++r) {
+      for (int g = 0; g < 256; ++g) {
+        for (int b = 0; b < 256; ++b) {
+          const bool red = IsRedPixel(r, g, b, t);
+          reds += red;
+          wrong += red != table.isRed(r, g, b);
+        }
+      }
+    }
+    EXPECT_EQ(wrong, 0) << "a* >= " << t.min_a << ", b* >= " << t.min_b;
+    EXPECT_GT(reds, 100000) << "a* >= " << t.min_a;  // the rule is not empty
+  }
+}
+
 }  // namespace
 }  // namespace pintag::stage
