@@ -8,7 +8,9 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <opencv2/imgproc.hpp>
 #include <thread>
+#include <vector>
 
 #include "blur_model.hpp"
 #include "camera_model.hpp"
@@ -242,6 +244,74 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   }
 }
 
+bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const Detection& d = detections[i];
+    if (!d.key) continue;
+    std::vector<cv::Point2f> square;
+    for (const Point2& c : d.corners)
+      square.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
+    if (cv::pointPolygonTest(square, cv::Point2f(p), false) >= 0) return true;
+  }
+  return false;
+}
+
+// Stages 1 to 6 at one redness threshold: every candidate's detection (decoded, or rejected when
+// asked for) is appended to `result`, and the stage times are added to its timings.
+void RunRedPass(const cv::Mat& bgr, const stage::RednessThresholds& red_thresholds,
+                int max_element_area_px, const DetectorOptions& options,
+                const stage::DebugImages* debug, DetectResult* result,
+                std::vector<stage::Quad>* all_quads) {
+  const auto start = Clock::now();
+  const stage::RedRuns red = stage::FindRedRuns(bgr, red_thresholds);
+  const auto t_red = Clock::now();
+  result->timings.redness_ms += Ms(start, t_red);
+  if (debug != nullptr && debug->enabled()) debug->redness(stage::RunsToMask(red));
+
+  stage::BlobLimits limits;
+  limits.min_area = options.min_element_area_px;
+  limits.max_area = std::max<int>(limits.min_area, max_element_area_px);
+  limits.max_blobs = options.max_blobs;
+  std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
+  // A later pass looks only for tags the earlier ones did not decode: the blobs inside a decoded
+  // square are its elements again.
+  const std::size_t decoded_before = result->detections.size();
+  std::erase_if(blobs, [&](const stage::RedBlob& b) {
+    return InsideDecodedTag(b.centroid, result->detections, decoded_before) ||
+           !stage::HasRing(bgr, b);
+  });
+  const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
+  const auto t_blobs = Clock::now();
+  result->timings.blobs_ms += Ms(t_red, t_blobs);
+  if (debug != nullptr) debug->blobs(bgr, blobs, clusters);
+
+  std::vector<ClusterOutput> outputs(clusters.size());
+  const int threads = std::clamp(options.threads, 1, 64);
+  if (threads == 1 || clusters.size() < 2) {
+    for (std::size_t i = 0; i < clusters.size(); ++i) {
+      ProcessCluster(bgr, blobs, clusters[i], options, &outputs[i]);
+    }
+  } else {
+    std::atomic<std::size_t> next{0};
+    std::vector<std::thread> pool;
+    pool.reserve(static_cast<std::size_t>(threads));
+    for (int t = 0; t < threads; ++t) {
+      pool.emplace_back([&] {
+        for (std::size_t i; (i = next++) < clusters.size();) {
+          ProcessCluster(bgr, blobs, clusters[i], options, &outputs[i]);
+        }
+      });
+    }
+    for (std::thread& t : pool) t.join();
+  }
+  for (ClusterOutput& o : outputs) {
+    result->timings.quads_ms += o.quads_ms;
+    result->timings.decode_ms += o.decode_ms;
+    for (Detection& d : o.detections) result->detections.push_back(std::move(d));
+    all_quads->insert(all_quads->end(), o.quads.begin(), o.quads.end());
+  }
+}
+
 }  // namespace
 
 std::string_view ToString(IntrinsicsSource source) {
@@ -278,48 +348,13 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   result.intrinsics_source = camera.source;
   const stage::DebugImages debug(options_.debug_dir);
 
-  const stage::RedRuns red = stage::FindRedRuns(bgr, {options_.red_min_a, options_.red_min_b});
-  const auto t_red = Clock::now();
-  result.timings.redness_ms = Ms(start, t_red);
-  if (debug.enabled()) debug.redness(stage::RunsToMask(red));
-
-  stage::BlobLimits limits;
-  limits.min_area = options_.min_element_area_px;
-  limits.max_area = std::max<int>(limits.min_area,
-                                  static_cast<int>(options_.max_element_area_ratio * bgr.total()));
-  limits.max_blobs = options_.max_blobs;
-  std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
-  std::erase_if(blobs, [&](const stage::RedBlob& b) { return !stage::HasRing(bgr, b); });
-  const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
-  const auto t_blobs = Clock::now();
-  result.timings.blobs_ms = Ms(t_red, t_blobs);
-  debug.blobs(bgr, blobs, clusters);
-
-  std::vector<ClusterOutput> outputs(clusters.size());
-  const int threads = std::clamp(options_.threads, 1, 64);
-  if (threads == 1 || clusters.size() < 2) {
-    for (std::size_t i = 0; i < clusters.size(); ++i) {
-      ProcessCluster(bgr, blobs, clusters[i], options_, &outputs[i]);
-    }
-  } else {
-    std::atomic<std::size_t> next{0};
-    std::vector<std::thread> pool;
-    pool.reserve(static_cast<std::size_t>(threads));
-    for (int t = 0; t < threads; ++t) {
-      pool.emplace_back([&] {
-        for (std::size_t i; (i = next++) < clusters.size();) {
-          ProcessCluster(bgr, blobs, clusters[i], options_, &outputs[i]);
-        }
-      });
-    }
-    for (std::thread& t : pool) t.join();
-  }
   std::vector<stage::Quad> all_quads;
-  for (ClusterOutput& o : outputs) {
-    result.timings.quads_ms += o.quads_ms;
-    result.timings.decode_ms += o.decode_ms;
-    for (Detection& d : o.detections) result.detections.push_back(std::move(d));
-    all_quads.insert(all_quads.end(), o.quads.begin(), o.quads.end());
+  RunRedPass(bgr, {options_.red_min_a, options_.red_min_b},
+             static_cast<int>(options_.max_element_area_ratio * bgr.total()), options_, &debug,
+             &result, &all_quads);
+  if (options_.faint_red_min_a < options_.red_min_a) {
+    RunRedPass(bgr, {options_.faint_red_min_a, options_.red_min_b},
+               options_.faint_max_element_area_px, options_, nullptr, &result, &all_quads);
   }
   debug.quads(bgr, all_quads);
   stage::RemoveDuplicates(&result.detections);

@@ -28,12 +28,14 @@ void VisitOptions(Options& o, Visit&& visit) {
   visit("tag_size_m", o.tag_size_m);
   visit("red_min_a", o.red_min_a);
   visit("red_min_b", o.red_min_b);
+  visit("faint_red_min_a", o.faint_red_min_a);
   visit("min_bit_span_b", o.min_bit_span_b);
   visit("min_bit_margin", o.min_bit_margin);
   visit("min_element_area_px", o.min_element_area_px);
   visit("max_element_area_ratio", o.max_element_area_ratio);
   visit("min_square_px", o.min_square_px);
   visit("max_blobs", o.max_blobs);
+  visit("faint_max_element_area_px", o.faint_max_element_area_px);
   visit("threads", o.threads);
   visit("debug_dir", o.debug_dir);
   visit("return_rejected", o.return_rejected);

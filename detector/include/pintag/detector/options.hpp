@@ -43,8 +43,13 @@ struct DetectorOptions {
   double tag_size_m = 0.050;     ///< side of the black square, metres (default 50 mm)
 
   // --- colour (CIELAB units, computed with integer stand-ins; see DESIGN.md §2) ---
-  double red_min_a = 20;         ///< a pixel is red when a* >= this …
-  double red_min_b = -30;        ///< … and b* >= this (keeps saturated blues, a* ~ +79, out)
+  double red_min_a = 20;   ///< a pixel is red when a* >= this …
+  double red_min_b = -30;  ///< … and b* >= this (keeps saturated blues, a* ~ +79, out)
+  /// A second, fainter pass looks for tags the first did not decode: a* >= this, b* as above,
+  /// blobs outside the tags already decoded and no larger than faint_max_element_area_px (the
+  /// faint tags are the small ones; larger faint blobs are mostly warm photograph). Off when not
+  /// below red_min_a.
+  double faint_red_min_a = 12;
   double min_bit_span_b = 20;    ///< least b* difference between a tag's 1 and 0 levels
   double min_bit_margin = 0.30;  ///< |b* − mid| / half-span below this: the bit is read as unknown
 
@@ -54,7 +59,8 @@ struct DetectorOptions {
   /// Quad size scale N, pixels: a square needs area >= (N/2)^2 and shortest side >= 0.3 N (slack
   /// for steep views), so the smallest accepted side is well below N.
   int min_square_px = 20;
-  int max_blobs = 4000;  ///< red blobs beyond this (by area) are ignored
+  int max_blobs = 4000;                ///< red blobs beyond this (by area) are ignored
+  int faint_max_element_area_px = 60;  ///< largest red blob of the faint pass, pixels
 
   // --- execution and diagnostics ---
   int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread
