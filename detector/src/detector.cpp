@@ -1,5 +1,6 @@
-// The pipeline of DESIGN.md §3, top to bottom. Full-frame work is one integer redness pass and
-// one connected-components pass; everything else runs in small regions around red blob clusters.
+// The pipeline of DESIGN.md §3, top to bottom, run twice: at the main redness threshold, then a
+// faint pass for small tags it missed. Full-frame work per pass is one table-lookup redness pass
+// and one connected-components pass; the rest runs in small regions around red blob clusters.
 
 #include "pintag/detector/detector.hpp"
 
