@@ -34,12 +34,10 @@ class RedTable {
   static const RedTable& For(const RednessThresholds& thresholds);
 
   bool isRed(int r, int g, int b) const { return r >= least_red_r_[(g << 8) | b]; }
-  /// The least R that is red with this G and B; 256 when none is.
-  int leastRedR(int g, int b) const { return least_red_r_[(g << 8) | b]; }
 
  private:
   explicit RedTable(const RednessThresholds& thresholds);
-  std::vector<std::uint16_t> least_red_r_;  // indexed by (G << 8) | B
+  std::vector<std::uint16_t> least_red_r_;  // least red R (256: none), by (G << 8) | B
 };
 
 /// A horizontal run of red pixels [x0, x1] on row y.

@@ -8,6 +8,7 @@
 #include "lab_approx.hpp"
 #include "pintag/codec/cielab.hpp"
 #include "pintag/codec/palette.hpp"
+#include "pintag/detector/options.hpp"
 #include "redness.hpp"
 
 namespace pintag::stage {
@@ -155,10 +156,12 @@ TEST(Redness, PrefilterNeverRejectsARedColourAtTheDefaultThreshold) {
 
 TEST(Redness, TableAgreesWithLabApproxOnEveryColour) {
   // The pass over the frame uses RedTable; it must call red exactly the colours IsRedPixel does,
-  // over all 2^24 of them, at the default thresholds and at others either side (so that a
-  // threshold tuned through DetectorOptions gets the same guarantee).
-  for (const RednessThresholds t :
-       {RednessThresholds{}, RednessThresholds{10, -30}, RednessThresholds{35, 0}}) {
+  // over all 2^24 of them, at the main and faint-pass defaults and at others either side (so
+  // that a threshold tuned through DetectorOptions gets the same guarantee).
+  const DetectorOptions defaults;
+  for (const RednessThresholds t : {RednessThresholds{defaults.red_min_a, defaults.red_min_b},
+                                    RednessThresholds{defaults.faint_red_min_a, defaults.red_min_b},
+                                    RednessThresholds{10, -30}, RednessThresholds{35, 0}}) {
     const RedTable& table = RedTable::For(t);
     long long reds = 0, wrong = 0;
     for (int r = 0; r < 256; ++r) {
