@@ -14,7 +14,7 @@ namespace {
 
 constexpr double kTagSizeM = 0.05;
 
-cv::Matx33d Rot(cv::Vec3d axis, double deg) {
+cv::Matx33d Rot(const cv::Vec3d& axis, double deg) {
   cv::Matx33d r;
   cv::Rodrigues(axis * (deg * std::numbers::pi / 180.0), r);
   return r;
@@ -57,7 +57,7 @@ SyntheticScene MakeScene(const std::vector<SyntheticTag>& tags, const SyntheticO
   const int s = o.supersample;
   cv::Mat canvas = Background(o, s, rng);
   SyntheticScene scene;
-  const cv::Matx33d k = o.camera.K();
+  const cv::Matx33d k = o.camera.cameraMatrix();
   for (const SyntheticTag& tag : tags) {
     // Distance so that the square would be `square_px` wide frontally.
     const double z = o.camera.f * kTagSizeM / tag.square_px;

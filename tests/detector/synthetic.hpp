@@ -14,7 +14,9 @@ struct SyntheticCamera {
   double f = 1200;
   int width = 960;
   int height = 540;
-  cv::Matx33d K() const { return {f, 0, (width - 1) / 2.0, 0, f, (height - 1) / 2.0, 0, 0, 1}; }
+  cv::Matx33d cameraMatrix() const {
+    return {f, 0, (width - 1) / 2.0, 0, f, (height - 1) / 2.0, 0, 0, 1};
+  }
 };
 
 struct SyntheticTag {

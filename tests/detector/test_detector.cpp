@@ -27,7 +27,7 @@ double MaxCornerError(const Detection& d, const testing::SyntheticTruth& t) {
 
 DetectorOptions OptionsFor(const SyntheticOptions& s) {
   DetectorOptions o;
-  const cv::Matx33d k = s.camera.K();
+  const cv::Matx33d k = s.camera.cameraMatrix();
   o.intrinsics = CameraIntrinsics{k(0, 0), k(1, 1), k(0, 2), k(1, 2), {}};
   // PINTAG_DEBUG_DIR=dir writes each stage's image and reports rejected candidates.
   if (const char* dir = std::getenv("PINTAG_DEBUG_DIR")) {
