@@ -67,6 +67,11 @@ std::vector<cv::Point2f> EdgePoints(const cv::Mat& dark, cv::Point2d a, cv::Poin
     }
     lo /= quarter;
     hi /= quarter;
+    // On dark ground the quiet zone is a light band with dark beyond it: its brightest stretch
+    // outside the edge is the white level, not the far end of the profile.
+    for (int s = steps; s + 2 <= 2 * steps; ++s) {
+      hi = std::max(hi, (profile[s] + profile[s + 1] + profile[s + 2]) / 3);
+    }
     if (hi - lo < 0.08 || hi < 2 * lo) continue;  // no clear dark-to-white step here
     const double level = (lo + hi) / 2;
     // The crossing nearest the expected edge (the middle of the profile).
