@@ -1,10 +1,45 @@
 #include "cluster_quads.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 
 #include "homography.hpp"
 
 namespace pintag::stage {
+
+std::vector<Quad> QuadsFromElements(const std::vector<cv::Point2d>& centres) {
+  std::vector<Quad> quads;
+  if (centres.size() == 3) {
+    for (int corner = 0; corner < 3; ++corner) {
+      const cv::Point2d a = centres[static_cast<std::size_t>(corner)];
+      cv::Point2d u = centres[static_cast<std::size_t>((corner + 1) % 3)] - a;
+      cv::Point2d v = centres[static_cast<std::size_t>((corner + 2) % 3)] - a;
+      if (u.cross(v) < 0) std::swap(u, v);  // clockwise on screen (y down)
+      quads.push_back({a - 0.5 * u - 0.5 * v, a + 1.5 * u - 0.5 * v, a + 1.5 * u + 1.5 * v,
+                       a - 0.5 * u + 1.5 * v});
+    }
+  } else if (centres.size() == 4) {
+    cv::Point2d mean;
+    for (const cv::Point2d& c : centres) mean += c / 4;
+    std::vector<cv::Point2d> ring = centres;
+    std::sort(ring.begin(), ring.end(), [&](cv::Point2d p, cv::Point2d q) {
+      return std::atan2(p.y - mean.y, p.x - mean.x) < std::atan2(q.y - mean.y, q.x - mean.x);
+    });
+    Quad elements;
+    std::copy(ring.begin(), ring.end(), elements.begin());
+    if (SignedArea2(elements) <= 0) return quads;
+    const cv::Matx33d h = HomographyFromQuad(elements);  // unit square -> element centres
+    Quad quad;
+    // Element centres are the unit square scaled by 0.5 about its centre: corners at −0.5, 1.5.
+    const std::array<cv::Point2d, 4> corners = {
+        {{-0.5, -0.5}, {1.5, -0.5}, {1.5, 1.5}, {-0.5, 1.5}}};
+    for (int i = 0; i < 4; ++i)
+      quad[static_cast<std::size_t>(i)] = Apply(h, corners[i].x, corners[i].y);
+    if (SignedArea2(quad) > 0) quads.push_back(quad);
+  }
+  return quads;
+}
 
 std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,
                                const std::vector<RedBlob>& blobs, double min_square_px) {

@@ -4,7 +4,8 @@
 // elements (roughly, before corner refinement), again without the closing, around the blobs
 // only: tilted steeply, a tag's quiet zone is about two pixels wide across the tilt, the closing
 // bridges it, and on dark ground the tag merges with the ground (48 px tags at 72° in the
-// benchmark). The detector and the benchmark's miss explanation both call this.
+// benchmark). The detector and the benchmark's miss explanation both call this. When none of a
+// cluster's quads decodes, the detector also tries the quads its blobs place (QuadsFromElements).
 
 #include <vector>
 
@@ -13,6 +14,16 @@
 #include "red_blobs.hpp"
 
 namespace pintag::stage {
+
+/// Largest cluster (blobs) whose blobs may place quads on their own.
+inline constexpr std::size_t kMaxBlobsForElementQuads = 4;
+
+/// The square as element centres place it, clockwise on screen. Centres sit at 0.25 and 0.75 of
+/// the side, so the corners are the centres' frame extended by half a spacing each way. Four
+/// centres fix a perspective frame (one quad); three fix an affine frame once one of them is
+/// taken as the corner element between the other two, so they give three quads, one per choice.
+/// Other counts give none.
+std::vector<Quad> QuadsFromElements(const std::vector<cv::Point2d>& centres);
 
 /// `dark`: MinChannel of `cluster.roi`. Quads in image coordinates, gaps-closed ones first.
 std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,
