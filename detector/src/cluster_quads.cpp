@@ -41,6 +41,29 @@ std::vector<Quad> QuadsFromElements(const std::vector<cv::Point2d>& centres) {
   return quads;
 }
 
+std::vector<Quad> ClusterElementQuads(const BlobCluster& cluster,
+                                      const std::vector<RedBlob>& blobs) {
+  std::vector<cv::Point2d> centres;
+  centres.reserve(cluster.blobs.size());
+  for (int i : cluster.blobs) centres.push_back(blobs[static_cast<std::size_t>(i)].centroid);
+  if (centres.size() <= 4) return QuadsFromElements(centres);
+  std::vector<Quad> quads;
+  if (centres.size() > kMaxBlobsForElementQuads) return quads;
+  const std::size_t n = centres.size();
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = a + 1; b < n; ++b) {
+      for (std::size_t c = b + 1; c < n; ++c) {
+        for (std::size_t d = c + 1; d < n; ++d) {
+          const std::vector<Quad> placed =
+              QuadsFromElements({centres[a], centres[b], centres[c], centres[d]});
+          quads.insert(quads.end(), placed.begin(), placed.end());
+        }
+      }
+    }
+  }
+  return quads;
+}
+
 std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,
                                const std::vector<RedBlob>& blobs, double min_square_px) {
   std::vector<cv::Point2d> anchors;

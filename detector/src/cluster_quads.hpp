@@ -16,7 +16,7 @@
 namespace pintag::stage {
 
 /// Largest cluster (blobs) whose blobs may place quads on their own.
-inline constexpr std::size_t kMaxBlobsForElementQuads = 4;
+inline constexpr std::size_t kMaxBlobsForElementQuads = 6;
 
 /// The square as element centres place it, clockwise on screen. Centres sit at 0.25 and 0.75 of
 /// the side, so the corners are the centres' frame extended by half a spacing each way. Four
@@ -24,6 +24,12 @@ inline constexpr std::size_t kMaxBlobsForElementQuads = 4;
 /// taken as the corner element between the other two, so they give three quads, one per choice.
 /// Other counts give none.
 std::vector<Quad> QuadsFromElements(const std::vector<cv::Point2d>& centres);
+
+/// The quads a cluster's blobs place: QuadsFromElements of all of them when there are 3 or 4,
+/// of every 4 of them when there are 5 or 6 (a stray red blob near the tag), none above
+/// kMaxBlobsForElementQuads.
+std::vector<Quad> ClusterElementQuads(const BlobCluster& cluster,
+                                      const std::vector<RedBlob>& blobs);
 
 /// `dark`: MinChannel of `cluster.roi`. Quads in image coordinates, gaps-closed ones first.
 std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,

@@ -271,12 +271,10 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   for (const stage::Quad& quad : quads) {
     decoded = ProcessQuad(bgr, dark, blobs, cluster, quad, options, out) || decoded;
   }
-  if (decoded || cluster.blobs.size() > stage::kMaxBlobsForElementQuads) return;
+  if (decoded) return;
   // The outline gave no tag (a dim quiet zone on dark ground merges with the ground, or leaves
   // only a shrunken outline): the blobs place the square, and step 4 looks for its edges there.
-  std::vector<cv::Point2d> centres;
-  for (int i : cluster.blobs) centres.push_back(blobs[static_cast<std::size_t>(i)].centroid);
-  const std::vector<stage::Quad> placed = stage::QuadsFromElements(centres);
+  const std::vector<stage::Quad> placed = stage::ClusterElementQuads(cluster, blobs);
   out->quads.insert(out->quads.end(), placed.begin(), placed.end());
   for (const stage::Quad& quad : placed) {
     if (ProcessQuad(bgr, dark, blobs, cluster, quad, options, out)) break;

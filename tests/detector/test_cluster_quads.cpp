@@ -129,6 +129,36 @@ TEST(ClusterQuads, FourBlobsInAnyOrderGiveOnePerspectiveQuad) {
   EXPECT_LT(WorstCornerError(quads[0], tag.corners), 2.0);
 }
 
+TEST(ClusterQuads, AStrayBlobBesideTheTagStillLeavesItsFourToPlaceIt) {
+  const DimTag tag = MakeDimTag(35);
+  std::vector<RedBlob> blobs = tag.blobs;
+  const double a = 35 * CV_PI / 180;
+  const cv::Point2d u(std::cos(a), std::sin(a)), v(-std::sin(a), std::cos(a));
+  RedBlob element0 = blobs[0];
+  element0.centroid = cv::Point2d(60.3, 58.8) - 7.0 * u - 7.0 * v;
+  blobs.push_back(element0);
+  RedBlob stray = blobs[0];
+  stray.centroid = {100, 20};
+  blobs.push_back(stray);
+  BlobCluster cluster;
+  cluster.blobs = {0, 4, 1, 3, 2};
+  cluster.roi = cv::Rect(0, 0, tag.dark.cols, tag.dark.rows);
+  const std::vector<Quad> quads = ClusterElementQuads(cluster, blobs);
+  EXPECT_LE(quads.size(), 5U);  // one per 4 of the 5 blobs
+  int near = 0;
+  for (const Quad& q : quads) near += WorstCornerError(q, tag.corners) < 2.0;
+  EXPECT_EQ(near, 1);
+
+  // Above kMaxBlobsForElementQuads the subsets are not tried.
+  while (cluster.blobs.size() <= kMaxBlobsForElementQuads) {
+    RedBlob more = stray;
+    more.centroid.y += 10.0 * static_cast<double>(cluster.blobs.size());
+    blobs.push_back(more);
+    cluster.blobs.push_back(static_cast<int>(blobs.size()) - 1);
+  }
+  EXPECT_TRUE(ClusterElementQuads(cluster, blobs).empty());
+}
+
 TEST(ClusterQuads, OtherBlobCountsPlaceNoSquare) {
   EXPECT_TRUE(QuadsFromElements({}).empty());
   EXPECT_TRUE(QuadsFromElements({{10, 10}, {20, 10}}).empty());
