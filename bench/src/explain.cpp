@@ -101,7 +101,8 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
       (truth.corners_px[0] + truth.corners_px[1] + truth.corners_px[2] + truth.corners_px[3]) *
       0.25;
   bool quad_on_tag = false, rough_ok = false;
-  // The same quads as detector.cpp.
+  // The same outline quads as detector.cpp (not the squares its blobs place when none of these
+  // decodes, nor the corner fit: misses there are counted at this stage or at the reason shown).
   const std::vector<stage::Quad> quads = stage::ClusterQuads(
       stage::MinChannel(bgr, cluster->roi), *cluster, blobs, options.min_square_px);
   for (const stage::Quad& q : quads) {

@@ -27,9 +27,9 @@ constexpr int kMaxKernelRadius = 7;       // px: about 3 kMaxSigmaPx
 constexpr double kObservedMargin = 0.06;  // tag units of quiet zone observed beyond the square
 constexpr int kSearchPixels = 400;        // pixels used while searching the blur (a stride beyond)
 constexpr int kFinalPixels = 2500;        // pixels of the final solve: 50 colours need far fewer
-// Pixels per residual in a corner search (brightness only). Measured on the benchmark (seed 1):
-// 600 found the most tags; 300 one tag fewer, 1,200 one fewer and slower; all three channels
-// at 600, 3 fewer and slower.
+// Pixels per residual in a corner search (brightness only), about. Measured on the benchmark
+// (seed 1): 600 found the most tags; 300 one tag fewer, 1,200 one fewer and slower; all three
+// channels at 2,500, 3 fewer and slower.
 constexpr int kCornerSearchPixels = 600;
 constexpr double kRidge = 0.01;  // regularisation, relative to the mean of AᵀA's diagonal
 // A nearest codeword that explains the pixels a little worse than the free reading is still
@@ -94,6 +94,16 @@ std::array<double, 3> ToOpponent(double r, double g, double b) {
 std::array<double, 3> ToLinearRgb(const std::array<double, 3>& o) {
   const double y = o[0], b = o[1] + y, r = o[2] + y;
   return {r, (y - kYr * r - kYb * b) / kYg, b};
+}
+
+// A spatial hash of an image pixel: picking pixels by it thins them evenly, without the rows or
+// columns a linear rule such as x + 3 y would pick for some strides.
+std::uint32_t PositionHash(int x, int y) {
+  std::uint32_t h =
+      static_cast<std::uint32_t>(x) * 73856093U ^ static_cast<std::uint32_t>(y) * 19349663U;
+  h ^= h >> 13;
+  h *= 0x5bd1e995U;
+  return h ^ (h >> 15);
 }
 
 // The tag's regions on the pixel grid around it, and the pixels observed.
@@ -165,9 +175,12 @@ class TagOnGrid {
     NormalEquations equations;
   };
 
-  /// Least-squares region colours under `blur`, from every `stride`-th observed pixel; only the
+  /// Least-squares region colours under `blur`, from every `stride`-th observed pixel (with
+  /// `by_position`, the pixels whose PositionHash is a multiple of `stride`: the same pixels
+  /// whatever homography placed the grid); only the
   /// brightness channel when `luma_only` (residual and colours of that channel alone).
-  Solution solve(const Blur& blur, std::size_t stride, bool luma_only = false) const {
+  Solution solve(const Blur& blur, std::size_t stride, bool luma_only = false,
+                 bool by_position = false) const {
     const int systems = luma_only ? 1 : 2;
     const std::vector<std::pair<cv::Point, double>> luma_kernel = Kernel(blur);
     Blur wider = blur;
@@ -182,8 +195,9 @@ class TagOnGrid {
     std::array<std::array<double, kRegions>, 2> row{};
     std::array<std::vector<int>, 2> nonzero;
     Solution s;
-    for (std::size_t i = 0; i < observed_.size(); i += stride) {
+    for (std::size_t i = 0; i < observed_.size(); i += by_position ? 1 : stride) {
       const cv::Point g = observed_[i];
+      if (by_position && PositionHash(origin_.x + g.x, origin_.y + g.y) % stride != 0) continue;
       const std::array<double, 3>& y = linear_[i];
       for (int system = 0; system < systems; ++system) {
         std::array<double, kRegions>& w = row[system];
@@ -397,15 +411,21 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
   return fit;
 }
 
-double ResidualAtFittedBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image,
-                            const BlurFit& fit) {
+std::size_t CornerSearchStride(double square_area_px) {
+  // Observed pixels: the square grown by the observed margin on each side.
+  const double observed = square_area_px * (1 + 2 * kObservedMargin) * (1 + 2 * kObservedMargin);
+  return std::max<std::size_t>(1, static_cast<std::size_t>(observed / kCornerSearchPixels));
+}
+
+double ResidualAtFittedBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, const BlurFit& fit,
+                            std::size_t pixel_stride) {
   constexpr double kNone = std::numeric_limits<double>::infinity();
   if (!fit.ok) return kNone;
   const TagOnGrid grid(bgr, tag_to_image);
   if (grid.observed() < 64) return kNone;
   const Blur blur{fit.sigma_major_px, fit.sigma_minor_px, fit.angle_deg, fit.chroma_extra_px};
-  const TagOnGrid::Solution s = grid.solve(
-      blur, std::max<std::size_t>(1, grid.observed() / kCornerSearchPixels), /*luma_only=*/true);
+  const TagOnGrid::Solution s = grid.solve(blur, std::max<std::size_t>(1, pixel_stride),
+                                           /*luma_only=*/true, /*by_position=*/true);
   if (s.pixels == 0 || s.residual >= 1e299) return kNone;
   return s.residual / static_cast<double>(s.pixels);
 }

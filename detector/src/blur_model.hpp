@@ -61,12 +61,16 @@ inline constexpr double kBlurFitMaxSidePx = 170;
 /// Fits the cells of the tag whose unit square maps to the image by `tag_to_image`.
 BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image);
 
-/// Mean squared brightness residual per pixel (linear light, a fixed subset of the observed
-/// pixels) of the free model with the tag at `tag_to_image` and the blur of `fit` held: what a
-/// corner search minimises. Brightness carries the square's edges and the cells' outlines, and
-/// alone halves the work. Infinity when the tag is out of the model's range or the solve fails.
-double ResidualAtFittedBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image,
-                            const BlurFit& fit);
+/// Mean squared brightness residual per pixel (linear light) of the free model with the tag at
+/// `tag_to_image` and the blur of `fit` held: what a corner search minimises. The pixels are the
+/// observed ones whose hashed image position is a multiple of `pixel_stride`, so that residuals
+/// of nearby corner positions are over (nearly) the same pixels. Brightness carries the square's
+/// edges and the cells' outlines, and alone halves the work. Infinity when the tag is out of the
+/// model's range or the solve fails.
+double ResidualAtFittedBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, const BlurFit& fit,
+                            std::size_t pixel_stride);
+/// The `pixel_stride` for a square of that area (px²): about 600 pixels per residual.
+std::size_t CornerSearchStride(double square_area_px);
 
 /// Bits read from a blur fit by a stronger model: every cell takes one of its class's two colours,
 /// so the whole tag has only six (quiet zone, black, red 0/1, green 0/1) besides 48 binary

@@ -22,14 +22,16 @@ inline constexpr std::size_t kMaxBlobsForElementQuads = 6;
 /// the side, so the corners are the centres' frame extended by half a spacing each way. Four
 /// centres fix a perspective frame (one quad); three fix an affine frame once one of them is
 /// taken as the corner element between the other two, so they give three quads, one per choice.
-/// Other counts give none.
+/// Only convex quads are returned (collinear centres, a dart-shaped ring of four or a frame
+/// seen beyond its horizon give none). Other counts give none.
 std::vector<Quad> QuadsFromElements(const std::vector<cv::Point2d>& centres);
 
 /// The quads a cluster's blobs place: QuadsFromElements of all of them when there are 3 or 4,
 /// of every 4 of them when there are 5 or 6 (a stray red blob near the tag), none above
-/// kMaxBlobsForElementQuads.
-std::vector<Quad> ClusterElementQuads(const BlobCluster& cluster,
-                                      const std::vector<RedBlob>& blobs);
+/// kMaxBlobsForElementQuads; each with every corner inside `cluster.roi` and no side shorter
+/// than 0.3 `min_square_px` (FindQuads' bound).
+std::vector<Quad> ClusterElementQuads(const BlobCluster& cluster, const std::vector<RedBlob>& blobs,
+                                      double min_square_px);
 
 /// `dark`: MinChannel of `cluster.roi`. Quads in image coordinates, gaps-closed ones first.
 std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,

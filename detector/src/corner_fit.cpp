@@ -12,9 +12,11 @@ CornerFit FitCornersThroughBlur(const cv::Mat& bgr, const Quad& quad, const Blur
   double side = 0;
   for (int i = 0; i < 4; ++i) side += cv::norm(quad[(i + 1) % 4] - quad[i]) / 4;
   if (side > kCornerFitMaxSidePx) return out;
+  // One pixel set for every trial (chosen by image position), so that residuals compare.
+  const std::size_t stride = CornerSearchStride(std::abs(SignedArea2(quad)) / 2);
   const auto residual = [&](const Quad& q) {
     ++out.evaluations;
-    return ResidualAtFittedBlur(bgr, HomographyFromQuad(q), fit);
+    return ResidualAtFittedBlur(bgr, HomographyFromQuad(q), fit, stride);
   };
   double best = residual(quad);
   out.residual_before = best;
@@ -32,7 +34,7 @@ CornerFit FitCornersThroughBlur(const cv::Mat& bgr, const Quad& quad, const Blur
             coordinate += sign * step;
             if (cv::norm(trial[corner] - quad[corner]) > kCornerFitMaxMovePx) continue;
             const double r = residual(trial);
-            if (r >= best) continue;
+            if (!(r < best)) continue;  // also refuses a NaN
             best = r;
             out.quad = trial;
             improved = true;

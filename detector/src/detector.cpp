@@ -133,7 +133,7 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThr
     r.orientation = std::move(orientation);
     r.payload = std::move(payload);
     r.through_blur_model = true;
-    return r;
+    return std::move(r);
   };
   stage::OrientationResult modelled = stage::ReadOrientation(fit.cells, t);
   if (modelled.ok) {
@@ -213,7 +213,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   if (rough.found < 3) return false;
   const bool refined = stage::RefineCorners(dark, cluster.roi.tl(), &quad);
   const cv::Matx33d h = stage::HomographyFromQuad(quad);
-  const stage::ElementAssignment assignment = stage::AssignElements(h, blobs, cluster.blobs);
+  stage::ElementAssignment assignment = stage::AssignElements(h, blobs, cluster.blobs);
   const auto t2 = Clock::now();
   out->quads_ms += Ms(t1, t2);
   const auto reject = [&](std::string reason, const stage::OrientationResult* o = nullptr) {
@@ -240,11 +240,15 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
     // No reader decoded it: the corners may be off by more than small cells allow.
     const stage::CornerFit fitted = stage::FitCornersThroughBlur(bgr, quad, reading.fit);
     if (fitted.moved) {
-      TagReading again = ReadTag(bgr, stage::HomographyFromQuad(fitted.quad), thresholds,
-                                 kFittedCornersNearestCodewordMinLead);
-      if (again.payload.key) {
+      const cv::Matx33d moved = stage::HomographyFromQuad(fitted.quad);
+      TagReading again = ReadTag(bgr, moved, thresholds, kFittedCornersNearestCodewordMinLead);
+      // The moved square must pass step 4's element check too.
+      const stage::ElementAssignment moved_assignment =
+          stage::AssignElements(moved, blobs, cluster.blobs);
+      if (again.payload.key && moved_assignment.found >= 3 && !moved_assignment.conflict) {
         quad = fitted.quad;
         reading = std::move(again);
+        assignment = moved_assignment;
       }
     }
   }
@@ -274,7 +278,8 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   if (decoded) return;
   // The outline gave no tag (a dim quiet zone on dark ground merges with the ground, or leaves
   // only a shrunken outline): the blobs place the square, and step 4 looks for its edges there.
-  const std::vector<stage::Quad> placed = stage::ClusterElementQuads(cluster, blobs);
+  const std::vector<stage::Quad> placed =
+      stage::ClusterElementQuads(cluster, blobs, options.min_square_px);
   out->quads.insert(out->quads.end(), placed.begin(), placed.end());
   for (const stage::Quad& quad : placed) {
     if (ProcessQuad(bgr, dark, blobs, cluster, quad, options, out)) break;

@@ -143,7 +143,7 @@ TEST(ClusterQuads, AStrayBlobBesideTheTagStillLeavesItsFourToPlaceIt) {
   BlobCluster cluster;
   cluster.blobs = {0, 4, 1, 3, 2};
   cluster.roi = cv::Rect(0, 0, tag.dark.cols, tag.dark.rows);
-  const std::vector<Quad> quads = ClusterElementQuads(cluster, blobs);
+  const std::vector<Quad> quads = ClusterElementQuads(cluster, blobs, 20);
   EXPECT_LE(quads.size(), 5U);  // one per 4 of the 5 blobs
   int near = 0;
   for (const Quad& q : quads) near += WorstCornerError(q, tag.corners) < 2.0;
@@ -156,7 +156,27 @@ TEST(ClusterQuads, AStrayBlobBesideTheTagStillLeavesItsFourToPlaceIt) {
     blobs.push_back(more);
     cluster.blobs.push_back(static_cast<int>(blobs.size()) - 1);
   }
-  EXPECT_TRUE(ClusterElementQuads(cluster, blobs).empty());
+  EXPECT_TRUE(ClusterElementQuads(cluster, blobs, 20).empty());
+}
+
+TEST(ClusterQuads, DegenerateBlobLayoutsPlaceNoSquare) {
+  // Three in a row.
+  EXPECT_TRUE(QuadsFromElements({{10, 10}, {20, 10}, {30, 10}}).empty());
+  // A dart: the fourth blob inside the triangle of the others.
+  EXPECT_TRUE(QuadsFromElements({{10, 10}, {40, 10}, {25, 40}, {25, 18}}).empty());
+  // Tiny, or off the cluster's region: ClusterElementQuads drops them.
+  const DimTag tag = MakeDimTag(0);
+  std::vector<RedBlob> shrunk = tag.blobs;
+  for (RedBlob& b : shrunk) {
+    b.centroid = 0.1 * (b.centroid - cv::Point2d(60, 60)) + cv::Point2d(60, 60);
+  }
+  BlobCluster cluster;
+  cluster.blobs = {0, 1, 2};
+  cluster.roi = cv::Rect(0, 0, 120, 120);
+  EXPECT_FALSE(ClusterElementQuads(cluster, tag.blobs, 20).empty());
+  EXPECT_TRUE(ClusterElementQuads(cluster, shrunk, 20).empty());  // sides of about 3 px
+  cluster.roi = cv::Rect(0, 0, 50, 50);
+  EXPECT_TRUE(ClusterElementQuads(cluster, tag.blobs, 20).empty());  // outside the region
 }
 
 TEST(ClusterQuads, OtherBlobCountsPlaceNoSquare) {

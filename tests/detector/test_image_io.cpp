@@ -101,13 +101,17 @@ TEST(ImageIo, BadInputIsAnErrorNeverACrash) {
     for (std::size_t n : {std::size_t{2}, std::size_t{3}, std::size_t{10}, full.size() / 4,
                           full.size() / 2, full.size() - 10}) {
       const LoadResult r = LoadImageBytes({full.data(), n});
-      if (r.image) EXPECT_TRUE(Detector().detect(*r.image).detections.empty());
+      if (r.image) {
+        EXPECT_TRUE(Detector().detect(*r.image).detections.empty());
+      }
     }
     // Magic bytes followed by garbage.
     std::vector<std::uint8_t> junk(full.begin(), full.begin() + 8);
     junk.resize(500, 0xAB);
     const LoadResult r = LoadImageBytes(junk);
-    if (r.image) EXPECT_TRUE(Detector().detect(*r.image).detections.empty());
+    if (r.image) {
+      EXPECT_TRUE(Detector().detect(*r.image).detections.empty());
+    }
   }
 }
 

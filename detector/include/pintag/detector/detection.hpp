@@ -65,7 +65,7 @@ struct StageTimings {
   double redness_ms = 0;
   double blobs_ms = 0;
   double quads_ms = 0;   ///< clustering, quads, grouping, corner refinement, homography
-  double decode_ms = 0;  ///< sampling, orientation, payload and parity
+  double decode_ms = 0;  ///< sampling, blur-model readers, corner fit, orientation, payload, parity
   double pose_ms = 0;
   double total_ms = 0;
 };
