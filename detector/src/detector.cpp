@@ -105,8 +105,8 @@ bool NearestCodewordIsStable(const cv::Mat& bgr, const cv::Matx33d& h, TagKey ke
 
 // On corners fitted to the pixels (stage::FitCornersThroughBlur) the nearest codeword needs a
 // lead of 100 noise units, not 25: the corners had eight coordinates of freedom to follow the
-// model. Logged over seeds 1 to 8 with the usual lead, the one wrong key read after a corner fit
-// (18 px at 40°, seed 6) led by 31.8; the 44 right ones by 105 to 3,338.
+// model. Logged with the usual lead over seeds 1–3 and 6–8, the one wrong key read after a
+// corner fit (18 px at 40°, seed 6) led by 31.8; the 44 right ones by 105 to 3,338.
 constexpr double kFittedCornersNearestCodewordMinLead = 100;
 
 // What the readers made of one candidate: direct samples first, then the blur model's colours,
