@@ -27,6 +27,7 @@ std::vector<Rgb8> PhotoLikePixels() {
   const double casts[][3] = {
       {1, 1, 1}, {1.15, 1.0, 0.75}, {0.9, 1.0, 1.1}, {0.85, 0.95, 1.2}, {1.05, 1.05, 0.9}};
   std::vector<Rgb8> bases;
+  bases.reserve(std::size(kPalette));
   for (const PaletteEntry& p : kPalette) bases.push_back(p.srgb);
   const Rgb8 others[] = {{224, 172, 140}, {141, 85, 36},   {198, 134, 66},  {255, 219, 172},
                          {150, 60, 40},   {178, 34, 34},   {135, 206, 235}, {34, 139, 34},
@@ -38,7 +39,8 @@ std::vector<Rgb8> PhotoLikePixels() {
       for (double exposure : {0.35, 0.55, 0.75, 1.0, 1.2}) {
         for (double mix : {0.0, 0.25, 0.5}) {
           for (int rep = 0; rep < 4; ++rep) {
-            const double target[] = {base.r, base.g, base.b};
+            const double target[] = {static_cast<double>(base.r), static_cast<double>(base.g),
+                                     static_cast<double>(base.b)};
             double c[3];
             for (int k = 0; k < 3; ++k) {
               const double lin =
@@ -110,7 +112,9 @@ TEST(LabApprox, PhotoLikePixelsClassifiedAsExact) {
         << int(c.r) << "," << int(c.g) << "," << int(c.b) << " a*=" << exact.a << " b*=" << exact.b;
     // The bit threshold in b* (palette mid-point ~30) classifies the same way too.
     const double b = LabApprox::Get().bStar(c.r, c.g, c.b) / 16.0;
-    if (std::abs(exact.b - 30) >= 1.0) ASSERT_EQ(b > 30, exact.b > 30);
+    if (std::abs(exact.b - 30) >= 1.0) {
+      ASSERT_EQ(b > 30, exact.b > 30);
+    }
   }
   std::printf("%d pixels compared (%d red), %d within 1 unit of a threshold skipped\n", compared,
               red, near_boundary);
