@@ -1,6 +1,7 @@
 // The faint redness pass (DetectorOptions::faint_red_min_a) on benchmark frames whose tag no red
 // pixel at a* >= 20 reveals well enough: rendered exactly as the sweep renders them, each is read
-// with the right key with the pass and not at all without it.
+// with the right key with the pass and not at all without it. Likewise its pairs of blobs
+// (faint_min_blobs = 2) on frames where only two red disks show any red.
 
 #include <gtest/gtest.h>
 
@@ -31,6 +32,25 @@ TEST(FaintPass, FindsSmallCastTagsTheMainPassMisses) {
     ASSERT_LT(index, static_cast<int>(frames.size()));
     const FrameSpec& frame = frames[static_cast<std::size_t>(index)];
     EXPECT_TRUE(DetectFrame(frame, camera, without).empty()) << "frame " << index;
+    const std::vector<Found> found = DetectFrame(frame, camera, DetectorOptions{});
+    ASSERT_EQ(found.size(), 1U) << "frame " << index;
+    EXPECT_EQ(found[0].id, frame.pintag_key) << "frame " << index;
+  }
+}
+
+// Seed 1: 32 px at 20° (hard), 32 px at 72° (moderate) and 24 px at 20° (hard). At a* >= 12 each
+// tag shows two red blobs on its elements, the other two disks are gone under the cast and blur.
+const std::vector<int> kPairFrames = {561, 712, 764};
+
+TEST(FaintPass, PairsOfBlobsFindTagsShowingOnlyTwoRedDisks) {
+  const scene::Camera camera;
+  const std::vector<FrameSpec> frames = MakeSweep(SweepOptions{}, camera);
+  DetectorOptions triples;
+  triples.faint_min_blobs = 3;
+  for (int index : kPairFrames) {
+    ASSERT_LT(index, static_cast<int>(frames.size()));
+    const FrameSpec& frame = frames[static_cast<std::size_t>(index)];
+    EXPECT_TRUE(DetectFrame(frame, camera, triples).empty()) << "frame " << index;
     const std::vector<Found> found = DetectFrame(frame, camera, DetectorOptions{});
     ASSERT_EQ(found.size(), 1U) << "frame " << index;
     EXPECT_EQ(found[0].id, frame.pintag_key) << "frame " << index;

@@ -35,6 +35,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+constexpr int kMainMinClusterBlobs = 3;
+
 double Ms(Clock::time_point from, Clock::time_point to) {
   return std::chrono::duration<double, std::milli>(to - from).count();
 }
@@ -210,7 +212,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   auto t1 = Clock::now();
   const stage::ElementAssignment rough = stage::AssignElements(
       stage::HomographyFromQuad(quad), blobs, cluster.blobs, stage::kRoughElementTolerance);
-  if (rough.found < 3) return false;
+  if (rough.found < cluster.min_elements) return false;
   const bool refined = stage::RefineCorners(dark, cluster.roi.tl(), &quad);
   const cv::Matx33d h = stage::HomographyFromQuad(quad);
   stage::ElementAssignment assignment = stage::AssignElements(h, blobs, cluster.blobs);
@@ -231,7 +233,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
     return false;
   };
   if (!refined) return reject("square edges not found");
-  if (assignment.found < 3 || assignment.conflict) {
+  if (assignment.found < cluster.min_elements || assignment.conflict) {
     return reject("red blobs do not match the elements");
   }
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
@@ -245,7 +247,8 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
       // The moved square must pass step 4's element check too.
       const stage::ElementAssignment moved_assignment =
           stage::AssignElements(moved, blobs, cluster.blobs);
-      if (again.payload.key && moved_assignment.found >= 3 && !moved_assignment.conflict) {
+      if (again.payload.key && moved_assignment.found >= cluster.min_elements &&
+          !moved_assignment.conflict) {
         quad = fitted.quad;
         reading = std::move(again);
         assignment = moved_assignment;
@@ -301,7 +304,7 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
 // Stages 1 to 6 at one redness threshold: every candidate's detection (decoded, or rejected when
 // asked for) is appended to `result`, and the stage times are added to its timings.
 void RunRedPass(const cv::Mat& bgr, const stage::RednessThresholds& red_thresholds,
-                int max_element_area_px, const DetectorOptions& options,
+                int max_element_area_px, int min_cluster_blobs, const DetectorOptions& options,
                 const stage::DebugImages* debug, DetectResult* result,
                 std::vector<stage::Quad>* all_quads) {
   const auto start = Clock::now();
@@ -322,7 +325,8 @@ void RunRedPass(const cv::Mat& bgr, const stage::RednessThresholds& red_threshol
     return InsideDecodedTag(b.centroid, result->detections, decoded_before) ||
            !stage::HasRing(bgr, b);
   });
-  const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
+  const std::vector<stage::BlobCluster> clusters =
+      stage::ClusterBlobs(blobs, bgr.size(), min_cluster_blobs);
   const auto t_blobs = Clock::now();
   result->timings.blobs_ms += Ms(t_red, t_blobs);
   if (debug != nullptr) debug->blobs(bgr, blobs, clusters);
@@ -392,11 +396,12 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
 
   std::vector<stage::Quad> all_quads;
   RunRedPass(bgr, {options_.red_min_a, options_.red_min_b},
-             static_cast<int>(options_.max_element_area_ratio * bgr.total()), options_, &debug,
-             &result, &all_quads);
+             static_cast<int>(options_.max_element_area_ratio * bgr.total()), kMainMinClusterBlobs,
+             options_, &debug, &result, &all_quads);
   if (options_.faint_red_min_a < options_.red_min_a) {
     RunRedPass(bgr, {options_.faint_red_min_a, options_.red_min_b},
-               options_.faint_max_element_area_px, options_, nullptr, &result, &all_quads);
+               options_.faint_max_element_area_px, std::max(2, options_.faint_min_blobs), options_,
+               nullptr, &result, &all_quads);
   }
   debug.quads(bgr, all_quads);
   stage::RemoveDuplicates(&result.detections);

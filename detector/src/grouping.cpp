@@ -15,6 +15,7 @@ constexpr double kLinkDiameters = 6.0;
 constexpr double kMaxAreaRatio = 8;    // perspective can shrink a far element
 constexpr double kRoiDiameters = 2.6;  // element centre -> square edge + quiet zone: 2.0
 constexpr double kRoiSpacings = 1.0;   // the same in element spacings (0.5 S): 0.8
+constexpr double kPairRoiSpacings = 1.8;
 
 int Find(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -94,10 +95,15 @@ std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Siz
       }
       spacing = std::max(spacing, nearest);
     }
-    const double m = std::max(kRoiDiameters * major, kRoiSpacings * spacing);
+    // A pair may be two neighbours: the far side of the square and its quiet zone are then
+    // 0.75 + 0.15 sides, 1.8 spacings, away.
+    const bool pair = group.size() == 2;
+    const double m =
+        std::max(kRoiDiameters * major, (pair ? kPairRoiSpacings : kRoiSpacings) * spacing);
     const cv::Rect roi(cv::Point(static_cast<int>(x0 - m), static_cast<int>(y0 - m)),
                        cv::Point(static_cast<int>(x1 + m) + 1, static_cast<int>(y1 + m) + 1));
-    BlobCluster cluster{std::move(group), roi & frame};
+    const int min_elements = std::min(3, static_cast<int>(group.size()));
+    BlobCluster cluster{std::move(group), roi & frame, min_elements};
     if (cluster.roi.area() > 0) clusters.push_back(std::move(cluster));
   }
   return clusters;

@@ -13,6 +13,7 @@ namespace pintag::stage {
 struct BlobCluster {
   std::vector<int> blobs;  ///< indices into the blob list
   cv::Rect roi;            ///< where the tag's square and quiet zone can be, clipped to the image
+  int min_elements = 3;    ///< blobs a quad must place on elements: 3, or 2 for a pair
 };
 
 /// Links blobs whose distance fits elements of one tag (neighbouring elements are 2.5 disk

@@ -36,6 +36,7 @@ void VisitOptions(Options& o, Visit&& visit) {
   visit("min_square_px", o.min_square_px);
   visit("max_blobs", o.max_blobs);
   visit("faint_max_element_area_px", o.faint_max_element_area_px);
+  visit("faint_min_blobs", o.faint_min_blobs);
   visit("threads", o.threads);
   visit("debug_dir", o.debug_dir);
   visit("return_rejected", o.return_rejected);
@@ -118,7 +119,11 @@ bool OptionsFromJson(const json& j, DetectorOptions* options, std::string* error
   }
   DetectorOptions out = *options;
   try {
-    for (const auto& [name, value] : j.items()) {
+    for (const auto& item : j.items()) {
+      // Named references, not structured bindings: the lambda below captures them, which
+      // clang 14 (clang-tidy's) does not allow for bindings.
+      const std::string& name = item.key();
+      const json& value = item.value();
       bool known = false;
       VisitOptions(out, [&](const char* field_name, auto& field) {
         if (name != field_name) return;
@@ -132,8 +137,9 @@ bool OptionsFromJson(const json& j, DetectorOptions* options, std::string* error
         c.fy = value.at("fy").get<double>();
         c.cx = value.at("cx").get<double>();
         c.cy = value.at("cy").get<double>();
-        if (value.contains("distortion"))
+        if (value.contains("distortion")) {
           c.distortion = value["distortion"].get<std::vector<double>>();
+        }
         out.intrinsics = c;
       }
       if (!known) {

@@ -40,7 +40,8 @@ cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi) {
 }
 
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
-                            const std::vector<cv::Point2d>* anchors, bool close_gaps) {
+                            const std::vector<cv::Point2d>* anchors, bool close_gaps,
+                            int min_anchors_inside) {
   cv::Mat binary;
   cv::threshold(dark, binary, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
   if (close_gaps) {
@@ -61,7 +62,7 @@ std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_si
       const cv::Rect box = cv::boundingRect(contour) + origin;
       int inside = 0;
       for (const cv::Point2d& p : *anchors) inside += box.contains(cv::Point(p));
-      if (inside < 3) continue;
+      if (inside < min_anchors_inside) continue;
     }
     const double area = cv::contourArea(contour);
     if (area < min_area) continue;

@@ -23,7 +23,7 @@ cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
 /// quiet zone two pixels wide still separates the tag from dark ground (a steeply tilted tag).
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
                             const std::vector<cv::Point2d>* anchors = nullptr,
-                            bool close_gaps = true);
+                            bool close_gaps = true, int min_anchors_inside = 3);
 
 /// Where a tag holding `anchors` (its red blobs, image coordinates) can lie: their bounding box
 /// grown by 0.8 of the largest nearest-anchor distance (a square's edge is half an element

@@ -43,6 +43,27 @@ TEST(Grouping, TwoTagsTwoClustersAndStrayBlobsNone) {
   }
 }
 
+// The faint pass also tries pairs: two neighbouring elements (the far side of the square is then
+// 1.7 element spacings away) or two diagonal ones.
+TEST(Grouping, PairsFormClustersOnlyWhenAskedAndTheirRegionHoldsTheSquare) {
+  for (const int hidden_a : {2, 1}) {
+    std::vector<RedBlob> blobs;
+    AddTag(&blobs, 100, 100, 100);
+    // Keep elements 0 and 1 (neighbours), or 0 and 2 (diagonal).
+    const int hidden_b = 3;
+    blobs.erase(blobs.begin() + hidden_b);
+    blobs.erase(blobs.begin() + hidden_a);
+    ASSERT_EQ(blobs.size(), 2u);
+    EXPECT_TRUE(ClusterBlobs(blobs, {800, 500}).empty());
+    const auto clusters = ClusterBlobs(blobs, {800, 500}, 2);
+    ASSERT_EQ(clusters.size(), 1u);
+    EXPECT_EQ(clusters[0].min_elements, 2);
+    // The square (100 … 200) and nearly all of its quiet zone (0.15 of the side).
+    EXPECT_TRUE(clusters[0].roi.contains({86, 86}) && clusters[0].roi.contains({214, 214}))
+        << "hidden " << hidden_a << ", roi " << clusters[0].roi;
+  }
+}
+
 TEST(Grouping, AssignsBlobsToElementSlots) {
   std::vector<RedBlob> blobs;
   AddTag(&blobs, 100, 100, 100, 1);

@@ -61,6 +61,9 @@ struct DetectorOptions {
   int min_square_px = 20;
   int max_blobs = 4000;                ///< red blobs beyond this (by area) are ignored
   int faint_max_element_area_px = 60;  ///< largest red blob of the faint pass, pixels
+  /// Blobs a cluster of the faint pass needs: 2 also tries pairs (on a small tag under a colour
+  /// cast often only two red disks show any red); 3 as the main pass. Values below 2 count as 2.
+  int faint_min_blobs = 2;
 
   // --- execution and diagnostics ---
   int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread
