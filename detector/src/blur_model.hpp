@@ -106,7 +106,7 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& 
 
 /// The format codeword nearest to a blur fit, for when no reading of single bits decodes: every
 /// (key, orientation) is ranked by the flip costs of the cells where it disagrees with the settled
-/// reading of that orientation, the best few are scored exactly (colours refitted), and the best
+/// reading of that orientation, the best 256 are scored exactly (colours refitted), and the best
 /// is accepted only if it explains the pixels better than any other codeword by `min_margin`
 /// times the residual noise, at least as well as the free reading, and its colours look like the
 /// palette. This is a dictionary decode with a margin, as ArUco and AprilTag do, but on
