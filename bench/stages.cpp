@@ -9,6 +9,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "blur_model.hpp"
+#include "corner_fit.hpp"
 #include "detectors.hpp"
 #include "grouping.hpp"
 #include "homography.hpp"
@@ -47,6 +49,13 @@ struct Fixture {
     stage::OrientationResult orientation;
   };
   std::vector<Candidate> candidates;  ///< quads that decode
+  /// The blur model's inputs on the candidates small enough for it (it reads squares up to
+  /// 170 px; the corner fit, up to 64 px): the model runs only when direct samples do not decode,
+  /// but these time it on tags whose answer is known.
+  std::vector<stage::BlurFit> fits;
+  std::vector<stage::SettledOrientations> settled;
+  std::vector<stage::Quad> fitted_quads;
+  std::vector<cv::Matx33d> fitted_h;
 };
 
 scene::SceneSpec Spec(Marker marker, bool with_tags) {
@@ -115,6 +124,12 @@ const Fixture& Get() {
         cand.orientation = stage::ReadOrientation(cand.samples, thresholds);
         if (!cand.orientation.ok) continue;
         f.candidates.push_back(cand);
+        stage::BlurFit fit = stage::FitCellsThroughBlur(f.tagged.bgr, cand.h);
+        if (!fit.ok) continue;
+        f.settled.push_back(stage::SettleOrientations(fit));
+        f.fits.push_back(fit);
+        f.fitted_quads.push_back(cand.refined);
+        f.fitted_h.push_back(cand.h);
       }
     }
     return f;
@@ -128,7 +143,11 @@ void ReportCounts(benchmark::State& state) {
   state.counters["blobs"] = static_cast<double>(f.blobs.size());
   state.counters["clusters"] = static_cast<double>(f.clusters.size());
   state.counters["tags"] = static_cast<double>(f.candidates.size());
+  state.counters["blur_fits"] = static_cast<double>(f.fits.size());
 }
+
+// Google Benchmark's idioms: BM_ names, and `for (auto _ : state)` whose loop variable is unused.
+// NOLINTBEGIN(readability-identifier-naming, clang-analyzer-deadcode.DeadStores)
 
 // --- whole frame -------------------------------------------------------------------------------
 
@@ -278,6 +297,51 @@ void BM_Stage5_SampleCells(benchmark::State& state) {
 }
 BENCHMARK(BM_Stage5_SampleCells)->Unit(benchmark::kMicrosecond);
 
+void BM_Stage5b_FitCellsThroughBlur(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const cv::Matx33d& h : f.fitted_h) {
+      benchmark::DoNotOptimize(stage::FitCellsThroughBlur(f.tagged.bgr, h));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage5b_FitCellsThroughBlur)->Unit(benchmark::kMillisecond);
+
+void BM_Stage5c_SettleAndReadBits(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (const stage::BlurFit& fit : f.fits) {
+      benchmark::DoNotOptimize(stage::ReadBitsThroughBlur(fit, stage::SettleOrientations(fit)));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage5c_SettleAndReadBits)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage5d_NearestCodeword(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < f.fits.size(); ++i) {
+      benchmark::DoNotOptimize(stage::NearestCodewordThroughBlur(f.fits[i], f.settled[i]));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage5d_NearestCodeword)->Unit(benchmark::kMicrosecond);
+
+void BM_Stage5e_FitCornersThroughBlur(benchmark::State& state) {
+  const Fixture& f = Get();
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < f.fits.size(); ++i) {
+      benchmark::DoNotOptimize(
+          stage::FitCornersThroughBlur(f.tagged.bgr, f.fitted_quads[i], f.fits[i]));
+    }
+  }
+  ReportCounts(state);
+}
+BENCHMARK(BM_Stage5e_FitCornersThroughBlur)->Unit(benchmark::kMillisecond);
+
 void BM_Stage6_ReadOrientation(benchmark::State& state) {
   const Fixture& f = Get();
   const stage::BitThresholds t{f.options.min_bit_span_b, f.options.min_bit_margin};
@@ -333,6 +397,8 @@ void BM_Baseline_AprilTag(benchmark::State& state) {
   state.counters["found"] = static_cast<double>(found);
 }
 BENCHMARK(BM_Baseline_AprilTag)->Arg(1)->Arg(2)->ArgName("decimate")->Unit(benchmark::kMillisecond);
+
+// NOLINTEND(readability-identifier-naming, clang-analyzer-deadcode.DeadStores)
 
 }  // namespace
 }  // namespace pintag::bench
