@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <type_traits>
 #include <vector>
 
@@ -124,25 +125,29 @@ class TagOnGrid {
     size_ = {static_cast<int>(std::ceil(x1)) + kMaxKernelRadius + 1 - origin_.x,
              static_cast<int>(std::ceil(y1)) + kMaxKernelRadius + 1 - origin_.y};
     coverage_.resize(static_cast<std::size_t>(size_.area()));
+    parts_.reserve(coverage_.size() * 2);
     std::array<int, kRegions> hits{};
     for (int gy = 0; gy < size_.height; ++gy) {
       for (int gx = 0; gx < size_.width; ++gx) {
         // Pixel (x, y) has its centre at integer coordinates and covers ±0.5 around it.
         const double x = origin_.x + gx, y = origin_.y + gy;
-        std::vector<int> touched;
+        // Regions in the order first touched (no allocation: this runs for every pixel of the
+        // grid, about a hundred grids per corner fit).
+        std::array<int, static_cast<std::size_t>(kSubsamples) * kSubsamples> touched{};
+        std::size_t touched_count = 0;
         for (int sy = 0; sy < kSubsamples; ++sy) {
           for (int sx = 0; sx < kSubsamples; ++sx) {
             const double px = x - 0.5 + (sx + 0.5) / kSubsamples;
             const double py = y - 0.5 + (sy + 0.5) / kSubsamples;
             const cv::Vec3d t = to_tag * cv::Vec3d(px, py, 1);
             const int region = ModelRegionAt(t[0] / t[2], t[1] / t[2]);
-            if (hits[region]++ == 0) touched.push_back(region);
+            if (hits[region]++ == 0) touched[touched_count++] = region;
           }
         }
         Coverage& c = coverage_[index(gx, gy)];
         c.first = static_cast<std::uint32_t>(parts_.size());
-        c.count = static_cast<std::uint32_t>(touched.size());
-        for (int region : touched) {
+        c.count = static_cast<std::uint32_t>(touched_count);
+        for (const int region : std::span(touched.data(), touched_count)) {
           parts_.push_back(
               {region, static_cast<float>(hits[region]) / (kSubsamples * kSubsamples)});
           hits[region] = 0;
