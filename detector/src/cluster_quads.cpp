@@ -106,8 +106,8 @@ std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,
                                const std::vector<RedBlob>& blobs, double min_square_px) {
   std::vector<cv::Point2d> anchors;
   for (int i : cluster.blobs) anchors.push_back(blobs[static_cast<std::size_t>(i)].centroid);
-  std::vector<Quad> quads =
-      FindQuads(dark, cluster.roi.tl(), min_square_px, &anchors, true, cluster.min_elements);
+  std::vector<Quad> quads = FindQuads(dark, cluster.roi.tl(), min_square_px, &anchors,
+                                      /*close_gaps=*/true, cluster.min_elements);
   const auto holds_elements = [&](const Quad& quad) {
     return AssignElements(HomographyFromQuad(quad), blobs, cluster.blobs, kRoughElementTolerance)
                .found >= cluster.min_elements;

@@ -17,7 +17,8 @@ cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
 
 /// Quads in `dark` (MinChannel of the region at `origin`), returned in image coordinates.
 /// `min_side_px`: shorter quads are dropped. When `anchors` (image coordinates) is given, only
-/// contours whose bounding box holds at least 3 of them are fitted (a tag holds its red blobs),
+/// contours whose bounding box holds at least `min_anchors_inside` of them are fitted (a tag
+/// holds its red blobs; 2 for a pair of the faint pass),
 /// which keeps textured photo regions cheap. `close_gaps` bridges one-pixel gaps in the dark
 /// shape first (a cover can leave a thin band of black at the square's edge); without it, a
 /// quiet zone two pixels wide still separates the tag from dark ground (a steeply tilted tag).
