@@ -39,7 +39,7 @@ TEST(FaintPass, FindsSmallCastTagsTheMainPassMisses) {
 }
 
 // Seed 1: 32 px at 20° (hard), 32 px at 72° (moderate) and 24 px at 20° (hard). At a* >= 12 each
-// tag shows two red blobs on its elements, the other two disks are gone under the cast and blur.
+// tag gives two red blobs of 3 px or more on its elements; the other disks show 2 px or nothing.
 const std::vector<int> kPairFrames = {561, 712, 764};
 
 TEST(FaintPass, PairsOfBlobsFindTagsShowingOnlyTwoRedDisks) {

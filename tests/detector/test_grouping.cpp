@@ -43,8 +43,8 @@ TEST(Grouping, TwoTagsTwoClustersAndStrayBlobsNone) {
   }
 }
 
-// The faint pass also tries pairs: two neighbouring elements (the far side of the square is then
-// 1.7 element spacings away) or two diagonal ones.
+// The faint pass also tries pairs: two neighbouring elements (the far side of the square and its
+// quiet zone are then 1.8 element spacings away) or two diagonal ones.
 TEST(Grouping, PairsFormClustersOnlyWhenAskedAndTheirRegionHoldsTheSquare) {
   for (const int hidden_a : {2, 1}) {
     std::vector<RedBlob> blobs;
