@@ -21,14 +21,12 @@
 #include "duplicates.hpp"
 #include "grouping.hpp"
 #include "homography.hpp"
-#include "orientation.hpp"
-#include "payload.hpp"
 #include "pintag/codec/geometry.hpp"
 #include "pose.hpp"
 #include "quads.hpp"
+#include "read_tag.hpp"
 #include "red_blobs.hpp"
 #include "redness.hpp"
-#include "sampling.hpp"
 
 namespace pintag {
 namespace {
@@ -52,126 +50,6 @@ Point2 ToPoint(cv::Point2d p) {
   return {p.x, p.y};
 }
 
-// A reading that needed recovery (a bit from the other payload copy, or one from the parity) has
-// lost part of the code's margin against errors; it is accepted only if every bit it did read
-// is clearly read. (A 24 px tag read with 9 unknown bits, 4 from one copy, 1 from parity and a
-// weakest bit at 0.31 decoded to another key in the benchmark.)
-constexpr double kRecoveredReadingMinMargin = 0.5;
-
-stage::PayloadResult Decode(const stage::OrientationResult& orientation) {
-  stage::PayloadResult payload = stage::DecodePayload(orientation.reading);
-  const bool recovered = payload.bit_from_parity || payload.bits_from_second_copy > 0;
-  if (payload.key && recovered && orientation.min_known_margin < kRecoveredReadingMinMargin) {
-    payload.key.reset();
-    payload.error = "bits recovered, but another bit is read too weakly to trust the rest";
-  }
-  return payload;
-}
-
-// A codeword chosen through the blur model must not hang on the exact corners. The fit is
-// repeated with the tag shifted by half a pixel each way and scaled by ±2 % (corner refinement is
-// good to a few tenths of a pixel); at least two of those fits must choose the same codeword and
-// none another. Measured on the benchmark: a 80 px tag at 78°, hard light, chose a codeword one
-// key bit from the truth with a lead of 334 noise units, but only 1 of the 6 shifted fits agreed
-// (5 chose none). Logged over seeds 1 to 6 (4,704 tagged frames), 203 nearest-codeword readings
-// passed the lead and excess rules, all of them the right key: 41 were confirmed by exactly 2
-// shifted fits, 18 by 1, 3 by none, and 1 met a fit choosing another key. Requiring 2 rather
-// than 3 found 40 more tags in those sweeps, and their 12 runs (with and without the colour
-// cast) read no wrong key.
-constexpr int kJitteredFits = 6;
-constexpr int kJitteredFitsToAgree = 2;
-
-bool NearestCodewordIsStable(const cv::Mat& bgr, const cv::Matx33d& h, TagKey key) {
-  constexpr std::array<std::array<double, 3>, kJitteredFits> kJitters{
-      {{0.5, 0, 1}, {-0.5, 0, 1}, {0, 0.5, 1}, {0, -0.5, 1}, {0, 0, 1.02}, {0, 0, 0.98}}};
-  const cv::Point2d centre = stage::Apply(h, 0.5, 0.5);
-  int agree = 0;
-  for (const auto& [dx, dy, scale] : kJitters) {
-    const cv::Matx33d moved(scale, 0, (1 - scale) * centre.x + dx,  //
-                            0, scale, (1 - scale) * centre.y + dy,  //
-                            0, 0, 1);
-    const stage::BlurFit fit = stage::FitCellsThroughBlur(bgr, moved * h);
-    if (!fit.ok) continue;
-    // Confirmation must be clean: a shifted fit agrees only if its winner explains the pixels at
-    // least as well as its free reading (no excused excess). With the excuse, a frame once misread
-    // (bench/misread_regressions_test.cpp) found 4 of 6 shifted fits "agreeing" on the wrong key.
-    const stage::CodewordReading again = stage::NearestCodewordThroughBlur(
-        fit, stage::SettleOrientations(fit), stage::kNearestCodewordMinLead,
-        /*excuse_small_excess=*/false);
-    if (!again.key) continue;
-    if (*again.key != key) return false;
-    ++agree;
-  }
-  return agree >= kJitteredFitsToAgree;
-}
-
-// On corners fitted to the pixels (stage::FitCornersThroughBlur) the nearest codeword needs a
-// lead of 100 noise units, not 25: the corners had eight coordinates of freedom to follow the
-// model. Logged with the usual lead over seeds 1–3 and 6–8, the one wrong key read after a
-// corner fit (18 px at 40°, seed 6) led by 31.8; the 44 right ones by 105 to 3,338.
-constexpr double kFittedCornersNearestCodewordMinLead = 100;
-
-// What the readers made of one candidate: direct samples first, then the blur model's colours,
-// then its two-colours-per-class bits, then the nearest codeword; the first that the codec
-// accepts wins.
-struct TagReading {
-  stage::OrientationResult orientation;
-  stage::PayloadResult payload;
-  bool through_blur_model = false;
-  stage::BlurFit fit;  ///< ok when the direct samples did not decode and the model was fitted
-};
-
-TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& h, const stage::BitThresholds& t,
-                   double nearest_min_lead = stage::kNearestCodewordMinLead) {
-  TagReading r;
-  r.orientation = stage::ReadOrientation(stage::SampleCells(bgr, h), t);
-  if (r.orientation.ok) r.payload = Decode(r.orientation);
-  if (r.payload.key) return r;
-  // Small or blurred cells mix: read them through a blur model.
-  r.fit = stage::FitCellsThroughBlur(bgr, h);
-  const stage::BlurFit& fit = r.fit;
-  if (!fit.ok) return r;
-  const auto accept = [&](stage::OrientationResult orientation, stage::PayloadResult payload) {
-    r.orientation = std::move(orientation);
-    r.payload = std::move(payload);
-    r.through_blur_model = true;
-    return std::move(r);
-  };
-  stage::OrientationResult modelled = stage::ReadOrientation(fit.cells, t);
-  if (modelled.ok) {
-    stage::PayloadResult payload = Decode(modelled);
-    if (payload.key) return accept(std::move(modelled), std::move(payload));
-  }
-  const stage::SettledOrientations settled = stage::SettleOrientations(fit);
-  const stage::ModelReading bits = stage::ReadBitsThroughBlur(fit, settled);
-  if (bits.ok) {
-    stage::OrientationResult as_read;
-    as_read.ok = true;
-    as_read.quarter_turns = bits.quarter_turns;
-    as_read.reading = bits.reading;
-    as_read.margins = bits.margins;
-    as_read.unknown = bits.unknown;
-    as_read.min_known_margin = bits.min_known_margin;
-    stage::PayloadResult payload = Decode(as_read);
-    if (payload.key) return accept(std::move(as_read), std::move(payload));
-  }
-  // Single bits do not decode: the codeword that explains the pixels clearly best, if one does.
-  const stage::CodewordReading nearest =
-      stage::NearestCodewordThroughBlur(fit, settled, nearest_min_lead);
-  if (!nearest.key) return r;
-  stage::OrientationResult as_read;
-  as_read.ok = true;
-  as_read.quarter_turns = nearest.quarter_turns;
-  as_read.reading = nearest.reading;
-  as_read.min_known_margin = 1;
-  stage::PayloadResult payload = Decode(as_read);
-  if (payload.key && *payload.key == *nearest.key &&
-      NearestCodewordIsStable(bgr, h, *nearest.key)) {
-    return accept(std::move(as_read), std::move(payload));
-  }
-  return r;
-}
-
 double MeanSide(const stage::Quad& quad) {
   double perimeter = 0;
   for (int i = 0; i < 4; ++i) perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
@@ -179,7 +57,7 @@ double MeanSide(const stage::Quad& quad) {
 }
 
 // A decoded candidate as a Detection (corners turned so that C0 comes first).
-Detection MakeDetection(stage::Quad quad, const TagReading& reading,
+Detection MakeDetection(stage::Quad quad, const stage::TagReading& reading,
                         const std::array<bool, 4>& blob_at_sampled_element) {
   Detection d;
   const stage::OrientationResult& o = reading.orientation;
@@ -201,7 +79,7 @@ Detection MakeDetection(stage::Quad quad, const TagReading& reading,
   d.min_known_margin = o.min_known_margin;
   d.bits_from_second_copy = reading.payload.bits_from_second_copy;
   d.bit_from_parity = reading.payload.bit_from_parity;
-  d.read_through_blur_model = reading.through_blur_model;
+  d.read_through_blur_model = reading.throughBlurModel();
   return d;
 }
 
@@ -237,13 +115,14 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
     return reject("red blobs do not match the elements");
   }
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
-  TagReading reading = ReadTag(bgr, h, thresholds);
+  stage::TagReading reading = stage::ReadTag(bgr, h, thresholds);
   if (!reading.payload.key && reading.fit.ok) {
     // No reader decoded it: the corners may be off by more than small cells allow.
     const stage::CornerFit fitted = stage::FitCornersThroughBlur(bgr, quad, reading.fit);
     if (fitted.moved) {
       const cv::Matx33d moved = stage::HomographyFromQuad(fitted.quad);
-      TagReading again = ReadTag(bgr, moved, thresholds, kFittedCornersNearestCodewordMinLead);
+      stage::TagReading again =
+          stage::ReadTag(bgr, moved, thresholds, stage::kFittedCornersNearestCodewordMinLead);
       // The moved square must pass step 4's element check too.
       const stage::ElementAssignment moved_assignment =
           stage::AssignElements(moved, blobs, cluster.blobs);
