@@ -12,6 +12,7 @@
 #include "blur_model.hpp"
 #include "corner_fit.hpp"
 #include "detectors.hpp"
+#include "frame_scan.hpp"
 #include "grouping.hpp"
 #include "homography.hpp"
 #include "orientation.hpp"
@@ -194,6 +195,18 @@ void BM_Stage1_FindRedRuns_Tagless(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(stage::FindRedRuns(f.tagless.bgr, t));
 }
 BENCHMARK(BM_Stage1_FindRedRuns_Tagless)->Unit(benchmark::kMillisecond);
+
+// The detector's one pass: both redness levels (and, with the argument 1, the half-resolution
+// dark image), against two FindRedRuns above.
+void BM_Stage1_ScanFrame(benchmark::State& state) {
+  const Fixture& f = Get();
+  stage::FrameScanRequest request;
+  request.red = {f.options.red_min_a, f.options.red_min_b};
+  request.faint = stage::RednessThresholds{f.options.faint_red_min_a, f.options.red_min_b};
+  request.dark_half = state.range(0) != 0;
+  for (auto _ : state) benchmark::DoNotOptimize(stage::ScanFrame(f.tagged.bgr, request));
+}
+BENCHMARK(BM_Stage1_ScanFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_Stage2_FindRedBlobs(benchmark::State& state) {
   const Fixture& f = Get();

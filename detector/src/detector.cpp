@@ -19,6 +19,7 @@
 #include "corner_fit.hpp"
 #include "debug_images.hpp"
 #include "duplicates.hpp"
+#include "frame_scan.hpp"
 #include "grouping.hpp"
 #include "homography.hpp"
 #include "pintag/codec/geometry.hpp"
@@ -180,16 +181,13 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
   return false;
 }
 
-// Stages 1 to 6 at one redness threshold: every candidate's detection (decoded, or rejected when
-// asked for) is appended to `result`, and the stage times are added to its timings.
-void RunRedPass(const cv::Mat& bgr, const stage::RednessThresholds& red_thresholds,
-                int max_element_area_px, int min_cluster_blobs, const DetectorOptions& options,
+// Stages 2 to 6 on the red runs of one redness threshold: every candidate's detection (decoded, or
+// rejected when asked for) is appended to `result`, and the stage times are added to its timings.
+void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_area_px,
+                int min_cluster_blobs, const DetectorOptions& options,
                 const stage::DebugImages* debug, DetectResult* result,
                 std::vector<stage::Quad>* all_quads) {
-  const auto start = Clock::now();
-  const stage::RedRuns red = stage::FindRedRuns(bgr, red_thresholds);
   const auto t_red = Clock::now();
-  result->timings.redness_ms += Ms(start, t_red);
   if (debug != nullptr && debug->enabled()) debug->redness(stage::RunsToMask(red));
 
   stage::BlobLimits limits;
@@ -273,14 +271,19 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   result.intrinsics_source = camera.source;
   const stage::DebugImages debug(options_.debug_dir);
 
+  stage::FrameScanRequest scan_request;
+  scan_request.red = {options_.red_min_a, options_.red_min_b};
+  const bool faint_pass = options_.faint_red_min_a < options_.red_min_a;
+  if (faint_pass) scan_request.faint = {options_.faint_red_min_a, options_.red_min_b};
+  const stage::FrameScan scan = stage::ScanFrame(bgr, scan_request);
+  result.timings.redness_ms += Ms(start, Clock::now());
+
   std::vector<stage::Quad> all_quads;
-  RunRedPass(bgr, {options_.red_min_a, options_.red_min_b},
-             static_cast<int>(options_.max_element_area_ratio * bgr.total()), kMainMinClusterBlobs,
-             options_, &debug, &result, &all_quads);
-  if (options_.faint_red_min_a < options_.red_min_a) {
-    RunRedPass(bgr, {options_.faint_red_min_a, options_.red_min_b},
-               options_.faint_max_element_area_px, std::max(2, options_.faint_min_blobs), options_,
-               nullptr, &result, &all_quads);
+  RunRedPass(bgr, scan.red, static_cast<int>(options_.max_element_area_ratio * bgr.total()),
+             kMainMinClusterBlobs, options_, &debug, &result, &all_quads);
+  if (faint_pass) {
+    RunRedPass(bgr, scan.faint, options_.faint_max_element_area_px,
+               std::max(2, options_.faint_min_blobs), options_, nullptr, &result, &all_quads);
   }
   debug.quads(bgr, all_quads);
   stage::RemoveDuplicates(&result.detections);

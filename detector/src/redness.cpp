@@ -7,6 +7,7 @@
 #include <mutex>
 #include <utility>
 
+#include "frame_scan.hpp"
 #include "lab_approx.hpp"
 
 namespace pintag::stage {
@@ -66,25 +67,9 @@ const RedTable& RedTable::For(const RednessThresholds& thresholds) {
 }
 
 RedRuns FindRedRuns(const cv::Mat& bgr, const RednessThresholds& thresholds) {
-  CV_Assert(bgr.type() == CV_8UC3);
-  RedRuns out;
-  out.size = bgr.size();
-  const RedTable& table = RedTable::For(thresholds);
-  for (int y = 0; y < bgr.rows; ++y) {
-    const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
-    int start = -1;
-    for (int x = 0; x < bgr.cols; ++x) {
-      const std::uint8_t* p = row + 3 * static_cast<std::ptrdiff_t>(x);
-      const bool red = table.isRed(p[2], p[1], p[0]);
-      if (red && start < 0) start = x;
-      if (!red && start >= 0) {
-        out.runs.push_back({y, start, x - 1});
-        start = -1;
-      }
-    }
-    if (start >= 0) out.runs.push_back({y, start, bgr.cols - 1});
-  }
-  return out;
+  FrameScanRequest request;
+  request.red = thresholds;
+  return ScanFrame(bgr, request).red;
 }
 
 cv::Mat RunsToMask(const RedRuns& runs) {

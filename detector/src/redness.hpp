@@ -54,7 +54,8 @@ struct RedRuns {
   std::vector<RedRun> runs;
 };
 
-/// One pass over `bgr` (CV_8UC3).
+/// One pass over `bgr` (CV_8UC3); the detector takes these from ScanFrame (frame_scan.hpp) with
+/// its other full-frame work.
 RedRuns FindRedRuns(const cv::Mat& bgr, const RednessThresholds& thresholds);
 
 /// CV_8U mask: 255 where red, 0 elsewhere (tests and debug images).

@@ -1,0 +1,143 @@
+#include "frame_scan.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <opencv2/core/hal/intrin.hpp>
+#include <vector>
+
+namespace pintag::stage {
+namespace {
+
+// Runs of one redness level along a row.
+class RunTracker {
+ public:
+  explicit RunTracker(std::vector<RedRun>* out) : out_(out) {}
+  void step(bool red, int y, int x) {
+    if (red && start_ < 0) start_ = x;
+    if (!red && start_ >= 0) {
+      out_->push_back({y, start_, x - 1});
+      start_ = -1;
+    }
+  }
+  void finish(int y, int cols) {
+    if (start_ >= 0) out_->push_back({y, start_, cols - 1});
+    start_ = -1;
+  }
+
+ private:
+  std::vector<RedRun>* out_;
+  int start_ = -1;
+};
+
+// One row; the faint level is a template switch so that the common loop carries no per-pixel
+// test for it. When the faint thresholds are both at most the main ones (the detector's
+// defaults), every main-red pixel is faint-red, and the faint table is looked up first: most
+// pixels of a photograph fail it, and the main table is not read for them.
+template <bool kFaint, bool kNested>
+void ScanRow(const std::uint8_t* row, int cols, int y, const RedTable& red, const RedTable* faint,
+             RunTracker* red_runs, RunTracker* faint_runs) {
+  for (int x = 0; x < cols; ++x) {
+    const std::uint8_t* p = row + 3 * static_cast<std::ptrdiff_t>(x);
+    const int b = p[0], g = p[1], r = p[2];
+    if constexpr (kFaint) {
+      const bool faint_red = faint->isRed(r, g, b);
+      faint_runs->step(faint_red, y, x);
+      red_runs->step((!kNested || faint_red) && red.isRed(r, g, b), y, x);
+    } else {
+      red_runs->step(red.isRed(r, g, b), y, x);
+    }
+  }
+  red_runs->finish(y, cols);
+  if constexpr (kFaint) faint_runs->finish(y, cols);
+}
+
+// min(R, G, B) of a row, 16 pixels at a time where the CPU has 128-bit vectors (the redness
+// loop, with its table lookups and branches, cannot be vectorised; a scalar loop here cost as
+// much as the redness itself).
+void RowMin(const std::uint8_t* row, std::ptrdiff_t cols, std::uint8_t* out) {
+  std::ptrdiff_t x = 0;
+#if CV_SIMD128
+  for (; x + 16 <= cols; x += 16) {
+    cv::v_uint8x16 b, g, r;
+    cv::v_load_deinterleave(row + 3 * x, b, g, r);
+    cv::v_store(out + x, cv::v_min(cv::v_min(b, g), r));
+  }
+#endif
+  for (; x < cols; ++x) {
+    const std::uint8_t b = row[3 * x], g = row[3 * x + 1], r = row[3 * x + 2];
+    const std::uint8_t bg = b < g ? b : g;
+    out[x] = bg < r ? bg : r;
+  }
+}
+
+// Each output pixel the mean of a 2 × 2 block of the two rows, rounded down.
+void HalveRows(const std::uint8_t* upper, const std::uint8_t* lower, std::ptrdiff_t half_cols,
+               std::uint8_t* out) {
+  std::ptrdiff_t x = 0;
+#if CV_SIMD128
+  for (; x + 16 <= half_cols; x += 16) {
+    cv::v_uint8x16 ue, uo, le, lo;
+    cv::v_load_deinterleave(upper + 2 * x, ue, uo);
+    cv::v_load_deinterleave(lower + 2 * x, le, lo);
+    cv::v_uint16x8 a0, a1, b0, b1, c0, c1, d0, d1;
+    cv::v_expand(ue, a0, a1);
+    cv::v_expand(uo, b0, b1);
+    cv::v_expand(le, c0, c1);
+    cv::v_expand(lo, d0, d1);
+    cv::v_store(out + x, cv::v_pack((a0 + b0 + c0 + d0) >> 2, (a1 + b1 + c1 + d1) >> 2));
+  }
+#endif
+  for (; x < half_cols; ++x) {
+    const int sum = upper[2 * x] + upper[2 * x + 1] + lower[2 * x] + lower[2 * x + 1];
+    out[x] = static_cast<std::uint8_t>(sum >> 2);
+  }
+}
+
+template <bool kFaint, bool kNested, bool kDark>
+void ScanRows(const cv::Mat& bgr, const RedTable& red, const RedTable* faint, FrameScan* scan) {
+  RunTracker red_runs(&scan->red.runs), faint_runs(&scan->faint.runs);
+  std::vector<std::uint8_t> previous_min(kDark ? bgr.cols : 0), row_min(kDark ? bgr.cols : 0);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
+    ScanRow<kFaint, kNested>(row, bgr.cols, y, red, faint, &red_runs, &faint_runs);
+    if constexpr (kDark) {
+      RowMin(row, bgr.cols, row_min.data());
+      if (y % 2 == 1 && y / 2 < scan->dark_half.rows) {
+        HalveRows(previous_min.data(), row_min.data(), scan->dark_half.cols,
+                  scan->dark_half.ptr<std::uint8_t>(y / 2));
+      }
+      std::swap(previous_min, row_min);
+    }
+  }
+}
+
+}  // namespace
+
+FrameScan ScanFrame(const cv::Mat& bgr, const FrameScanRequest& request) {
+  CV_Assert(bgr.type() == CV_8UC3);
+  FrameScan scan;
+  scan.red.size = bgr.size();
+  const RedTable& red = RedTable::For(request.red);
+  const RedTable* faint = nullptr;
+  if (request.faint) {
+    scan.faint.size = bgr.size();
+    faint = &RedTable::For(*request.faint);
+  }
+  if (request.dark_half) scan.dark_half.create(bgr.rows / 2, bgr.cols / 2, CV_8U);
+  const bool nested = request.faint && request.faint->min_a <= request.red.min_a &&
+                      request.faint->min_b <= request.red.min_b;
+  const bool dark = request.dark_half;
+  if (faint == nullptr) {
+    dark ? ScanRows<false, false, true>(bgr, red, faint, &scan)
+         : ScanRows<false, false, false>(bgr, red, faint, &scan);
+  } else if (nested) {
+    dark ? ScanRows<true, true, true>(bgr, red, faint, &scan)
+         : ScanRows<true, true, false>(bgr, red, faint, &scan);
+  } else {
+    dark ? ScanRows<true, false, true>(bgr, red, faint, &scan)
+         : ScanRows<true, false, false>(bgr, red, faint, &scan);
+  }
+  return scan;
+}
+
+}  // namespace pintag::stage

@@ -1,0 +1,96 @@
+// Stage 1, the one pass over the frame: each of its outputs is what the separate computation of
+// it gives.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <opencv2/core.hpp>
+
+#include "frame_scan.hpp"
+#include "quads.hpp"
+
+namespace pintag::stage {
+namespace {
+
+// Random colours, with warm and reddish patches so that both red levels have runs; odd sizes so
+// that the half-resolution image drops a row and a column.
+cv::Mat NoisyFrame() {
+  cv::Mat bgr(201, 301, CV_8UC3);
+  cv::RNG rng(7);
+  rng.fill(bgr, cv::RNG::UNIFORM, 0, 256);
+  bgr(cv::Rect(20, 30, 40, 25)).setTo(cv::Scalar(40, 70, 150));    // a* about 30: both levels
+  bgr(cv::Rect(120, 80, 30, 30)).setTo(cv::Scalar(90, 100, 130));  // a* about 15: faint only
+  return bgr;
+}
+
+bool SameRuns(const RedRuns& a, const RedRuns& b) {
+  return a.size == b.size && std::equal(a.runs.begin(), a.runs.end(), b.runs.begin(), b.runs.end(),
+                                        [](const RedRun& x, const RedRun& y) {
+                                          return x.y == y.y && x.x0 == y.x0 && x.x1 == y.x1;
+                                        });
+}
+
+TEST(FrameScan, BothRedLevelsAreWhatTheirOwnPassesGive) {
+  const cv::Mat bgr = NoisyFrame();
+  const RednessThresholds main{20, -30};
+  // Nested levels (the faint table is read first and the main one only where it passes), and
+  // levels that are not nested (the faint level's b* bound is the stricter one).
+  for (const RednessThresholds faint : {RednessThresholds{12, -30}, RednessThresholds{12, 0}}) {
+    FrameScanRequest both;
+    both.red = main;
+    both.faint = faint;
+    const FrameScan scan = ScanFrame(bgr, both);
+    FrameScanRequest only_main, only_faint;
+    only_main.red = main;
+    only_faint.red = faint;
+    EXPECT_TRUE(SameRuns(scan.red, ScanFrame(bgr, only_main).red)) << faint.min_b;
+    EXPECT_TRUE(SameRuns(scan.faint, ScanFrame(bgr, only_faint).red)) << faint.min_b;
+  }
+}
+
+TEST(FrameScan, EachOutputIsWhatItsOwnPassGives) {
+  const cv::Mat bgr = NoisyFrame();
+  const RednessThresholds main{20, -30}, faint{12, -30};
+  FrameScanRequest all;
+  all.red = main;
+  all.faint = faint;
+  all.dark_half = true;
+  const FrameScan scan = ScanFrame(bgr, all);
+
+  FrameScanRequest only_main;
+  only_main.red = main;
+  FrameScanRequest only_faint;
+  only_faint.red = faint;
+  const FrameScan main_alone = ScanFrame(bgr, only_main);
+  EXPECT_TRUE(SameRuns(scan.red, main_alone.red));
+  EXPECT_TRUE(SameRuns(scan.faint, ScanFrame(bgr, only_faint).red));
+  EXPECT_GT(scan.faint.runs.size(), scan.red.runs.size());
+  EXPECT_TRUE(main_alone.faint.runs.empty());
+  EXPECT_TRUE(main_alone.dark_half.empty());
+
+  // Red runs against a plain per-pixel mask of the same rule.
+  cv::Mat mask = RunsToMask(scan.red);
+  int disagree = 0;
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+      disagree += IsRedPixel(p[2], p[1], p[0], main) != (mask.at<std::uint8_t>(y, x) != 0);
+    }
+  }
+  EXPECT_EQ(disagree, 0);
+
+  const cv::Mat dark = MinChannel(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows));
+  ASSERT_EQ(scan.dark_half.rows, bgr.rows / 2);
+  ASSERT_EQ(scan.dark_half.cols, bgr.cols / 2);
+  for (int y = 0; y < scan.dark_half.rows; ++y) {
+    for (int x = 0; x < scan.dark_half.cols; ++x) {
+      const int sum =
+          dark.at<std::uint8_t>(2 * y, 2 * x) + dark.at<std::uint8_t>(2 * y, 2 * x + 1) +
+          dark.at<std::uint8_t>(2 * y + 1, 2 * x) + dark.at<std::uint8_t>(2 * y + 1, 2 * x + 1);
+      ASSERT_EQ(scan.dark_half.at<std::uint8_t>(y, x), sum / 4) << x << ", " << y;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pintag::stage
