@@ -4,7 +4,10 @@
 // elements (roughly, before corner refinement), again without the closing, around the blobs
 // only: tilted steeply, a tag's quiet zone is about two pixels wide across the tilt, the closing
 // bridges it, and on dark ground the tag merges with the ground (48 px tags at 72° in the
-// benchmark). The detector and the benchmark's miss explanation both call this. When none of a
+// benchmark). A region over 250,000 px (a cluster spread over red clutter) is searched at half or
+// quarter resolution when all its blobs are large, and again at full resolution only around the
+// quads found there that hold the elements. The detector and the benchmark's miss explanation
+// both call this. When none of a
 // cluster's quads decodes, the detector also tries the quads its blobs place (QuadsFromElements).
 
 #include <vector>
