@@ -26,32 +26,40 @@ std::vector<Found> DetectFrame(const FrameSpec& frame, const scene::Camera& came
 TEST(FaintPass, FindsSmallCastTagsTheMainPassMisses) {
   const scene::Camera camera;
   const std::vector<FrameSpec> frames = MakeSweep(SweepOptions{}, camera);
-  DetectorOptions without;
+  // The faint pass alone: candidates found by their dark square (which also find some of these
+  // tags) are off in both runs.
+  DetectorOptions with;
+  with.dark_square_candidates = false;
+  DetectorOptions without = with;
   without.faint_red_min_a = without.red_min_a;  // off
   for (int index : kFaintFrames) {
     ASSERT_LT(index, static_cast<int>(frames.size()));
     const FrameSpec& frame = frames[static_cast<std::size_t>(index)];
     EXPECT_TRUE(DetectFrame(frame, camera, without).empty()) << "frame " << index;
-    const std::vector<Found> found = DetectFrame(frame, camera, DetectorOptions{});
+    const std::vector<Found> found = DetectFrame(frame, camera, with);
     ASSERT_EQ(found.size(), 1U) << "frame " << index;
     EXPECT_EQ(found[0].id, frame.pintag_key) << "frame " << index;
   }
 }
 
-// Seed 1: 32 px at 20° (hard), 32 px at 72° (moderate) and 24 px at 20° (hard). At a* >= 12 each
-// tag gives two red blobs of 3 px or more on its elements; the other disks show 2 px or nothing.
-const std::vector<int> kPairFrames = {561, 712, 764};
+// Seed 1: 32 px at 20° (hard) and 32 px at 72° (moderate). At a* >= 12 each tag gives two red
+// blobs of 3 px or more on its elements; the other disks show 2 px or nothing. (Frame 764, 24 px
+// at 20° under hard light, was a third case; since the nearest-codeword rules of read_tag.hpp
+// its pair's candidate no longer reads. The sweep still finds it, by its dark square.)
+const std::vector<int> kPairFrames = {561, 712};
 
 TEST(FaintPass, PairsOfBlobsFindTagsShowingOnlyTwoRedDisks) {
   const scene::Camera camera;
   const std::vector<FrameSpec> frames = MakeSweep(SweepOptions{}, camera);
-  DetectorOptions triples;
+  DetectorOptions pairs;
+  pairs.dark_square_candidates = false;  // as above
+  DetectorOptions triples = pairs;
   triples.faint_min_blobs = 3;
   for (int index : kPairFrames) {
     ASSERT_LT(index, static_cast<int>(frames.size()));
     const FrameSpec& frame = frames[static_cast<std::size_t>(index)];
     EXPECT_TRUE(DetectFrame(frame, camera, triples).empty()) << "frame " << index;
-    const std::vector<Found> found = DetectFrame(frame, camera, DetectorOptions{});
+    const std::vector<Found> found = DetectFrame(frame, camera, pairs);
     ASSERT_EQ(found.size(), 1U) << "frame " << index;
     EXPECT_EQ(found[0].id, frame.pintag_key) << "frame " << index;
   }

@@ -11,6 +11,7 @@
 
 #include "blur_model.hpp"
 #include "corner_fit.hpp"
+#include "dark_squares.hpp"
 #include "detectors.hpp"
 #include "frame_scan.hpp"
 #include "grouping.hpp"
@@ -207,6 +208,32 @@ void BM_Stage1_ScanFrame(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(stage::ScanFrame(f.tagged.bgr, request));
 }
 BENCHMARK(BM_Stage1_ScanFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Stage 3e on the whole frame: squares found by their darkness (the frame's tags included, since
+// nothing is decoded yet), and on the same photograph without tags.
+void DarkSquares(benchmark::State& state, const cv::Mat& bgr) {
+  const Fixture& f = Get();
+  stage::FrameScanRequest request;
+  request.red = {f.options.red_min_a, f.options.red_min_b};
+  request.dark_half = true;
+  const stage::FrameScan scan = stage::ScanFrame(bgr, request);
+  stage::DarkSquareLimits limits;
+  limits.min_square_px = f.options.min_square_px;
+  std::size_t squares = 0;
+  for (auto _ : state) {
+    squares = stage::FindDarkSquares(bgr, scan.dark_half, limits, {}).size();
+    benchmark::DoNotOptimize(squares);
+  }
+  state.counters["squares"] = static_cast<double>(squares);
+}
+void BM_Stage3e_FindDarkSquares(benchmark::State& state) {
+  DarkSquares(state, Get().tagged.bgr);
+}
+BENCHMARK(BM_Stage3e_FindDarkSquares)->Unit(benchmark::kMillisecond);
+void BM_Stage3e_FindDarkSquares_Tagless(benchmark::State& state) {
+  DarkSquares(state, Get().tagless.bgr);
+}
+BENCHMARK(BM_Stage3e_FindDarkSquares_Tagless)->Unit(benchmark::kMillisecond);
 
 void BM_Stage2_FindRedBlobs(benchmark::State& state) {
   const Fixture& f = Get();

@@ -42,6 +42,10 @@ struct NormalEquations {
   std::size_t pixels = 0;
 };
 
+/// Widest blur the fit tries, px (standard deviation along the blur's long axis): 5 px of motion
+/// with 2 px of defocus. A fit that ends here has met a blur it cannot model.
+inline constexpr double kBlurFitMaxSigmaPx = 2.5;
+
 struct BlurFit {
   bool ok = false;
   CellSamples cells;           ///< each cell's fitted colour, as a*, b*
@@ -52,6 +56,9 @@ struct BlurFit {
   double rms = 0;              ///< residual per pixel and channel, linear light (0 … 1)
   int evaluations = 0;         ///< blur candidates tried
   NormalEquations equations;   ///< of the chosen blur, over all observed pixels
+  /// The blur search ended at its widest blur: the pixels are blurred at least that much, and
+  /// the model's colours and residuals are the less trustworthy.
+  bool atBlurLimit() const { return sigma_major_px >= kBlurFitMaxSigmaPx - 1e-9; }
 };
 
 /// Largest square side (px) the fit is tried on: above it cells are several pixels wide, direct

@@ -9,9 +9,7 @@ namespace pintag::stage {
 CornerFit FitCornersThroughBlur(const cv::Mat& bgr, const Quad& quad, const BlurFit& fit) {
   CornerFit out;
   out.quad = quad;
-  double side = 0;
-  for (int i = 0; i < 4; ++i) side += cv::norm(quad[(i + 1) % 4] - quad[i]) / 4;
-  if (side > kCornerFitMaxSidePx) return out;
+  if (MeanSidePx(quad) > kCornerFitMaxSidePx) return out;
   // One pixel set for every trial (chosen by image position), so that residuals compare.
   const std::size_t stride = CornerSearchStride(std::abs(SignedArea2(quad)) / 2);
   const auto residual = [&](const Quad& q) {

@@ -1,6 +1,8 @@
-// The pipeline of DESIGN.md §3, top to bottom, run twice: at the main redness threshold, then a
-// faint pass for small tags it missed. Full-frame work per pass is one table-lookup redness pass
-// and one connected-components pass; the rest runs in small regions around red blob clusters.
+// The pipeline of DESIGN.md §3, top to bottom: one pass over the frame (both redness levels and a
+// half-resolution dark image), stages 2-6 at the main redness threshold, again at the faint one
+// for small tags the first missed, then candidates found by their dark square alone outside the
+// tags decoded so far. Whole-frame work is that one pass, a connected-components pass per level
+// and one contour pass at half resolution; the rest runs in small regions around candidates.
 
 #include "pintag/detector/detector.hpp"
 
@@ -8,6 +10,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <thread>
@@ -16,7 +19,7 @@
 #include "blur_model.hpp"
 #include "camera_model.hpp"
 #include "cluster_quads.hpp"
-#include "corner_fit.hpp"
+#include "dark_squares.hpp"
 #include "debug_images.hpp"
 #include "duplicates.hpp"
 #include "frame_scan.hpp"
@@ -40,21 +43,21 @@ double Ms(Clock::time_point from, Clock::time_point to) {
   return std::chrono::duration<double, std::milli>(to - from).count();
 }
 
+// The squares a detect() call looked at.
+struct Candidates {
+  std::vector<stage::Quad> found;  ///< every quad (for the debug image)
+  std::vector<stage::Quad> read;   ///< those the readers tried, as they were read
+};
+
 struct ClusterOutput {
   std::vector<Detection> detections;
-  std::vector<stage::Quad> quads;  // for the debug image
+  Candidates candidates;
   double quads_ms = 0;
   double decode_ms = 0;
 };
 
 Point2 ToPoint(cv::Point2d p) {
   return {p.x, p.y};
-}
-
-double MeanSide(const stage::Quad& quad) {
-  double perimeter = 0;
-  for (int i = 0; i < 4; ++i) perimeter += cv::norm(quad[(i + 1) % 4] - quad[i]);
-  return perimeter / 4;
 }
 
 // A decoded candidate as a Detection (corners turned so that C0 comes first).
@@ -73,7 +76,7 @@ Detection MakeDetection(stage::Quad quad, const stage::TagReading& reading,
     d.element_seen[i] = blob_at_sampled_element[(i + r) % 4];
   }
   for (int i = 0; i < 9; ++i) d.homography[i] = h.val[i];
-  d.square_px = MeanSide(quad);
+  d.square_px = stage::MeanSidePx(quad);
   d.cells = o.reading;
   d.margins = o.margins;
   d.unknown_bits = o.unknown;
@@ -81,6 +84,21 @@ Detection MakeDetection(stage::Quad quad, const stage::TagReading& reading,
   d.bits_from_second_copy = reading.payload.bits_from_second_copy;
   d.bit_from_parity = reading.payload.bit_from_parity;
   d.read_through_blur_model = reading.throughBlurModel();
+  return d;
+}
+
+// A candidate no reader decoded, for DetectorOptions::return_rejected.
+Detection Rejected(const stage::Quad& quad, std::string reason,
+                   const stage::OrientationResult* orientation) {
+  Detection d;
+  d.reject_reason = std::move(reason);
+  for (int i = 0; i < 4; ++i) d.corners[i] = ToPoint(quad[i]);
+  d.square_px = stage::MeanSidePx(quad);
+  if (orientation != nullptr) {
+    d.cells = orientation->reading;
+    d.margins = orientation->margins;
+    d.unknown_bits = orientation->unknown;
+  }
   return d;
 }
 
@@ -98,17 +116,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   const auto t2 = Clock::now();
   out->quads_ms += Ms(t1, t2);
   const auto reject = [&](std::string reason, const stage::OrientationResult* o = nullptr) {
-    if (!options.return_rejected) return false;
-    Detection d;
-    d.reject_reason = std::move(reason);
-    for (int i = 0; i < 4; ++i) d.corners[i] = ToPoint(quad[i]);
-    d.square_px = MeanSide(quad);
-    if (o != nullptr) {
-      d.cells = o->reading;
-      d.margins = o->margins;
-      d.unknown_bits = o->unknown;
-    }
-    out->detections.push_back(d);
+    if (options.return_rejected) out->detections.push_back(Rejected(quad, std::move(reason), o));
     return false;
   };
   if (!refined) return reject("square edges not found");
@@ -116,24 +124,18 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
     return reject("red blobs do not match the elements");
   }
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
-  stage::TagReading reading = stage::ReadTag(bgr, h, thresholds);
-  if (!reading.payload.key && reading.fit.ok) {
-    // No reader decoded it: the corners may be off by more than small cells allow.
-    const stage::CornerFit fitted = stage::FitCornersThroughBlur(bgr, quad, reading.fit);
-    if (fitted.moved) {
-      const cv::Matx33d moved = stage::HomographyFromQuad(fitted.quad);
-      stage::TagReading again =
-          stage::ReadTag(bgr, moved, thresholds, stage::kFittedCornersNearestCodewordMinLead);
-      // The moved square must pass step 4's element check too.
-      const stage::ElementAssignment moved_assignment =
-          stage::AssignElements(moved, blobs, cluster.blobs);
-      if (again.payload.key && moved_assignment.found >= cluster.min_elements &&
-          !moved_assignment.conflict) {
-        quad = fitted.quad;
-        reading = std::move(again);
-        assignment = moved_assignment;
-      }
-    }
+  out->candidates.read.push_back(quad);
+  // A square moved by the corner fit must pass step 4's element check too.
+  const stage::CandidateReading candidate =
+      stage::ReadCandidate(bgr, quad, thresholds, [&](const stage::Quad& fitted) {
+        const stage::ElementAssignment moved =
+            stage::AssignElements(stage::HomographyFromQuad(fitted), blobs, cluster.blobs);
+        return moved.found >= cluster.min_elements && !moved.conflict;
+      });
+  const stage::TagReading& reading = candidate.reading;
+  if (candidate.corners_fitted) {
+    quad = candidate.quad;
+    assignment = stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs);
   }
   out->decode_ms += Ms(t2, Clock::now());
   if (!reading.orientation.ok) return reject(reading.orientation.error);
@@ -151,7 +153,7 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   const cv::Mat dark = stage::MinChannel(bgr, cluster.roi);
   const std::vector<stage::Quad> quads =
       stage::ClusterQuads(dark, cluster, blobs, options.min_square_px);
-  out->quads.insert(out->quads.end(), quads.begin(), quads.end());
+  out->candidates.found.insert(out->candidates.found.end(), quads.begin(), quads.end());
   out->quads_ms += Ms(t0, Clock::now());
 
   bool decoded = false;
@@ -163,20 +165,76 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
   // only a shrunken outline): the blobs place the square, and step 4 looks for its edges there.
   const std::vector<stage::Quad> placed =
       stage::ClusterElementQuads(cluster, blobs, options.min_square_px);
-  out->quads.insert(out->quads.end(), placed.begin(), placed.end());
+  out->candidates.found.insert(out->candidates.found.end(), placed.begin(), placed.end());
   for (const stage::Quad& quad : placed) {
     if (ProcessQuad(bgr, dark, blobs, cluster, quad, options, out)) break;
   }
+}
+
+// A square found by its darkness alone (stage 3e) through stages 4 to 6. Its corners are refined
+// already; there are no red blobs to hold against its elements, so the readers' rules decide.
+void ProcessDarkSquare(const cv::Mat& bgr, const stage::Quad& quad, const DetectorOptions& options,
+                       ClusterOutput* out) {
+  const auto start = Clock::now();
+  const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
+  const stage::CandidateReading candidate = stage::ReadCandidate(
+      bgr, quad, thresholds,
+      [&](const stage::Quad& fitted) { return stage::ElementsOutshineCentre(bgr, fitted); });
+  out->decode_ms += Ms(start, Clock::now());
+  const stage::TagReading& reading = candidate.reading;
+  if (reading.payload.key) {
+    out->detections.push_back(MakeDetection(candidate.quad, reading, {}));
+  } else if (options.return_rejected) {
+    const bool oriented = reading.orientation.ok;
+    out->detections.push_back(Rejected(candidate.quad,
+                                       oriented ? reading.payload.error : reading.orientation.error,
+                                       oriented ? &reading.orientation : nullptr));
+  }
+}
+
+// Runs work(i) for i in [0, count) on up to `threads` threads (the caller's alone for 1).
+void ForEach(std::size_t count, int threads, const std::function<void(std::size_t)>& work) {
+  threads = std::clamp(threads, 1, 64);
+  if (threads == 1 || count < 2) {
+    for (std::size_t i = 0; i < count; ++i) work(i);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(threads));
+  for (int t = 0; t < threads; ++t) {
+    pool.emplace_back([&] {
+      for (std::size_t i; (i = next++) < count;) work(i);
+    });
+  }
+  for (std::thread& t : pool) t.join();
+}
+
+// Adds what each candidate's work gave to the result.
+void Collect(std::vector<ClusterOutput>& outputs, DetectResult* result, Candidates* candidates) {
+  for (ClusterOutput& o : outputs) {
+    result->timings.quads_ms += o.quads_ms;
+    result->timings.decode_ms += o.decode_ms;
+    for (Detection& d : o.detections) result->detections.push_back(std::move(d));
+    for (const auto& [from, to] : {std::pair{&o.candidates.found, &candidates->found},
+                                   std::pair{&o.candidates.read, &candidates->read}}) {
+      to->insert(to->end(), from->begin(), from->end());
+    }
+  }
+}
+
+bool Inside(cv::Point2d p, const stage::Quad& quad) {
+  const std::vector<cv::Point2f> square(quad.begin(), quad.end());
+  return cv::pointPolygonTest(square, cv::Point2f(p), false) >= 0;
 }
 
 bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) {
     const Detection& d = detections[i];
     if (!d.key) continue;
-    std::vector<cv::Point2f> square;
-    for (const Point2& c : d.corners)
-      square.emplace_back(static_cast<float>(c.x), static_cast<float>(c.y));
-    if (cv::pointPolygonTest(square, cv::Point2f(p), false) >= 0) return true;
+    stage::Quad square;
+    for (std::size_t c = 0; c < 4; ++c) square[c] = {d.corners[c].x, d.corners[c].y};
+    if (Inside(p, square)) return true;
   }
   return false;
 }
@@ -185,8 +243,7 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
 // rejected when asked for) is appended to `result`, and the stage times are added to its timings.
 void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_area_px,
                 int min_cluster_blobs, const DetectorOptions& options,
-                const stage::DebugImages* debug, DetectResult* result,
-                std::vector<stage::Quad>* all_quads) {
+                const stage::DebugImages* debug, DetectResult* result, Candidates* candidates) {
   const auto t_red = Clock::now();
   if (debug != nullptr && debug->enabled()) debug->redness(stage::RunsToMask(red));
 
@@ -209,30 +266,34 @@ void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_a
   if (debug != nullptr) debug->blobs(bgr, blobs, clusters);
 
   std::vector<ClusterOutput> outputs(clusters.size());
-  const int threads = std::clamp(options.threads, 1, 64);
-  if (threads == 1 || clusters.size() < 2) {
-    for (std::size_t i = 0; i < clusters.size(); ++i) {
-      ProcessCluster(bgr, blobs, clusters[i], options, &outputs[i]);
-    }
-  } else {
-    std::atomic<std::size_t> next{0};
-    std::vector<std::thread> pool;
-    pool.reserve(static_cast<std::size_t>(threads));
-    for (int t = 0; t < threads; ++t) {
-      pool.emplace_back([&] {
-        for (std::size_t i; (i = next++) < clusters.size();) {
-          ProcessCluster(bgr, blobs, clusters[i], options, &outputs[i]);
-        }
+  ForEach(clusters.size(), options.threads,
+          [&](std::size_t i) { ProcessCluster(bgr, blobs, clusters[i], options, &outputs[i]); });
+  Collect(outputs, result, candidates);
+}
+
+// Stage 3e and stages 4 to 6 for squares found by their darkness, outside the tags decoded so far
+// and the squares the readers have tried already: a tag the red passes placed and could not read
+// is not read again. Reading it again from the dark square's corners found 3 more of 1,309 tags
+// over seeds 1-3 and doubled the time of those frames (seconds on hard-light 32 px tags).
+void RunDarkSquarePass(const cv::Mat& bgr, const cv::Mat& dark_half, const DetectorOptions& options,
+                       DetectResult* result, Candidates* candidates) {
+  const auto start = Clock::now();
+  const std::size_t decoded_before = result->detections.size();
+  stage::DarkSquareLimits limits;
+  limits.min_square_px = options.min_square_px;
+  const std::vector<stage::Quad> squares =
+      stage::FindDarkSquares(bgr, dark_half, limits, [&](cv::Point2d centre) {
+        return InsideDecodedTag(centre, result->detections, decoded_before) ||
+               std::any_of(candidates->read.begin(), candidates->read.end(),
+                           [&](const stage::Quad& q) { return Inside(centre, q); });
       });
-    }
-    for (std::thread& t : pool) t.join();
-  }
-  for (ClusterOutput& o : outputs) {
-    result->timings.quads_ms += o.quads_ms;
-    result->timings.decode_ms += o.decode_ms;
-    for (Detection& d : o.detections) result->detections.push_back(std::move(d));
-    all_quads->insert(all_quads->end(), o.quads.begin(), o.quads.end());
-  }
+  result->timings.quads_ms += Ms(start, Clock::now());
+  std::vector<ClusterOutput> outputs(squares.size());
+  ForEach(squares.size(), options.threads, [&](std::size_t i) {
+    outputs[i].candidates.found.push_back(squares[i]);
+    ProcessDarkSquare(bgr, squares[i], options, &outputs[i]);
+  });
+  Collect(outputs, result, candidates);
 }
 
 }  // namespace
@@ -275,17 +336,21 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   scan_request.red = {options_.red_min_a, options_.red_min_b};
   const bool faint_pass = options_.faint_red_min_a < options_.red_min_a;
   if (faint_pass) scan_request.faint = {options_.faint_red_min_a, options_.red_min_b};
+  scan_request.dark_half = options_.dark_square_candidates;
   const stage::FrameScan scan = stage::ScanFrame(bgr, scan_request);
   result.timings.redness_ms += Ms(start, Clock::now());
 
-  std::vector<stage::Quad> all_quads;
+  Candidates candidates;
   RunRedPass(bgr, scan.red, static_cast<int>(options_.max_element_area_ratio * bgr.total()),
-             kMainMinClusterBlobs, options_, &debug, &result, &all_quads);
+             kMainMinClusterBlobs, options_, &debug, &result, &candidates);
   if (faint_pass) {
     RunRedPass(bgr, scan.faint, options_.faint_max_element_area_px,
-               std::max(2, options_.faint_min_blobs), options_, nullptr, &result, &all_quads);
+               std::max(2, options_.faint_min_blobs), options_, nullptr, &result, &candidates);
   }
-  debug.quads(bgr, all_quads);
+  if (options_.dark_square_candidates) {
+    RunDarkSquarePass(bgr, scan.dark_half, options_, &result, &candidates);
+  }
+  debug.quads(bgr, candidates.found);
   stage::RemoveDuplicates(&result.detections);
 
   const auto t_pose = Clock::now();

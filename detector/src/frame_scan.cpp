@@ -5,6 +5,8 @@
 #include <opencv2/core/hal/intrin.hpp>
 #include <vector>
 
+#include "quads.hpp"
+
 namespace pintag::stage {
 namespace {
 
@@ -51,25 +53,6 @@ void ScanRow(const std::uint8_t* row, int cols, int y, const RedTable& red, cons
   if constexpr (kFaint) faint_runs->finish(y, cols);
 }
 
-// min(R, G, B) of a row, 16 pixels at a time where the CPU has 128-bit vectors (the redness
-// loop, with its table lookups and branches, cannot be vectorised; a scalar loop here cost as
-// much as the redness itself).
-void RowMin(const std::uint8_t* row, std::ptrdiff_t cols, std::uint8_t* out) {
-  std::ptrdiff_t x = 0;
-#if CV_SIMD128
-  for (; x + 16 <= cols; x += 16) {
-    cv::v_uint8x16 b, g, r;
-    cv::v_load_deinterleave(row + 3 * x, b, g, r);
-    cv::v_store(out + x, cv::v_min(cv::v_min(b, g), r));
-  }
-#endif
-  for (; x < cols; ++x) {
-    const std::uint8_t b = row[3 * x], g = row[3 * x + 1], r = row[3 * x + 2];
-    const std::uint8_t bg = b < g ? b : g;
-    out[x] = bg < r ? bg : r;
-  }
-}
-
 // Each output pixel the mean of a 2 × 2 block of the two rows, rounded down.
 void HalveRows(const std::uint8_t* upper, const std::uint8_t* lower, std::ptrdiff_t half_cols,
                std::uint8_t* out) {
@@ -101,7 +84,7 @@ void ScanRows(const cv::Mat& bgr, const RedTable& red, const RedTable* faint, Fr
     const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
     ScanRow<kFaint, kNested>(row, bgr.cols, y, red, faint, &red_runs, &faint_runs);
     if constexpr (kDark) {
-      RowMin(row, bgr.cols, row_min.data());
+      MinChannelRow(row, bgr.cols, row_min.data());
       if (y % 2 == 1 && y / 2 < scan->dark_half.rows) {
         HalveRows(previous_min.data(), row_min.data(), scan->dark_half.cols,
                   scan->dark_half.ptr<std::uint8_t>(y / 2));

@@ -3,7 +3,7 @@
 // work done on each, so everything the later stages need from every pixel is taken in the same
 // pass: the red runs at the main threshold and at the faint pass's, and a half-resolution
 // image of min(R, G, B) in which a tag, its elements included, is one dark square inside its
-// white quiet zone (stage 3d's candidates without red).
+// white quiet zone (stage 3e's candidates without red).
 
 #include <opencv2/core.hpp>
 #include <optional>

@@ -37,6 +37,7 @@ void VisitOptions(Options& o, Visit&& visit) {
   visit("max_blobs", o.max_blobs);
   visit("faint_max_element_area_px", o.faint_max_element_area_px);
   visit("faint_min_blobs", o.faint_min_blobs);
+  visit("dark_square_candidates", o.dark_square_candidates);
   visit("threads", o.threads);
   visit("debug_dir", o.debug_dir);
   visit("return_rejected", o.return_rejected);

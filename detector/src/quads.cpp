@@ -2,17 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace pintag::stage {
 namespace {
-
-bool ToQuad(const std::vector<cv::Point>& polygon, Quad* quad) {
-  if (polygon.size() != 4 || !cv::isContourConvex(polygon)) return false;
-  for (int i = 0; i < 4; ++i) (*quad)[i] = cv::Point2d(polygon[i].x, polygon[i].y);
-  if (SignedArea2(*quad) < 0) std::reverse(quad->begin(), quad->end());
-  return true;
-}
 
 double MinSide(const Quad& q) {
   double side = 1e18;
@@ -22,19 +16,48 @@ double MinSide(const Quad& q) {
 
 }  // namespace
 
+double MeanSidePx(const Quad& q) {
+  double perimeter = 0;
+  for (int i = 0; i < 4; ++i) perimeter += cv::norm(q[(i + 1) % 4] - q[i]);
+  return perimeter / 4;
+}
+
+bool QuadFromHull(const std::vector<cv::Point>& hull, std::initializer_list<double> tolerances_px,
+                  Quad* quad) {
+  std::vector<cv::Point> polygon;
+  for (const double tolerance : tolerances_px) {
+    cv::approxPolyDP(hull, polygon, tolerance, true);
+    if (polygon.size() != 4 || !cv::isContourConvex(polygon)) continue;
+    for (int i = 0; i < 4; ++i) (*quad)[i] = cv::Point2d(polygon[i].x, polygon[i].y);
+    if (SignedArea2(*quad) < 0) std::reverse(quad->begin(), quad->end());
+    return true;
+  }
+  return false;
+}
+
 double SignedArea2(const Quad& q) {
   double s = 0;
   for (int i = 0; i < 4; ++i) s += q[i].x * q[(i + 1) % 4].y - q[(i + 1) % 4].x * q[i].y;
   return s;
 }
 
+void MinChannelRow(const std::uint8_t* bgr, std::ptrdiff_t pixels, std::uint8_t* out) {
+  std::ptrdiff_t x = 0;
+#if CV_SIMD128
+  for (; x + 16 <= pixels; x += 16) {
+    cv::v_uint8x16 b, g, r;
+    cv::v_load_deinterleave(bgr + 3 * x, b, g, r);
+    cv::v_store(out + x, cv::v_min(cv::v_min(b, g), r));
+  }
+#endif
+  for (; x < pixels; ++x) out[x] = std::min({bgr[3 * x], bgr[3 * x + 1], bgr[3 * x + 2]});
+}
+
 cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi) {
   cv::Mat out(roi.size(), CV_8U);
   for (int y = 0; y < roi.height; ++y) {
-    const std::uint8_t* p =
-        bgr.ptr<std::uint8_t>(roi.y + y) + 3 * static_cast<std::ptrdiff_t>(roi.x);
-    std::uint8_t* o = out.ptr<std::uint8_t>(y);
-    for (int x = 0; x < roi.width; ++x, p += 3) o[x] = std::min({p[0], p[1], p[2]});
+    MinChannelRow(bgr.ptr<std::uint8_t>(roi.y + y) + 3 * static_cast<std::ptrdiff_t>(roi.x),
+                  roi.width, out.ptr<std::uint8_t>(y));
   }
   return out;
 }
@@ -66,18 +89,16 @@ std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_si
     }
     const double area = cv::contourArea(contour);
     if (area < min_area) continue;
-    const double perimeter = cv::arcLength(contour, true);
     // The hull: a light cover over an element can notch the square's outline, and the tag's
     // outline is convex anyway.
-    std::vector<cv::Point> hull, polygon;
+    std::vector<cv::Point> hull;
     cv::convexHull(contour, hull);
+    const double perimeter = cv::arcLength(contour, true);
     Quad quad;
-    bool found = false;
-    for (double eps : {0.02, 0.035, 0.05}) {
-      cv::approxPolyDP(hull, polygon, eps * perimeter, true);
-      if ((found = ToQuad(polygon, &quad))) break;
+    if (!QuadFromHull(hull, {0.02 * perimeter, 0.035 * perimeter, 0.05 * perimeter}, &quad) ||
+        MinSide(quad) < min_side_px * 0.3) {
+      continue;
     }
-    if (!found || MinSide(quad) < min_side_px * 0.3) continue;
     for (cv::Point2d& p : quad) p += cv::Point2d(origin);
     quads.push_back(quad);
   }

@@ -5,6 +5,8 @@
 // quads.
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -12,6 +14,8 @@ namespace pintag::stage {
 
 using Quad = std::array<cv::Point2d, 4>;  ///< clockwise on screen (x right, y down), px
 
+/// min(R, G, B) of `pixels` interleaved BGR pixels (vectorised where the CPU allows).
+void MinChannelRow(const std::uint8_t* bgr, std::ptrdiff_t pixels, std::uint8_t* out);
 /// min(R, G, B) of `bgr` inside `roi` (CV_8U, roi-sized).
 cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
 
@@ -33,5 +37,14 @@ cv::Rect AnchorsRegion(const std::vector<cv::Point2d>& anchors, const cv::Rect& 
 
 /// Twice the signed area; positive when clockwise on screen.
 double SignedArea2(const Quad& quad);
+
+/// The mean of the four sides, px.
+double MeanSidePx(const Quad& quad);
+
+/// A convex four-cornered polygon approximating `hull` (a convex hull, integer px), tried at each
+/// of `tolerances_px` in turn (the largest distance allowed between hull and polygon); corners
+/// clockwise on screen. False when no tolerance gives one.
+bool QuadFromHull(const std::vector<cv::Point>& hull, std::initializer_list<double> tolerances_px,
+                  Quad* quad);
 
 }  // namespace pintag::stage

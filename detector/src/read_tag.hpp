@@ -4,11 +4,13 @@
 // its two-colours-per-class bits, then the nearest codeword; the first reading the codec accepts
 // wins, subject to the rules below that each exist because a wrong key got through without them.
 
+#include <functional>
 #include <opencv2/core.hpp>
 
 #include "blur_model.hpp"
 #include "orientation.hpp"
 #include "payload.hpp"
+#include "quads.hpp"
 
 namespace pintag::stage {
 
@@ -18,10 +20,33 @@ namespace pintag::stage {
 inline constexpr double kRecoveredReadingMinMargin = 0.5;
 PayloadResult DecodeReading(const OrientationResult& orientation);
 
+/// The lead (noise units) by which the nearest codeword must beat every other codeword for a
+/// candidate read on its own corners. kNearestCodewordMinLead (25) was set from the first wrong
+/// keys logged in the sweeps; read from the true corners of tags of 14–48 px (a scratch probe,
+/// seeds 1–6, 16 frames per bin, the exact corners and three with 0.5 px of noise on each
+/// coordinate), wrong codewords that passed every other rule led by up to 71, all on 24 px tags
+/// under hard light. At 75 the seed 1–3 sweeps lost 3 of 1,440 target-bin tags. (The shifted
+/// fits that confirm a codeword still need only kNearestCodewordMinLead.)
+inline constexpr double kNearestCodewordAcceptLead = 75;
+
 /// On corners fitted to the pixels (FitCornersThroughBlur) the nearest codeword needs this lead
-/// (noise units), not kNearestCodewordMinLead: the corners had eight coordinates of freedom to
+/// (noise units), not kNearestCodewordAcceptLead: the corners had eight coordinates of freedom to
 /// follow the model.
 inline constexpr double kFittedCornersNearestCodewordMinLead = 100;
+
+/// When the blur fit ends at its widest blur (BlurFit::atBlurLimit) the nearest codeword needs
+/// this lead, wherever the corners came from: the model then misses part of the blur. In the
+/// probe above such fits gave 11 of the 18 wrong keys (at leads of 49–173; all 4 of those read
+/// on fitted corners, at 102–166) from a tenth of the right readings.
+inline constexpr double kBlurLimitNearestCodewordMinLead = 200;
+
+/// A square whose sides average less than this (px) gets no nearest codeword: its cells (0.1 of
+/// the side) are near two pixels across, the colour resolution JPEG keeps (4:2:0), while the bits
+/// are in the colour. The detector read an 18 px tag in moderate light (seed 7, 16 frames per
+/// bin, frame 1505) as key 543 for 539, one key bit apart, on corners averaging 20.1 px; at its
+/// exact corners the model's free labelling was that codeword too. 22 rather than 20 leaves room
+/// for corners a pixel outside the square.
+inline constexpr double kNearestCodewordMinSidePx = 22;
 
 /// Which reader decided.
 enum class Reader : std::uint8_t {
@@ -40,13 +65,30 @@ struct TagReading {
   bool throughBlurModel() const { return reader != Reader::kNone && reader != Reader::kDirect; }
 };
 
-/// Reads the tag whose unit square maps to the image by `tag_to_image`. A key read through the
-/// blur model by its colours or its bits is refused when another codeword explains the pixels
-/// better (at the true corners of a 32 px tag under hard light the bits reading, with two bits
+/// Reads the tag whose unit square maps to the image by `tag_to_image`. Through the blur model, a
+/// key read from the fitted colours is refused when another codeword explains the pixels better,
+/// and one read from the two-colours-per-class bits unless it is the codeword explaining them
+/// best (at the true corners of a 32 px tag under hard light the bits reading, with two bits
 /// recovered from the other copy, gave a valid key two bits from the truth; the right codeword
-/// explained the pixels better by 286 noise units).
+/// explained the pixels better by 286 noise units). The nearest codeword itself needs a lead of
+/// `nearest_min_lead`, or kBlurLimitNearestCodewordMinLead when the blur fit ended at its limit.
 TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image,
                    const BitThresholds& thresholds,
-                   double nearest_min_lead = kNearestCodewordMinLead);
+                   double nearest_min_lead = kNearestCodewordAcceptLead);
+
+/// A candidate square read as the detector reads it: ReadTag on its corners, a nearest-codeword
+/// reading confirmed where the corners fit the model best (the same codeword must be nearest
+/// there); when no reader decodes and the blur model was fitted, the corners fitted through the
+/// model (FitCornersThroughBlur) and read again, with the nearest codeword held to
+/// kFittedCornersNearestCodewordMinLead. `accept_fitted`, when given, may refuse the fitted
+/// square (the red path checks that its blobs still sit on the elements).
+struct CandidateReading {
+  TagReading reading;
+  Quad quad{};                  ///< the corners the reading was made on
+  bool corners_fitted = false;  ///< they are the fitted ones
+};
+CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
+                               const BitThresholds& thresholds,
+                               const std::function<bool(const Quad&)>& accept_fitted = {});
 
 }  // namespace pintag::stage

@@ -13,6 +13,7 @@ TEST(Json, OptionsRoundTripAndRejectUnknownFields) {
   DetectorOptions o;
   o.tag_size_m = 0.08;
   o.threads = 2;
+  o.dark_square_candidates = false;
   o.intrinsics = CameraIntrinsics{1000, 1001, 500, 400, {0.1, -0.2, 0, 0}};
   const nlohmann::json j = ToJson(o);
   DetectorOptions back;
@@ -20,6 +21,7 @@ TEST(Json, OptionsRoundTripAndRejectUnknownFields) {
   ASSERT_TRUE(OptionsFromJson(j, &back, &error)) << error;
   EXPECT_EQ(back.tag_size_m, 0.08);
   EXPECT_EQ(back.threads, 2);
+  EXPECT_FALSE(back.dark_square_candidates);
   ASSERT_TRUE(back.intrinsics);
   EXPECT_EQ(back.intrinsics->fy, 1001);
   EXPECT_EQ(ToJson(back), j);

@@ -64,6 +64,9 @@ struct DetectorOptions {
   /// Blobs a cluster of the faint pass needs: 2 also tries pairs (on a small tag under a colour
   /// cast often only two red disks show any red); 3 as the main pass. Values below 2 count as 2.
   int faint_min_blobs = 2;
+  /// Also look for tags by their dark square alone (small tags whose red disks blur, JPEG and a
+  /// colour cast have washed below both red thresholds), outside the tags the red passes decoded.
+  bool dark_square_candidates = true;
 
   // --- execution and diagnostics ---
   int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread

@@ -1,0 +1,81 @@
+// Stage 3e: squares found by their darkness alone. Small tags are found, once each, with corners
+// close to the truth; dark shapes without the four bright elements are not.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dark_squares.hpp"
+#include "frame_scan.hpp"
+#include "synthetic.hpp"
+
+namespace pintag::stage {
+namespace {
+
+cv::Mat DarkHalf(const cv::Mat& bgr) {
+  FrameScanRequest request;
+  request.dark_half = true;
+  return ScanFrame(bgr, request).dark_half;
+}
+
+// Mean corner distance of `quad` to `truth`, over the four rotations of the corner order.
+double CornerError(const Quad& quad, const std::array<cv::Point2d, 4>& truth) {
+  double best = 1e9;
+  for (int r = 0; r < 4; ++r) {
+    double sum = 0;
+    for (int i = 0; i < 4; ++i) sum += cv::norm(quad[(i + r) % 4] - truth[i]);
+    best = std::min(best, sum / 4);
+  }
+  return best;
+}
+
+TEST(DarkSquares, FindsSmallTagsWithTheirCorners) {
+  testing::SyntheticOptions options;
+  options.blur_sigma = 0.8;
+  options.noise_sigma = 2;
+  const testing::SyntheticScene scene = MakeScene(
+      {{.key = 100, .centre_px = {150, 150}, .square_px = 24},
+       {.key = 200,
+        .centre_px = {400, 150},
+        .square_px = 32,
+        .tilt_deg = 40,
+        .tilt_axis_deg = 30,
+        .roll_deg = 20},
+       {.key = 300, .centre_px = {700, 300}, .square_px = 48, .tilt_deg = 55, .roll_deg = 70}},
+      options);
+  const std::vector<Quad> squares = FindDarkSquares(scene.bgr, DarkHalf(scene.bgr), {}, {});
+  ASSERT_EQ(squares.size(), 3U);
+  for (const testing::SyntheticTruth& truth : scene.truth) {
+    double best = 1e9;
+    for (const Quad& q : squares) best = std::min(best, CornerError(q, truth.corners));
+    EXPECT_LT(best, 0.8) << "key " << truth.key;
+  }
+  // What a decoded tag covers is skipped, and only that: with the first tag decoded, the other
+  // two are still found, and no square is returned in the first one's place.
+  const cv::Point2d decoded = {150, 150};  // the first tag's centre
+  const auto inside_decoded = [&](cv::Point2d p) { return cv::norm(p - decoded) < 16; };
+  const std::vector<Quad> rest =
+      FindDarkSquares(scene.bgr, DarkHalf(scene.bgr), {}, inside_decoded);
+  EXPECT_EQ(rest.size(), 2U);
+  for (const Quad& q : rest) {
+    EXPECT_GT(cv::norm((q[0] + q[1] + q[2] + q[3]) / 4 - decoded), 16);
+  }
+}
+
+TEST(DarkSquares, DarkShapesWithoutBrightElementsAreNot) {
+  cv::Mat bgr(540, 960, CV_8UC3, cv::Scalar(235, 235, 235));
+  // A plain black square, one with a single bright disk, one with a bright bar across it, and a
+  // colourful square whose centre is as bright as its corners: each in a white margin.
+  const std::array<cv::Point, 4> origins = {{{100, 100}, {300, 100}, {500, 100}, {700, 100}}};
+  for (const cv::Point& o : origins)
+    cv::rectangle(bgr, {o, o + cv::Point(40, 40)}, {20, 20, 20}, cv::FILLED);
+  cv::circle(bgr, origins[1] + cv::Point(10, 10), 4, {40, 200, 120}, cv::FILLED);
+  cv::rectangle(bgr, {origins[2] + cv::Point(4, 18), origins[2] + cv::Point(36, 22)},
+                {40, 200, 120}, cv::FILLED);
+  cv::rectangle(bgr, {origins[3] + cv::Point(6, 6), origins[3] + cv::Point(34, 34)}, {30, 160, 150},
+                cv::FILLED);
+  EXPECT_TRUE(FindDarkSquares(bgr, DarkHalf(bgr), {}, {}).empty());
+}
+
+}  // namespace
+}  // namespace pintag::stage
