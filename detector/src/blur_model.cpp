@@ -10,6 +10,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "homography.hpp"
 #include "lab_approx.hpp"
 #include "pintag/codec/cielab.hpp"
 #include "pintag/codec/geometry.hpp"
@@ -341,14 +342,7 @@ CellSample ToSample(const std::array<double, 3>& opponent, double support) {
 
 BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image) {
   BlurFit fit;
-  double side = 0;
-  for (int i = 0; i < 4; ++i) {
-    const geometry::Point a = geometry::kSquareCorners[i],
-                          b = geometry::kSquareCorners[(i + 1) % 4];
-    const cv::Vec3d pa = tag_to_image * cv::Vec3d(a.x, a.y, 1);
-    const cv::Vec3d pb = tag_to_image * cv::Vec3d(b.x, b.y, 1);
-    side += std::hypot(pa[0] / pa[2] - pb[0] / pb[2], pa[1] / pa[2] - pb[1] / pb[2]) / 4;
-  }
+  const double side = MeanSidePx(tag_to_image);
   if (side > kBlurFitMaxSidePx || side < 8) return fit;
   const TagOnGrid grid(bgr, tag_to_image);
   if (grid.observed() < 64) return fit;

@@ -22,6 +22,41 @@ bool IsConvexClockwise(const Quad& q) {
   return true;
 }
 
+// A cluster spread over a red-rich photograph can span the whole frame; thresholding and tracing
+// such a region cost 3 ms a search. When every blob of the cluster is large, so is any tag that
+// holds three of them (an element's red core of 8 px belongs to a square of 40 px or more, one
+// of 32 px to 160 px or more), and the region is searched at a half or a quarter of the
+// resolution: the tag's square stays 20 px or more there, and its quads are refined at full
+// resolution afterwards (step 4) as always.
+constexpr int kReducedRegionPx = 250'000;
+constexpr double kHalfResolutionMinBlobMajorPx = 8;
+constexpr double kQuarterResolutionMinBlobMajorPx = 32;
+
+// FindQuads on `dark` (the region at `origin`) made `scale` (2 or 4) times smaller; the quads in
+// full-resolution coordinates.
+std::vector<Quad> FindQuadsReduced(const cv::Mat& dark, cv::Point origin, double min_square_px,
+                                   const std::vector<cv::Point2d>& anchors, bool close_gaps,
+                                   int min_anchors, int scale) {
+  // Halved step by step: OpenCV's area resize is fast for a factor of 2 and ten times slower for
+  // 4 (2.5 against 0.2 ms on a 1774 × 1080 region).
+  cv::Mat reduced = dark;
+  for (int s = 1; s < scale; s *= 2) {
+    cv::resize(reduced, reduced, cv::Size(reduced.cols / 2, reduced.rows / 2), 0, 0,
+               cv::INTER_AREA);
+  }
+  std::vector<cv::Point2d> reduced_anchors;
+  reduced_anchors.reserve(anchors.size());
+  for (const cv::Point2d& a : anchors) reduced_anchors.push_back((a - cv::Point2d(origin)) / scale);
+  std::vector<Quad> quads =
+      FindQuads(reduced, {0, 0}, min_square_px / scale, &reduced_anchors, close_gaps, min_anchors);
+  // Reduced pixel (x, y) covers full-resolution pixels scale x to scale x + scale - 1.
+  const cv::Point2d offset = cv::Point2d(origin) + cv::Point2d(scale - 1, scale - 1) / 2;
+  for (Quad& quad : quads) {
+    for (cv::Point2d& p : quad) p = scale * p + offset;
+  }
+  return quads;
+}
+
 }  // namespace
 
 std::vector<Quad> QuadsFromElements(const std::vector<cv::Point2d>& centres) {
@@ -102,45 +137,6 @@ std::vector<Quad> ClusterElementQuads(const BlobCluster& cluster, const std::vec
   }
   return quads;
 }
-
-namespace {
-
-// A cluster spread over a red-rich photograph can span the whole frame; thresholding and tracing
-// such a region cost 3 ms a search. When every blob of the cluster is large, so is any tag that
-// holds three of them (an element's red core of 8 px belongs to a square of 40 px or more, one
-// of 32 px to 160 px or more), and the region is searched at a half or a quarter of the
-// resolution: the tag's square stays 20 px or more there, and its quads are refined at full
-// resolution afterwards (step 4) as always.
-constexpr int kReducedRegionPx = 250'000;
-constexpr double kHalfResolutionMinBlobMajorPx = 8;
-constexpr double kQuarterResolutionMinBlobMajorPx = 32;
-
-// FindQuads on `dark` (the region at `origin`) made `scale` (2 or 4) times smaller; the quads in
-// full-resolution coordinates.
-std::vector<Quad> FindQuadsReduced(const cv::Mat& dark, cv::Point origin, double min_square_px,
-                                   const std::vector<cv::Point2d>& anchors, bool close_gaps,
-                                   int min_anchors, int scale) {
-  // Halved step by step: OpenCV's area resize is fast for a factor of 2 and ten times slower for
-  // 4 (2.5 against 0.2 ms on a 1774 × 1080 region).
-  cv::Mat reduced = dark;
-  for (int s = 1; s < scale; s *= 2) {
-    cv::resize(reduced, reduced, cv::Size(reduced.cols / 2, reduced.rows / 2), 0, 0,
-               cv::INTER_AREA);
-  }
-  std::vector<cv::Point2d> reduced_anchors;
-  reduced_anchors.reserve(anchors.size());
-  for (const cv::Point2d& a : anchors) reduced_anchors.push_back((a - cv::Point2d(origin)) / scale);
-  std::vector<Quad> quads =
-      FindQuads(reduced, {0, 0}, min_square_px / scale, &reduced_anchors, close_gaps, min_anchors);
-  // Reduced pixel (x, y) covers full-resolution pixels scale x to scale x + scale - 1.
-  const cv::Point2d offset = cv::Point2d(origin) + cv::Point2d(scale - 1, scale - 1) / 2;
-  for (Quad& quad : quads) {
-    for (cv::Point2d& p : quad) p = scale * p + offset;
-  }
-  return quads;
-}
-
-}  // namespace
 
 std::vector<Quad> ClusterQuads(const cv::Mat& dark, const BlobCluster& cluster,
                                const std::vector<RedBlob>& blobs, double min_square_px) {

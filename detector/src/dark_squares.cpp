@@ -174,6 +174,10 @@ std::vector<Quad> FindDarkSquares(const cv::Mat& bgr, const cv::Mat& dark_half,
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(dark, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
 
+  const auto found_already = [&](cv::Point2d p) {
+    return std::any_of(squares.begin(), squares.end(),
+                       [&](const Quad& q) { return QuadContains(q, p); });
+  };
   const cv::Rect frame(0, 0, bgr.cols, bgr.rows);
   for (const std::vector<cv::Point>& contour : contours) {
     if (contour.size() < 4) continue;
@@ -188,14 +192,6 @@ std::vector<Quad> FindDarkSquares(const cv::Mat& bgr, const cv::Mat& dark_half,
     const cv::Point2d rough_centre = Centre(rough);
     if (skip && skip(rough_centre)) continue;
     // A tag gives several outlines (its square, and dark shapes inside it): one square each.
-    const auto covers = [](const Quad& q, cv::Point2d p) {
-      const std::vector<cv::Point2f> corners(q.begin(), q.end());
-      return cv::pointPolygonTest(corners, cv::Point2f(p), false) >= 0;
-    };
-    const auto found_already = [&](cv::Point2d p) {
-      return std::any_of(squares.begin(), squares.end(),
-                         [&](const Quad& q) { return covers(q, p); });
-    };
     if (found_already(rough_centre)) continue;
     if (!ElementsOutshineCentre(bgr, rough)) continue;
 
@@ -210,7 +206,7 @@ std::vector<Quad> FindDarkSquares(const cv::Mat& bgr, const cv::Mat& dark_half,
                                /*close_gaps=*/false)) {
       if (!RefineCorners(region, roi.tl(), &quad)) continue;
       const cv::Point2d centre = Centre(quad);
-      if (!covers(rough, centre) || (skip && skip(centre)) || found_already(centre)) continue;
+      if (!QuadContains(rough, centre) || (skip && skip(centre)) || found_already(centre)) continue;
       if (PatternContrast(bgr, quad, /*rough=*/false) < kPatternMargin) continue;
       squares.push_back(quad);
       break;

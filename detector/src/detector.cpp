@@ -126,16 +126,17 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
   out->candidates.read.push_back(quad);
   // A square moved by the corner fit must pass step 4's element check too.
+  stage::ElementAssignment fitted_assignment;
   const stage::CandidateReading candidate =
       stage::ReadCandidate(bgr, quad, thresholds, [&](const stage::Quad& fitted) {
-        const stage::ElementAssignment moved =
+        fitted_assignment =
             stage::AssignElements(stage::HomographyFromQuad(fitted), blobs, cluster.blobs);
-        return moved.found >= cluster.min_elements && !moved.conflict;
+        return fitted_assignment.found >= cluster.min_elements && !fitted_assignment.conflict;
       });
   const stage::TagReading& reading = candidate.reading;
   if (candidate.corners_fitted) {
     quad = candidate.quad;
-    assignment = stage::AssignElements(stage::HomographyFromQuad(quad), blobs, cluster.blobs);
+    assignment = fitted_assignment;
   }
   out->decode_ms += Ms(t2, Clock::now());
   if (!reading.orientation.ok) return reject(reading.orientation.error);
@@ -216,16 +217,11 @@ void Collect(std::vector<ClusterOutput>& outputs, DetectResult* result, Candidat
     result->timings.quads_ms += o.quads_ms;
     result->timings.decode_ms += o.decode_ms;
     for (Detection& d : o.detections) result->detections.push_back(std::move(d));
-    for (const auto& [from, to] : {std::pair{&o.candidates.found, &candidates->found},
-                                   std::pair{&o.candidates.read, &candidates->read}}) {
-      to->insert(to->end(), from->begin(), from->end());
-    }
+    candidates->found.insert(candidates->found.end(), o.candidates.found.begin(),
+                             o.candidates.found.end());
+    candidates->read.insert(candidates->read.end(), o.candidates.read.begin(),
+                            o.candidates.read.end());
   }
-}
-
-bool Inside(cv::Point2d p, const stage::Quad& quad) {
-  const std::vector<cv::Point2f> square(quad.begin(), quad.end());
-  return cv::pointPolygonTest(square, cv::Point2f(p), false) >= 0;
 }
 
 bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, std::size_t count) {
@@ -234,7 +230,7 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
     if (!d.key) continue;
     stage::Quad square;
     for (std::size_t c = 0; c < 4; ++c) square[c] = {d.corners[c].x, d.corners[c].y};
-    if (Inside(p, square)) return true;
+    if (stage::QuadContains(square, p)) return true;
   }
   return false;
 }
@@ -285,7 +281,7 @@ void RunDarkSquarePass(const cv::Mat& bgr, const cv::Mat& dark_half, const Detec
       stage::FindDarkSquares(bgr, dark_half, limits, [&](cv::Point2d centre) {
         return InsideDecodedTag(centre, result->detections, decoded_before) ||
                std::any_of(candidates->read.begin(), candidates->read.end(),
-                           [&](const stage::Quad& q) { return Inside(centre, q); });
+                           [&](const stage::Quad& q) { return stage::QuadContains(q, centre); });
       });
   result->timings.quads_ms += Ms(start, Clock::now());
   std::vector<ClusterOutput> outputs(squares.size());

@@ -166,4 +166,9 @@ cv::Point2d Apply(const cv::Matx33d& h, double u, double v) {
   return {p[0] / p[2], p[1] / p[2]};
 }
 
+double MeanSidePx(const cv::Matx33d& tag_to_image) {
+  return MeanSidePx(Quad{Apply(tag_to_image, 0, 0), Apply(tag_to_image, 1, 0),
+                         Apply(tag_to_image, 1, 1), Apply(tag_to_image, 0, 1)});
+}
+
 }  // namespace pintag::stage

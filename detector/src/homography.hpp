@@ -23,4 +23,7 @@ Quad RotateQuad(const Quad& quad, int first);
 
 cv::Point2d Apply(const cv::Matx33d& h, double u, double v);
 
+/// The mean side (px) of the square that `tag_to_image` maps the unit square to.
+double MeanSidePx(const cv::Matx33d& tag_to_image);
+
 }  // namespace pintag::stage

@@ -22,6 +22,11 @@ double MeanSidePx(const Quad& q) {
   return perimeter / 4;
 }
 
+bool QuadContains(const Quad& quad, cv::Point2d p) {
+  const std::vector<cv::Point2f> corners(quad.begin(), quad.end());
+  return cv::pointPolygonTest(corners, cv::Point2f(p), false) >= 0;
+}
+
 bool QuadFromHull(const std::vector<cv::Point>& hull, std::initializer_list<double> tolerances_px,
                   Quad* quad) {
   std::vector<cv::Point> polygon;

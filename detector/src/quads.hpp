@@ -41,6 +41,9 @@ double SignedArea2(const Quad& quad);
 /// The mean of the four sides, px.
 double MeanSidePx(const Quad& quad);
 
+/// Whether `p` lies inside `quad` or on its edge.
+bool QuadContains(const Quad& quad, cv::Point2d p);
+
 /// A convex four-cornered polygon approximating `hull` (a convex hull, integer px), tried at each
 /// of `tolerances_px` in turn (the largest distance allowed between hull and polygon); corners
 /// clockwise on screen. False when no tolerance gives one.

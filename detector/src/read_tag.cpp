@@ -68,12 +68,6 @@ bool NearestCodewordSurvivesCornerFit(const cv::Mat& bgr, const Quad& quad,
   return there.key && reading.payload.key && *there.key == *reading.payload.key;
 }
 
-// The mean side of the square `tag_to_image` maps the unit square to, px.
-double SquareMeanSidePx(const cv::Matx33d& tag_to_image) {
-  return MeanSidePx({Apply(tag_to_image, 0, 0), Apply(tag_to_image, 1, 0),
-                     Apply(tag_to_image, 1, 1), Apply(tag_to_image, 0, 1)});
-}
-
 OrientationResult AsOrientation(const ModelReading& bits) {
   OrientationResult o;
   o.ok = true;
@@ -172,7 +166,7 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image,
   if (fit.atBlurLimit())
     nearest_min_lead = std::max(nearest_min_lead, kBlurLimitNearestCodewordMinLead);
   if (!best.key || best.lead < nearest_min_lead) return r;
-  if (SquareMeanSidePx(tag_to_image) < kNearestCodewordMinSidePx) return r;
+  if (MeanSidePx(tag_to_image) < kNearestCodewordMinSidePx) return r;
   OrientationResult as_read = AsOrientation(best);
   PayloadResult payload = DecodeReading(as_read);
   if (payload.key && *payload.key == *best.key &&
