@@ -230,8 +230,16 @@ TEST_F(LoopbackTest, MetricsCountWhatHappened) {
   ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png?dpi=100",
                            {{"Authorization", std::string("Bearer ") + test::kCounterToken}}));
   ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png", {{"Authorization", "Bearer nope"}}));
-  metricsWhen(
-      R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)");
+  // Each request is counted by the server's logger after its answer is sent, on the thread that
+  // answered it: the next request can be answered (and counted) first. Wait for all of them.
+  for (
+      const char* line :
+      {R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 3)",
+       R"(pintag_http_requests_total{route="unmatched",method="GET",status="404"} 1)",
+       R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="200"} 1)",
+       R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)"}) {
+    metricsWhen(line);
+  }
   const auto r = client_->Get("/metrics");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
