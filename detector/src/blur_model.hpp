@@ -38,7 +38,7 @@ struct NormalEquations {
   std::array<double, kModelRegions * kModelRegions> ata{};         ///< brightness
   std::array<double, kModelRegions * kModelRegions> ata_chroma{};  ///< colour differences
   std::array<double, kModelRegions * 3> aty{};
-  double yty = 0;
+  std::array<double, 3> yty{};  ///< per channel: the channels' noise differs (NearestCodeword…)
   std::size_t pixels = 0;
 };
 
@@ -125,6 +125,7 @@ inline constexpr double kNearestCodewordMinLead = 25;
 
 struct CodewordReading {
   std::optional<TagKey> key;
+  std::optional<TagKey> winner;  ///< the codeword explaining the pixels best, also when refused
   std::string error;
   int quarter_turns = 0;  ///< element `quarter_turns` of the sampled frame is C0
   CellReading reading;    ///< the codeword, canonical
