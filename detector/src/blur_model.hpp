@@ -113,14 +113,15 @@ ModelReading ReadBitsThroughBlur(const BlurFit& fit, const SettledOrientations& 
 
 /// The format codeword nearest to a blur fit, for when no reading of single bits decodes: every
 /// (key, orientation) is ranked by the flip costs of the cells where it disagrees with the settled
-/// reading of that orientation, the best 256 are scored exactly (colours refitted), and the best
-/// is accepted only if it explains the pixels better than any other codeword by `min_margin`
-/// times the residual noise, at least as well as the free reading, and its colours look like the
-/// palette. This is a dictionary decode with a margin, as ArUco and AprilTag do, but on
-/// the fitted model rather than on thresholded bits. With `excuse_small_excess`, a winner leading
-/// by at least 100 noise units may explain the pixels worse than the free reading by up to a
-/// tenth of its lead.
-/// The lead (noise units) a nearest codeword needs over every other codeword.
+/// reading of that orientation, the best 256 are scored exactly (colours refitted), then every
+/// codeword within 7 cells of the winner (again around a new winner), and the best is accepted
+/// only if it explains the pixels better than any other codeword scored by `min_margin` times
+/// the residual noise (each channel's own, under the free reading), at least as well as the free
+/// reading, and its colours look like the palette. This is a dictionary decode with a margin, as
+/// ArUco and AprilTag do, but on the fitted model rather than on thresholded bits. With
+/// `excuse_small_excess`, a winner leading by at least 100 noise units may explain the pixels worse
+/// than the free reading by up to a tenth of its lead. The lead (noise units) a nearest codeword
+/// needs over every other codeword.
 inline constexpr double kNearestCodewordMinLead = 25;
 
 struct CodewordReading {
