@@ -119,6 +119,16 @@ const std::vector<TrueSquareCase> kTrueSquareCases = {
     {3, 16, 763, {}, "kBlurLimitNearestCodewordMinLead, on fitted corners"},
     // 24 px at 20°, exact corners: the nearest codeword 29247 for 29278, lead 46.
     {6, 16, 176, {}, "kNearestCodewordAcceptLead 75"},
+    // 32 px at 65° (seed 8, a held-out seed): nearest codeword 7506 at a lead of 18 on these
+    // corners; after the corner fit 16878 for 16894 (one key bit) at a lead of 114.
+    {8,
+     16,
+     1446,
+     {{{-0.50168833907068422, -0.55144750844989743},
+       {-0.1057248348868972, -0.0062524073933691087},
+       {-0.021396956396387327, -0.58544051915518225},
+       {0.069289868907842431, -0.35665155742815557}}},
+     "kFittedCornersNewCodewordMinLead"},
 };
 
 TEST(MisreadRegressions, NoWrongKeyReadOnSquaresPlacedByTheTruth) {

@@ -163,6 +163,7 @@ TagReading ReadTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image,
   // Single bits do not decode: the codeword that explains the pixels clearly best, if one does.
   // (Its lead is measured whatever the bar; a reading refused at a lead of 0 is refused at any.)
   const CodewordReading& best = nearest_codeword();
+  r.nearest = best;
   if (fit.atBlurLimit())
     nearest_min_lead = std::max(nearest_min_lead, kBlurLimitNearestCodewordMinLead);
   if (!best.key || best.lead < nearest_min_lead) return r;
@@ -196,6 +197,14 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   TagReading again = ReadTag(bgr, HomographyFromQuad(fitted.quad), thresholds,
                              kFittedCornersNearestCodewordMinLead);
   if (!again.payload.key || (accept_fitted && !accept_fitted(fitted.quad))) return c;
+  // A codeword that only became the nearest once the corners moved needs a larger lead: the
+  // corners may have followed the model towards it.
+  if (again.reader == Reader::kNearestCodeword &&
+      again.nearest.lead < kFittedCornersNewCodewordMinLead &&
+      c.reading.nearest.winner != again.payload.key) {
+    c.reading.payload.error = "nearest codeword on fitted corners is not the nearest on the own";
+    return c;
+  }
   c.reading = std::move(again);
   c.quad = fitted.quad;
   c.corners_fitted = true;
