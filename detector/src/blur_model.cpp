@@ -138,7 +138,12 @@ class TagOnGrid {
         // grid, about a hundred grids per corner fit).
         std::array<int, static_cast<std::size_t>(kSubsamples) * kSubsamples> touched{};
         std::size_t touched_count = 0;
-        for (int sy = 0; sy < kSubsamples; ++sy) {
+        const bool outside = BeyondOneSide(to_tag, x, y);  // half the grid: the quiet zone's
+        if (outside) {
+          hits[kOutsideRegion] = kSubsamples * kSubsamples;
+          touched[touched_count++] = kOutsideRegion;
+        }
+        for (int sy = 0; sy < kSubsamples && !outside; ++sy) {
           for (int sx = 0; sx < kSubsamples; ++sx) {
             const double px = x - 0.5 + (sx + 0.5) / kSubsamples;
             const double py = y - 0.5 + (sy + 0.5) / kSubsamples;
@@ -175,6 +180,27 @@ class TagOnGrid {
 
   std::size_t observed() const { return observed_.size(); }
 
+  /// Whether the pixel centred at (x, y) lies wholly beyond one side of the tag's square (in tag
+  /// units below 0 or above 1 in u or in v, with a margin), so that every subsample of it is
+  /// outside. Under a homography with the pixel in front of the camera (t₂ > 0 at its corners)
+  /// each such side is a half-plane, and a half-plane holding the four corners holds the pixel.
+  static bool BeyondOneSide(const cv::Matx33d& to_tag, double x, double y) {
+    constexpr double kMargin = 1e-6;
+    std::array<bool, 4> beyond{true, true, true, true};  // u < 0, u > 1, v < 0, v > 1
+    for (const double dy : {-0.5, 0.5}) {
+      for (const double dx : {-0.5, 0.5}) {
+        const cv::Vec3d t = to_tag * cv::Vec3d(x + dx, y + dy, 1);
+        if (t[2] <= 0) return false;
+        const double u = t[0] / t[2], v = t[1] / t[2];
+        beyond[0] = beyond[0] && u < -kMargin;
+        beyond[1] = beyond[1] && u > 1 + kMargin;
+        beyond[2] = beyond[2] && v < -kMargin;
+        beyond[3] = beyond[3] && v > 1 + kMargin;
+      }
+    }
+    return beyond[0] || beyond[1] || beyond[2] || beyond[3];
+  }
+
   struct Solution {
     double residual = 1e300;  // sum of squares over the pixels used and the 3 channels
     std::size_t pixels = 0;
@@ -183,18 +209,27 @@ class TagOnGrid {
     NormalEquations equations;
   };
 
+  /// Which channels a solve fits: brightness and colour differences see different blurs and are
+  /// independent least-squares systems, so either can be fitted alone (its residual and colours).
+  enum class Channels { kAll, kBrightness, kColour };
+
   /// Least-squares region colours under `blur`, from every `stride`-th observed pixel (with
   /// `by_position`, the pixels whose PositionHash is a multiple of `stride`: the same pixels
-  /// whatever homography placed the grid); only the
-  /// brightness channel when `luma_only` (residual and colours of that channel alone).
-  Solution solve(const Blur& blur, std::size_t stride, bool luma_only = false,
+  /// whatever homography placed the grid), in `channels`.
+  Solution solve(const Blur& blur, std::size_t stride, Channels channels = Channels::kAll,
                  bool by_position = false) const {
-    const int systems = luma_only ? 1 : 2;
-    const std::vector<std::pair<cv::Point, double>> luma_kernel = Kernel(blur);
-    Blur wider = blur;
-    wider.major = std::sqrt(blur.major * blur.major + blur.chroma_extra * blur.chroma_extra);
-    wider.minor = std::sqrt(blur.minor * blur.minor + blur.chroma_extra * blur.chroma_extra);
-    const std::vector<std::pair<cv::Point, double>> chroma_kernel = Kernel(wider);
+    // System 0: brightness (channel 0); system 1: the colour differences (channels 1 and 2).
+    const int first_system = channels == Channels::kColour ? 1 : 0;
+    const int end_system = channels == Channels::kBrightness ? 1 : 2;
+    const int first_channel = first_system == 0 ? 0 : 1, end_channel = end_system == 1 ? 1 : 3;
+    std::vector<std::pair<cv::Point, double>> luma_kernel, chroma_kernel;
+    if (first_system == 0) luma_kernel = Kernel(blur);
+    if (end_system == 2) {
+      Blur wider = blur;
+      wider.major = std::sqrt(blur.major * blur.major + blur.chroma_extra * blur.chroma_extra);
+      wider.minor = std::sqrt(blur.minor * blur.minor + blur.chroma_extra * blur.chroma_extra);
+      chroma_kernel = Kernel(wider);
+    }
     using Square = cv::Matx<double, kRegions, kRegions>;
     std::array<Square, 2> ata = {Square::zeros(), Square::zeros()};  // luma, chroma
     cv::Matx<double, kRegions, 3> aty = cv::Matx<double, kRegions, 3>::zeros();
@@ -207,7 +242,7 @@ class TagOnGrid {
       const cv::Point g = observed_[i];
       if (by_position && PositionHash(origin_.x + g.x, origin_.y + g.y) % stride != 0) continue;
       const std::array<double, 3>& y = linear_[i];
-      for (int system = 0; system < systems; ++system) {
+      for (int system = first_system; system < end_system; ++system) {
         std::array<double, kRegions>& w = row[system];
         std::vector<int>& nz = nonzero[system];
         nz.clear();
@@ -234,7 +269,9 @@ class TagOnGrid {
         }
         for (int r : nz) w[r] = 0;
       }
-      for (int ch = 0; ch < (luma_only ? 1 : 3); ++ch) yty[ch] += y[ch] * y[ch], mean[ch] += y[ch];
+      for (int ch = first_channel; ch < end_channel; ++ch) {
+        yty[ch] += y[ch] * y[ch], mean[ch] += y[ch];
+      }
       ++s.pixels;
     }
     if (s.pixels == 0) return s;
@@ -245,7 +282,7 @@ class TagOnGrid {
     }
     for (int r = 0; r < kRegions; ++r) s.support[r] = ata[0](r, r);
     double residual = yty[0] + yty[1] + yty[2];
-    for (int system = 0; system < systems; ++system) {
+    for (int system = first_system; system < end_system; ++system) {
       const Square& m0 = ata[system];
       double trace = 0;
       for (int r = 0; r < kRegions; ++r) trace += m0(r, r);
@@ -375,7 +412,7 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
     blur.major = std::min(blur.major, kMaxSigmaPx);
     blur.minor = std::min(blur.minor, blur.major);
     ++fit.evaluations;
-    const double r = grid.solve(blur, stride, /*luma_only=*/true).residual;
+    const double r = grid.solve(blur, stride, TagOnGrid::Channels::kBrightness).residual;
     if (r < best_residual) best_residual = r, best = blur;
   };
   // Round blurs first, then elongated ones around the best, then small steps.
@@ -397,7 +434,8 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
   }
 
   // The lens blur is searched on brightness alone (its edges are sharpest there, and it halves
-  // the work); then the colour differences' extra blur, on all three channels.
+  // the work); then the colour differences' extra blur, on them alone (the brightness system does
+  // not change with it).
   const Blur luma_best = best;
   best_residual = 1e300;
   // Up to 2.7 px: on small tags under strong JPEG (and Bayer demosaicing) the fit chose the
@@ -406,7 +444,7 @@ BlurFit FitCellsThroughBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image)
     Blur b = luma_best;
     b.chroma_extra = extra;
     ++fit.evaluations;
-    const double r = grid.solve(b, stride).residual;
+    const double r = grid.solve(b, stride, TagOnGrid::Channels::kColour).residual;
     if (r < best_residual) best_residual = r, best = b;
   }
 
@@ -446,8 +484,9 @@ double ResidualAtFittedBlur(const cv::Mat& bgr, const cv::Matx33d& tag_to_image,
   const TagOnGrid grid(bgr, tag_to_image);
   if (grid.observed() < 64) return kNone;
   const Blur blur{fit.sigma_major_px, fit.sigma_minor_px, fit.angle_deg, fit.chroma_extra_px};
-  const TagOnGrid::Solution s = grid.solve(blur, std::max<std::size_t>(1, pixel_stride),
-                                           /*luma_only=*/true, /*by_position=*/true);
+  const TagOnGrid::Solution s =
+      grid.solve(blur, std::max<std::size_t>(1, pixel_stride), TagOnGrid::Channels::kBrightness,
+                 /*by_position=*/true);
   if (s.pixels == 0 || s.residual >= 1e299) return kNone;
   return s.residual / static_cast<double>(s.pixels);
 }
