@@ -129,6 +129,23 @@ class TagOnGrid {
              static_cast<int>(std::ceil(y1)) + kMaxKernelRadius + 1 - origin_.y};
     coverage_.resize(static_cast<std::size_t>(size_.area()));
     parts_.reserve(coverage_.size() * 2);
+    // Pixel corners in tag units, each shared by up to four pixels.
+    const int lattice_width = size_.width + 1;
+    std::vector<PixelCorner> corners(static_cast<std::size_t>(lattice_width) *
+                                     static_cast<std::size_t>(size_.height + 1));
+    for (int ly = 0; ly <= size_.height; ++ly) {
+      for (int lx = 0; lx < lattice_width; ++lx) {
+        const double x = static_cast<double>(origin_.x + lx) - 0.5;
+        const double y = static_cast<double>(origin_.y + ly) - 0.5;
+        const cv::Vec3d t = to_tag * cv::Vec3d(x, y, 1);
+        PixelCorner& corner = corners[static_cast<std::size_t>(ly * lattice_width + lx)];
+        corner.front = t[2] > 0;
+        if (!corner.front) continue;
+        corner.u = t[0] / t[2];
+        corner.v = t[1] / t[2];
+        corner.region = ModelRegionAt(corner.u, corner.v);
+      }
+    }
     std::array<int, kRegions> hits{};
     for (int gy = 0; gy < size_.height; ++gy) {
       for (int gx = 0; gx < size_.width; ++gx) {
@@ -138,12 +155,17 @@ class TagOnGrid {
         // grid, about a hundred grids per corner fit).
         std::array<int, static_cast<std::size_t>(kSubsamples) * kSubsamples> touched{};
         std::size_t touched_count = 0;
-        const bool outside = BeyondOneSide(to_tag, x, y);  // half the grid: the quiet zone's
-        if (outside) {
-          hits[kOutsideRegion] = kSubsamples * kSubsamples;
-          touched[touched_count++] = kOutsideRegion;
+        const std::size_t top_left = static_cast<std::size_t>(gy * lattice_width + gx);
+        const std::array<const PixelCorner*, 4> pixel_corners = {
+            &corners[top_left], &corners[top_left + 1], &corners[top_left + lattice_width],
+            &corners[top_left + lattice_width + 1]};
+        // Half the grid is the quiet zone's; much of the rest lies inside one region.
+        const int whole_region = WholeRegion(pixel_corners);
+        if (whole_region >= 0) {
+          hits[whole_region] = kSubsamples * kSubsamples;
+          touched[touched_count++] = whole_region;
         }
-        for (int sy = 0; sy < kSubsamples && !outside; ++sy) {
+        for (int sy = 0; sy < kSubsamples && whole_region < 0; ++sy) {
           for (int sx = 0; sx < kSubsamples; ++sx) {
             const double px = x - 0.5 + (sx + 0.5) / kSubsamples;
             const double py = y - 0.5 + (sy + 0.5) / kSubsamples;
@@ -160,14 +182,18 @@ class TagOnGrid {
               {region, static_cast<float>(hits[region]) / (kSubsamples * kSubsamples)});
           hits[region] = 0;
         }
+        // Observed: in the image, a kernel's reach inside the grid, and within the margin.
+        if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows || gx < kMaxKernelRadius ||
+            gy < kMaxKernelRadius || gx >= size_.width - kMaxKernelRadius ||
+            gy >= size_.height - kMaxKernelRadius) {
+          continue;
+        }
         const cv::Vec3d t = to_tag * cv::Vec3d(x, y, 1);
         const double u = t[0] / t[2], v = t[1] / t[2];
-        const bool observed = u >= -kObservedMargin && u <= 1 + kObservedMargin &&
-                              v >= -kObservedMargin && v <= 1 + kObservedMargin && x >= 0 &&
-                              y >= 0 && x < bgr.cols && y < bgr.rows && gx >= kMaxKernelRadius &&
-                              gy >= kMaxKernelRadius && gx < size_.width - kMaxKernelRadius &&
-                              gy < size_.height - kMaxKernelRadius;
-        if (observed) observed_.push_back({gx, gy});
+        if (u >= -kObservedMargin && u <= 1 + kObservedMargin && v >= -kObservedMargin &&
+            v <= 1 + kObservedMargin) {
+          observed_.push_back({gx, gy});
+        }
       }
     }
     linear_.reserve(observed_.size());
@@ -180,25 +206,57 @@ class TagOnGrid {
 
   std::size_t observed() const { return observed_.size(); }
 
-  /// Whether the pixel centred at (x, y) lies wholly beyond one side of the tag's square (in tag
-  /// units below 0 or above 1 in u or in v, with a margin), so that every subsample of it is
-  /// outside. Under a homography with the pixel in front of the camera (t₂ > 0 at its corners)
-  /// each such side is a half-plane, and a half-plane holding the four corners holds the pixel.
-  static bool BeyondOneSide(const cv::Matx33d& to_tag, double x, double y) {
+  /// A pixel corner in tag units, and its region (when in front of the camera).
+  struct PixelCorner {
+    double u = 0, v = 0;
+    int region = kOutsideRegion;
+    bool front = false;
+  };
+
+  /// The one region holding the whole pixel with these corners, or −1 when it may hold more (its
+  /// subsamples decide then). With every corner in front of the camera (t₂ > 0) the pixel maps
+  /// onto the convex hull of its corners, so: beyond one side of the square (a half-plane) when
+  /// all four are; inside a red quadrant or the square when all four are (both convex); inside a
+  /// green sector or the black when all four are and a circle around the corners keeps clear of
+  /// the disks cut out of that region (the sector's red disk; the black's four element disks).
+  static int WholeRegion(const std::array<const PixelCorner*, 4>& corners) {
     constexpr double kMargin = 1e-6;
     std::array<bool, 4> beyond{true, true, true, true};  // u < 0, u > 1, v < 0, v > 1
-    for (const double dy : {-0.5, 0.5}) {
-      for (const double dx : {-0.5, 0.5}) {
-        const cv::Vec3d t = to_tag * cv::Vec3d(x + dx, y + dy, 1);
-        if (t[2] <= 0) return false;
-        const double u = t[0] / t[2], v = t[1] / t[2];
-        beyond[0] = beyond[0] && u < -kMargin;
-        beyond[1] = beyond[1] && u > 1 + kMargin;
-        beyond[2] = beyond[2] && v < -kMargin;
-        beyond[3] = beyond[3] && v > 1 + kMargin;
-      }
+    double mean_u = 0, mean_v = 0;
+    for (const PixelCorner* c : corners) {
+      if (!c->front) return -1;
+      beyond[0] = beyond[0] && c->u < -kMargin;
+      beyond[1] = beyond[1] && c->u > 1 + kMargin;
+      beyond[2] = beyond[2] && c->v < -kMargin;
+      beyond[3] = beyond[3] && c->v > 1 + kMargin;
+      mean_u += c->u / 4, mean_v += c->v / 4;
     }
-    return beyond[0] || beyond[1] || beyond[2] || beyond[3];
+    if (beyond[0] || beyond[1] || beyond[2] || beyond[3]) return kOutsideRegion;
+    const int region = corners[0]->region;
+    if (region == kOutsideRegion) return -1;
+    for (std::size_t k = 1; k < corners.size(); ++k) {
+      if (corners[k]->region != region) return -1;
+    }
+    const int cell = (region - 2) % kCellsPerElement;
+    if (region != kBlackRegion && cell < kRedQuadrants) return region;
+    double reach2 = 0;  // squared radius of the circle around the corners
+    for (const PixelCorner* c : corners) {
+      reach2 =
+          std::max(reach2, (c->u - mean_u) * (c->u - mean_u) + (c->v - mean_v) * (c->v - mean_v));
+    }
+    const auto clear_of = [&](int element, double radius) {
+      const geometry::Point centre = geometry::kElementCentres[element];
+      const double du = mean_u - centre.x, dv = mean_v - centre.y;
+      const double gap = radius + std::sqrt(reach2) + kMargin;
+      return du * du + dv * dv > gap * gap;
+    };
+    if (region == kBlackRegion) {
+      for (int e = 0; e < kElements; ++e) {
+        if (!clear_of(e, geometry::kGreenOuterRadius)) return -1;
+      }
+      return region;
+    }
+    return clear_of((region - 2) / kCellsPerElement, geometry::kRedRadius) ? region : -1;
   }
 
   struct Solution {
