@@ -130,15 +130,15 @@ class TagOnGrid {
     coverage_.resize(static_cast<std::size_t>(size_.area()));
     parts_.reserve(coverage_.size() * 2);
     // Pixel corners in tag units, each shared by up to four pixels.
-    const int lattice_width = size_.width + 1;
-    std::vector<PixelCorner> corners(static_cast<std::size_t>(lattice_width) *
-                                     static_cast<std::size_t>(size_.height + 1));
+    const auto lattice_width = static_cast<std::size_t>(size_.width) + 1;
+    std::vector<PixelCorner> corners(lattice_width * (static_cast<std::size_t>(size_.height) + 1));
     for (int ly = 0; ly <= size_.height; ++ly) {
-      for (int lx = 0; lx < lattice_width; ++lx) {
+      for (int lx = 0; lx <= size_.width; ++lx) {
         const double x = static_cast<double>(origin_.x + lx) - 0.5;
         const double y = static_cast<double>(origin_.y + ly) - 0.5;
         const cv::Vec3d t = to_tag * cv::Vec3d(x, y, 1);
-        PixelCorner& corner = corners[static_cast<std::size_t>(ly * lattice_width + lx)];
+        PixelCorner& corner =
+            corners[static_cast<std::size_t>(ly) * lattice_width + static_cast<std::size_t>(lx)];
         corner.front = t[2] > 0;
         if (!corner.front) continue;
         corner.u = t[0] / t[2];
@@ -155,7 +155,8 @@ class TagOnGrid {
         // grid, about a hundred grids per corner fit).
         std::array<int, static_cast<std::size_t>(kSubsamples) * kSubsamples> touched{};
         std::size_t touched_count = 0;
-        const std::size_t top_left = static_cast<std::size_t>(gy * lattice_width + gx);
+        const std::size_t top_left =
+            static_cast<std::size_t>(gy) * lattice_width + static_cast<std::size_t>(gx);
         const std::array<const PixelCorner*, 4> pixel_corners = {
             &corners[top_left], &corners[top_left + 1], &corners[top_left + lattice_width],
             &corners[top_left + lattice_width + 1]};
