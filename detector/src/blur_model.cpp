@@ -75,6 +75,13 @@ struct Part {
   int region;
   float weight;
 };
+// A pixel wholly in one region, and how many pixels from it rightwards are wholly in that region
+// (up to 255); length 0 when the pixel holds more than one region.
+struct RegionRun {
+  std::uint8_t region = 0;
+  std::uint8_t length = 0;
+};
+static_assert(kModelRegions <= 256);
 
 // The camera's blur by its spread: standard deviations along its long axis and across it, px
 // (TagOnGrid::Kernel gives its shape).
@@ -197,6 +204,22 @@ class TagOnGrid {
         }
       }
     }
+    runs_.resize(coverage_.size());
+    for (int gy = 0; gy < size_.height; ++gy) {
+      for (int gx = size_.width - 1; gx >= 0; --gx) {
+        const Coverage& c = coverage_[index(gx, gy)];
+        if (c.count != 1) continue;  // length 0: more than one region
+        const auto region = static_cast<std::uint8_t>(parts_[c.first].region);
+        int length = 1;
+        if (gx + 1 < size_.width) {
+          const RegionRun& right = runs_[index(gx + 1, gy)];
+          if (right.length > 0 && right.region == region) {
+            length = std::min<int>(right.length + 1, std::numeric_limits<std::uint8_t>::max());
+          }
+        }
+        runs_[index(gx, gy)] = {region, static_cast<std::uint8_t>(length)};
+      }
+    }
     linear_.reserve(observed_.size());
     for (const cv::Point g : observed_) {
       const std::uint8_t* p =
@@ -281,13 +304,13 @@ class TagOnGrid {
     const int first_system = channels == Channels::kColour ? 1 : 0;
     const int end_system = channels == Channels::kBrightness ? 1 : 2;
     const int first_channel = first_system == 0 ? 0 : 1, end_channel = end_system == 1 ? 1 : 3;
-    std::vector<std::pair<cv::Point, double>> luma_kernel, chroma_kernel;
-    if (first_system == 0) luma_kernel = Kernel(blur);
+    std::array<std::vector<KernelRow>, 2> kernels;  // luma, chroma
+    if (first_system == 0) kernels[0] = KernelRows(Kernel(blur));
     if (end_system == 2) {
       Blur wider = blur;
       wider.major = std::sqrt(blur.major * blur.major + blur.chroma_extra * blur.chroma_extra);
       wider.minor = std::sqrt(blur.minor * blur.minor + blur.chroma_extra * blur.chroma_extra);
-      chroma_kernel = Kernel(wider);
+      kernels[1] = KernelRows(Kernel(wider));
     }
     using Square = cv::Matx<double, kRegions, kRegions>;
     std::array<Square, 2> ata = {Square::zeros(), Square::zeros()};  // luma, chroma
@@ -305,12 +328,29 @@ class TagOnGrid {
         std::array<double, kRegions>& w = row[system];
         std::vector<int>& nz = nonzero[system];
         nz.clear();
-        for (const auto& [offset, weight] : system == 0 ? luma_kernel : chroma_kernel) {
-          const Coverage& c = coverage_[index(g.x + offset.x, g.y + offset.y)];
-          for (std::uint32_t k = 0; k < c.count; ++k) {
-            const Part& part = parts_[c.first + k];
-            if (w[part.region] == 0) nz.push_back(part.region);
-            w[part.region] += weight * part.weight;
+        // Every term is positive, so a region's sum is 0 only before its first one.
+        const auto add = [&](int region, double term) {
+          if (!(term > 0)) return;
+          if (w[region] == 0) nz.push_back(region);
+          w[region] += term;
+        };
+        for (const KernelRow& kernel_row : kernels[system]) {
+          const std::size_t first = index(g.x + kernel_row.dx_begin, g.y + kernel_row.dy);
+          const std::size_t count = kernel_row.weight.size();
+          for (std::size_t j = 0; j < count;) {
+            const RegionRun run = runs_[first + j];
+            if (run.length > 0) {  // a stretch in one region: its weight in one addition
+              const std::size_t end = std::min(count, j + run.length);
+              add(run.region, kernel_row.prefix[end] - kernel_row.prefix[j]);
+              j = end;
+              continue;
+            }
+            const Coverage& c = coverage_[first + j];
+            for (std::uint32_t k = 0; k < c.count; ++k) {
+              const Part& part = parts_[c.first + k];
+              add(part.region, kernel_row.weight[j] * part.weight);
+            }
+            ++j;
           }
         }
         for (std::size_t a = 0; a < nz.size(); ++a) {
@@ -432,10 +472,37 @@ class TagOnGrid {
     return taps;
   }
 
+  /// A kernel's taps by rows, each row dense from its first kept tap to its last (0 where one was
+  /// dropped), with running sums so that a stretch of pixels lying in one region takes the
+  /// stretch's weight in one addition.
+  struct KernelRow {
+    int dy = 0;
+    int dx_begin = 0;
+    std::vector<double> weight;  // the tap at dx_begin + j
+    std::vector<double> prefix;  // prefix[j]: weight[0] + … + weight[j − 1]
+  };
+  static std::vector<KernelRow> KernelRows(const std::vector<std::pair<cv::Point, double>>& taps) {
+    std::vector<KernelRow> rows;
+    for (const auto& [offset, weight] : taps) {  // Kernel() gives them row by row, dx rising
+      if (rows.empty() || rows.back().dy != offset.y) rows.push_back({offset.y, offset.x, {}, {}});
+      KernelRow& row = rows.back();
+      row.weight.resize(static_cast<std::size_t>(offset.x - row.dx_begin), 0.0);
+      row.weight.push_back(weight);
+    }
+    for (KernelRow& row : rows) {
+      row.prefix.assign(row.weight.size() + 1, 0.0);
+      for (std::size_t j = 0; j < row.weight.size(); ++j) {
+        row.prefix[j + 1] = row.prefix[j] + row.weight[j];
+      }
+    }
+    return rows;
+  }
+
   cv::Point origin_;
   cv::Size size_;
   std::vector<Coverage> coverage_;
   std::vector<Part> parts_;
+  std::vector<RegionRun> runs_;  // per grid pixel
   std::vector<cv::Point> observed_;
   std::vector<std::array<double, 3>> linear_;
 };
