@@ -240,9 +240,9 @@ class TagOnGrid {
   /// The one region holding the whole pixel with these corners, or −1 when it may hold more (its
   /// subsamples decide then). With every corner in front of the camera (t₂ > 0) the pixel maps
   /// onto the convex hull of its corners, so: beyond one side of the square (a half-plane) when
-  /// all four are; inside a red quadrant or the square when all four are (both convex); inside a
-  /// green sector or the black when all four are and a circle around the corners keeps clear of
-  /// the disks cut out of that region (the sector's red disk; the black's four element disks).
+  /// all four are; inside a red quadrant (convex) when all four are; inside a green sector or the
+  /// black when all four are and a circle around the corners keeps clear of the disks cut out of
+  /// that region (the sector's red disk; the black's four element disks).
   static int WholeRegion(const std::array<const PixelCorner*, 4>& corners) {
     constexpr double kMargin = 1e-6;
     std::array<bool, 4> beyond{true, true, true, true};  // u < 0, u > 1, v < 0, v > 1
@@ -261,8 +261,9 @@ class TagOnGrid {
     for (std::size_t k = 1; k < corners.size(); ++k) {
       if (corners[k]->region != region) return -1;
     }
-    const int cell = (region - 2) % kCellsPerElement;
-    if (region != kBlackRegion && cell < kRedQuadrants) return region;
+    const bool red_quadrant =
+        region != kBlackRegion && (region - 2) % kCellsPerElement < kRedQuadrants;
+    if (red_quadrant) return region;
     double reach2 = 0;  // squared radius of the circle around the corners
     for (const PixelCorner* c : corners) {
       reach2 =
