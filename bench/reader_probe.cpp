@@ -4,17 +4,27 @@
 // size and photometry. What the detector's readers can do when the candidate stages are perfect:
 // the ceiling of recall, and the misreads the readers alone would make.
 
+#include <time.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "homography.hpp"
 #include "pintag/scene/rng.hpp"
 #include "read_tag.hpp"
+#include "reading/decision.hpp"
+#include "reading/model_reader.hpp"
+#include "reading/region_fit.hpp"
+#include "reading/region_system.hpp"
 #include "sweep.hpp"
 
 namespace pintag::bench {
@@ -26,8 +36,46 @@ struct Args {
   int draws = 1;         ///< readings per tag (1 without jitter)
   int threads = 0;       ///< 0: all cores
   int max_size_px = 48;
-  bool verbose = false;  ///< also a line per tag left unread
+  bool verbose = false;   ///< also a line per tag left unread
+  bool model = false;     ///< the model reader (reading/model_reader.hpp) instead of ReadCandidate
+  std::string csv;        ///< a row per reading
+  std::string residuals;  ///< with --reader model: a picture of each tag and its luma residual
 };
+
+// The tag (left) and what the model leaves of its luminance (right, ×1000 around grey), ×8.
+void WriteResidual(const std::string& dir, const std::string& name, const cv::Mat& bgr,
+                   const reading::ModelFit& fit) {
+  const cv::Matx33d h =
+      stage::HomographyFromQuad({fit.corners[0], fit.corners[1], fit.corners[2], fit.corners[3]});
+  const reading::TagSamples samples = reading::SampleTag(bgr, h);
+  if (samples.luma.empty()) return;
+  const reading::RegionCoverage coverage(h, reading::CoverageBox(samples.bounds));
+  const reading::Kernel kernel = reading::MakeKernel(fit.luma_blur);
+  const reading::FreeFit<1> free =
+      reading::SolveFree(reading::AccumulateLuma(coverage, samples.luma, kernel));
+  const std::vector<double> predicted =
+      reading::PredictLuma(coverage, samples.luma, kernel, free.colour[0]);
+  const cv::Rect box = cv::Rect(samples.bounds.x - 2, samples.bounds.y - 2,
+                                samples.bounds.width + 4, samples.bounds.height + 4) &
+                       cv::Rect(0, 0, bgr.cols, bgr.rows);
+  cv::Mat residual(box.size(), CV_8UC3, cv::Scalar(128, 128, 128));
+  for (std::size_t i = 0; i < samples.luma.size(); ++i) {
+    const auto& s = samples.luma[i];
+    const int v = std::clamp(static_cast<int>(128 + 1000 * (s.value - predicted[i])), 0, 255);
+    residual.at<cv::Vec3b>(s.y - box.y, s.x - box.x) = cv::Vec3b(v, v, v);
+  }
+  cv::Mat both;
+  cv::hconcat(bgr(box), residual, both);
+  cv::resize(both, both, {}, 8, 8, cv::INTER_NEAREST);
+  cv::imwrite(dir + "/" + name + ".png", both);
+}
+
+/// CPU time of the calling thread, ms (the machine may be busy).
+double ThreadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
 
 struct Count {
   int right = 0, wrong = 0, unread = 0;
@@ -58,6 +106,12 @@ int Main(int argc, char** argv) {
       args.draws = std::max(1, std::atoi(next()));
     } else if (a == "--threads") {
       args.threads = std::atoi(next());
+    } else if (a == "--reader") {
+      args.model = std::string(next()) == "model";
+    } else if (a == "--residuals") {
+      args.residuals = next();
+    } else if (a == "--csv") {
+      args.csv = next();
     } else if (a == "--verbose") {
       args.verbose = true;
     } else if (a == "--max-size") {
@@ -82,6 +136,14 @@ int Main(int argc, char** argv) {
                                            f.tilt_index)];
   };
   std::mutex mutex;
+  FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
+  if (csv != nullptr) {
+    std::fprintf(
+        csv,
+        "frame,size_px,tilt_deg,hard,draw,truth,key,winner,lead,excess,distance,"
+        "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
+        "evaluations,ms,residual,free_residual,refused\n");
+  }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
     for (std::size_t i; (i = next++) < frames.size();) {
@@ -96,21 +158,62 @@ int Main(int argc, char** argv) {
           quad[c] = truth.corners_px[c] +
                     cv::Point2d(rng.normal() * args.jitter_px, rng.normal() * args.jitter_px);
         }
+        std::optional<TagKey> key;
+        if (args.model) {
+          const double t0 = ThreadCpuMs();
+          const reading::ModelReading m = reading::ReadThroughModel(s.bgr, quad);
+          const double ms = ThreadCpuMs() - t0;
+          double corner_error = 0;
+          for (std::size_t k = 0; k < 4; ++k) {
+            corner_error += cv::norm(m.fit.corners[k] - truth.corners_px[k]) / 4;
+          }
+          const auto& dec = m.decision;
+          std::string refused = reading::RefuseCodeword(m);
+          std::replace(refused.begin(), refused.end(), ',', ';');
+          if (!args.residuals.empty() && m.fit.ok) {
+            char name[128];
+            std::snprintf(name, sizeof name, "f%05d-%dpx-%ddeg-%s-d%d-%s", f.index,
+                          kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? "hard" : "mod",
+                          d,
+                          !dec.winner                       ? "none"
+                          : dec.winner->value() == truth.id ? "right"
+                                                            : "wrong");
+            WriteResidual(args.residuals, name, s.bgr, m.fit);
+          }
+          // Until the decision rule is settled, the probe accepts no codeword: it logs them.
+          const std::lock_guard lock(mutex);
+          if (csv != nullptr) {
+            std::fprintf(csv,
+                         "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
+                         "%.3f,%d,%.2f,%.1f,%.1f,%s\n",
+                         f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
+                         d, truth.id, refused.empty() ? dec.winner->value() : -1,
+                         dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
+                         dec.runner_up_distance, m.fit.luma_noise, m.fit.chroma_noise,
+                         m.fit.luma_blur.major, m.fit.luma_blur.minor, m.fit.luma_blur.sharpen,
+                         m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
+                         m.fit.evaluations, ms, dec.residual, dec.free_residual,
+                         refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str());
+          }
+          Count& c = at(f);
+          if (!dec.winner) {
+            ++c.unread;
+          } else if (dec.winner->value() == truth.id) {
+            ++c.right;
+          } else {
+            ++c.wrong;
+          }
+          continue;
+        }
         const stage::CandidateReading r = stage::ReadCandidate(s.bgr, quad, {});
         const std::lock_guard lock(mutex);
         Count& c = at(f);
         if (!r.reading.payload.key) {
           ++c.unread;
           if (args.verbose) {
-            const auto& n = r.reading.nearest;
-            std::printf(
-                "unread f%d %dpx %ddeg %s truth %d: fit %d sigma %.2fx%.2f chroma+%.2f rms %.4f; "
-                "nearest %d lead %.1f excess %.1f err '%s' orient '%s' payload '%s'\n",
-                f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? "hard" : "mod",
-                truth.id, r.reading.fit.ok, r.reading.fit.sigma_major_px,
-                r.reading.fit.sigma_minor_px, r.reading.fit.chroma_extra_px, r.reading.fit.rms,
-                n.winner ? n.winner->value() : -1, n.lead, n.excess, n.error.c_str(),
-                r.reading.orientation.error.c_str(), r.reading.payload.error.c_str());
+            std::printf("unread f%d %dpx %ddeg %s truth %d: %s\n", f.index, kSizesPx[f.size_index],
+                        kTiltsDeg[f.tilt_index], f.hard ? "hard" : "mod", truth.id,
+                        r.reading.payload.error.c_str());
           }
         } else if (r.reading.payload.key->value() == truth.id) {
           ++c.right;
@@ -129,6 +232,7 @@ int Main(int argc, char** argv) {
   for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
+  if (csv != nullptr) std::fclose(csv);
 
   std::printf(
       "%s world, seed %llu, %d frames per bin, jitter %.2f px x %d: right / wrong / unread\n",

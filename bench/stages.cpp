@@ -9,8 +9,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "blur_model.hpp"
-#include "corner_fit.hpp"
 #include "dark_squares.hpp"
 #include "detectors.hpp"
 #include "frame_scan.hpp"
@@ -22,6 +20,7 @@
 #include "pintag/scene/scene.hpp"
 #include "pose.hpp"
 #include "quads.hpp"
+#include "reading/model_reader.hpp"
 #include "red_blobs.hpp"
 #include "redness.hpp"
 #include "sampling.hpp"
@@ -51,13 +50,11 @@ struct Fixture {
     stage::OrientationResult orientation;
   };
   std::vector<Candidate> candidates;  ///< quads that decode
-  /// The blur model's inputs on the candidates small enough for it (it reads squares up to
-  /// 170 px; the corner fit, up to 64 px): the model runs only when direct samples do not decode,
-  /// but these time it on tags whose answer is known.
-  std::vector<stage::BlurFit> fits;
-  std::vector<stage::SettledOrientations> settled;
-  std::vector<stage::Quad> fitted_quads;
-  std::vector<cv::Matx33d> fitted_h;
+  /// The model reader's inputs on the candidates small enough for it (squares up to 170 px): the
+  /// model runs only when direct samples do not decode, but these time it on tags whose answer is
+  /// known.
+  std::vector<reading::Corners> model_corners;
+  std::vector<reading::FittedModel> models;
 };
 
 scene::SceneSpec Spec(Marker marker, bool with_tags) {
@@ -126,12 +123,13 @@ const Fixture& Get() {
         cand.orientation = stage::ReadOrientation(cand.samples, thresholds);
         if (!cand.orientation.ok) continue;
         f.candidates.push_back(cand);
-        stage::BlurFit fit = stage::FitCellsThroughBlur(f.tagged.bgr, cand.h);
-        if (!fit.ok) continue;
-        f.settled.push_back(stage::SettleOrientations(fit));
-        f.fits.push_back(fit);
-        f.fitted_quads.push_back(cand.refined);
-        f.fitted_h.push_back(cand.h);
+        const reading::Corners corners{cand.refined[0], cand.refined[1], cand.refined[2],
+                                       cand.refined[3]};
+        std::string error;
+        reading::FittedModel model = reading::FitModel(f.tagged.bgr, corners, &error);
+        if (!model.fit.ok) continue;
+        f.model_corners.push_back(corners);
+        f.models.push_back(std::move(model));
       }
     }
     return f;
@@ -145,7 +143,7 @@ void ReportCounts(benchmark::State& state) {
   state.counters["blobs"] = static_cast<double>(f.blobs.size());
   state.counters["clusters"] = static_cast<double>(f.clusters.size());
   state.counters["tags"] = static_cast<double>(f.candidates.size());
-  state.counters["blur_fits"] = static_cast<double>(f.fits.size());
+  state.counters["model_fits"] = static_cast<double>(f.models.size());
 }
 
 // Google Benchmark's idioms: BM_ names, and `for (auto _ : state)` whose loop variable is unused.
@@ -337,50 +335,28 @@ void BM_Stage5_SampleCells(benchmark::State& state) {
 }
 BENCHMARK(BM_Stage5_SampleCells)->Unit(benchmark::kMicrosecond);
 
-void BM_Stage5b_FitCellsThroughBlur(benchmark::State& state) {
+void BM_Stage5b_FitModel(benchmark::State& state) {
   const Fixture& f = Get();
   for (auto _ : state) {
-    for (const cv::Matx33d& h : f.fitted_h) {
-      benchmark::DoNotOptimize(stage::FitCellsThroughBlur(f.tagged.bgr, h));
+    for (const reading::Corners& corners : f.model_corners) {
+      std::string error;
+      benchmark::DoNotOptimize(reading::FitModel(f.tagged.bgr, corners, &error));
     }
   }
   ReportCounts(state);
 }
-BENCHMARK(BM_Stage5b_FitCellsThroughBlur)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stage5b_FitModel)->Unit(benchmark::kMillisecond);
 
-void BM_Stage5c_SettleAndReadBits(benchmark::State& state) {
+void BM_Stage5c_DecideCodeword(benchmark::State& state) {
   const Fixture& f = Get();
   for (auto _ : state) {
-    for (const stage::BlurFit& fit : f.fits) {
-      benchmark::DoNotOptimize(stage::ReadBitsThroughBlur(fit, stage::SettleOrientations(fit)));
+    for (const reading::FittedModel& model : f.models) {
+      benchmark::DoNotOptimize(reading::DecideCodeword(model));
     }
   }
   ReportCounts(state);
 }
-BENCHMARK(BM_Stage5c_SettleAndReadBits)->Unit(benchmark::kMicrosecond);
-
-void BM_Stage5d_NearestCodeword(benchmark::State& state) {
-  const Fixture& f = Get();
-  for (auto _ : state) {
-    for (std::size_t i = 0; i < f.fits.size(); ++i) {
-      benchmark::DoNotOptimize(stage::NearestCodewordThroughBlur(f.fits[i], f.settled[i]));
-    }
-  }
-  ReportCounts(state);
-}
-BENCHMARK(BM_Stage5d_NearestCodeword)->Unit(benchmark::kMicrosecond);
-
-void BM_Stage5e_FitCornersThroughBlur(benchmark::State& state) {
-  const Fixture& f = Get();
-  for (auto _ : state) {
-    for (std::size_t i = 0; i < f.fits.size(); ++i) {
-      benchmark::DoNotOptimize(
-          stage::FitCornersThroughBlur(f.tagged.bgr, f.fitted_quads[i], f.fits[i]));
-    }
-  }
-  ReportCounts(state);
-}
-BENCHMARK(BM_Stage5e_FitCornersThroughBlur)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stage5c_DecideCodeword)->Unit(benchmark::kMillisecond);
 
 void BM_Stage6_ReadOrientation(benchmark::State& state) {
   const Fixture& f = Get();

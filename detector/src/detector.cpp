@@ -16,7 +16,6 @@
 #include <thread>
 #include <vector>
 
-#include "blur_model.hpp"
 #include "camera_model.hpp"
 #include "cluster_quads.hpp"
 #include "dark_squares.hpp"
@@ -83,7 +82,7 @@ Detection MakeDetection(stage::Quad quad, const stage::TagReading& reading,
   d.min_known_margin = o.min_known_margin;
   d.bits_from_second_copy = reading.payload.bits_from_second_copy;
   d.bit_from_parity = reading.payload.bit_from_parity;
-  d.read_through_blur_model = reading.throughBlurModel();
+  d.read_through_blur_model = reading.throughModel();
   return d;
 }
 
@@ -139,8 +138,14 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
     assignment = fitted_assignment;
   }
   out->decode_ms += Ms(t2, Clock::now());
-  if (!reading.orientation.ok) return reject(reading.orientation.error);
-  if (!reading.payload.key) return reject(reading.payload.error, &reading.orientation);
+  if (!reading.payload.key) {
+    // The last reader's word: the model's when it was tried, else the direct samples'.
+    if (!reading.orientation.ok) {
+      return reject(reading.payload.error.empty() ? reading.orientation.error
+                                                  : reading.payload.error);
+    }
+    return reject(reading.payload.error, &reading.orientation);
+  }
   std::array<bool, 4> seen{};
   for (int e = 0; e < 4; ++e) seen[e] = assignment.blob[e] >= 0;
   out->detections.push_back(MakeDetection(quad, reading, seen));
@@ -187,9 +192,10 @@ void ProcessDarkSquare(const cv::Mat& bgr, const stage::Quad& quad, const Detect
     out->detections.push_back(MakeDetection(candidate.quad, reading, {}));
   } else if (options.return_rejected) {
     const bool oriented = reading.orientation.ok;
-    out->detections.push_back(Rejected(candidate.quad,
-                                       oriented ? reading.payload.error : reading.orientation.error,
-                                       oriented ? &reading.orientation : nullptr));
+    out->detections.push_back(
+        Rejected(candidate.quad,
+                 reading.payload.error.empty() ? reading.orientation.error : reading.payload.error,
+                 oriented ? &reading.orientation : nullptr));
   }
 }
 

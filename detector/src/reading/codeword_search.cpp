@@ -1,0 +1,176 @@
+#include "reading/codeword_search.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <limits>
+#include <vector>
+
+namespace pintag::reading {
+namespace {
+
+// The levels the format fixes in orientation r: the outer red quadrants, 0 on C0, 1 elsewhere.
+void FixOrientationCells(int r, Labels* labels, std::array<bool, kModelRegions>* fixed) {
+  for (int e = 0; e < kElements; ++e) {
+    for (int q = 0; q < kRedQuadrants; ++q) {
+      if (q == InnerQuadrant(e)) continue;
+      const int j = SampledRegion(32 + 4 * e + q, r);
+      (*labels)[static_cast<std::size_t>(j)] = e == 0 ? kRed0 : kRed1;
+      (*fixed)[static_cast<std::size_t>(j)] = true;
+    }
+  }
+}
+
+}  // namespace
+
+SettledLabellings SettleOrientations(const PaletteModel& model) {
+  SettledLabellings settled;
+  for (int r = 0; r < 4; ++r) {
+    Labels labels{};
+    std::array<bool, kModelRegions> fixed{};
+    labels[kQuietRegion] = kQuietLevel;
+    labels[kBlackRegion] = kBlackLevel;
+    fixed[kQuietRegion] = fixed[kBlackRegion] = true;
+    FixOrientationCells(r, &labels, &fixed);
+    // Every other cell starts on the side of the orientation cells' midpoint in Cb its free colour
+    // lies on: the palette gives both classes the same two levels of yellowness (its ones low in
+    // Cb), so the red orientation cells' zeros and ones set the split for the greens too. (A split
+    // at each class's own mean would make half the greens ones on a tag whose greens are all
+    // zeros, key 0's.)
+    double zero_cb = 0, one_cb = 0;
+    int zeros = 0, ones = 0;
+    for (int j = 2; j < kModelRegions; ++j) {
+      if (!fixed[static_cast<std::size_t>(j)]) continue;
+      const double cb = model.freeColour(j)[1];
+      if (labels[static_cast<std::size_t>(j)] == kRed0) {
+        zero_cb += cb, ++zeros;
+      } else {
+        one_cb += cb, ++ones;
+      }
+    }
+    const double mid = (zero_cb / std::max(zeros, 1) + one_cb / std::max(ones, 1)) / 2;
+    for (int j = 2; j < kModelRegions; ++j) {
+      if (fixed[static_cast<std::size_t>(j)]) continue;
+      const bool green = (j - 2) % kCellsPerElement >= kRedQuadrants;
+      const bool one = model.freeColour(j)[1] < mid;
+      labels[static_cast<std::size_t>(j)] =
+          green ? (one ? kGreen1 : kGreen0) : (one ? kRed1 : kRed0);
+    }
+    SettledLabelling& s = settled[static_cast<std::size_t>(r)];
+    model.settle(&labels, fixed, &s.colours);
+    s.labels = labels;
+    s.colours = model.fit(labels, &s.residual);
+  }
+  return settled;
+}
+
+CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabellings& settled,
+                                 std::size_t exact) {
+  CodewordDecision decision;
+  double free_best = std::numeric_limits<double>::infinity();
+  for (const SettledLabelling& s : settled) free_best = std::min(free_best, s.residual);
+
+  struct Candidate {
+    double cost;
+    int key;
+    int turns;
+  };
+  std::vector<Candidate> ranked;
+  ranked.reserve(exact + 1);
+  const std::vector<std::uint64_t>& book = Codebook();
+  for (int r = 0; r < 4; ++r) {
+    const SettledLabelling& h = settled[static_cast<std::size_t>(r)];
+    std::array<double, kCanonicalCells> cost{};
+    std::uint64_t read = 0;
+    for (int c = 0; c < kCanonicalCells; ++c) {
+      const int j = SampledRegion(c, r);
+      cost[static_cast<std::size_t>(c)] = model.flipCost(h.labels, h.colours, j);
+      if (IsOneLevel(h.labels[static_cast<std::size_t>(j)])) read |= std::uint64_t{1} << c;
+    }
+    // The summed cost of any set of differing cells, a byte of the mask at a time.
+    std::array<std::array<double, 256>, kCanonicalCells / 8> by_byte{};
+    for (std::size_t byte = 0; byte < by_byte.size(); ++byte) {
+      for (unsigned v = 1; v < 256; ++v) {
+        by_byte[byte][v] = by_byte[byte][v & (v - 1)] +
+                           cost[byte * 8 + static_cast<std::size_t>(std::countr_zero(v))];
+      }
+    }
+    for (int k = 0; k < kKeyCount; ++k) {
+      const std::uint64_t differ = book[static_cast<std::size_t>(k)] ^ read;
+      double total = 0;
+      for (std::size_t byte = 0; byte < by_byte.size(); ++byte) {
+        total += by_byte[byte][(differ >> (8 * byte)) & 0xFFU];
+      }
+      if (ranked.size() < exact || total < ranked.back().cost) {
+        if (ranked.size() == exact) ranked.pop_back();
+        const Candidate candidate{total, k, r};
+        ranked.insert(std::upper_bound(
+                          ranked.begin(), ranked.end(), candidate,
+                          [](const Candidate& x, const Candidate& y) { return x.cost < y.cost; }),
+                      candidate);
+      }
+    }
+  }
+
+  struct Scored {
+    double residual;
+    Candidate candidate;
+    PaletteColours colours;
+  };
+  std::vector<Scored> scored;
+  std::vector<bool> is_scored(4 * static_cast<std::size_t>(kKeyCount));
+  const auto slot = [](int turns, int key) {
+    return static_cast<std::size_t>(turns) * kKeyCount + static_cast<std::size_t>(key);
+  };
+  const auto score = [&](const Candidate& c) {
+    is_scored[slot(c.turns, c.key)] = true;
+    Labels labels{};
+    labels[kQuietRegion] = kQuietLevel;
+    labels[kBlackRegion] = kBlackLevel;
+    const std::uint64_t code = book[static_cast<std::size_t>(c.key)];
+    for (int cell = 0; cell < kCanonicalCells; ++cell) {
+      const bool one = ((code >> cell) & 1U) != 0;
+      labels[static_cast<std::size_t>(SampledRegion(cell, c.turns))] =
+          cell < 32 ? (one ? kGreen1 : kGreen0) : (one ? kRed1 : kRed0);
+    }
+    double residual = 0;
+    const PaletteColours colours = model.fit(labels, &residual);
+    scored.push_back({residual, c, colours});
+  };
+  for (const Candidate& c : ranked) score(c);
+  const auto by_residual = [](const Scored& a, const Scored& b) { return a.residual < b.residual; };
+  std::sort(scored.begin(), scored.end(), by_residual);
+  // A lead over the runner-up among those scored says nothing about codewords the ranking left
+  // out: every codeword within 7 cells of the winner (in its orientation) is scored too.
+  constexpr int kNeighbourCells = 7;
+  for (int round = 0; round < 4 && !scored.empty(); ++round) {
+    const Candidate winner = scored[0].candidate;
+    const std::uint64_t winner_code = book[static_cast<std::size_t>(winner.key)];
+    const std::size_t before = scored.size();
+    for (int k = 0; k < kKeyCount; ++k) {
+      if (is_scored[slot(winner.turns, k)] ||
+          std::popcount(book[static_cast<std::size_t>(k)] ^ winner_code) > kNeighbourCells) {
+        continue;
+      }
+      score({0, k, winner.turns});
+    }
+    if (scored.size() == before) break;
+    std::sort(scored.begin(), scored.end(), by_residual);
+    if (scored[0].candidate.key == winner.key && scored[0].candidate.turns == winner.turns) break;
+  }
+  decision.scored = static_cast<int>(scored.size());
+  if (scored.size() < 2) return decision;
+  const Scored& best = scored[0];
+  decision.winner = TagKey(static_cast<std::uint16_t>(best.candidate.key));
+  decision.quarter_turns = best.candidate.turns;
+  decision.residual = best.residual;
+  decision.lead = scored[1].residual - best.residual;
+  decision.excess = best.residual - free_best;
+  decision.colours = best.colours;
+  const std::uint64_t a = book[static_cast<std::size_t>(best.candidate.key)];
+  const std::uint64_t b = book[static_cast<std::size_t>(scored[1].candidate.key)];
+  decision.runner_up_distance =
+      scored[1].candidate.turns == best.candidate.turns ? std::popcount(a ^ b) : kCanonicalCells;
+  return decision;
+}
+
+}  // namespace pintag::reading

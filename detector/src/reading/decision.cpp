@@ -1,0 +1,44 @@
+#include "reading/decision.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include "homography.hpp"
+
+namespace pintag::reading {
+
+std::string RefuseCodeword(const ModelReading& reading) {
+  const CodewordDecision& d = reading.decision;
+  if (!reading.fit.ok) return reading.error.empty() ? "no model fitted" : reading.error;
+  if (!d.winner) return "no codeword candidates";
+  const Corners& q = reading.fit.corners;
+  if (stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx) {
+    return "square too small to read its codeword";
+  }
+  if (d.lead < kMinLead) return "no codeword clearly nearest";
+  if (d.excess > kMaxExcess) return "codeword explains the pixels worse than its cells read freely";
+  // The colours must be a tag's: every cell level between the black and the quiet zone in
+  // luminance, and red redder (higher Cr) than green by a clear step (the palette's reds sit at
+  // Cr +0.34, its greens at −0.07 and −0.30; casts move all four together).
+  const auto& c = d.colours;
+  const std::uint64_t code = Codebook()[d.winner->value()];
+  const std::uint64_t greens = code & 0xFFFFFFFFU;
+  std::vector<int> levels = {kRed0, kRed1};
+  if (greens != 0xFFFFFFFFU) levels.push_back(kGreen0);
+  if (greens != 0) levels.push_back(kGreen1);
+  const double least_red_cr = std::min(c[kRed0][2], c[kRed1][2]);
+  double most_green_cr = -1;
+  for (const int level : levels) {
+    const double y = c[static_cast<std::size_t>(level)][0];
+    if (!(y > c[kBlackLevel][0] && y < c[kQuietLevel][0]))
+      return "codeword's colours are not a tag's";
+    if (level == kGreen0 || level == kGreen1) {
+      most_green_cr = std::max(most_green_cr, c[static_cast<std::size_t>(level)][2]);
+    }
+  }
+  if (least_red_cr - most_green_cr < kMinRedOverGreenCr)
+    return "codeword's colours are not a tag's";
+  return {};
+}
+
+}  // namespace pintag::reading

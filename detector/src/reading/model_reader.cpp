@@ -1,0 +1,293 @@
+#include "reading/model_reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "homography.hpp"
+#include "reading/region_fit.hpp"
+#include "reading/region_system.hpp"
+#include "reading/tag_samples.hpp"
+
+namespace pintag::reading {
+namespace {
+
+constexpr std::size_t kSearchSamples = 300;  // luminance samples while searching the blur
+constexpr std::size_t kCornerSamples = 600;  // … while refining the corners
+constexpr std::size_t kFinalSamples = 2500;  // … of the final fit
+constexpr double kMaxSigmaPx = 2.7;
+
+cv::Matx33d Homography(const Corners& c) {
+  return stage::HomographyFromQuad({c[0], c[1], c[2], c[3]});
+}
+
+std::size_t StrideFor(std::size_t samples, std::size_t wanted) {
+  return std::max<std::size_t>(1, samples / wanted);
+}
+
+// The observations and the grid they are modelled on, for one placement of the square.
+struct Placement {
+  const TagSamples& samples;
+  RegionCoverage coverage;
+  Placement(const TagSamples& s, const Corners& corners)
+      : samples(s), coverage(Homography(corners), CoverageBox(s.bounds)) {}
+};
+
+double LumaResidual(const Placement& p, const LumaBlur& blur, std::size_t stride,
+                    bool by_position = false) {
+  const FreeFit<1> fit =
+      SolveFree(AccumulateLuma(p.coverage, p.samples.luma, MakeKernel(blur), stride, by_position));
+  return fit.ok ? fit.residual[0] : 1e300;
+}
+
+// The luminance blur, by a small search on the free model's residual. Round blurs first (what
+// the corners are refined with), then, with `shape`, elongated ones around the best, steps of each
+// axis and the angle, and sharpening.
+LumaBlur SearchLumaBlur(const Placement& p, bool shape, const LumaBlur& from, int* evaluations) {
+  const std::size_t stride = StrideFor(p.samples.luma.size(), kSearchSamples);
+  LumaBlur best = from;
+  double best_residual = 1e300;
+  const auto consider = [&](LumaBlur blur) {
+    blur.major = std::clamp(blur.major, 0.25, kMaxSigmaPx);
+    blur.minor = std::clamp(blur.minor, 0.25, blur.major);
+    ++*evaluations;
+    const double r = LumaResidual(p, blur, stride);
+    if (r < best_residual) best_residual = r, best = blur;
+  };
+  if (!shape) {
+    for (const double sigma : {0.35, 0.6, 0.9, 1.3, 1.9, 2.7}) consider({sigma, sigma, 0, 0, 1});
+    const double sigma = best.major;
+    for (const double f : {0.8, 1.2}) consider({sigma * f, sigma * f, 0, 0, 1});
+    return best;
+  }
+  consider(from);
+  const LumaBlur round = best;
+  for (const double angle : {0.0, 45.0, 90.0, 135.0}) {
+    consider({round.major * 1.6, round.minor / 1.25, angle, 0, 1});
+  }
+  const LumaBlur centre = best;
+  for (const double f : {1.25, 0.8}) {
+    LumaBlur b = centre;
+    b.major *= f;
+    consider(b);
+    b = centre;
+    b.minor *= f;
+    consider(b);
+  }
+  if (centre.major > centre.minor * 1.1) {
+    for (const double turn : {22.5, -22.5}) {
+      LumaBlur b = centre;
+      b.angle_deg += turn;
+      consider(b);
+    }
+  }
+  const LumaBlur unsharpened = best;
+  for (const double amount : {0.5, 1.0}) {
+    LumaBlur b = unsharpened;
+    b.sharpen = amount;
+    consider(b);
+  }
+  return best;
+}
+
+ChromaBlur SearchChromaBlur(const Placement& p, int* evaluations) {
+  ChromaBlur best;
+  double best_residual = 1e300;
+  for (const double sigma : {0.3, 0.6, 0.9, 1.3, 1.8, 2.4}) {
+    ++*evaluations;
+    const FreeFit<2> fit =
+        SolveFree(AccumulateChroma(p.coverage, p.samples.chroma, MakeKernel(ChromaBlur{sigma})));
+    const double r = fit.ok ? fit.residual[0] + fit.residual[1] : 1e300;
+    if (r < best_residual) best_residual = r, best = {sigma};
+  }
+  return best;
+}
+
+// Gauss–Newton on the eight corner coordinates, the blur held, the free colours re-solved at each
+// step. The edge fit puts an edge where a blurred step crosses its midpoint; on a small, blurred or
+// steep tag the elements and the quiet zone pull that crossing a pixel or more, and cells 3 px
+// across do not survive that. The Jacobian is the Lucas–Kanade one: moving a corner moves each
+// tag point by the homography's change, and the predicted luminance there changes by its
+// gradient along that motion (colours held).
+Corners RefineCorners(const TagSamples& samples, const Corners& start, const LumaBlur& blur,
+                      int* evaluations) {
+  const Kernel kernel = MakeKernel(blur);
+  std::vector<LumaSample> used;
+  const std::size_t stride = StrideFor(samples.luma.size(), kCornerSamples);
+  for (std::size_t i = 0; i < samples.luma.size(); i += stride) used.push_back(samples.luma[i]);
+  const cv::Rect box = CoverageBox(samples.bounds);
+  // Every pixel of the samples' bounds and a pixel around them, for the predicted image's gradient.
+  const cv::Rect dense_box(samples.bounds.x - 1, samples.bounds.y - 1, samples.bounds.width + 2,
+                           samples.bounds.height + 2);
+  std::vector<LumaSample> dense;
+  dense.reserve(static_cast<std::size_t>(dense_box.area()));
+  for (int y = dense_box.y; y < dense_box.y + dense_box.height; ++y) {
+    for (int x = dense_box.x; x < dense_box.x + dense_box.width; ++x) dense.push_back({x, y, 0});
+  }
+  const auto solve = [&](const Corners& c, std::array<double, kModelRegions>* colours,
+                         const RegionCoverage** keep, std::unique_ptr<RegionCoverage>* owner) {
+    auto coverage = std::make_unique<RegionCoverage>(Homography(c), box);
+    const FreeFit<1> fit = SolveFree(AccumulateLuma(*coverage, used, kernel));
+    ++*evaluations;
+    if (!fit.ok) return 1e300;
+    *colours = fit.colour[0];
+    *keep = coverage.get();
+    *owner = std::move(coverage);
+    return fit.residual[0];
+  };
+  const double side = stage::MeanSidePx(Homography(start));
+  const double max_total = std::clamp(0.08 * side, 1.0, 3.0);  // px, per corner
+  Corners corners = start;
+  std::array<double, kModelRegions> colours{};
+  const RegionCoverage* coverage = nullptr;
+  std::unique_ptr<RegionCoverage> owned;
+  double residual = solve(corners, &colours, &coverage, &owned);
+  if (coverage == nullptr) return start;
+  double lambda = 1e-3;
+  constexpr double kStep = 0.05;  // px, the homography's change per coordinate
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const std::vector<double> image = PredictLuma(*coverage, dense, kernel, colours);
+    const auto at = [&](int x, int y) {
+      return image[static_cast<std::size_t>((y - dense_box.y) * dense_box.width + x - dense_box.x)];
+    };
+    const cv::Matx33d h = Homography(corners);
+    const cv::Matx33d to_tag = h.inv();
+    std::array<cv::Matx33d, 8> moved;
+    for (int k = 0; k < 8; ++k) {
+      Corners c = corners;
+      (k % 2 == 0 ? c[static_cast<std::size_t>(k / 2)].x : c[static_cast<std::size_t>(k / 2)].y) +=
+          kStep;
+      moved[static_cast<std::size_t>(k)] = Homography(c);
+    }
+    cv::Matx<double, 8, 8> jtj = cv::Matx<double, 8, 8>::zeros();
+    cv::Matx<double, 8, 1> jtr = cv::Matx<double, 8, 1>::zeros();
+    for (const LumaSample& s : used) {
+      const double gx = (at(s.x + 1, s.y) - at(s.x - 1, s.y)) / 2;
+      const double gy = (at(s.x, s.y + 1) - at(s.x, s.y - 1)) / 2;
+      const cv::Vec3d t = to_tag * cv::Vec3d(s.x, s.y, 1);
+      std::array<double, 8> j{};
+      for (int k = 0; k < 8; ++k) {
+        const cv::Vec3d q = moved[static_cast<std::size_t>(k)] * t;
+        const double dx = (q[0] / q[2] - s.x) / kStep, dy = (q[1] / q[2] - s.y) / kStep;
+        j[static_cast<std::size_t>(k)] = -(gx * dx + gy * dy);
+      }
+      const double r = s.value - at(s.x, s.y);
+      for (int a = 0; a < 8; ++a) {
+        jtr(a) += j[static_cast<std::size_t>(a)] * r;
+        for (int b = a; b < 8; ++b)
+          jtj(a, b) += j[static_cast<std::size_t>(a)] * j[static_cast<std::size_t>(b)];
+      }
+    }
+    for (int a = 0; a < 8; ++a) {
+      for (int b = 0; b < a; ++b) jtj(a, b) = jtj(b, a);
+    }
+    bool improved = false;
+    double largest = 0;
+    for (int attempt = 0; attempt < 3 && !improved; ++attempt) {
+      cv::Matx<double, 8, 8> damped = jtj;
+      for (int a = 0; a < 8; ++a) damped(a, a) *= 1 + lambda;
+      cv::Matx<double, 8, 1> delta;
+      if (!cv::solve(damped, jtr, delta, cv::DECOMP_CHOLESKY)) break;
+      Corners next = corners;
+      largest = 0;
+      for (std::size_t k = 0; k < 4; ++k) {
+        cv::Point2d d(delta(static_cast<int>(2 * k)), delta(static_cast<int>(2 * k + 1)));
+        const double n = cv::norm(d);
+        if (n > 1.0) d *= 1.0 / n;  // at most a pixel per step
+        next[k] += d;
+        const cv::Point2d total = next[k] - start[k];
+        if (cv::norm(total) > max_total) next[k] = start[k] + total * (max_total / cv::norm(total));
+        largest = std::max(largest, cv::norm(next[k] - corners[k]));
+      }
+      std::array<double, kModelRegions> next_colours{};
+      const RegionCoverage* next_coverage = nullptr;
+      std::unique_ptr<RegionCoverage> next_owned;
+      const double next_residual = solve(next, &next_colours, &next_coverage, &next_owned);
+      if (next_residual < residual) {
+        corners = next, colours = next_colours, residual = next_residual;
+        coverage = next_coverage, owned = std::move(next_owned);
+        lambda = std::max(1e-4, lambda / 4);
+        improved = true;
+      } else {
+        lambda *= 8;
+      }
+    }
+    if (!improved || largest < 0.02) break;
+  }
+  return corners;
+}
+
+}  // namespace
+
+FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error) {
+  FittedModel model;
+  ModelFit& fit = model.fit;
+  fit.corners = start;
+  const double side = stage::MeanSidePx(Homography(start));
+  if (side > kModelMaxSidePx || side < 8) {
+    *error = "square too large or too small for the model";
+    return model;
+  }
+  const TagSamples samples = SampleTag(bgr, Homography(start));
+  if (samples.luma.size() < 64 || samples.chroma.size() < 16) {
+    *error = "too few samples for the model";
+    return model;
+  }
+  {
+    const Placement placed(samples, start);
+    fit.luma_blur = SearchLumaBlur(placed, /*shape=*/false, {}, &fit.evaluations);
+  }
+  if (side <= kRefineCornersMaxSidePx) {
+    fit.corners = RefineCorners(samples, start, fit.luma_blur, &fit.evaluations);
+    for (std::size_t k = 0; k < 4; ++k) {
+      fit.corner_shift = std::max(fit.corner_shift, cv::norm(fit.corners[k] - start[k]));
+    }
+  }
+  const Placement placed(samples, fit.corners);
+  fit.luma_blur = SearchLumaBlur(placed, /*shape=*/true, fit.luma_blur, &fit.evaluations);
+  fit.chroma_blur = SearchChromaBlur(placed, &fit.evaluations);
+  model.luma = AccumulateLuma(placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
+                              StrideFor(samples.luma.size(), kFinalSamples));
+  model.chroma = AccumulateChroma(placed.coverage, samples.chroma, MakeKernel(fit.chroma_blur));
+  const FreeFit<1> free_luma = SolveFree(model.luma);
+  const FreeFit<2> free_chroma = SolveFree(model.chroma);
+  if (!free_luma.ok || !free_chroma.ok) {
+    *error = "model fit failed";
+    return model;
+  }
+  // Each channel's noise: the free model's residual per degree of freedom (model error included).
+  const auto variance = [](double residual, std::size_t samples_used) {
+    return std::max(residual, 1e-12) /
+           std::max(1.0, static_cast<double>(samples_used) - kModelRegions);
+  };
+  const double luma_variance = variance(free_luma.residual[0], model.luma.samples);
+  const double chroma_variance =
+      variance(free_chroma.residual[0] + free_chroma.residual[1], 2 * model.chroma.samples);
+  fit.luma_noise = std::sqrt(luma_variance);
+  fit.chroma_noise = std::sqrt(chroma_variance);
+  fit.luma_samples = model.luma.samples;
+  fit.chroma_samples = model.chroma.samples;
+  model.weights = {1 / luma_variance, 1 / chroma_variance, 1 / chroma_variance};
+  model.free_residual = free_luma.residual[0] / luma_variance +
+                        (free_chroma.residual[0] + free_chroma.residual[1]) / chroma_variance;
+  fit.ok = true;
+  return model;
+}
+
+CodewordDecision DecideCodeword(const FittedModel& fitted) {
+  if (!fitted.fit.ok) return {};
+  const PaletteModel model(fitted.luma, fitted.chroma, fitted.weights);
+  CodewordDecision decision = SearchCodewords(model, SettleOrientations(model));
+  decision.free_residual = fitted.free_residual;
+  return decision;
+}
+
+ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners) {
+  ModelReading reading;
+  const FittedModel fitted = FitModel(bgr, corners, &reading.error);
+  reading.fit = fitted.fit;
+  if (fitted.fit.ok) reading.decision = DecideCodeword(fitted);
+  return reading;
+}
+
+}  // namespace pintag::reading

@@ -1,0 +1,70 @@
+#pragma once
+// Reading a tag through a model of what the photo holds. The tag's regions are laid on the pixel
+// grid; luminance (every pixel) and colour (Cb and Cr, one sample per 2 × 2 pixels, as a JPEG
+// keeps them) are each the blurred coverage of the regions times their colours, with a blur of
+// their own found by search (luminance: defocus, motion and a phone's sharpening; colour: the
+// 4:2:0 block and whatever else smooths it). The corners are moved to where the model explains the
+// luminance best, and the key is decided over the whole code at once (codeword_search.hpp), in
+// units of each channel's own noise.
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+
+#include "reading/codeword_search.hpp"
+#include "reading/psf.hpp"
+#include "reading/region_system.hpp"
+
+namespace pintag::reading {
+
+/// Corners C0 … C3 of a square, image pixels.
+using Corners = std::array<cv::Point2d, 4>;
+
+struct ModelFit {
+  bool ok = false;
+  Corners corners{};        ///< where the model put the square (the candidate's, refined)
+  double corner_shift = 0;  ///< largest corner movement of the refinement, px
+  LumaBlur luma_blur;
+  ChromaBlur chroma_blur;
+  double luma_noise = 0;    ///< residual standard deviation of the free model, luminance (0 … 1)
+  double chroma_noise = 0;  ///< … Cb and Cr together
+  std::size_t luma_samples = 0;
+  std::size_t chroma_samples = 0;
+  int evaluations = 0;  ///< models solved
+};
+
+/// The fitted model's normal equations and channel weights (1 / noise variance): all the decision
+/// needs.
+struct FittedModel {
+  ModelFit fit;
+  LumaSystem luma;
+  ChromaSystem chroma;
+  std::array<double, 3> weights{};  ///< luminance, Cb, Cr
+  double free_residual = 0;         ///< the free model's weighted residual (its degrees of freedom)
+};
+
+struct ModelReading {
+  ModelFit fit;
+  CodewordDecision decision;
+  std::string error;  ///< set when no model could be fitted
+};
+
+/// Largest square side (px) read this way: above it cells are several pixels wide, direct samples
+/// read them, and the model's cost grows with the area.
+inline constexpr double kModelMaxSidePx = 170;
+/// Largest side (px) whose corners the model refines: above it the edge fit places them well
+/// enough for cells of 7 px and more.
+inline constexpr double kRefineCornersMaxSidePx = 72;
+
+/// Fits the model to the square with `corners` in `bgr` (8-bit BGR): blur search, corners refined
+/// (squares up to kRefineCornersMaxSidePx), final fit. fit.ok false and `error` set when it cannot.
+FittedModel FitModel(const cv::Mat& bgr, const Corners& corners, std::string* error);
+
+/// The codeword that explains a fitted model best, and by how much (codeword_search.hpp).
+CodewordDecision DecideCodeword(const FittedModel& model);
+
+/// FitModel, then DecideCodeword.
+ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners);
+
+}  // namespace pintag::reading

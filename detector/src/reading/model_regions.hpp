@@ -1,0 +1,52 @@
+#pragma once
+// The tag as the reading model sees it: 50 regions (the quiet zone, the black square, then per
+// element its 4 red quadrants and 8 green sectors), the six colours a printed tag has, and the
+// canonical order of the 48 cells in which codewords are bit masks.
+
+#include <cstdint>
+#include <vector>
+
+#include "pintag/codec/cells.hpp"
+
+namespace pintag::reading {
+
+inline constexpr int kCellsPerElement = kRedQuadrants + kGreenSectors;
+inline constexpr int kModelRegions = 2 + kElements * kCellsPerElement;
+inline constexpr int kQuietRegion = 0;
+inline constexpr int kBlackRegion = 1;
+
+inline constexpr int RedRegion(int element, int quadrant) {
+  return 2 + element * kCellsPerElement + quadrant;
+}
+inline constexpr int GreenRegion(int element, int sector) {
+  return 2 + element * kCellsPerElement + kRedQuadrants + sector;
+}
+
+/// The model region of a point in tag units: 0 outside the square, 1 black, then element e's red
+/// quadrant q at RedRegion(e, q) and green sector s at GreenRegion(e, s) (geometry::LocateCell's
+/// cells, found by comparisons instead of atan2: this runs for every sub-sample of a tag's pixels).
+int ModelRegionAt(double x, double y);
+
+/// The six colours of a printed tag, the levels a region can take.
+enum Level : std::uint8_t { kQuietLevel, kBlackLevel, kRed0, kRed1, kGreen0, kGreen1, kLevels };
+
+inline constexpr int Flipped(int level) {
+  return level == kRed0 ? kRed1 : level == kRed1 ? kRed0 : level == kGreen0 ? kGreen1 : kGreen0;
+}
+inline constexpr bool IsOneLevel(int level) {
+  return level == kRed1 || level == kGreen1;
+}
+
+/// Canonical cells: green (e, s) at 8 e + s, red (e, q) at 32 + 4 e + q, as the codec's
+/// orientation has them.
+inline constexpr int kCanonicalCells = kElements * kCellsPerElement;
+static_assert(kCanonicalCells == 48);
+
+/// The region of canonical cell `canonical` when element `quarter_turns` of the sampled frame is
+/// C0.
+int SampledRegion(int canonical, int quarter_turns);
+
+/// Every key's 48 cells as a bit mask in canonical order (bit c set: cell c is a one), built once.
+const std::vector<std::uint64_t>& Codebook();
+
+}  // namespace pintag::reading

@@ -1,0 +1,65 @@
+#pragma once
+// The printed tag's own model: six colours (quiet zone, black, red 0 and 1, green 0 and 1), each
+// region taking one of its class's two. Given a labelling of the 50 regions, the colours follow
+// by least squares from the free model's normal equations, without touching the pixels again; so
+// does the residual, channel by channel, weighted by each channel's noise.
+
+#include <array>
+
+#include "reading/region_system.hpp"
+
+namespace pintag::reading {
+
+using Labels = std::array<int, kModelRegions>;
+
+/// The palette's order (DESIGN.md's colours): a class's one is brighter and yellower (lower Cb)
+/// than its zero; green 1 by 0.19 of the black-to-white luminance step and 0.36 in Cb, red 1 by
+/// 0.13 and 0.35. Casts, exposure and blur shrink the steps; a third of the smaller luminance one
+/// and a sixth of the Cb one are held as least steps.
+inline constexpr double kMinLumaStep = 0.04;  ///< of the quiet zone's luminance over the black's
+inline constexpr double kMinCbStep = 0.06;
+/// Green's least steps as parts of red's (the palette's: 1.46 in luminance, 1.0 in Cb).
+inline constexpr double kGreenLumaStepOfRed = 0.75;
+inline constexpr double kGreenCbStepOfRed = 0.5;
+/// Per level, Y′, Cb, Cr.
+using PaletteColours = std::array<std::array<double, 3>, kLevels>;
+
+class PaletteModel {
+ public:
+  /// `weights`: each channel's (Y′, Cb, Cr) residual is multiplied by its weight (1 / its noise
+  /// variance), so that residuals are in noise units.
+  PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma, std::array<double, 3> weights);
+
+  /// The colours that explain the samples best under `labels`, each class's one held at least the
+  /// least steps above its zero, and with `residual` the weighted residual they leave (yᵀy − 2 xᵀb
+  /// + xᵀBx per channel, from the labels' 6 × 6 equations).
+  PaletteColours fit(const Labels& labels, double* residual = nullptr) const;
+
+  /// Change of the weighted residual if region `j` took the other level of its class, colours held.
+  double flipCost(const Labels& labels, const PaletteColours& colours, int j) const;
+
+  /// Iterated conditional modes: flips every free region that lowers the residual, refits the
+  /// colours, until nothing changes (or a few rounds).
+  void settle(Labels* labels, const std::array<bool, kModelRegions>& fixed,
+              PaletteColours* colours) const;
+
+  /// The free fit's colour of region `j` (Y′, Cb, Cr), for starting labellings.
+  const std::array<double, 3>& freeColour(int j) const {
+    return free_colour_[static_cast<std::size_t>(j)];
+  }
+
+ private:
+  double ata(int system, int j, int k) const {
+    return ata_[static_cast<std::size_t>(system)][static_cast<std::size_t>(j * kModelRegions + k)];
+  }
+  // Channel c's system: Y′ is the luma one, Cb and Cr share the chroma one.
+  static int SystemOf(int channel) { return channel == 0 ? 0 : 1; }
+
+  std::array<std::array<double, kModelRegions * kModelRegions>, 2> ata_{};
+  std::array<std::array<double, kModelRegions>, 3> aty_{};
+  std::array<double, 3> yty_{};
+  std::array<double, 3> weights_{};
+  std::array<std::array<double, 3>, kModelRegions> free_colour_{};
+};
+
+}  // namespace pintag::reading

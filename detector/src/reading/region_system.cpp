@@ -1,0 +1,111 @@
+#include "reading/region_system.hpp"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace pintag::reading {
+namespace {
+
+// A spatial hash of an image pixel: picking pixels by it thins them evenly, without the rows or
+// columns a linear rule such as x + 3 y would pick for some strides.
+std::uint32_t PositionHash(int x, int y) {
+  std::uint32_t h =
+      static_cast<std::uint32_t>(x) * 73856093U ^ static_cast<std::uint32_t>(y) * 19349663U;
+  h ^= h >> 13;
+  h *= 0x5bd1e995U;
+  return h ^ (h >> 15);
+}
+
+template <int kChannels>
+void AddSample(RegionSystem<kChannels>& system, const SampleWeights& w,
+               const std::array<double, kChannels>& values) {
+  const std::vector<int>& touched = w.touched;
+  for (std::size_t a = 0; a < touched.size(); ++a) {
+    const int ra = touched[a];
+    const double wa = w.weight[static_cast<std::size_t>(ra)];
+    for (std::size_t b = a; b < touched.size(); ++b) {
+      const int rb = touched[b];
+      system.ata[static_cast<std::size_t>(std::min(ra, rb) * kModelRegions + std::max(ra, rb))] +=
+          wa * w.weight[static_cast<std::size_t>(rb)];
+    }
+    for (int ch = 0; ch < kChannels; ++ch) {
+      system.aty[static_cast<std::size_t>(ch)][static_cast<std::size_t>(ra)] +=
+          wa * values[static_cast<std::size_t>(ch)];
+    }
+  }
+  for (int ch = 0; ch < kChannels; ++ch) {
+    system.yty[static_cast<std::size_t>(ch)] +=
+        values[static_cast<std::size_t>(ch)] * values[static_cast<std::size_t>(ch)];
+  }
+  ++system.samples;
+}
+
+template <int kChannels>
+void Symmetrise(RegionSystem<kChannels>& system) {
+  for (int a = 0; a < kModelRegions; ++a) {
+    for (int b = 0; b < a; ++b) {
+      system.ata[static_cast<std::size_t>(a * kModelRegions + b)] =
+          system.ata[static_cast<std::size_t>(b * kModelRegions + a)];
+    }
+  }
+}
+
+}  // namespace
+
+cv::Rect CoverageBox(const cv::Rect& bounds) {
+  const int reach = kMaxKernelRadius + 1;
+  return {bounds.x - reach, bounds.y - reach, bounds.width + 2 * reach + 1,
+          bounds.height + 2 * reach + 1};
+}
+
+LumaSystem AccumulateLuma(const RegionCoverage& coverage, const std::vector<LumaSample>& samples,
+                          const Kernel& kernel, std::size_t stride, bool by_position) {
+  LumaSystem system;
+  SampleWeights w;
+  stride = std::max<std::size_t>(1, stride);
+  for (std::size_t i = 0; i < samples.size(); i += by_position ? 1 : stride) {
+    const LumaSample& s = samples[i];
+    if (by_position && PositionHash(s.x, s.y) % stride != 0) continue;
+    coverage.blurred(kernel, s.x, s.y, w);
+    AddSample<1>(system, w, {s.value});
+    w.clear();
+  }
+  Symmetrise(system);
+  return system;
+}
+
+ChromaSystem AccumulateChroma(const RegionCoverage& coverage,
+                              const std::vector<ChromaSample>& samples, const Kernel& kernel,
+                              std::size_t stride) {
+  ChromaSystem system;
+  SampleWeights w;
+  stride = std::max<std::size_t>(1, stride);
+  for (std::size_t i = 0; i < samples.size(); i += stride) {
+    const ChromaSample& s = samples[i];
+    coverage.blurred(kernel, s.x, s.y, w);
+    AddSample<2>(system, w, {s.cb, s.cr});
+    w.clear();
+  }
+  Symmetrise(system);
+  return system;
+}
+
+std::vector<double> PredictLuma(const RegionCoverage& coverage,
+                                const std::vector<LumaSample>& samples, const Kernel& kernel,
+                                const std::array<double, kModelRegions>& colours) {
+  std::vector<double> predicted;
+  predicted.reserve(samples.size());
+  SampleWeights w;
+  for (const LumaSample& s : samples) {
+    coverage.blurred(kernel, s.x, s.y, w);
+    double v = 0;
+    for (const int r : w.touched) {
+      v += w.weight[static_cast<std::size_t>(r)] * colours[static_cast<std::size_t>(r)];
+    }
+    predicted.push_back(v);
+    w.clear();
+  }
+  return predicted;
+}
+
+}  // namespace pintag::reading

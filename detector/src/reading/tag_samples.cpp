@@ -1,0 +1,87 @@
+#include "reading/tag_samples.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+namespace pintag::reading {
+namespace {
+
+bool WithinMargin(const cv::Matx33d& to_tag, double x, double y) {
+  const cv::Vec3d t = to_tag * cv::Vec3d(x, y, 1);
+  if (!(t[2] > 0)) return false;
+  const double u = t[0] / t[2], v = t[1] / t[2];
+  return u >= -kObservedMargin && u <= 1 + kObservedMargin && v >= -kObservedMargin &&
+         v <= 1 + kObservedMargin;
+}
+
+const std::array<double, 256>& LinearTable() {
+  static const std::array<double, 256> table = [] {
+    std::array<double, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      const double v = i / 255.0;
+      t[static_cast<std::size_t>(i)] =
+          v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+    }
+    return t;
+  }();
+  return table;
+}
+
+double Luminance(const std::uint8_t* bgr) {
+  const auto& lin = LinearTable();
+  return 0.2126 * lin[bgr[2]] + 0.7152 * lin[bgr[1]] + 0.0722 * lin[bgr[0]];
+}
+
+// BT.601, full range, as JPEG: Cb = (B′ − Y′) / 1.772, Cr = (R′ − Y′) / 1.402.
+constexpr double kCb = 0.5 / (1 - 0.114), kCr = 0.5 / (1 - 0.299);
+
+}  // namespace
+
+TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int border) {
+  TagSamples samples;
+  double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+  for (const double u : {-kObservedMargin, 1 + kObservedMargin}) {
+    for (const double v : {-kObservedMargin, 1 + kObservedMargin}) {
+      const cv::Vec3d p = tag_to_image * cv::Vec3d(u, v, 1);
+      if (!(p[2] > 0)) return samples;
+      x0 = std::min(x0, p[0] / p[2]), x1 = std::max(x1, p[0] / p[2]);
+      y0 = std::min(y0, p[1] / p[2]), y1 = std::max(y1, p[1] / p[2]);
+    }
+  }
+  const cv::Rect inside(border, border, bgr.cols - 2 * border, bgr.rows - 2 * border);
+  cv::Rect box(static_cast<int>(std::floor(x0)), static_cast<int>(std::floor(y0)), 0, 0);
+  box.width = static_cast<int>(std::ceil(x1)) + 1 - box.x;
+  box.height = static_cast<int>(std::ceil(y1)) + 1 - box.y;
+  box &= inside;
+  if (box.area() <= 0 || box.area() > 4'000'000) return samples;
+  const cv::Matx33d to_tag = tag_to_image.inv();
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      if (WithinMargin(to_tag, x, y)) samples.luma.push_back({x, y, Luminance(row + 3 * x)});
+    }
+  }
+  // Blocks at even coordinates wholly inside: their centre decides.
+  const int bx0 = box.x + (box.x & 1), by0 = box.y + (box.y & 1);
+  for (int y = by0; y + 1 < box.y + box.height; y += 2) {
+    for (int x = bx0; x + 1 < box.x + box.width; x += 2) {
+      if (!WithinMargin(to_tag, x + 0.5, y + 0.5)) continue;
+      double cb = 0, cr = 0;
+      for (int dy = 0; dy < 2; ++dy) {
+        const std::uint8_t* p = bgr.ptr<std::uint8_t>(y + dy) + 3 * x;
+        for (int dx = 0; dx < 2; ++dx, p += 3) {
+          const double luma = (0.299 * p[2] + 0.587 * p[1] + 0.114 * p[0]) / 255.0;
+          cb += kCb * (p[0] / 255.0 - luma);
+          cr += kCr * (p[2] / 255.0 - luma);
+        }
+      }
+      samples.chroma.push_back({x, y, cb / 4, cr / 4});
+    }
+  }
+  samples.bounds = box;
+  return samples;
+}
+
+}  // namespace pintag::reading

@@ -1,0 +1,39 @@
+#pragma once
+// What the photo holds around a tag, as a JPEG holds it: brightness at every pixel, colour once per
+// 2 × 2 pixels (4:2:0). These are the observations every model of the tag is fitted to; they are
+// taken once per candidate, whatever corners the model then tries.
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace pintag::reading {
+
+/// One pixel's brightness: linear-light luminance of its decoded colour (light mixes linearly
+/// there: blur and a pixel's area act before the camera's tone curve).
+struct LumaSample {
+  int x = 0, y = 0;  ///< image pixel
+  double value = 0;  ///< 0 … 1
+};
+
+/// One 2 × 2 block's colour differences as JPEG stores them (BT.601 Cb and Cr of the sRGB values,
+/// −0.5 … 0.5), the block at even image coordinates as JPEG's chroma blocks are.
+struct ChromaSample {
+  int x = 0, y = 0;  ///< the block's top-left pixel
+  double cb = 0, cr = 0;
+};
+
+struct TagSamples {
+  std::vector<LumaSample> luma;
+  std::vector<ChromaSample> chroma;
+  cv::Rect bounds;  ///< pixels the samples occupy (chroma blocks whole)
+};
+
+/// Tag units beyond the square that are observed: the quiet zone's edge carries the square's.
+inline constexpr double kObservedMargin = 0.06;
+
+/// The samples within kObservedMargin of the square that `tag_to_image` maps the unit square to,
+/// inside `bgr` (8-bit BGR) and at least `border` pixels from its edge. Empty when the square is
+/// not wholly in front of the camera.
+TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int border = 0);
+
+}  // namespace pintag::reading

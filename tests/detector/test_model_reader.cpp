@@ -1,0 +1,179 @@
+// The model reader (reading/): a tag's luminance and its 4:2:0 chroma explained by its regions
+// under a searched blur, its corners refined, its codeword decided over the whole code, and the
+// rule that accepts it.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "homography.hpp"
+#include "pintag/codec/geometry.hpp"
+#include "reading/decision.hpp"
+#include "reading/model_reader.hpp"
+#include "synthetic.hpp"
+
+namespace pintag::reading {
+namespace {
+
+Corners TrueCorners(const testing::SyntheticTruth& truth) {
+  return {truth.corners[0], truth.corners[1], truth.corners[2], truth.corners[3]};
+}
+
+cv::Mat Jpeg420(const cv::Mat& bgr, int quality) {
+  std::vector<std::uint8_t> bytes;
+  // OpenCV 4.6 leaves the sampling to libjpeg, whose default is 4:2:0.
+  cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+  return cv::imdecode(bytes, cv::IMREAD_COLOR);
+}
+
+// One tag of `side` px, blurred (σ px, round) and noised, at a tilt and roll.
+testing::SyntheticScene Tag(int key, double side, double tilt_deg, double roll_deg, double sigma,
+                            double noise, std::uint64_t seed) {
+  testing::SyntheticOptions o;
+  o.seed = seed;
+  o.blur_sigma = sigma;
+  o.noise_sigma = noise;
+  return testing::MakeScene(
+      {{.key = key, .square_px = side, .tilt_deg = tilt_deg, .roll_deg = roll_deg}}, o);
+}
+
+TEST(ModelReader, RegionsAreTheFormatsCells) {
+  int checked = 0;
+  for (int iy = -20; iy <= 420; ++iy) {
+    for (int ix = -20; ix <= 420; ++ix) {
+      // Offsets keep the points off the cell boundaries, where the two may round differently.
+      const double x = (ix + 0.37) / 400, y = (iy + 0.61) / 400;
+      const geometry::CellAt cell = geometry::LocateCell(x, y);
+      int expected = kQuietRegion;
+      switch (cell.region) {
+        case geometry::Region::kOutside:
+          break;
+        case geometry::Region::kBlack:
+          expected = kBlackRegion;
+          break;
+        case geometry::Region::kRed:
+          expected = RedRegion(cell.element, cell.index);
+          break;
+        case geometry::Region::kGreen:
+          expected = GreenRegion(cell.element, cell.index);
+          break;
+      }
+      ASSERT_EQ(ModelRegionAt(x, y), expected) << x << ", " << y;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 441 * 441);
+}
+
+TEST(ModelReader, ExplainsASharpCleanTagClosely) {
+  const auto scene = Tag(12345, 40, 30, 17, 0, 0, 1);
+  const ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  // What is left is the sub-sampled coverage and the renderer's own anti-aliasing: far below the
+  // luminance steps between a tag's colours (0.1 and more).
+  EXPECT_LT(r.fit.luma_noise, 0.02);
+  EXPECT_LT(r.fit.luma_blur.major, 0.7);
+  ASSERT_TRUE(r.decision.winner);
+  EXPECT_EQ(r.decision.winner->value(), 12345);
+  EXPECT_EQ(RefuseCodeword(r), "");
+  EXPECT_GT(r.decision.lead, 1000);
+}
+
+// Small blurred tags, which direct samples mostly cannot read: every one is read right, and the
+// blur found is the one applied (σ 1.6 px, round) within the search's steps.
+TEST(ModelReader, ReadsSmallBlurredTags) {
+  for (const int key : {0, 1, 4660, 13107, 21845, 32767}) {
+    for (const double roll : {0.0, 33.0}) {
+      const auto scene =
+          Tag(key, 30, 20, roll, 1.6, 2,
+              static_cast<std::uint64_t>(key) * 7 + static_cast<std::uint64_t>(roll));
+      const ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+      ASSERT_TRUE(r.fit.ok) << r.error;
+      ASSERT_EQ(RefuseCodeword(r), "") << "key " << key << " roll " << roll;
+      EXPECT_EQ(r.decision.winner->value(), key);
+      EXPECT_NEAR(r.fit.luma_blur.major, 1.6, 0.6) << key;
+      EXPECT_NEAR(r.fit.luma_blur.minor, 1.6, 0.6) << key;
+    }
+  }
+}
+
+// A 24 px tag saved as a 4:2:0 JPEG, read on corners a pixel off each way: the corners come back
+// to within a few tenths of a pixel and the key is read.
+TEST(ModelReader, RefinesCornersAPixelOffAndReadsA24PxJpeg) {
+  const auto scene = Tag(20301, 24, 25, 40, 0.7, 2, 5);
+  const cv::Mat jpeg = Jpeg420(scene.bgr, 85);
+  Corners start = TrueCorners(scene.truth[0]);
+  const cv::Point2d offsets[4] = {{0.8, -0.6}, {-0.7, -0.5}, {0.6, 0.9}, {-0.9, 0.4}};
+  for (std::size_t k = 0; k < 4; ++k) start[k] += offsets[k];
+  const ModelReading r = ReadThroughModel(jpeg, start);
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_LT(cv::norm(r.fit.corners[k] - scene.truth[0].corners[k]), 0.4) << "corner " << k;
+  }
+  ASSERT_EQ(RefuseCodeword(r), "");
+  EXPECT_EQ(r.decision.winner->value(), 20301);
+}
+
+// A phone's unsharp mask on luma (over- and undershoot at every edge): still read.
+TEST(ModelReader, ReadsASharpenedTag) {
+  const auto scene = Tag(777, 36, 10, 5, 1.0, 1, 9);
+  cv::Mat ycrcb;
+  cv::cvtColor(scene.bgr, ycrcb, cv::COLOR_BGR2YCrCb);
+  std::vector<cv::Mat> planes;
+  cv::split(ycrcb, planes);
+  cv::Mat luma, soft;
+  planes[0].convertTo(luma, CV_32F);
+  cv::GaussianBlur(luma, soft, {}, 1.0);
+  luma += 1.2 * (luma - soft);
+  luma.convertTo(planes[0], CV_8U);
+  cv::merge(planes, ycrcb);
+  cv::Mat sharpened;
+  cv::cvtColor(ycrcb, sharpened, cv::COLOR_YCrCb2BGR);
+  const ModelReading r = ReadThroughModel(sharpened, TrueCorners(scene.truth[0]));
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  ASSERT_EQ(RefuseCodeword(r), "");
+  EXPECT_EQ(r.decision.winner->value(), 777);
+}
+
+TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {
+  cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
+  cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
+  cv::GaussianBlur(bgr, bgr, {}, 1.2);
+  const Corners square = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
+  const ModelReading r = ReadThroughModel(bgr, square);
+  ASSERT_TRUE(r.fit.ok);
+  EXPECT_NE(RefuseCodeword(r), "");
+}
+
+// Squares that are not tags (colourful blotches in a black square with a white margin) are
+// refused.
+TEST(ModelReader, ColourfulNonTagsAreRefused) {
+  cv::RNG rng(7);
+  for (int trial = 0; trial < 12; ++trial) {
+    cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
+    cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
+    for (int blob = 0; blob < 6; ++blob) {
+      const cv::Point centre(rng.uniform(44, 76), rng.uniform(44, 76));
+      const cv::Scalar colour(rng.uniform(0, 256), rng.uniform(0, 256), rng.uniform(0, 256));
+      cv::circle(bgr, centre, rng.uniform(2, 7), colour, cv::FILLED);
+    }
+    cv::GaussianBlur(bgr, bgr, {}, 1.5);
+    const Corners square = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
+    const ModelReading r = ReadThroughModel(bgr, square);
+    ASSERT_TRUE(r.fit.ok);
+    EXPECT_NE(RefuseCodeword(r), "") << "trial " << trial;
+  }
+}
+
+TEST(ModelReader, LargeSquaresAndSquaresOffTheImageAreNotModelled) {
+  const cv::Mat bgr(400, 400, CV_8UC3, cv::Scalar(200, 200, 200));
+  std::string error;
+  const Corners large = {cv::Point2d(50, 50), {250, 50}, {250, 250}, {50, 250}};
+  EXPECT_FALSE(FitModel(bgr, large, &error).fit.ok);
+  const Corners outside = {cv::Point2d(-500, -500), {-460, -500}, {-460, -460}, {-500, -460}};
+  EXPECT_FALSE(FitModel(bgr, outside, &error).fit.ok);
+}
+
+}  // namespace
+}  // namespace pintag::reading
