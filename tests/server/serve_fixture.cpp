@@ -7,7 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
+#include <cstdio>
 #include <regex>
 #include <thread>
 
@@ -19,6 +21,20 @@ namespace pintag::serve_test {
 
 std::string PintagExe() {
   return PINTAG_EXE;
+}
+
+CommandResult RunPintag(const std::string& arguments) {
+  CommandResult result;
+  const std::string line = PintagExe() + " " + arguments + " 2>&1";
+  FILE* pipe = ::popen(line.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  std::size_t n = 0;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    result.out.append(buffer.data(), n);
+  const int raw = ::pclose(pipe);
+  if (WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
+  return result;
 }
 
 ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
