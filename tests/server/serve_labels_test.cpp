@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <regex>
+#include <sstream>
 
 #include "serve_fixture.hpp"
 
@@ -169,6 +170,69 @@ TEST_F(ServeTest, LabelErrors) {
   ExpectProblem(client().Post("/api/v1/labels", counter(), R"({"pincodes": ["110001", "110002"]})",
                               "application/json"),
                 410);
+}
+
+/// The lines of text on page `page` of a PDF, as pdftotext reads them.
+std::vector<std::string> PdfLines(const TempDir& dir, const std::string& pdf, int page) {
+  const std::string file = dir.file("text.pdf");
+  WriteFile(file, pdf);
+  const std::string text = Capture("pdftotext -f " + std::to_string(page) + " -l " +
+                                   std::to_string(page) + " " + file + " -");
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) lines.push_back(line);
+  }
+  return lines;
+}
+
+bool HasLine(const std::vector<std::string>& lines, const std::string& line) {
+  return std::find(lines.begin(), lines.end(), line) != lines.end();
+}
+
+// A counter clerk who never picks a plan still prints the bin: labels and batches without `plan`
+// use the default sort plan, the same bin GET /api/v1/route/{pin} answers.
+TEST_F(ServeTest, LabelsWithoutAPlanPrintTheDefaultPlansBin) {
+  ASSERT_EQ(std::system("command -v pdftotext > /dev/null 2>&1"), 0)
+      << "pdftotext is missing: install poppler-utils (scripts/debian-packages-test.txt)";
+  std::vector<std::string> bins;
+  for (const char* pin : {"560001", "110001"}) {
+    const json routed = ExpectJson(client().Get(std::string("/api/v1/route/") + pin));
+    ASSERT_EQ(routed["plan"], "default");
+    bins.push_back(routed["bin"]);
+    auto r = client().Get(std::string("/api/v1/labels/") + pin + ".pdf", counter());
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body.substr(0, 300);
+    const std::vector<std::string> lines = PdfLines(dir_, r->body, 1);
+    EXPECT_TRUE(HasLine(lines, "SORT BIN")) << pin;
+    EXPECT_TRUE(HasLine(lines, bins.back())) << pin << " bin " << bins.back();
+    EXPECT_TRUE(HasLine(lines, "plan default")) << pin;
+    EXPECT_FALSE(HasLine(lines, "none")) << pin;
+  }
+  ASSERT_NE(bins[0], bins[1]);  // so each page below is checked against its own bin
+  const auto r = client().Post("/api/v1/labels", counter(), R"({"pincodes": ["560001", "110001"]})",
+                               "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body.substr(0, 300);
+  for (int page = 1; page <= 2; ++page) {
+    const std::vector<std::string> lines = PdfLines(dir_, r->body, page);
+    EXPECT_TRUE(HasLine(lines, bins[page - 1])) << "page " << page;
+    EXPECT_TRUE(HasLine(lines, "plan default")) << "page " << page;
+    EXPECT_FALSE(HasLine(lines, "none")) << "page " << page;
+  }
+  // The OpenAPI document says so for every label route.
+  const json doc = ExpectJson(client().Get("/openapi.json"));
+  for (const auto& [path, method] :
+       {std::pair{"/api/v1/labels/{pin}.pdf", "get"}, std::pair{"/api/v1/labels/{pin}.png", "get"},
+        std::pair{"/api/v1/labels/{pin}.svg", "get"}, std::pair{"/api/v1/labels", "post"}}) {
+    bool documented = false;
+    for (const json& parameter : doc["paths"][path][method]["parameters"]) {
+      documented = documented ||
+                   (parameter["name"] == "plan" && parameter["description"].get<std::string>().find(
+                                                       "(default: default)") != std::string::npos);
+    }
+    EXPECT_TRUE(documented) << method << " " << path;
+  }
 }
 
 TEST_F(ServeTest, BatchPdfOf50LabelsHas50PagesOfTheRightSize) {

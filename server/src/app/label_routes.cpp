@@ -1,6 +1,6 @@
 // Tag and label routes: a pincode's PinTag alone (PNG, SVG) and its printable label (PDF, PNG,
-// SVG; many as one PDF). Labels print the bin of the asked sort plan. Unknown pincodes are 404,
-// retired ones 410.
+// SVG; many as one PDF). Labels print the bin of the asked sort plan, the default plan when none
+// is asked for. Unknown pincodes are 404, retired ones 410.
 
 #include <vector>
 
@@ -21,18 +21,16 @@ constexpr double kDefaultTagMm = 50;
 constexpr double kMinTagMm = 5;
 constexpr double kMaxTagMm = 500;
 
-// What a label prints for an active pincode under `plan` (none: no bin).
-LabelContent LabelFor(const db::PincodeRecord& record, const std::optional<db::SortPlan>& plan) {
+// What a label prints for an active pincode under `plan`.
+LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan) {
   LabelContent label;
   label.pincode = record.pincode;
   label.key = record.key;
   if (const db::PostOffice* office = MainOffice(record)) label.office = office->name;
   label.district = record.district;
   label.state = record.state;
-  if (plan) {
-    label.plan = plan->name;
-    label.bin = db::RouteWith(*plan, record.pincode).bin;
-  }
+  label.plan = plan.name;
+  label.bin = db::RouteWith(plan, record.pincode).bin;
   return label;
 }
 
@@ -49,11 +47,6 @@ HttpResponse Rendered(const RenderedLabel& rendered, const AppContext& context, 
   return Named(HttpResponse::Bytes(std::move(type), rendered.bytes), filename);
 }
 
-std::optional<std::string> OptionalPlan(const std::optional<std::string>& name) {
-  if (!name || name->empty()) return std::nullopt;
-  return name;
-}
-
 // One label: its options and content from the request and the registry.
 struct LabelRequest {
   LabelContent content;
@@ -65,11 +58,10 @@ LabelRequest ReadLabelRequest(const AppContext& context, const HttpRequest& requ
   LabelRequest label;
   label.options.size = LabelSizeQuery(request);
   label.options.dpi = DpiQuery(request);
-  const std::optional<std::string> plan_name = OptionalPlan(request.queryParam("plan"));
+  const std::string plan_name = PlanQuery(request);
   auto connection = context.pool->acquire();
   const db::PincodeRecord record = LoadActivePincode(*connection, pincode);
-  label.content =
-      LabelFor(record, plan_name ? std::optional(LoadPlan(*connection, *plan_name)) : std::nullopt);
+  label.content = LabelFor(record, LoadPlan(*connection, plan_name));
   return label;
 }
 
@@ -82,8 +74,8 @@ TagKey ActiveKey(const AppContext& context, const HttpRequest& request) {
 }  // namespace
 
 HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request) {
-  const double px =
-      NumberQuery(request, "px", kMinTagSquarePx, context.max_tag_px).value_or(kDefaultTagPx);
+  const double px = NumberQuery(request, "px", kMinTagSquarePx, context.max_tag_px)
+                        .value_or(kDefaultTagPx);
   const double dpi = DpiQuery(request);
   const TagKey key = ActiveKey(context, request);
   const TagRaster raster = RenderTagRaster(key, {static_cast<int>(px), 4});
@@ -148,9 +140,8 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   LabelOptions options;
   const std::optional<std::string> size = text("size");
   options.size = size ? LabelSizeValue(*size) : LabelSizeQuery(request);
-  const std::optional<std::string> body_plan = text("plan");
-  const std::optional<std::string> plan =
-      OptionalPlan(body_plan ? body_plan : request.queryParam("plan"));
+  const std::optional<std::string> plan_name = text("plan");
+  const std::string plan = plan_name ? PlanNameValue(*plan_name) : PlanQuery(request);
   std::vector<Pincode> pincodes;
   pincodes.reserve(pins.size());
   for (std::size_t i = 0; i < pins.size(); ++i) {
@@ -161,8 +152,7 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   labels.reserve(pincodes.size());
   {
     auto connection = context.pool->acquire();
-    const std::optional<db::SortPlan> sort_plan =
-        plan ? std::optional(LoadPlan(*connection, *plan)) : std::nullopt;
+    const db::SortPlan sort_plan = LoadPlan(*connection, plan);
     for (const Pincode pincode : pincodes) {
       labels.push_back(LabelFor(LoadActivePincode(*connection, pincode), sort_plan));
     }

@@ -37,7 +37,6 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
   const std::vector<std::string> photo_types = {"image/jpeg",          "image/png",
                                                 "image/tiff",          "image/webp",
                                                 "multipart/form-data", "application/octet-stream"};
-  const QueryParamDoc label_plan{"plan", "sort plan whose bin is printed"};
   // clang-format off
   const AppRoute table[] = {
   // method    path                                 role              handler
@@ -69,17 +68,17 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
        {"px", "black square side in pixels instead of mm, 64 to " + max_tag_px, "number"}},
       {}, {"image/svg+xml"}}},
     {"GET",    "/api/v1/labels/{pin}.pdf",          Access::kCounter, GetLabelPdf,
-     {"labels", "Printable label for a pincode (pdf)",
-      {LabelSizeQueryDoc(), label_plan}, {}, {"application/pdf"}}},
+     {"labels", "Printable label for a pincode (pdf) with its bin under the sort plan",
+      {LabelSizeQueryDoc(), PlanQueryDoc()}, {}, {"application/pdf"}}},
     {"GET",    "/api/v1/labels/{pin}.png",          Access::kCounter, GetLabelPng,
-     {"labels", "Printable label for a pincode (png)",
-      {LabelSizeQueryDoc(), DpiQueryDoc(), label_plan}, {}, {"image/png"}}},
+     {"labels", "Printable label for a pincode (png) with its bin under the sort plan",
+      {LabelSizeQueryDoc(), DpiQueryDoc(), PlanQueryDoc()}, {}, {"image/png"}}},
     {"GET",    "/api/v1/labels/{pin}.svg",          Access::kCounter, GetLabelSvg,
-     {"labels", "Printable label for a pincode (svg)",
-      {LabelSizeQueryDoc(), label_plan}, {}, {"image/svg+xml"}}},
+     {"labels", "Printable label for a pincode (svg) with its bin under the sort plan",
+      {LabelSizeQueryDoc(), PlanQueryDoc()}, {}, {"image/svg+xml"}}},
     {"POST",   "/api/v1/labels",                    Access::kCounter, PostLabels,
-     {"labels", R"(Many labels as one PDF, a page each; body {"pincodes": [...], "size": "a6", "plan": "..."})",
-      {}, {"application/json"}, {"application/pdf"}}},
+     {"labels", R"(Many labels as one PDF, a page each; body {"pincodes": [...], "size": "a6", "plan": "..."}; size and plan may be query parameters instead)",
+      {LabelSizeQueryDoc(), PlanQueryDoc()}, {"application/json"}, {"application/pdf"}}},
 
     {"POST",   "/api/v1/detect",                    Access::kScanner, PostDetect,
      {"detection", "Find every PinTag in a photo: pincode, key, status, office, bin, corners, pose",
