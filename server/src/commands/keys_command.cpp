@@ -79,7 +79,7 @@ void AddKeysCommand(CLI::App& app) {
   lookup->callback([args] { Lookup(*args); });
 }
 
-const CommandRegistration registration{"keys", &AddKeysCommand};
+const CommandRegistration keys_registration{"keys", &AddKeysCommand};
 
 }  // namespace
 }  // namespace pintag::cli

@@ -81,7 +81,7 @@ void AddRenderCommand(CLI::App& app) {
   cmd->callback([args] { Run(*args); });
 }
 
-const CommandRegistration registration{"render", &AddRenderCommand};
+const CommandRegistration render_registration{"render", &AddRenderCommand};
 
 }  // namespace
 
