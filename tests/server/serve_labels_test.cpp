@@ -93,6 +93,7 @@ TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {
   expect("/api/v1/labels/110001.png?dpi=abc", 400, "'dpi'");
   expect("/api/v1/labels/110001.png?size=300x300mm&dpi=1200", 400, "megapixels");
   expect("/api/v1/tags/110001.png?px=5000", 400, "'px'");
+  expect("/api/v1/tags/110001.png?px=128.5", 400, "must be an integer");
   expect("/api/v1/tags/110001.svg?px=100&mm=10", 400, "at most one");
   const std::string metrics = client().Get("/metrics")->body;
   EXPECT_EQ(MetricLine(metrics, "pintag_labels_rendered_total"), "pintag_labels_rendered_total 0");

@@ -16,7 +16,7 @@
 namespace pintag::app {
 namespace {
 
-constexpr double kDefaultTagPx = 256;
+constexpr int kDefaultTagPx = 256;
 constexpr double kDefaultTagMm = 50;
 constexpr double kMinTagMm = 5;
 constexpr double kMaxTagMm = 500;
@@ -74,8 +74,8 @@ TagKey ActiveKey(const AppContext& context, const HttpRequest& request) {
 }  // namespace
 
 HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request) {
-  const double px = NumberQuery(request, "px", kMinTagSquarePx, context.max_tag_px)
-                        .value_or(kDefaultTagPx);
+  const long long px =
+      IntegerQuery(request, "px", kDefaultTagPx, kMinTagSquarePx, context.max_tag_px);
   const double dpi = DpiQuery(request);
   const TagKey key = ActiveKey(context, request);
   const TagRaster raster = RenderTagRaster(key, {static_cast<int>(px), 4});
