@@ -28,7 +28,8 @@ TEST(Utf8, DecodesEveryLengthAtItsBoundaries) {
   for (const Encoded& e : kBoundaries) {
     const Utf8CodePoint decoded = DecodeUtf8(e.bytes, 0);
     EXPECT_EQ(decoded.value, e.code_point) << std::hex << static_cast<std::uint32_t>(e.code_point);
-    EXPECT_EQ(decoded.length, e.bytes.size()) << std::hex << static_cast<std::uint32_t>(e.code_point);
+    EXPECT_EQ(decoded.length, e.bytes.size())
+        << std::hex << static_cast<std::uint32_t>(e.code_point);
   }
 }
 

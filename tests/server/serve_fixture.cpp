@@ -44,6 +44,7 @@ ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::st
   std::vector<std::string> argv_text = {PintagExe(), "serve", "--port", "0", "--bind", "127.0.0.1"};
   argv_text.insert(argv_text.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(argv_text.size() + 1);
   for (std::string& a : argv_text) argv.push_back(a.data());
   argv.push_back(nullptr);
   const pid_t parent = ::getpid();

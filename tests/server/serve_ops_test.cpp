@@ -22,6 +22,11 @@ namespace {
 
 using nlohmann::json;
 
+std::string Upper(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return text;
+}
+
 std::set<std::string> Secrets(const std::string& text) {
   std::set<std::string> found;
   const std::regex secret(R"(pt_\d+_[A-Za-z0-9_-]{43})");
@@ -230,9 +235,8 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
   for (const auto& [path, item] : doc["paths"].items()) {
     for (const auto& [method, operation] : item.items()) {
       if (method == "parameters") continue;
-      std::string upper = method;
-      for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-      listed.insert(upper + " " + path);
+      const std::string upper = Upper(method);
+      listed.insert(std::string(upper).append(" ").append(path));
       std::string concrete = std::regex_replace(path, std::regex(R"(\{pin\})"), "110001");
       concrete = std::regex_replace(concrete, std::regex(R"(\{key\})"), "11684");
       concrete = std::regex_replace(concrete, std::regex(R"(\{name\})"), "default");
@@ -290,9 +294,8 @@ TEST_F(ServeTest, ApiDocListsEveryRouteWithItsRole) {
   std::set<std::string> served;
   for (const auto& [path, item] : doc["paths"].items()) {
     for (const auto& [method, operation] : item.items()) {
-      std::string upper = method;
-      for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-      served.insert(upper + " " + path + " " + operation["x-pintag-role"].get<std::string>());
+      served.insert(Upper(method).append(" ").append(path).append(" ").append(
+          operation["x-pintag-role"].get<std::string>()));
     }
   }
   const std::string text = ReadFile(std::string(PINTAG_SOURCE_DIR) + "/docs/API.md");

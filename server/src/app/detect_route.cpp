@@ -137,7 +137,7 @@ Overlay OverlayQuery(const HttpRequest& request) {
 
 /// What the scan log keeps of one call.
 struct Outcome {
-  json result;
+  std::string result_json;  ///< what was read, or the problem that ended the call
   std::optional<int> width, height;
 };
 
@@ -154,7 +154,7 @@ void Log(const AppContext& context, const HttpRequest& request, std::size_t byte
   scan.image_bytes = static_cast<std::int64_t>(bytes);
   scan.image_width = outcome.width;
   scan.image_height = outcome.height;
-  scan.result_json = outcome.result.dump();
+  scan.result_json = outcome.result_json;
   try {
     auto connection = context.pool->acquire();
     auto appended = db::AppendScan(*connection, scan);
@@ -269,7 +269,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   out["tag_count"] = tags.size();
   out["tags"] = std::move(tags);
   out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
-  outcome->result = out;
+  outcome->result_json = out.dump();
 
   switch (overlay) {
     case Overlay::kNone:
@@ -305,7 +305,8 @@ HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
     Log(context, request, bytes.size(), outcome);
     return response;
   } catch (const HttpError& e) {
-    outcome.result = {{"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}};
+    outcome.result_json =
+        json{{"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}}.dump();
     Log(context, request, bytes.size(), outcome);
     throw;
   }

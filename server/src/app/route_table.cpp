@@ -23,10 +23,10 @@ struct RouteDoc {
 
 /// One row of the table.
 struct AppRoute {
-  const char* method;
-  const char* path;
-  Access role;
-  RouteHandler handler;
+  const char* method = "GET";
+  const char* path = "/";
+  Access role = Access::kAdmin;
+  RouteHandler handler = nullptr;
   RouteDoc doc;
 };
 
