@@ -1,11 +1,20 @@
 #!/usr/bin/env bash
-# Configures (until a configure has succeeded) and builds the project into build/ (override with PINTAG_BUILD_DIR).
+# Configures (until a configure has succeeded) and builds into build/ (override with
+# PINTAG_BUILD_DIR):
+#   scripts/build.sh                    everything the configure found packages for
+#   scripts/build.sh pintag             only the named targets (scripts/start.sh builds `pintag`)
+#   PINTAG_TESTS=ON scripts/build.sh    configure again first, requiring the tests and benchmarks
+#                                       (scripts/test.sh; see PINTAG_TESTS in CMakeLists.txt)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${PINTAG_BUILD_DIR:-$root/build}"
-launcher=()
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-if [[ ! -f "$build/build.ninja" ]]; then
-  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}"
+options=(-G Ninja -DCMAKE_BUILD_TYPE=Release)
+command -v ccache >/dev/null && options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+if [[ -n "${PINTAG_TESTS:-}" ]]; then
+  cmake -S "$root" -B "$build" "${options[@]}" -DPINTAG_TESTS="$PINTAG_TESTS"
+elif [[ ! -f "$build/build.ninja" ]]; then
+  cmake -S "$root" -B "$build" "${options[@]}"
 fi
-cmake --build "$build" --parallel "$(nproc)"
+targets=()
+for target in "$@"; do targets+=(--target "$target"); done
+cmake --build "$build" --parallel "$(nproc)" "${targets[@]}"

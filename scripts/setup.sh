@@ -1,18 +1,36 @@
 #!/usr/bin/env bash
-# Installs the Debian packages listed in scripts/debian-packages.txt that are not installed yet.
-# Idempotent: when everything is present it changes nothing and asks for no privileges.
+# Installs the Debian packages of the named lists that are not installed yet:
+#   scripts/setup.sh [serve] [test]      (no name: serve)
+# serve  scripts/debian-packages-serve.txt: building and running `pintag serve`
+# test   scripts/debian-packages-test.txt: the tests and benchmarks, on top of serve
+# A package counts as installed when it is, or when an installed package provides it (e.g. a
+# nodejs build that ships npm). Idempotent: when everything is present it changes nothing and
+# asks for no privileges.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+(($# > 0)) || set -- serve
+
+lists=()
+for name in "$@"; do
+  list="$here/debian-packages-$name.txt"
+  [[ -f "$list" ]] || { echo "setup: no package list '$name' (serve, test)" >&2; exit 2; }
+  lists+=("$list")
+done
+
+# Installed packages and what they provide, one name a line.
+present="$(dpkg-query -W -f='${db:Status-Status} ${Package} ${Provides}\n' 2>/dev/null |
+  awk '$1 == "installed" { for (i = 2; i <= NF; i++) { sub(/,$/, "", $i); if ($i !~ /^[(]|[)]$/) print $i } }')"
 
 missing=()
-while read -r package; do
-  [[ -z "$package" || "$package" == \#* ]] && continue
-  status="$(dpkg-query -W -f='${Status}' "$package" 2>/dev/null || true)"
-  [[ "$status" == "install ok installed" ]] || missing+=("$package")
-done <"$here/debian-packages.txt"
+while read -r line; do
+  package="${line%%#*}"
+  package="${package//[[:space:]]/}"
+  [[ -z "$package" ]] && continue
+  grep -qxF "$package" <<<"$present" || missing+=("$package")
+done < <(cat "${lists[@]}")
 
 if ((${#missing[@]} == 0)); then
-  echo "setup: all ${here##*/}/debian-packages.txt packages are installed"
+  echo "setup: every package is installed (lists: $*)"
   exit 0
 fi
 

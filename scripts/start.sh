@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Quick start, step 1: install what is missing, build, then start the PinTag server in the
-# foreground (Ctrl-C stops it). The first start creates and seeds the database and prints one
-# admin token; later starts say how to make one.
+# Quick start, step 1: install the packages serving needs that are missing, build the `pintag`
+# command alone (no tests, no benchmarks), then start the PinTag server in the foreground
+# (Ctrl-C stops it). The first start creates and seeds the database and prints one admin token;
+# later starts say how to make one.
 #
 #   PINTAG_DB=FILE      database (default: out/pintag.db)
 #   PINTAG_PORT=N       port (default 8080)
@@ -9,8 +10,8 @@
 #   PINTAG_BUILD_DIR    build tree (default build/)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-"$root/scripts/setup.sh"
-"$root/scripts/build.sh"
+"$root/scripts/setup.sh" serve
+"$root/scripts/build.sh" pintag
 build="${PINTAG_BUILD_DIR:-$root/build}"
 db="${PINTAG_DB:-$root/out/pintag.db}"
 mkdir -p "$(dirname "$db")"

@@ -235,10 +235,16 @@ export async function loadPlans(select, preferred = 'default') {
     const { plans } = await api('/api/v1/sortplans');
     const current = select.value;
     for (const plan of plans) {
-      if ([...select.options].some((o) => o.value === plan.name)) continue;
       let text = plan.name;
       if (plan.description) text += ` — ${plan.description.length > 44 ? `${plan.description.slice(0, 43)}…` : plan.description}`;
-      select.append(el('option', { value: plan.name, title: plan.description || null }, text));
+      const known = [...select.options].find((o) => o.value === plan.name);
+      if (known) {
+        // An option the page starts with (the default plan): give it its description too.
+        known.textContent = text;
+        if (plan.description) known.title = plan.description;
+      } else {
+        select.append(el('option', { value: plan.name, title: plan.description || null }, text));
+      }
     }
     const want = current || preferred;
     if ([...select.options].some((o) => o.value === want)) select.value = want;

@@ -149,7 +149,7 @@ async function refreshPreview() {
     if (previewUrl) URL.revokeObjectURL(previewUrl);
     previewUrl = URL.createObjectURL(blob);
     const office = row && row.record ? row.record.office : '';
-    const plan = planValue() ? `plan ${planValue()}` : 'no plan';
+    const plan = `plan ${planValue() || 'default'}`;
     show($('preview'),
       el('img', { id: 'label-preview', src: previewUrl, alt: `Label for ${selected}${office ? ` (${office})` : ''}` }),
       el('figcaption', { class: 'small muted', style: 'margin-top:0.6rem' },

@@ -2,39 +2,9 @@
 
 #include <string>
 
+#include "pintag/codec/utf8.hpp"
+
 namespace pintag::db {
-namespace {
-
-/// Length of the valid UTF-8 sequence at `text[i]`, or 0 when it is not one.
-std::size_t Utf8Length(std::string_view text, std::size_t i) {
-  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
-  const unsigned char lead = byte(i);
-  if (lead < 0x80) return 1;
-  std::size_t length = 0;
-  std::uint32_t code = 0;
-  if ((lead & 0xE0) == 0xC0) {
-    length = 2;
-    code = lead & 0x1F;
-  } else if ((lead & 0xF0) == 0xE0) {
-    length = 3;
-    code = lead & 0x0F;
-  } else if ((lead & 0xF8) == 0xF0) {
-    length = 4;
-    code = lead & 0x07;
-  } else {
-    return 0;
-  }
-  if (i + length > text.size()) return 0;
-  for (std::size_t k = 1; k < length; ++k) {
-    if ((byte(i + k) & 0xC0) != 0x80) return 0;
-    code = (code << 6) | (byte(i + k) & 0x3F);
-  }
-  constexpr std::uint32_t kMinimum[] = {0, 0, 0x80, 0x800, 0x10000};
-  if (code < kMinimum[length] || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return 0;
-  return length;
-}
-
-}  // namespace
 
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty) {
@@ -52,7 +22,7 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
       return invalid("contains control character " + std::to_string(c) + " at byte " +
                      std::to_string(i));
     }
-    const std::size_t length = Utf8Length(value, i);
+    const std::size_t length = DecodeUtf8(value, i).length;
     if (length == 0) return invalid("is not valid UTF-8 at byte " + std::to_string(i));
     i += length;
   }

@@ -19,13 +19,14 @@ after(async () => {
   await server?.stop();
 });
 
+// poppler-utils is in scripts/debian-packages-test.txt: without it these throw, and the test fails.
 function pdfPageSize(path) {
-  try {
-    const info = execFileSync('pdfinfo', [path], { encoding: 'utf8' });
-    return { pages: Number(info.match(/^Pages:\s+(\d+)/m)[1]), size: info.match(/^Page size:\s+(.*?) pts/m)[1] };
-  } catch {
-    return null;  // no pdfinfo: the %PDF check still holds
-  }
+  const info = execFileSync('pdfinfo', [path], { encoding: 'utf8' });
+  return { pages: Number(info.match(/^Pages:\s+(\d+)/m)[1]), size: info.match(/^Page size:\s+(.*?) pts/m)[1] };
+}
+
+function pdfLines(path) {
+  return execFileSync('pdftotext', [path, '-'], { encoding: 'utf8' }).split('\n').filter(Boolean);
 }
 
 test('counter looks up pincodes, previews a label and downloads single and batch PDFs', async () => {
@@ -53,8 +54,13 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   assert.equal(single.suggestedFilename(), 'label-110001.pdf');
   const singlePath = await single.path();
   assert.equal((await readFile(singlePath)).subarray(0, 5).toString(), '%PDF-');
-  const singleInfo = pdfPageSize(singlePath);
-  if (singleInfo) assert.deepEqual(singleInfo, { pages: 1, size: '283.465 x 425.197' });
+  assert.deepEqual(pdfPageSize(singlePath), { pages: 1, size: '283.465 x 425.197' });
+  // No plan was picked: the label carries the default plan's bin, the one the routing API gives.
+  assert.equal(await page.locator('#plan').inputValue(), 'default');
+  assert.match(await page.locator('#preview figcaption').textContent(), /plan default/);
+  const routed = await (await fetch(`${server.url}/api/v1/route/110001`)).json();
+  const lines = pdfLines(singlePath);
+  assert.ok(lines.includes('plan default') && lines.includes(routed.bin), `bin ${routed.bin} in ${lines.join(' | ')}`);
 
   await page.getByLabel('A6').check();
   await page.waitForFunction(() => /A6/.test(document.querySelector('#preview figcaption')?.textContent || ''));
@@ -62,8 +68,7 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   const [batch] = await Promise.all([page.waitForEvent('download'), batchButton.click()]);
   const batchPath = await batch.path();
   assert.equal((await readFile(batchPath)).subarray(0, 5).toString(), '%PDF-');
-  const batchInfo = pdfPageSize(batchPath);
-  if (batchInfo) assert.deepEqual(batchInfo, { pages: 2, size: '297.638 x 419.528' });
+  assert.deepEqual(pdfPageSize(batchPath), { pages: 2, size: '297.638 x 419.528' });
   await page.getByText('2 labels in one PDF downloaded').waitFor();
   assert.deepEqual(page.problems, []);
 });

@@ -86,7 +86,7 @@ export async function createToken(server, role) {
 export async function launchBrowser() {
   const executablePath = process.env.PINTAG_CHROMIUM || '/usr/bin/chromium';
   if (!existsSync(executablePath)) {
-    throw new Error(`no browser at ${executablePath}: install Debian's chromium (scripts/setup.sh does)`);
+    throw new Error(`no browser at ${executablePath}: install Debian's chromium (scripts/setup.sh test does)`);
   }
   return chromium.launch({
     executablePath,

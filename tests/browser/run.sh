@@ -4,7 +4,7 @@
 # PINTAG_BIN (the pintag binary) and PINTAG_SCREENSHOT_DIR come from tests/browser/CMakeLists.txt.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")"
-command -v node >/dev/null || { echo "browser tests: node not found (scripts/setup.sh installs nodejs)" >&2; exit 1; }
+command -v node >/dev/null || { echo "browser tests: node not found (scripts/setup.sh test installs nodejs)" >&2; exit 1; }
 if [[ ! -f node_modules/playwright-core/package.json ]]; then
   npm ci --no-audit --no-fund
 fi

@@ -40,7 +40,7 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   await page.locator('#token').fill(scannerToken);
   const uploads = [];
   page.on('request', (request) => {
-    if (request.url().includes('/api/v1/detect')) uploads.push(request.url());
+    if (request.url().includes('/api/v1/detect')) uploads.push(`${request.method()} ${request.url()}`);
   });
   await page.locator('#photo').setInputFiles(labelPng);
   const card = page.locator('.tag-card[data-pincode="110001"]');
@@ -89,6 +89,10 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.ok(outline.size > 0.2 && outline.size < 1, JSON.stringify(outline));
   assert.ok(outline.darkInside < 80 && outline.lightOutside > 170, JSON.stringify(outline));
   assert.equal(uploads.length, 1, `one upload per scan, got ${uploads.join(', ')}`);
+  assert.match(uploads[0], /^POST /);
+  // The server saw one photo too (the handler counts it before it answers).
+  const metrics = await (await fetch(`${server.url}/metrics`)).text();
+  assert.match(metrics, /^pintag_scans_total 1$/m);
   await screenshot(page, 'scanner-phone');
   assert.deepEqual(page.problems, []);
 });

@@ -179,11 +179,11 @@ TEST_F(ApiTest, CountsRequestsByRouteAndStatus) {
   api_.handle(Get("/livez"));
   api_.handle(Get("/api/v1/echo/a"));
   api_.handle(Get("/api/v1/nope"));
-  api_.handle(Get("/api/v1/tags/110001.png"));
+  api_.handle(Get("/api/v1/files/x.bin"));
   EXPECT_EQ(metrics_->requestCount("/livez", "GET", 200), 2);
   EXPECT_EQ(metrics_->requestCount("/api/v1/echo/{word}", "GET", 200), 1);
   EXPECT_EQ(metrics_->requestCount("unmatched", "GET", 404), 1);
-  EXPECT_EQ(metrics_->requestCount("/api/v1/tags/{pin}.png", "GET", 401), 1);
+  EXPECT_EQ(metrics_->requestCount("/api/v1/files/{name}.bin", "GET", 401), 1);
   const std::string text = api_.handle(Get("/metrics")).body;
   EXPECT_NE(text.find(R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 2)"),
             std::string::npos)

@@ -3,10 +3,7 @@
 // by the scene generator at a known pose.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -14,30 +11,12 @@
 #include "pintag/codec/label.hpp"
 #include "pintag/scene/scene.hpp"
 #include "pintag/test/files.hpp"
+#include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
 namespace {
 
 using nlohmann::json;
-
-struct CommandResult {
-  int status = -1;  ///< exit status, -1 if it did not exit normally
-  std::string out;  ///< stdout and stderr together
-};
-
-CommandResult RunPintag(const std::string& arguments) {
-  CommandResult result;
-  const std::string line = std::string(PINTAG_EXE) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(line.c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 4096> buffer{};
-  std::size_t n = 0;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
-    result.out.append(buffer.data(), n);
-  const int raw = pclose(pipe);
-  if (WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
-  return result;
-}
 
 struct RenderedPhoto {
   std::string path;

@@ -100,24 +100,24 @@ TEST_F(LoopbackTest, ProblemsFor404And405) {
   const auto r = client_->Post("/livez", "x", "text/plain");
   ExpectProblem(r, 405);
   EXPECT_EQ(r->get_header_value("Allow"), "GET, HEAD");
-  ExpectProblem(client_->Delete("/api/v1/labels"), 405);
+  ExpectProblem(client_->Delete("/api/v1/upload"), 405);
 }
 
 TEST_F(LoopbackTest, ProblemsFor401And403) {
-  auto r = client_->Get("/api/v1/labels/110001.pdf");
+  auto r = client_->Get("/api/v1/files/report.bin");
   ExpectProblem(r, 401);
   EXPECT_EQ(r->get_header_value("WWW-Authenticate"), R"(Bearer realm="pintag")");
-  r = client_->Get("/api/v1/labels/110001.pdf", {{"Authorization", "Bearer wrong"}});
+  r = client_->Get("/api/v1/files/report.bin", {{"Authorization", "Bearer wrong"}});
   ExpectProblem(r, 401);
-  ExpectProblem(client_->Get("/api/v1/labels/110001.pdf",
+  ExpectProblem(client_->Get("/api/v1/files/report.bin",
                              {{"Authorization", std::string("Bearer ") + test::kScannerToken}}),
                 403);
-  r = client_->Get("/api/v1/labels/110001.pdf",
+  r = client_->Get("/api/v1/files/report.bin",
                    {{"Authorization", std::string("Bearer ") + test::kCounterToken}});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
-  EXPECT_EQ(r->get_header_value("Content-Type"), "application/pdf");
-  EXPECT_EQ(r->body.rfind("%PDF-", 0), 0U);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/octet-stream");
+  EXPECT_EQ(r->body, "bytes of report");
 }
 
 TEST_F(LoopbackTest, ProblemFor413WithContentLength) {
@@ -166,7 +166,9 @@ TEST_F(LoopbackTest, UnreadBodyIsNotParsedAsARequest) {
   for (int i = 0; i < 5; ++i) chunks += "4000\r\n" + chunk + "\r\n";
   const std::string smuggled = "GET /livez HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
   for (const std::string& tail : {smuggled, "\r\n" + smuggled}) {
-    const std::string answer = raw(head + chunks + tail);
+    std::string request = head + chunks;
+    request += tail;
+    const std::string answer = raw(request);
     EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 200);
     EXPECT_EQ(answer.find(R"({"status":"ok"})"), std::string::npos) << answer;
   }
@@ -227,17 +229,17 @@ TEST_F(LoopbackTest, StaticFilesAndTraversalAttempts) {
 TEST_F(LoopbackTest, MetricsCountWhatHappened) {
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(client_->Get("/livez"));
   ASSERT_TRUE(client_->Get("/api/v1/nothing"));
-  ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png?dpi=100",
+  ASSERT_TRUE(client_->Get("/api/v1/files/a.bin",
                            {{"Authorization", std::string("Bearer ") + test::kCounterToken}}));
-  ASSERT_TRUE(client_->Get("/api/v1/labels/110001.png", {{"Authorization", "Bearer nope"}}));
+  ASSERT_TRUE(client_->Get("/api/v1/files/a.bin", {{"Authorization", "Bearer nope"}}));
   // Each request is counted by the server's logger after its answer is sent, on the thread that
   // answered it: the next request can be answered (and counted) first. Wait for all of them.
   for (
       const char* line :
       {R"(pintag_http_requests_total{route="/livez",method="GET",status="200"} 3)",
        R"(pintag_http_requests_total{route="unmatched",method="GET",status="404"} 1)",
-       R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="200"} 1)",
-       R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)"}) {
+       R"(pintag_http_requests_total{route="/api/v1/files/{name}.bin",method="GET",status="200"} 1)",
+       R"(pintag_http_requests_total{route="/api/v1/files/{name}.bin",method="GET",status="401"} 1)"}) {
     metricsWhen(line);
   }
   const auto r = client_->Get("/metrics");
@@ -253,17 +255,17 @@ TEST_F(LoopbackTest, MetricsCountWhatHappened) {
       std::string::npos);
   EXPECT_NE(
       text.find(
-          R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="200"} 1)"),
+          R"(pintag_http_requests_total{route="/api/v1/files/{name}.bin",method="GET",status="200"} 1)"),
       std::string::npos);
   EXPECT_NE(
       text.find(
-          R"(pintag_http_requests_total{route="/api/v1/labels/{pin}.png",method="GET",status="401"} 1)"),
+          R"(pintag_http_requests_total{route="/api/v1/files/{name}.bin",method="GET",status="401"} 1)"),
       std::string::npos);
   EXPECT_NE(
       text.find(
           R"(pintag_http_request_duration_seconds_count{route="/livez",method="GET",status="200"} 3)"),
       std::string::npos);
-  EXPECT_NE(text.find("pintag_labels_rendered_total 1\n"), std::string::npos);
+  EXPECT_NE(text.find(std::string(test::kFilesServedCounter) + " 1\n"), std::string::npos);
 }
 
 TEST_F(LoopbackTest, OpenApiIsServed) {

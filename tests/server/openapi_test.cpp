@@ -28,19 +28,20 @@ TEST(OpenApi, DescribesEveryRouteOfTheTable) {
   int listed = 0;
   for (const auto& [path, item] : doc["paths"].items()) listed += static_cast<int>(item.size());
   EXPECT_EQ(listed, operations);
-  for (const char* path :
-       {"/livez", "/readyz", "/metrics", "/openapi.json", "/api/v1/labels/{pin}.pdf",
-        "/api/v1/tags/{pin}.png", "/api/v1/labels"}) {
+  for (const char* path : {"/livez", "/readyz", "/metrics", "/openapi.json",
+                           "/api/v1/files/{name}.bin", "/api/v1/upload", "/api/v1/echo/{word}"}) {
     EXPECT_TRUE(doc["paths"].contains(path)) << path;
   }
-  const nlohmann::json& pdf = doc["paths"]["/api/v1/labels/{pin}.pdf"]["get"];
-  EXPECT_EQ(pdf["parameters"][0]["name"], "pin");
-  EXPECT_EQ(pdf["parameters"][0]["in"], "path");
-  EXPECT_TRUE(pdf["responses"]["200"]["content"].contains("application/pdf"));
+  const nlohmann::json& file = doc["paths"]["/api/v1/files/{name}.bin"]["get"];
+  EXPECT_EQ(file["parameters"][0]["name"], "name");
+  EXPECT_EQ(file["parameters"][0]["in"], "path");
+  EXPECT_TRUE(file["responses"]["200"]["content"].contains("application/octet-stream"));
+  EXPECT_EQ(file["x-pintag-role"], "counter");
+  EXPECT_EQ(doc["paths"]["/livez"]["get"]["x-pintag-role"], "open");
   EXPECT_EQ(doc["components"]["securitySchemes"]["bearer"]["scheme"], "bearer");
 }
 
-// Each listed operation answers (with an admin token and a known pincode): nothing in the
+// Each listed operation answers (with an admin token): nothing in the
 // document is a 404 or 405.
 TEST(OpenApi, EveryListedOperationAnswers) {
   auto metrics = std::make_shared<Metrics>();
@@ -50,7 +51,7 @@ TEST(OpenApi, EveryListedOperationAnswers) {
     for (const auto& [method, op] : item.items()) {
       std::string path = pattern;
       for (const auto& [from, to] :
-           {std::pair<std::string, std::string>{"{pin}", "110001"}, {"{word}", "w"}}) {
+           {std::pair<std::string, std::string>{"{name}", "n"}, {"{word}", "w"}}) {
         for (std::size_t at = path.find(from); at != std::string::npos; at = path.find(from))
           path.replace(at, from.size(), to);
       }
@@ -61,7 +62,7 @@ TEST(OpenApi, EveryListedOperationAnswers) {
       if (op.contains("requestBody")) {
         const std::string type = op["requestBody"]["content"].begin().key();
         r.headers.emplace("Content-Type", type);
-        r.body = type == "application/json" ? R"({"pincodes": ["110001"]})" : "x";
+        r.body = type == "application/json" ? "{}" : "x";
         r.headers.emplace("Content-Length", std::to_string(r.body.size()));
       }
       const HttpResponse response = api.handle(r);

@@ -2,6 +2,7 @@
 // synthetic scene at a known pose, uploaded, read back; and every way an upload can be wrong.
 
 #include <OpenImageIO/imageio.h>
+#include <openssl/evp.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -148,6 +149,79 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_EQ(logged["tags"][0]["pincode"], "110001");
   EXPECT_TRUE((*scans)[2].token_id.has_value());
   EXPECT_NE((*scans)[0].token_id, (*scans)[2].token_id);  // admin made the last call
+}
+
+/// The bytes of a base64 data URL of `media_type`, decoded by OpenSSL; empty when it is not one.
+std::string DataUrlBytes(const std::string& url, const std::string& media_type) {
+  const std::string prefix = "data:" + media_type + ";base64,";
+  if (url.rfind(prefix, 0) != 0) return {};
+  const std::string text = url.substr(prefix.size());
+  if (text.size() % 4 != 0) return {};
+  std::string bytes(text.size() / 4 * 3, '\0');
+  const int n = EVP_DecodeBlock(reinterpret_cast<unsigned char*>(bytes.data()),
+                                reinterpret_cast<const unsigned char*>(text.data()),
+                                static_cast<int>(text.size()));
+  if (n < 0) return {};
+  const std::size_t padding = text.size() - text.find_last_not_of('=') - 1;
+  bytes.resize(static_cast<std::size_t>(n) - padding);
+  return bytes;
+}
+
+cv::Mat Decode(const std::string& bytes) {
+  return cv::imdecode(std::vector<std::uint8_t>(bytes.begin(), bytes.end()), cv::IMREAD_COLOR);
+}
+
+// ?overlay=inline: one upload answers the usual JSON and the outlined photo, as a data URL; a
+// client that shows both (the scanner page's use case) need not send the photo twice.
+TEST_F(ServeTest, DetectOverlayInlineGivesTheJsonAndTheOutlinedPhotoFromOneUpload) {
+  const Photo photo = PhotographLabel(client(), counter(), "110001", 30);
+  ASSERT_FALSE(photo.jpeg.empty());
+  const httplib::MultipartFormDataItems form = {{"image", photo.jpeg, "photo.jpg", "image/jpeg"}};
+  json plain = ExpectJson(client().Post("/api/v1/detect", scanner(), form));
+  json inline_answer = ExpectJson(client().Post("/api/v1/detect?overlay=inline", scanner(), form));
+
+  // The JSON is the plain answer plus "overlay" (times differ from call to call).
+  ASSERT_TRUE(inline_answer.contains("overlay"));
+  const std::string url = inline_answer["overlay"];
+  inline_answer.erase("overlay");
+  inline_answer.erase("time_ms");
+  plain.erase("time_ms");
+  EXPECT_EQ(inline_answer, plain);
+  ASSERT_EQ(plain["tags"].size(), 1U);
+  EXPECT_EQ(plain["tags"][0]["pincode"], "110001");
+
+  // The data URL holds the same PNG ?overlay=1 answers, at the photo's size.
+  const std::string png = DataUrlBytes(url, "image/png");
+  ASSERT_FALSE(png.empty()) << url.substr(0, 80);
+  auto r = client().Post("/api/v1/detect?overlay=1", scanner(), form);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_TRUE(png == r->body) << "inline " << png.size() << " bytes, ?overlay=1 " << r->body.size();
+  const cv::Mat overlay = Decode(png);
+  const cv::Mat uploaded = Decode(photo.jpeg);
+  ASSERT_EQ(overlay.size(), uploaded.size());
+  // The outline is drawn on the tag's edges; far from the tag the photo is untouched.
+  cv::Mat difference;
+  cv::absdiff(overlay, uploaded, difference);
+  const auto changed = [&](cv::Point2d p) {
+    const cv::Vec3b d = difference.at<cv::Vec3b>(cvRound(p.y), cvRound(p.x));
+    return std::max({d[0], d[1], d[2]});
+  };
+  for (int c = 0; c < 4; ++c) {
+    const cv::Point2d mid = (photo.truth.corners_px[c] + photo.truth.corners_px[(c + 1) % 4]) / 2;
+    EXPECT_GT(changed(mid), 60) << "edge " << c;
+  }
+  EXPECT_EQ(changed({1900, 1060}), 0);
+
+  // One scan-log row per upload, and the log keeps what was read, not the picture.
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  auto scans = db::RecentScans(opened.value().connection, 10);
+  ASSERT_TRUE(scans);
+  ASSERT_EQ(scans->size(), 3U);
+  const json logged = json::parse((*scans)[1].result_json);
+  EXPECT_EQ(logged["tags"][0]["pincode"], "110001");
+  EXPECT_FALSE(logged.contains("overlay"));
 }
 
 // Three tags in one photo: an active pincode, a retired one (its printed labels still decode) and a

@@ -7,7 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
+#include <cstdio>
 #include <regex>
 #include <thread>
 
@@ -21,6 +23,20 @@ std::string PintagExe() {
   return PINTAG_EXE;
 }
 
+CommandResult RunPintag(const std::string& arguments) {
+  CommandResult result;
+  const std::string line = PintagExe() + " " + arguments + " 2>&1";
+  FILE* pipe = ::popen(line.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 4096> buffer{};
+  std::size_t n = 0;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    result.out.append(buffer.data(), n);
+  const int raw = ::pclose(pipe);
+  if (WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
+  return result;
+}
+
 ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
                              int timeout_s) {
   int pipe_fds[2];
@@ -28,6 +44,7 @@ ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::st
   std::vector<std::string> argv_text = {PintagExe(), "serve", "--port", "0", "--bind", "127.0.0.1"};
   argv_text.insert(argv_text.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(argv_text.size() + 1);
   for (std::string& a : argv_text) argv.push_back(a.data());
   argv.push_back(nullptr);
   const pid_t parent = ::getpid();

@@ -53,6 +53,14 @@ class ServerProcess {
 
 /// The `pintag` executable under test.
 std::string PintagExe();
+
+/// What a finished `pintag` command left.
+struct CommandResult {
+  int status = -1;  ///< exit status, -1 if it did not exit normally
+  std::string out;  ///< stdout and stderr together
+};
+/// Runs `pintag <arguments>` (a shell command line) and waits for it.
+CommandResult RunPintag(const std::string& arguments);
 /// The path of a seeded database made once per build (do not modify it).
 const std::string& SeededTemplate();
 

@@ -1,7 +1,11 @@
 // Tags and labels of a real `pintag serve`, with the registry behind them.
 
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
 #include <cstdio>
 #include <regex>
+#include <sstream>
 
 #include "serve_fixture.hpp"
 
@@ -19,6 +23,101 @@ std::string Capture(const std::string& command) {
   while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
   ::pclose(pipe);
   return out;
+}
+
+OIIO::ImageSpec PngSpec(const std::string& bytes) {
+  OIIO::Filesystem::IOMemReader reader(bytes.data(), bytes.size());
+  OIIO::Filesystem::IOProxy* proxy = &reader;
+  OIIO::ImageSpec config;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  auto in = OIIO::ImageInput::open("x.png", &config);
+  return in ? in->spec() : OIIO::ImageSpec();
+}
+
+/// The metrics line `name value`, or "" when it is not there.
+std::string MetricLine(const std::string& metrics, const std::string& name) {
+  std::smatch m;
+  return std::regex_search(metrics, m, std::regex("\\n(" + name + " [^\\n]*)")) ? m[1].str() : "";
+}
+
+TEST_F(ServeTest, LabelsAndTagsComeAtTheAskedSizeAndResolution) {
+  auto r = client().Get("/api/v1/labels/110001.pdf", counter());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/pdf");
+  EXPECT_EQ(r->body.rfind("%PDF-", 0), 0U);
+  // 100 x 150 mm in points (1 pt = 25.4 / 72 mm): 283.4646 x 425.1969.
+  EXPECT_NE(r->body.find("/MediaBox [ 0 0 283.464567 425.19685 ]"), std::string::npos);
+
+  r = client().Get("/api/v1/labels/110001.png?size=a6&dpi=150", counter());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  const OIIO::ImageSpec label = PngSpec(r->body);
+  EXPECT_EQ(label.width, 620);   // 105 mm at 150 dpi
+  EXPECT_EQ(label.height, 874);  // 148 mm at 150 dpi
+  EXPECT_NEAR(label.get_float_attribute("XResolution"), 150, 0.03);
+
+  r = client().Get("/api/v1/labels/560001.svg?size=4x6in", counter());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/svg+xml");
+  EXPECT_NE(r->body.find("width=\"101.6000mm\""), std::string::npos);
+
+  r = client().Get("/api/v1/tags/110001.png?px=128&dpi=600", counter());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  const OIIO::ImageSpec tag = PngSpec(r->body);
+  EXPECT_EQ(tag.width, 128 + 2 * 20);  // ceil(0.15 x 128) = 20 px quiet zone each side
+  EXPECT_NEAR(tag.get_float_attribute("XResolution"), 600, 0.03);
+  r = client().Get("/api/v1/tags/110001.svg?mm=30", counter());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_NE(r->body.find("key 11684"), std::string::npos);  // 110001's key in the seed
+
+  const std::string metrics = client().Get("/metrics")->body;
+  EXPECT_EQ(MetricLine(metrics, "pintag_labels_rendered_total"), "pintag_labels_rendered_total 3");
+  EXPECT_EQ(MetricLine(metrics, "pintag_tags_rendered_total"), "pintag_tags_rendered_total 2");
+}
+
+TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {
+  const auto expect = [&](const std::string& path, int status, const std::string& fragment) {
+    const json problem = ExpectProblem(client().Get(path, counter()), status);
+    EXPECT_NE(problem.dump().find(fragment), std::string::npos) << path << ": " << problem;
+  };
+  expect("/api/v1/labels/11001.pdf", 400, "6 digits");
+  expect("/api/v1/labels/011001.pdf", 400, "Malformed Pincode");
+  expect("/api/v1/labels/110001.pdf?size=100x150", 400, "needs a unit");
+  expect("/api/v1/labels/110001.pdf?size=10x10mm", 400, "50 to 300 mm");
+  expect("/api/v1/labels/110001.png?dpi=5000", 400, "'dpi'");
+  expect("/api/v1/labels/110001.png?dpi=abc", 400, "'dpi'");
+  expect("/api/v1/labels/110001.png?size=300x300mm&dpi=1200", 400, "megapixels");
+  expect("/api/v1/tags/110001.png?px=5000", 400, "'px'");
+  expect("/api/v1/tags/110001.png?px=128.5", 400, "must be an integer");
+  expect("/api/v1/tags/110001.svg?px=100&mm=10", 400, "at most one");
+  const std::string metrics = client().Get("/metrics")->body;
+  EXPECT_EQ(MetricLine(metrics, "pintag_labels_rendered_total"), "pintag_labels_rendered_total 0");
+}
+
+TEST_F(ServeTest, BatchProblemsNameTheBadInput) {
+  const auto expect = [&](const std::string& body, int status, const std::string& fragment) {
+    const json problem =
+        ExpectProblem(client().Post("/api/v1/labels", counter(), body, "application/json"), status);
+    EXPECT_NE(problem.dump().find(fragment), std::string::npos) << body << ": " << problem;
+  };
+  expect("not json", 400, "not valid JSON");
+  expect(R"({"pincodes": []})", 400, "empty");
+  expect(R"({"pins": ["110001"]})", 400, "expected");
+  expect(R"({"pincodes": [110001.5]})", 400, "pincodes[0]");
+  expect(R"({"pincodes": ["110001", "abc"]})", 400, "pincodes[1]");
+  expect(R"({"pincodes": ["110001"], "size": 5})", 400, "'size' must be a string");
+  expect(R"({"pincodes": ["110001"], "plan": "nope"})", 404, "Unknown Sort Plan");
+  // A bare list of pincodes (strings or numbers) is a batch too.
+  const auto r =
+      client().Post("/api/v1/labels", counter(), R"(["110001", 560001])", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body.substr(0, 300);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/pdf");
 }
 
 TEST_F(ServeTest, TagsAndLabelsForARealPincode) {
@@ -74,8 +173,72 @@ TEST_F(ServeTest, LabelErrors) {
                 410);
 }
 
+/// The lines of text on page `page` of a PDF, as pdftotext reads them.
+std::vector<std::string> PdfLines(const TempDir& dir, const std::string& pdf, int page) {
+  const std::string file = dir.file("text.pdf");
+  WriteFile(file, pdf);
+  const std::string text = Capture("pdftotext -f " + std::to_string(page) + " -l " +
+                                   std::to_string(page) + " " + file + " -");
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) lines.push_back(line);
+  }
+  return lines;
+}
+
+bool HasLine(const std::vector<std::string>& lines, const std::string& line) {
+  return std::find(lines.begin(), lines.end(), line) != lines.end();
+}
+
+// A counter clerk who never picks a plan still prints the bin: labels and batches without `plan`
+// use the default sort plan, the same bin GET /api/v1/route/{pin} answers.
+TEST_F(ServeTest, LabelsWithoutAPlanPrintTheDefaultPlansBin) {
+  ASSERT_EQ(std::system("command -v pdftotext > /dev/null 2>&1"), 0)
+      << "pdftotext is missing: install poppler-utils (scripts/debian-packages-test.txt)";
+  std::vector<std::string> bins;
+  for (const char* pin : {"560001", "110001"}) {
+    const json routed = ExpectJson(client().Get(std::string("/api/v1/route/") + pin));
+    ASSERT_EQ(routed["plan"], "default");
+    bins.push_back(routed["bin"]);
+    auto r = client().Get(std::string("/api/v1/labels/") + pin + ".pdf", counter());
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body.substr(0, 300);
+    const std::vector<std::string> lines = PdfLines(dir_, r->body, 1);
+    EXPECT_TRUE(HasLine(lines, "SORT BIN")) << pin;
+    EXPECT_TRUE(HasLine(lines, bins.back())) << pin << " bin " << bins.back();
+    EXPECT_TRUE(HasLine(lines, "plan default")) << pin;
+    EXPECT_FALSE(HasLine(lines, "none")) << pin;
+  }
+  ASSERT_NE(bins[0], bins[1]);  // so each page below is checked against its own bin
+  const auto r = client().Post("/api/v1/labels", counter(), R"({"pincodes": ["560001", "110001"]})",
+                               "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body.substr(0, 300);
+  for (int page = 1; page <= 2; ++page) {
+    const std::vector<std::string> lines = PdfLines(dir_, r->body, page);
+    EXPECT_TRUE(HasLine(lines, bins[page - 1])) << "page " << page;
+    EXPECT_TRUE(HasLine(lines, "plan default")) << "page " << page;
+    EXPECT_FALSE(HasLine(lines, "none")) << "page " << page;
+  }
+  // The OpenAPI document says so for every label route.
+  const json doc = ExpectJson(client().Get("/openapi.json"));
+  for (const auto& [path, method] :
+       {std::pair{"/api/v1/labels/{pin}.pdf", "get"}, std::pair{"/api/v1/labels/{pin}.png", "get"},
+        std::pair{"/api/v1/labels/{pin}.svg", "get"}, std::pair{"/api/v1/labels", "post"}}) {
+    bool documented = false;
+    for (const json& parameter : doc["paths"][path][method]["parameters"]) {
+      documented = documented ||
+                   (parameter["name"] == "plan" && parameter["description"].get<std::string>().find(
+                                                       "(default: default)") != std::string::npos);
+    }
+    EXPECT_TRUE(documented) << method << " " << path;
+  }
+}
+
 TEST_F(ServeTest, BatchPdfOf50LabelsHas50PagesOfTheRightSize) {
-  if (std::system("command -v pdfinfo > /dev/null 2>&1") != 0) GTEST_SKIP() << "no pdfinfo";
+  ASSERT_EQ(std::system("command -v pdfinfo > /dev/null 2>&1"), 0)
+      << "pdfinfo is missing: install poppler-utils (scripts/debian-packages-test.txt)";
   const json search = ExpectJson(client().Get("/api/v1/pincodes?state=Delhi&limit=500"));
   std::vector<std::string> pins;
   for (const json& hit : search["results"]) {

@@ -22,6 +22,11 @@ namespace {
 
 using nlohmann::json;
 
+std::string Upper(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return text;
+}
+
 std::set<std::string> Secrets(const std::string& text) {
   std::set<std::string> found;
   const std::regex secret(R"(pt_\d+_[A-Za-z0-9_-]{43})");
@@ -230,9 +235,8 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
   for (const auto& [path, item] : doc["paths"].items()) {
     for (const auto& [method, operation] : item.items()) {
       if (method == "parameters") continue;
-      std::string upper = method;
-      for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-      listed.insert(upper + " " + path);
+      const std::string upper = Upper(method);
+      listed.insert(std::string(upper).append(" ").append(path));
       std::string concrete = std::regex_replace(path, std::regex(R"(\{pin\})"), "110001");
       concrete = std::regex_replace(concrete, std::regex(R"(\{key\})"), "11684");
       concrete = std::regex_replace(concrete, std::regex(R"(\{name\})"), "default");
@@ -281,6 +285,40 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
     EXPECT_EQ(listed.count(route), 1U) << route;
   }
   EXPECT_EQ(listed.size(), 24U);
+}
+
+// docs/API.md's route table is the route table: every operation /openapi.json lists, with the role
+// it needs, is one row there, and the doc lists nothing else.
+TEST_F(ServeTest, ApiDocListsEveryRouteWithItsRole) {
+  const json doc = ExpectJson(client().Get("/openapi.json"));
+  std::set<std::string> served;
+  for (const auto& [path, item] : doc["paths"].items()) {
+    for (const auto& [method, operation] : item.items()) {
+      served.insert(Upper(method).append(" ").append(path).append(" ").append(
+          operation["x-pintag-role"].get<std::string>()));
+    }
+  }
+  const std::string text = ReadFile(std::string(PINTAG_SOURCE_DIR) + "/docs/API.md");
+  const std::size_t begin = text.find("<!-- routes:");
+  const std::size_t end = text.find("<!-- /routes -->");
+  ASSERT_NE(begin, std::string::npos);
+  ASSERT_NE(end, std::string::npos);
+  std::set<std::string> documented;
+  const std::string table = text.substr(begin, end - begin);
+  const std::regex row(
+      R"(\| (GET|POST|PUT|DELETE) \| `([^`]+)` \| (open|counter|scanner|admin) \|)");
+  for (auto it = std::sregex_iterator(table.begin(), table.end(), row);
+       it != std::sregex_iterator(); ++it) {
+    EXPECT_TRUE(
+        documented.insert((*it)[1].str() + " " + (*it)[2].str() + " " + (*it)[3].str()).second)
+        << "listed twice: " << it->str();
+  }
+  for (const std::string& route : served) {
+    EXPECT_EQ(documented.count(route), 1U) << "docs/API.md does not list " << route;
+  }
+  for (const std::string& route : documented) {
+    EXPECT_EQ(served.count(route), 1U) << "docs/API.md lists " << route << ", not served";
+  }
 }
 
 TEST_F(ServeTest, StaticFilesFromTheWebDirectoryOnly) {

@@ -1,5 +1,5 @@
 #pragma once
-// Shared fixtures for the server tests: a fake token table and a fake registry.
+// Shared fixtures for the HTTP layer tests: a fixed token table and a route table of test routes.
 
 #include <atomic>
 #include <filesystem>
@@ -9,7 +9,6 @@
 #include <string>
 
 #include "pintag/server/api.hpp"
-#include "pintag/server/label_routes.hpp"
 #include "pintag/server/problem.hpp"
 #include "pintag/test/files.hpp"
 
@@ -21,44 +20,18 @@ inline constexpr const char* kScannerToken = "scanner-secret";
 
 inline TokenVerifier FakeVerifier() {
   return [](std::string_view token) -> std::optional<Principal> {
-    if (token == kAdminToken) return Principal{"t-admin", Role::kAdmin};
-    if (token == kCounterToken) return Principal{"t-counter", Role::kCounter};
-    if (token == kScannerToken) return Principal{"t-scanner", Role::kScanner};
+    if (token == kAdminToken) return Principal{"t-admin", Access::kAdmin};
+    if (token == kCounterToken) return Principal{"t-counter", Access::kCounter};
+    if (token == kScannerToken) return Principal{"t-scanner", Access::kScanner};
     return std::nullopt;
   };
 }
 
-/// 110001 and 560001 exist; 110002 is retired; plan "north" has bins; others are unknown.
-inline LabelContentProvider FakeRegistry() {
-  return [](Pincode pin, const std::optional<std::string>& plan) -> LabelLookup {
-    if (plan && *plan != "north") {
-      return {std::nullopt,
-              Problem{404, "Unknown Plan", "no sort plan '" + *plan + "'", "about:blank"}};
-    }
-    if (pin == Pincode(110002)) {
-      return {std::nullopt,
-              Problem{410, "Retired Pincode", "pincode 110002 is retired", "about:blank"}};
-    }
-    if (pin != Pincode(110001) && pin != Pincode(560001)) {
-      return {std::nullopt,
-              Problem{404, "Unknown Pincode", "pincode " + pin.str() + " is not in the registry",
-                      "about:blank"}};
-    }
-    LabelContent label;
-    label.pincode = pin;
-    label.key = TagKey(pin == Pincode(110001) ? 12345 : 777);
-    label.office = pin == Pincode(110001) ? "Connaught Place S.O" : "Bangalore G.P.O.";
-    label.district = pin == Pincode(110001) ? "New Delhi" : "Bengaluru";
-    label.state = pin == Pincode(110001) ? "Delhi" : "Karnataka";
-    if (plan) {
-      label.plan = plan;
-      label.bin = pin == Pincode(110001) ? "N-07" : "S-02";
-    }
-    return {label, std::nullopt};
-  };
-}
+/// A metrics counter the file route counts its answers in.
+inline constexpr std::string_view kFilesServedCounter = "test_files_served_total";
 
-/// A test route table: an open echo, role-protected routes, a thrower, and the label routes.
+/// A test route table: an open echo, role-protected routes (an upload, an admin write, a binary
+/// file with a suffixed path parameter that counts in kFilesServedCounter), a thrower.
 inline Router TestRouter(const std::shared_ptr<Metrics>& metrics) {
   Router router;
   router.add(MakeRoute(
@@ -94,7 +67,16 @@ inline Router TestRouter(const std::shared_ptr<Metrics>& metrics) {
       "GET", "/api/v1/teapot", Access::kOpen,
       [](const HttpRequest&) -> HttpResponse { throw HttpError(418, "short and stout", "Teapot"); },
       "problem"));
-  AddLabelRoutes(router, FakeRegistry(), metrics, {.max_batch = 60, .max_tag_px = 1024});
+  metrics->defineCounter(kFilesServedCounter, "Files the test route served.");
+  Route file = MakeRoute(
+      "GET", "/api/v1/files/{name}.bin", Access::kCounter,
+      [metrics](const HttpRequest& r) {
+        metrics->increment(kFilesServedCounter);
+        return HttpResponse::Bytes("application/octet-stream", "bytes of " + r.pathParam("name"));
+      },
+      "a binary file");
+  file.produces = {"application/octet-stream"};
+  router.add(std::move(file));
   return router;
 }
 

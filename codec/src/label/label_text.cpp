@@ -1,67 +1,30 @@
 #include "label/label_text.hpp"
 
 #include <algorithm>
-#include <cstdint>
 #include <vector>
+
+#include "pintag/codec/utf8.hpp"
 
 namespace pintag::label {
 namespace {
 
 constexpr char32_t kReplacement = 0xFFFD;
 
-void Append(std::string& out, char32_t c) {
-  if (c < 0x80) {
-    out += static_cast<char>(c);
-  } else if (c < 0x800) {
-    out += static_cast<char>(0xC0 | (c >> 6));
-    out += static_cast<char>(0x80 | (c & 0x3F));
-  } else if (c < 0x10000) {
-    out += static_cast<char>(0xE0 | (c >> 12));
-    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
-    out += static_cast<char>(0x80 | (c & 0x3F));
-  } else {
-    out += static_cast<char>(0xF0 | (c >> 18));
-    out += static_cast<char>(0x80 | ((c >> 12) & 0x3F));
-    out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
-    out += static_cast<char>(0x80 | (c & 0x3F));
-  }
+bool IsContinuation(char byte) {
+  return (static_cast<unsigned char>(byte) & 0xC0) == 0x80;
 }
 
-// Decodes one code point at text[i], advancing i; malformed input yields U+FFFD and skips one byte.
+// The code point at text[i], advancing i past it. Invalid bytes yield one U+FFFD for the bad byte
+// and the continuation bytes right after it, so an overlong or surrogate sequence is one mark.
 char32_t Next(std::string_view text, std::size_t& i) {
-  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
-  const unsigned char lead = byte(i);
-  if (lead < 0x80) {
-    ++i;
-    return lead;
+  const Utf8CodePoint decoded = DecodeUtf8(text, i);
+  if (decoded.length > 0) {
+    i += decoded.length;
+    return decoded.value;
   }
-  int extra = 0;
-  char32_t c = 0;
-  char32_t min = 0;
-  if ((lead & 0xE0) == 0xC0) {
-    extra = 1, c = lead & 0x1F, min = 0x80;
-  } else if ((lead & 0xF0) == 0xE0) {
-    extra = 2, c = lead & 0x0F, min = 0x800;
-  } else if ((lead & 0xF8) == 0xF0) {
-    extra = 3, c = lead & 0x07, min = 0x10000;
-  } else {
-    ++i;
-    return kReplacement;
-  }
-  if (i + extra >= text.size()) {
-    ++i;
-    return kReplacement;
-  }
-  for (int k = 1; k <= extra; ++k) {
-    if ((byte(i + k) & 0xC0) != 0x80) {
-      ++i;
-      return kReplacement;
-    }
-    c = (c << 6) | (byte(i + k) & 0x3F);
-  }
-  i += extra + 1;
-  if (c < min || c > 0x10FFFF || (c >= 0xD800 && c <= 0xDFFF)) return kReplacement;
-  return c;
+  ++i;
+  while (i < text.size() && IsContinuation(text[i])) ++i;
+  return kReplacement;
 }
 
 bool IsSpace(char32_t c) {
@@ -78,7 +41,7 @@ bool IsControl(char32_t c) {
 std::vector<std::size_t> Boundaries(std::string_view text) {
   std::vector<std::size_t> at;
   for (std::size_t i = 0; i < text.size(); ++i) {
-    if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) at.push_back(i);
+    if (!IsContinuation(text[i])) at.push_back(i);
   }
   at.push_back(text.size());
   return at;
@@ -109,7 +72,7 @@ std::string SanitizeUtf8(std::string_view text) {
       ++count;
       pending_space = false;
     }
-    Append(out, c);
+    AppendUtf8(out, c);
     ++count;
   }
   return out;

@@ -2,24 +2,24 @@
 
 #include <sys/stat.h>
 
-#include "app/routes.hpp"
+#include "app/context.hpp"
+#include "app/route_table.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
-#include "pintag/server/label_routes.hpp"
 
 namespace pintag::app {
 namespace {
 
-server::Role ToServerRole(db::Role role) {
+server::Access Granted(db::Role role) {
   switch (role) {
     case db::Role::kAdmin:
-      return server::Role::kAdmin;
+      return server::Access::kAdmin;
     case db::Role::kCounter:
-      return server::Role::kCounter;
+      return server::Access::kCounter;
     case db::Role::kScanner:
       break;
   }
-  return server::Role::kScanner;
+  return server::Access::kScanner;
 }
 
 server::TokenVerifier RegistryTokenVerifier(const std::shared_ptr<ConnectionPool>& pool) {
@@ -28,11 +28,19 @@ server::TokenVerifier RegistryTokenVerifier(const std::shared_ptr<ConnectionPool
       auto connection = pool->acquire();
       auto token = db::VerifyToken(*connection, secret);
       if (!token) return std::nullopt;
-      return server::Principal{std::to_string(token->id), ToServerRole(token->role)};
+      return server::Principal{std::to_string(token->id), Granted(token->role)};
     } catch (const std::exception&) {
       return std::nullopt;  // database unreachable: no one is admitted
     }
   };
+}
+
+void DefineCounters(server::Metrics& metrics) {
+  metrics.defineCounter(kLabelsRenderedCounter, "Labels rendered (PDF pages, PNGs, SVGs).");
+  metrics.defineCounter(kTagsRenderedCounter, "Tag images rendered.");
+  metrics.defineCounter(kScansCounter, "POST /api/v1/detect calls that sent a photo.");
+  metrics.defineCounter(kDetectionsCounter, "Tags decoded in uploaded photos.");
+  metrics.defineCounter(kUnknownKeysCounter, "Decoded tags whose key no pincode holds.");
 }
 
 }  // namespace
@@ -67,15 +75,10 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->pool = std::make_shared<ConnectionPool>(config.db_path, config.busy_timeout_ms);
   context->metrics = std::make_shared<server::Metrics>();
   context->max_pixels = config.max_pixels;
-  std::shared_ptr<const AppContext> shared = context;
-
-  server::Router router;
-  AddRegistryRoutes(router, shared);
-  server::AddLabelRoutes(router, RegistryLabelProvider(shared), context->metrics,
-                         {.max_batch = config.max_batch, .max_tag_px = config.max_tag_px});
-  AddDetectRoutes(router, shared);
-  AddRoutingRoutes(router, shared);
-  AddTokenRoutes(router, shared);
+  context->max_batch = config.max_batch;
+  context->max_tag_px = config.max_tag_px;
+  DefineCounters(*context->metrics);
+  server::Router router = AppRouter(context);
 
   server::ApiOptions options;
   options.max_body_bytes = config.max_body_bytes;

@@ -1,7 +1,7 @@
 #pragma once
-// The PinTag application assembled: every /api/v1 route over one database, the registry as the
-// label content provider and the token verifier, readiness from the database, the metrics.
-// `pintag serve` builds this and hands it to server::HttpServer.
+// The PinTag application assembled: every /api/v1 route of the route table over one database,
+// bearer tokens verified against its token table, readiness from the database file, the
+// metrics. `pintag serve` builds this and hands it to server::HttpServer.
 
 #include <cstddef>
 #include <cstdint>

@@ -4,20 +4,25 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string_view>
 
 #include "app/connection_pool.hpp"
 #include "pintag/server/metrics.hpp"
 
 namespace pintag::app {
 
+inline constexpr std::string_view kLabelsRenderedCounter = "pintag_labels_rendered_total";
+inline constexpr std::string_view kTagsRenderedCounter = "pintag_tags_rendered_total";
+inline constexpr std::string_view kScansCounter = "pintag_scans_total";
 inline constexpr std::string_view kDetectionsCounter = "pintag_detections_total";
 inline constexpr std::string_view kUnknownKeysCounter = "pintag_detections_unknown_key_total";
-inline constexpr std::string_view kScansCounter = "pintag_scans_total";
 
 struct AppContext {
   std::shared_ptr<ConnectionPool> pool;
-  std::shared_ptr<server::Metrics> metrics;
-  std::int64_t max_pixels = 40'000'000;  ///< decoded pixels per uploaded photo
+  std::shared_ptr<server::Metrics> metrics;  ///< the counters above are defined in it
+  std::int64_t max_pixels = 40'000'000;      ///< decoded pixels per uploaded photo
+  std::size_t max_batch = 100;               ///< labels per POST /api/v1/labels; more is 413
+  int max_tag_px = 4096;                     ///< largest ?px= of a tag image (square side)
 };
 
 }  // namespace pintag::app

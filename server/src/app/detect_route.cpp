@@ -1,7 +1,8 @@
 // POST /api/v1/detect: photo bytes -> header check (format, pixel limit, whole file) -> decode
 // (OpenImageIO, EXIF) -> Detector -> keys -> registry (pincode, status, office) -> sort plan (bin)
-// -> JSON, or the photo annotated as PNG. Every call that reaches the handler is written to the
-// scan log, refusals of the photo included.
+// -> JSON; on request with the photo annotated, as PNG instead of the JSON (?overlay=1) or inside
+// it as a data URL (?overlay=inline). Every call that reaches the handler is written to the scan
+// log, refusals of the photo included.
 
 #include <charconv>
 #include <chrono>
@@ -10,8 +11,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "app/common.hpp"
+#include "app/data_url.hpp"
+#include "app/db_problems.hpp"
 #include "app/image_header.hpp"
+#include "app/params.hpp"
+#include "app/registry_json.hpp"
 #include "app/routes.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/db/scan_log.hpp"
@@ -114,215 +118,198 @@ std::string OverlayPng(cv::Mat image, const DetectResult& result,
   return {png.begin(), png.end()};
 }
 
-class DetectService {
- public:
-  explicit DetectService(std::shared_ptr<const AppContext> context) : context_(std::move(context)) {
-    context_->metrics->defineCounter(kScansCounter, "POST /api/v1/detect calls that sent a photo.");
-    context_->metrics->defineCounter(kDetectionsCounter, "Tags decoded in uploaded photos.");
-    context_->metrics->defineCounter(kUnknownKeysCounter,
-                                     "Decoded tags whose key no pincode holds.");
+/// ?overlay=: the photo with the tags outlined, instead of the JSON or inside it.
+enum class Overlay {
+  kNone,    ///< absent, 0, false, no: the JSON alone
+  kPng,     ///< 1, true, yes (or empty): the PNG instead of the JSON, as before there was kInline
+  kInline,  ///< inline: the JSON with "overlay", the PNG as a data: URL (one upload, both)
+};
+
+Overlay OverlayQuery(const HttpRequest& request) {
+  const std::optional<std::string> text = request.queryParam("overlay");
+  if (!text || *text == "0" || *text == "false" || *text == "no") return Overlay::kNone;
+  if (*text == "1" || *text == "true" || *text == "yes" || text->empty()) return Overlay::kPng;
+  if (*text == "inline") return Overlay::kInline;
+  throw HttpError(400,
+                  "query parameter 'overlay' must be 1 (the outlined photo as PNG), inline (the "
+                  "JSON with the outlined photo as a data URL) or 0");
+}
+
+/// What the scan log keeps of one call.
+struct Outcome {
+  std::string result_json;  ///< what was read, or the problem that ended the call
+  std::optional<int> width, height;
+};
+
+void Log(const AppContext& context, const HttpRequest& request, std::size_t bytes,
+         const Outcome& outcome) {
+  context.metrics->increment(kScansCounter);
+  db::ScanRecord scan;
+  if (request.principal) {
+    std::int64_t id = 0;
+    const std::string& text = request.principal->id;
+    if (std::from_chars(text.data(), text.data() + text.size(), id).ec == std::errc())
+      scan.token_id = id;
+  }
+  scan.image_bytes = static_cast<std::int64_t>(bytes);
+  scan.image_width = outcome.width;
+  scan.image_height = outcome.height;
+  scan.result_json = outcome.result_json;
+  try {
+    auto connection = context.pool->acquire();
+    auto appended = db::AppendScan(*connection, scan);
+    if (!appended) std::cerr << "pintag serve: scan log: " << appended.error().message << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "pintag serve: scan log: " << e.what() << "\n";
+  }
+}
+
+HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::string_view bytes,
+                    Clock::time_point start, Outcome* outcome) {
+  const std::string plan_name = PlanQuery(request);
+  // By default the tag is the one printed on the default label (100 x 150 mm: 57.9 mm).
+  const double tag_size_mm = NumberQuery(request, "tag_size_mm", 1, 10000)
+                                 .value_or(TagPlacement(kLabel100x150).square_side_mm);
+  const std::optional<double> fx = NumberQuery(request, "fx", 1e-3, 1e7);
+  const std::optional<double> fy = NumberQuery(request, "fy", 1e-3, 1e7);
+  const std::optional<double> cx = NumberQuery(request, "cx", -1e6, 1e6);
+  const std::optional<double> cy = NumberQuery(request, "cy", -1e6, 1e6);
+  if (fx.has_value() != fy.has_value()) throw HttpError(400, "give both fx and fy, or neither");
+  if ((cx || cy) && !fx) throw HttpError(400, "cx and cy need fx and fy");
+  const Overlay overlay = OverlayQuery(request);
+
+  db::SortPlan plan;
+  {
+    auto connection = context.pool->acquire();
+    plan = LoadPlan(*connection, plan_name);
   }
 
-  HttpResponse handle(const HttpRequest& request) const {
-    const Clock::time_point start = Clock::now();
-    std::string_view bytes = request.body;
-    if (request.content_type == "multipart/form-data") {
-      const server::FormPart* part = request.part("image");
-      if (part == nullptr) throw HttpError(400, "the multipart body needs a part named 'image'");
-      bytes = part->content;
-    }
-    if (bytes.empty()) throw HttpError(400, "no photo: the body is empty", "No Image");
-    Outcome outcome;
-    try {
-      HttpResponse response = detect(request, bytes, start, &outcome);
-      log(request, bytes.size(), outcome);
-      return response;
-    } catch (const HttpError& e) {
-      outcome.result = {
-          {"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}};
-      log(request, bytes.size(), outcome);
-      throw;
+  // The photo: format and claimed size from the header, before anything is decoded.
+  const std::span<const std::uint8_t> data(reinterpret_cast<const std::uint8_t*>(bytes.data()),
+                                           bytes.size());
+  const ImageHeader header = InspectImage(data);
+  if (header.format.empty()) {
+    throw HttpError(415, "the body is not a JPEG, PNG, TIFF or WebP image",
+                    "Unsupported Image Format");
+  }
+  if (header.width > 0 && header.height > 0) {
+    outcome->width = header.width;
+    outcome->height = header.height;
+    const std::int64_t pixels = std::int64_t{header.width} * header.height;
+    if (pixels > context.max_pixels) {
+      throw HttpError(413,
+                      "the image is " + std::to_string(header.width) + " x " +
+                          std::to_string(header.height) + " pixels; at most " +
+                          std::to_string(context.max_pixels) + " pixels are decoded",
+                      "Image Too Large");
     }
   }
-
- private:
-  struct Outcome {
-    json result;
-    std::optional<int> width, height;
-  };
-
-  void log(const HttpRequest& request, std::size_t bytes, const Outcome& outcome) const {
-    context_->metrics->increment(kScansCounter);
-    db::ScanRecord scan;
-    if (request.principal) {
-      std::int64_t id = 0;
-      const std::string& text = request.principal->id;
-      if (std::from_chars(text.data(), text.data() + text.size(), id).ec == std::errc())
-        scan.token_id = id;
-    }
-    scan.image_bytes = static_cast<std::int64_t>(bytes);
-    scan.image_width = outcome.width;
-    scan.image_height = outcome.height;
-    scan.result_json = outcome.result.dump();
-    try {
-      auto connection = context_->pool->acquire();
-      auto appended = db::AppendScan(*connection, scan);
-      if (!appended) std::cerr << "pintag serve: scan log: " << appended.error().message << "\n";
-    } catch (const std::exception& e) {
-      std::cerr << "pintag serve: scan log: " << e.what() << "\n";
-    }
+  if (!header.complete) throw HttpError(400, header.problem, "Corrupt Image");
+  const Clock::time_point decode_start = Clock::now();
+  const LoadResult loaded = LoadImageBytes(data, context.max_pixels);
+  if (!loaded.image) {
+    // TIFF and WebP sizes are checked by the loader, from the header too.
+    if (loaded.error.rfind("image too large", 0) == 0)
+      throw HttpError(413, loaded.error, "Image Too Large");
+    throw HttpError(400, loaded.error, "Corrupt Image");
   }
+  const double decode_ms = Ms(decode_start);
+  const cv::Mat& image = loaded.image->bgr;
+  outcome->width = image.cols;
+  outcome->height = image.rows;
 
-  HttpResponse detect(const HttpRequest& request, std::string_view bytes, Clock::time_point start,
-                      Outcome* outcome) const {
-    const std::string plan_name =
-        request.queryParam("plan").value_or(std::string(db::kDefaultPlanName));
-    // By default the tag is the one printed on the default label (100 x 150 mm: 57.9 mm).
-    const double tag_size_mm = NumberQuery(request, "tag_size_mm", 1, 10000)
-                                   .value_or(TagPlacement(kLabel100x150).square_side_mm);
-    const std::optional<double> fx = NumberQuery(request, "fx", 1e-3, 1e7);
-    const std::optional<double> fy = NumberQuery(request, "fy", 1e-3, 1e7);
-    const std::optional<double> cx = NumberQuery(request, "cx", -1e6, 1e6);
-    const std::optional<double> cy = NumberQuery(request, "cy", -1e6, 1e6);
-    if (fx.has_value() != fy.has_value()) throw HttpError(400, "give both fx and fy, or neither");
-    if ((cx || cy) && !fx) throw HttpError(400, "cx and cy need fx and fy");
-    const bool overlay = BoolQuery(request, "overlay", false);
+  DetectorOptions options;
+  options.tag_size_m = tag_size_mm / 1000.0;
+  if (fx) {
+    options.intrinsics = CameraIntrinsics{
+        *fx, *fy, cx.value_or((image.cols - 1) / 2.0), cy.value_or((image.rows - 1) / 2.0), {}};
+  }
+  const Clock::time_point detect_start = Clock::now();
+  const DetectResult result = Detector(options).detect(*loaded.image);
+  if (!result.error.empty()) throw HttpError(400, result.error, "Cannot Detect");
+  const double detect_ms = Ms(detect_start);
 
-    db::SortPlan plan;
-    {
-      auto connection = context_->pool->acquire();
-      auto found = db::GetPlan(*connection, plan_name);
-      if (!found && found.error().code == db::ErrorCode::kNotFound) {
-        throw HttpError(404, "no sort plan named '" + plan_name.substr(0, 100) + "'",
-                        "Unknown Sort Plan");
-      }
-      plan = Unwrap(std::move(found));
-    }
-
-    // The photo: format and claimed size from the header, before anything is decoded.
-    const std::span<const std::uint8_t> data(reinterpret_cast<const std::uint8_t*>(bytes.data()),
-                                             bytes.size());
-    const ImageHeader header = InspectImage(data);
-    if (header.format.empty()) {
-      throw HttpError(415, "the body is not a JPEG, PNG, TIFF or WebP image",
-                      "Unsupported Image Format");
-    }
-    if (header.width > 0 && header.height > 0) {
-      outcome->width = header.width;
-      outcome->height = header.height;
-      const std::int64_t pixels = std::int64_t{header.width} * header.height;
-      if (pixels > context_->max_pixels) {
-        throw HttpError(413,
-                        "the image is " + std::to_string(header.width) + " x " +
-                            std::to_string(header.height) + " pixels; at most " +
-                            std::to_string(context_->max_pixels) + " pixels are decoded",
-                        "Image Too Large");
-      }
-    }
-    if (!header.complete) throw HttpError(400, header.problem, "Corrupt Image");
-    const Clock::time_point decode_start = Clock::now();
-    const LoadResult loaded = LoadImageBytes(data, context_->max_pixels);
-    if (!loaded.image) {
-      // TIFF and WebP sizes are checked by the loader, from the header too.
-      if (loaded.error.rfind("image too large", 0) == 0)
-        throw HttpError(413, loaded.error, "Image Too Large");
-      throw HttpError(400, loaded.error, "Corrupt Image");
-    }
-    const double decode_ms = Ms(decode_start);
-    const cv::Mat& image = loaded.image->bgr;
-    outcome->width = image.cols;
-    outcome->height = image.rows;
-
-    DetectorOptions options;
-    options.tag_size_m = tag_size_mm / 1000.0;
-    if (fx) {
-      options.intrinsics = CameraIntrinsics{
-          *fx, *fy, cx.value_or((image.cols - 1) / 2.0), cy.value_or((image.rows - 1) / 2.0), {}};
-    }
-    const Clock::time_point detect_start = Clock::now();
-    const DetectResult result = Detector(options).detect(*loaded.image);
-    if (!result.error.empty()) throw HttpError(400, result.error, "Cannot Detect");
-    const double detect_ms = Ms(detect_start);
-
-    std::vector<Resolved> resolved;
-    json tags = json::array();
-    {
-      auto connection = context_->pool->acquire();
-      for (const Detection& d : result.detections) {
-        Resolved r;
-        if (d.key) {
-          auto record = db::LookupKey(*connection, *d.key);
-          if (record) {
-            r.routing = db::RouteWith(plan, record->pincode);
-            r.record = std::move(record).value();
-          } else if (record.error().code != db::ErrorCode::kNotFound) {
-            ThrowDbError(record.error());
-          }
-          tags.push_back(TagJson(d, r));
+  std::vector<Resolved> resolved;
+  json tags = json::array();
+  {
+    auto connection = context.pool->acquire();
+    for (const Detection& d : result.detections) {
+      Resolved r;
+      if (d.key) {
+        auto record = db::LookupKey(*connection, *d.key);
+        if (record) {
+          r.routing = db::RouteWith(plan, record->pincode);
+          r.record = std::move(record).value();
+        } else if (record.error().code != db::ErrorCode::kNotFound) {
+          ThrowDbError(record.error());
         }
-        resolved.push_back(std::move(r));
+        tags.push_back(TagJson(d, r));
       }
+      resolved.push_back(std::move(r));
     }
-    context_->metrics->increment(kDetectionsCounter, static_cast<double>(tags.size()));
-    std::size_t unknown = 0;
-    for (const json& tag : tags) unknown += tag["pincode"].is_null();
-    if (unknown > 0)
-      context_->metrics->increment(kUnknownKeysCounter, static_cast<double>(unknown));
+  }
+  context.metrics->increment(kDetectionsCounter, static_cast<double>(tags.size()));
+  std::size_t unknown = 0;
+  for (const json& tag : tags) unknown += tag["pincode"].is_null();
+  if (unknown > 0) context.metrics->increment(kUnknownKeysCounter, static_cast<double>(unknown));
 
-    json out;
-    out["image"] = {{"width", image.cols},
-                    {"height", image.rows},
-                    {"format", loaded.image->format},
-                    {"bytes", bytes.size()},
-                    {"exif_orientation", loaded.image->exif_orientation}};
-    out["intrinsics"] = {{"source", std::string(ToString(result.intrinsics_source))},
-                         {"fx", result.intrinsics.fx},
-                         {"fy", result.intrinsics.fy},
-                         {"cx", result.intrinsics.cx},
-                         {"cy", result.intrinsics.cy}};
-    out["tag_size_mm"] = tag_size_mm;
-    out["plan"] = plan.name;
-    out["tag_count"] = tags.size();
-    out["tags"] = std::move(tags);
-    out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
-    outcome->result = out;
+  json out;
+  out["image"] = {{"width", image.cols},
+                  {"height", image.rows},
+                  {"format", loaded.image->format},
+                  {"bytes", bytes.size()},
+                  {"exif_orientation", loaded.image->exif_orientation}};
+  out["intrinsics"] = {{"source", std::string(ToString(result.intrinsics_source))},
+                       {"fx", result.intrinsics.fx},
+                       {"fy", result.intrinsics.fy},
+                       {"cx", result.intrinsics.cx},
+                       {"cy", result.intrinsics.cy}};
+  out["tag_size_mm"] = tag_size_mm;
+  out["plan"] = plan.name;
+  out["tag_count"] = tags.size();
+  out["tags"] = std::move(tags);
+  out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
+  outcome->result_json = out.dump();
 
-    if (overlay) {
+  switch (overlay) {
+    case Overlay::kNone:
+      break;
+    case Overlay::kPng: {
       HttpResponse response =
           HttpResponse::Bytes("image/png", OverlayPng(image.clone(), result, resolved));
       response.headers.emplace_back("X-PinTag-Tags", std::to_string(out["tag_count"].get<int>()));
       return response;
     }
-    return HttpResponse::Json(out.dump());
+    case Overlay::kInline:
+      // Added after the scan log took its copy: the log keeps what was read, not the photo.
+      out["overlay"] = DataUrl("image/png", OverlayPng(image.clone(), result, resolved));
+      break;
   }
-
-  std::shared_ptr<const AppContext> context_;
-};
+  return HttpResponse::Json(out.dump());
+}
 
 }  // namespace
 
-void AddDetectRoutes(server::Router& router, std::shared_ptr<const AppContext> context) {
-  auto service = std::make_shared<DetectService>(std::move(context));
-  Route detect = MakeRoute(
-      "POST", "/api/v1/detect", Access::kScanner,
-      [service](const HttpRequest& r) { return service->handle(r); },
-      "Find every PinTag in a photo: pincode, key, status, office, bin, corners, pose",
-      "detection");
-  detect.consumes = {"image/jpeg", "image/png",           "image/tiff",
-                     "image/webp", "multipart/form-data", "application/octet-stream"};
-  detect.produces = {"application/json", "image/png"};
-  detect.query = {
-      {"plan", "sort plan for the bins (default: default)"},
-      {"tag_size_mm",
-       "black square side, millimetres (default: the tag of a 100x150mm label, 57.892; a6 "
-       "57.062, 4x6in 58.889)",
-       "number"},
-      {"fx", "focal length x, pixels (with fy: intrinsics given)", "number"},
-      {"fy", "focal length y, pixels", "number"},
-      {"cx", "principal point x, pixels (default: image centre)", "number"},
-      {"cy", "principal point y, pixels (default: image centre)", "number"},
-      {"overlay", "1: answer the photo with the tags outlined, as PNG", "boolean"}};
-  router.add(std::move(detect));
+HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
+  const Clock::time_point start = Clock::now();
+  std::string_view bytes = request.body;
+  if (request.content_type == "multipart/form-data") {
+    const server::FormPart* part = request.part("image");
+    if (part == nullptr) throw HttpError(400, "the multipart body needs a part named 'image'");
+    bytes = part->content;
+  }
+  if (bytes.empty()) throw HttpError(400, "no photo: the body is empty", "No Image");
+  Outcome outcome;
+  try {
+    HttpResponse response = Detect(context, request, bytes, start, &outcome);
+    Log(context, request, bytes.size(), outcome);
+    return response;
+  } catch (const HttpError& e) {
+    outcome.result_json =
+        json{{"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}}.dump();
+    Log(context, request, bytes.size(), outcome);
+    throw;
+  }
 }
 
 }  // namespace pintag::app

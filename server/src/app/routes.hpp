@@ -1,45 +1,50 @@
 #pragma once
-// The application's /api/v1 routes beyond the label routes, one file per group. Each adds its
-// routes to the table with their access rule and OpenAPI notes.
+// The application's route handlers, one file per group. Each is a plain function of the shared
+// context and the request; route_table.cpp gives each its method, path and role.
 
-#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "app/context.hpp"
-#include "pintag/server/label_routes.hpp"
-#include "pintag/server/router.hpp"
+#include "pintag/server/http_types.hpp"
+#include "pintag/server/problem.hpp"
 
 namespace pintag::app {
 
-// The route files speak the HTTP layer's vocabulary throughout.
+// The handler files speak the HTTP layer's vocabulary throughout.
 using nlohmann::json;
-using server::Access;
 using server::HttpError;
 using server::HttpRequest;
 using server::HttpResponse;
-using server::MakeRoute;
-using server::Route;
 
-/// A route group's handler: a plain function of the shared context and the request.
-using ContextHandler = HttpResponse (*)(const AppContext&, const HttpRequest&);
+using RouteHandler = HttpResponse (*)(const AppContext&, const HttpRequest&);
 
-/// `f` as a route handler over `context` (kept alive by the handler).
-inline server::Handler Bind(const std::shared_ptr<const AppContext>& context, ContextHandler f) {
-  return [context, f](const HttpRequest& request) { return f(*context, request); };
-}
+// registry_routes.cpp: pincodes and keys.
+HttpResponse GetPincode(const AppContext& context, const HttpRequest& request);
+HttpResponse SearchPincodes(const AppContext& context, const HttpRequest& request);
+HttpResponse GetKey(const AppContext& context, const HttpRequest& request);
+HttpResponse PostPincode(const AppContext& context, const HttpRequest& request);
+HttpResponse PostRetirePincode(const AppContext& context, const HttpRequest& request);
 
-/// GET /pincodes/{pin}, GET /pincodes, GET /keys/{key}, POST /pincodes, POST
-/// /pincodes/{pin}/retire.
-void AddRegistryRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context);
-/// GET /route/{pin}, GET /sortplans, GET and PUT /sortplans/{name}.
-void AddRoutingRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context);
-/// POST /tokens, GET /tokens, DELETE /tokens/{id}, POST /tokens/{id}/revoke.
-void AddTokenRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context);
-/// POST /detect.
-void AddDetectRoutes(server::Router& router, std::shared_ptr<const AppContext> context);
+// label_routes.cpp: tags and printable labels.
+HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request);
+HttpResponse GetTagSvg(const AppContext& context, const HttpRequest& request);
+HttpResponse GetLabelPdf(const AppContext& context, const HttpRequest& request);
+HttpResponse GetLabelPng(const AppContext& context, const HttpRequest& request);
+HttpResponse GetLabelSvg(const AppContext& context, const HttpRequest& request);
+HttpResponse PostLabels(const AppContext& context, const HttpRequest& request);
 
-/// The registry as the label routes see it: unknown pincode 404, retired 410, unknown plan 404.
-server::LabelContentProvider RegistryLabelProvider(
-    const std::shared_ptr<const AppContext>& context);
+// detect_route.cpp: tags in a photo.
+HttpResponse PostDetect(const AppContext& context, const HttpRequest& request);
+
+// routing_routes.cpp: bins and sort plans.
+HttpResponse GetRoute(const AppContext& context, const HttpRequest& request);
+HttpResponse GetSortPlans(const AppContext& context, const HttpRequest& request);
+HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request);
+HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request);
+
+// token_routes.cpp: bearer tokens.
+HttpResponse PostToken(const AppContext& context, const HttpRequest& request);
+HttpResponse GetTokens(const AppContext& context, const HttpRequest& request);
+HttpResponse RevokeToken(const AppContext& context, const HttpRequest& request);
 
 }  // namespace pintag::app

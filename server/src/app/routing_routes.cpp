@@ -1,20 +1,12 @@
 // Routing routes: the bin for a pincode under a sort plan, and the plans themselves (read by
 // anyone, written by admins as CSV or JSON).
 
-#include "app/common.hpp"
+#include "app/db_problems.hpp"
+#include "app/params.hpp"
 #include "app/routes.hpp"
-#include "pintag/db/sort_plan.hpp"
 
 namespace pintag::app {
 namespace {
-
-db::SortPlan GetPlanOrThrow(db::Connection& connection, const std::string& name) {
-  auto plan = db::GetPlan(connection, name);
-  if (!plan && plan.error().code == db::ErrorCode::kNotFound) {
-    throw HttpError(404, "no sort plan named '" + name.substr(0, 100) + "'", "Unknown Sort Plan");
-  }
-  return Unwrap(std::move(plan));
-}
 
 json PlanJson(const db::SortPlan& plan) {
   json rules = json::array();
@@ -26,38 +18,6 @@ json PlanJson(const db::SortPlan& plan) {
           {"rules", std::move(rules)}};
 }
 
-HttpResponse RoutePincode(const AppContext& context, const HttpRequest& request) {
-  const Pincode pincode = ParsePincodeOrThrow(request.pathParam("pin"));
-  const std::string plan_name =
-      request.queryParam("plan").value_or(std::string(db::kDefaultPlanName));
-  auto connection = context.pool->acquire();
-  const db::SortPlan plan = GetPlanOrThrow(*connection, plan_name);
-  const db::Routing routing = db::RouteWith(plan, pincode);
-  auto record = db::LookupPincode(*connection, pincode);
-  if (!record && record.error().code != db::ErrorCode::kNotFound) ThrowDbError(record.error());
-  json out = {{"pincode", pincode.str()},
-              {"plan", plan.name},
-              {"bin", routing.bin},
-              {"matched_prefix", routing.rule ? json(routing.rule->prefix) : json(nullptr)},
-              {"fallback", !routing.rule.has_value()},
-              {"status", record ? db::ToString(record->status) : "unknown"},
-              {"key", record ? json(record->key.value()) : json(nullptr)}};
-  return HttpResponse::Json(out.dump());
-}
-
-HttpResponse ListPlansRoute(const AppContext& context, const HttpRequest&) {
-  auto connection = context.pool->acquire();
-  json plans = json::array();
-  for (const std::string& name : Unwrap(db::ListPlans(*connection))) {
-    const db::SortPlan plan = GetPlanOrThrow(*connection, name);
-    plans.push_back({{"name", plan.name},
-                     {"fallback_bin", plan.fallback_bin},
-                     {"description", plan.description},
-                     {"rules", plan.rules.size()}});
-  }
-  return HttpResponse::Json(json{{"plans", std::move(plans)}}.dump());
-}
-
 bool WantsCsv(const HttpRequest& request) {
   if (const auto format = request.queryParam("format")) {
     if (*format == "csv") return true;
@@ -67,15 +27,6 @@ bool WantsCsv(const HttpRequest& request) {
   const std::string accept = request.header("Accept").value_or("");
   return accept.find("text/csv") != std::string::npos &&
          accept.find("application/json") == std::string::npos;
-}
-
-HttpResponse GetPlanRoute(const AppContext& context, const HttpRequest& request) {
-  auto connection = context.pool->acquire();
-  const db::SortPlan plan = GetPlanOrThrow(*connection, request.pathParam("name"));
-  if (WantsCsv(request)) {
-    return HttpResponse::Bytes("text/csv; charset=utf-8", db::PlanToCsv(plan));
-  }
-  return HttpResponse::Json(PlanJson(plan).dump());
 }
 
 db::SortPlan PlanFromJson(const std::string& name, const json& body) {
@@ -108,8 +59,50 @@ db::SortPlan PlanFromJson(const std::string& name, const json& body) {
   return plan;
 }
 
-HttpResponse PutPlanRoute(const AppContext& context, const HttpRequest& request) {
-  const std::string name = request.pathParam("name");
+}  // namespace
+
+HttpResponse GetRoute(const AppContext& context, const HttpRequest& request) {
+  const Pincode pincode = PincodeParam(request);
+  const std::string plan_name = PlanQuery(request);
+  auto connection = context.pool->acquire();
+  const db::SortPlan plan = LoadPlan(*connection, plan_name);
+  const db::Routing routing = db::RouteWith(plan, pincode);
+  auto record = db::LookupPincode(*connection, pincode);
+  if (!record && record.error().code != db::ErrorCode::kNotFound) ThrowDbError(record.error());
+  json out = {{"pincode", pincode.str()},
+              {"plan", plan.name},
+              {"bin", routing.bin},
+              {"matched_prefix", routing.rule ? json(routing.rule->prefix) : json(nullptr)},
+              {"fallback", !routing.rule.has_value()},
+              {"status", record ? db::ToString(record->status) : "unknown"},
+              {"key", record ? json(record->key.value()) : json(nullptr)}};
+  return HttpResponse::Json(out.dump());
+}
+
+HttpResponse GetSortPlans(const AppContext& context, const HttpRequest&) {
+  auto connection = context.pool->acquire();
+  json plans = json::array();
+  for (const std::string& name : Unwrap(db::ListPlans(*connection))) {
+    const db::SortPlan plan = LoadPlan(*connection, name);
+    plans.push_back({{"name", plan.name},
+                     {"fallback_bin", plan.fallback_bin},
+                     {"description", plan.description},
+                     {"rules", plan.rules.size()}});
+  }
+  return HttpResponse::Json(json{{"plans", std::move(plans)}}.dump());
+}
+
+HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request) {
+  auto connection = context.pool->acquire();
+  const db::SortPlan plan = LoadPlan(*connection, PlanNameParam(request));
+  if (WantsCsv(request)) {
+    return HttpResponse::Bytes("text/csv; charset=utf-8", db::PlanToCsv(plan));
+  }
+  return HttpResponse::Json(PlanJson(plan).dump());
+}
+
+HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) {
+  const std::string name = PlanNameParam(request);
   db::SortPlan plan;
   if (request.content_type == "text/csv") {
     plan = Unwrap(db::ParsePlanCsv(name, request.body), "Bad Sort Plan");
@@ -122,32 +115,8 @@ HttpResponse PutPlanRoute(const AppContext& context, const HttpRequest& request)
   const bool existed = db::GetPlan(*connection, name).ok();
   Unwrap(db::SavePlan(*connection, plan), "Bad Sort Plan");
   HttpResponse response =
-      HttpResponse::Json(PlanJson(GetPlanOrThrow(*connection, name)).dump(), existed ? 200 : 201);
+      HttpResponse::Json(PlanJson(LoadPlan(*connection, name)).dump(), existed ? 200 : 201);
   return response;
-}
-
-}  // namespace
-
-void AddRoutingRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context) {
-  Route route =
-      MakeRoute("GET", "/api/v1/route/{pin}", Access::kOpen, Bind(context, RoutePincode),
-                "The bin for a pincode under a sort plan (longest prefix wins)", "routing");
-  route.query = {{"plan", "sort plan name (default: default)"}};
-  router.add(std::move(route));
-  router.add(MakeRoute("GET", "/api/v1/sortplans", Access::kOpen, Bind(context, ListPlansRoute),
-                       "Every sort plan with its fallback bin and rule count", "routing"));
-  Route get =
-      MakeRoute("GET", "/api/v1/sortplans/{name}", Access::kOpen, Bind(context, GetPlanRoute),
-                "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv)", "routing");
-  get.produces = {"application/json", "text/csv"};
-  get.query = {{"format", "json (default) or csv"}};
-  router.add(std::move(get));
-  Route put = MakeRoute(
-      "PUT", "/api/v1/sortplans/{name}", Access::kAdmin, Bind(context, PutPlanRoute),
-      "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON", "routing");
-  put.consumes = {"text/csv", "application/json"};
-  put.query = {{"description", "plan description (CSV bodies)"}};
-  router.add(std::move(put));
 }
 
 }  // namespace pintag::app

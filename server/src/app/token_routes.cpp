@@ -1,8 +1,7 @@
 // Token routes (admin only): create (the secret is in this one answer), list, revoke.
 
-#include <charconv>
-
-#include "app/common.hpp"
+#include "app/db_problems.hpp"
+#include "app/params.hpp"
 #include "app/routes.hpp"
 #include "pintag/db/tokens.hpp"
 
@@ -17,7 +16,9 @@ json TokenJson(const db::TokenInfo& token) {
           {"revoked_at", token.revoked_at ? json(*token.revoked_at) : json(nullptr)}};
 }
 
-HttpResponse CreateTokenRoute(const AppContext& context, const HttpRequest& request) {
+}  // namespace
+
+HttpResponse PostToken(const AppContext& context, const HttpRequest& request) {
   const json body = JsonBody(request);
   if (!body.is_object() || !body.contains("role") || !body["role"].is_string()) {
     throw HttpError(400, R"(expected {"role": "admin|counter|scanner", "label": "…"})");
@@ -38,7 +39,7 @@ HttpResponse CreateTokenRoute(const AppContext& context, const HttpRequest& requ
   return response;
 }
 
-HttpResponse ListTokensRoute(const AppContext& context, const HttpRequest&) {
+HttpResponse GetTokens(const AppContext& context, const HttpRequest&) {
   auto connection = context.pool->acquire();
   json tokens = json::array();
   for (const db::TokenInfo& token : Unwrap(db::ListTokens(*connection)))
@@ -46,33 +47,11 @@ HttpResponse ListTokensRoute(const AppContext& context, const HttpRequest&) {
   return HttpResponse::Json(json{{"tokens", std::move(tokens)}}.dump());
 }
 
-HttpResponse RevokeTokenRoute(const AppContext& context, const HttpRequest& request) {
-  const std::string text = request.pathParam("id");
-  std::int64_t id = 0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), id);
-  if (ec != std::errc() || end != text.data() + text.size() || id <= 0) {
-    throw HttpError(400, "a token id is a positive integer, got '" + text.substr(0, 40) + "'");
-  }
+HttpResponse RevokeToken(const AppContext& context, const HttpRequest& request) {
+  const std::int64_t id = TokenIdParam(request);
   auto connection = context.pool->acquire();
   return HttpResponse::Json(
       TokenJson(Unwrap(db::RevokeToken(*connection, id), "Unknown Token")).dump());
-}
-
-}  // namespace
-
-void AddTokenRoutes(server::Router& router, const std::shared_ptr<const AppContext>& context) {
-  Route create =
-      MakeRoute("POST", "/api/v1/tokens", Access::kAdmin, Bind(context, CreateTokenRoute),
-                R"(Create a token {"role", "label"}; the answer holds its secret, once)", "tokens");
-  create.consumes = {"application/json"};
-  router.add(std::move(create));
-  router.add(MakeRoute("GET", "/api/v1/tokens", Access::kAdmin, Bind(context, ListTokensRoute),
-                       "Every token (never a secret), revoked ones included", "tokens"));
-  router.add(MakeRoute("DELETE", "/api/v1/tokens/{id}", Access::kAdmin,
-                       Bind(context, RevokeTokenRoute), "Revoke a token (permanent)", "tokens"));
-  router.add(MakeRoute("POST", "/api/v1/tokens/{id}/revoke", Access::kAdmin,
-                       Bind(context, RevokeTokenRoute), "Revoke a token (same as DELETE)",
-                       "tokens"));
 }
 
 }  // namespace pintag::app

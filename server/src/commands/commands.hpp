@@ -1,7 +1,8 @@
 #pragma once
 // Subcommands of `pintag`. Each lives in its own file in this folder and registers itself with a
-// file-scope `const CommandRegistration registration{"name", &AddNameCommand};`; main adds them
-// to the app in name order.
+// file-scope `const CommandRegistration name_registration{"name", &AddNameCommand};`; main adds
+// them to the app in name order. The files are compiled as one unit (server/CMakeLists.txt), so
+// names in their anonymous namespaces must differ from file to file.
 
 #include <CLI/CLI.hpp>
 #include <stdexcept>

@@ -158,7 +158,7 @@ void AddDetectCommand(CLI::App& app) {
   cmd->callback([args] { Run(*args); });
 }
 
-const CommandRegistration registration{"detect", &AddDetectCommand};
+const CommandRegistration detect_registration{"detect", &AddDetectCommand};
 
 }  // namespace
 

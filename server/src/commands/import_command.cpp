@@ -100,7 +100,7 @@ void AddImportCommand(CLI::App& app) {
   cmd->callback([args] { Run(*args); });
 }
 
-const CommandRegistration registration{"import", &AddImportCommand};
+const CommandRegistration import_registration{"import", &AddImportCommand};
 
 }  // namespace
 }  // namespace pintag::cli

@@ -7,6 +7,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "commands/option_checks.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/registry.hpp"
 
@@ -72,13 +73,13 @@ void AddKeysCommand(CLI::App& app) {
   CLI::App* lookup =
       keys->add_subcommand("lookup", "Show a pincode's key and offices, or a key's pincode");
   lookup->add_option("pincode", args->pincode, "six-digit pincode");
-  lookup->add_option("--key", args->key, "tag key, 0-32767")->check(CLI::Range(0, kKeyCount - 1));
+  lookup->add_option("--key", args->key, "tag key, 0-32767")->check(TagKeyCheck());
   lookup->add_option("--db", args->db, "database file (created and seeded when missing)")
       ->capture_default_str();
   lookup->callback([args] { Lookup(*args); });
 }
 
-const CommandRegistration registration{"keys", &AddKeysCommand};
+const CommandRegistration keys_registration{"keys", &AddKeysCommand};
 
 }  // namespace
 }  // namespace pintag::cli

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "commands/commands.hpp"
+#include "commands/option_checks.hpp"
 #include "pintag/codec/png_io.hpp"
 #include "pintag/codec/tag_raster.hpp"
 #include "pintag/codec/tag_svg.hpp"
@@ -68,9 +69,7 @@ void Run(const RenderArgs& args) {
 void AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render one tag as PNG or SVG");
-  cmd->add_option("--key", args->key, "tag key, 0-32767")
-      ->required()
-      ->check(CLI::Range(0, kKeyCount - 1));
+  cmd->add_option("--key", args->key, "tag key, 0-32767")->required()->check(TagKeyCheck());
   cmd->add_option("--size-px", args->size_px, "black square side in pixels (quiet zone added)")
       ->check(CLI::Range(kMinTagSquarePx, kMaxSquarePx));
   cmd->add_option("--size-mm", args->size_mm, "black square side in millimetres (quiet zone added)")
@@ -82,7 +81,7 @@ void AddRenderCommand(CLI::App& app) {
   cmd->callback([args] { Run(*args); });
 }
 
-const CommandRegistration registration{"render", &AddRenderCommand};
+const CommandRegistration render_registration{"render", &AddRenderCommand};
 
 }  // namespace
 

@@ -163,7 +163,7 @@ void AddServeCommand(CLI::App& app) {
   cmd->callback([args] { Run(*args); });
 }
 
-const CommandRegistration registration{"serve", &AddServeCommand};
+const CommandRegistration serve_registration{"serve", &AddServeCommand};
 
 }  // namespace
 }  // namespace pintag::cli

@@ -73,7 +73,7 @@ void AddTokenCommand(CLI::App& app) {
   revoke->callback([args] { Revoke(*args); });
 }
 
-const CommandRegistration registration{"token", &AddTokenCommand};
+const CommandRegistration token_registration{"token", &AddTokenCommand};
 
 }  // namespace
 }  // namespace pintag::cli

@@ -5,18 +5,6 @@
 
 namespace pintag::server {
 
-std::string_view ToString(Role role) {
-  switch (role) {
-    case Role::kAdmin:
-      return "admin";
-    case Role::kCounter:
-      return "counter";
-    case Role::kScanner:
-      return "scanner";
-  }
-  return "unknown";
-}
-
 std::string_view ToString(Access access) {
   switch (access) {
     case Access::kOpen:
@@ -31,10 +19,8 @@ std::string_view ToString(Access access) {
   return "unknown";
 }
 
-bool Allows(Access access, Role role) {
-  if (access == Access::kOpen || role == Role::kAdmin) return true;
-  return (access == Access::kCounter && role == Role::kCounter) ||
-         (access == Access::kScanner && role == Role::kScanner);
+bool Allows(Access required, Access granted) {
+  return required == Access::kOpen || granted == Access::kAdmin || required == granted;
 }
 
 bool CaseInsensitiveLess::operator()(std::string_view a, std::string_view b) const {

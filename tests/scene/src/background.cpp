@@ -13,7 +13,7 @@ namespace pintag::scene {
 namespace {
 
 struct PhotoSource {
-  const char* package;  ///< the Debian package that installs them (scripts/setup.sh)
+  const char* package;  ///< the Debian package that installs them (scripts/setup.sh test)
   const char* directory;
   std::vector<const char*> files;
 };
@@ -61,7 +61,7 @@ std::vector<std::string> FindPhotos(World world) {
       if (!std::filesystem::is_regular_file(path, error)) {
         throw std::runtime_error("scene: background photograph " + path.string() +
                                  " is missing; install the Debian package " + source.package +
-                                 " (scripts/setup.sh installs every package the tests need)");
+                                 " (scripts/setup.sh test installs every package the tests need)");
       }
       found.push_back(path.string());
     }

@@ -3,6 +3,9 @@
 
 #include <compare>
 #include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
 
 namespace pintag {
 
@@ -24,5 +27,15 @@ class TagKey {
  private:
   std::uint16_t value_ = 0;
 };
+
+/// The outcome of parsing text as a key: a key, or the reason it is not one.
+struct ParsedTagKey {
+  std::optional<TagKey> key;
+  std::string error;  ///< empty when `key` holds a value
+  explicit operator bool() const { return key.has_value(); }
+};
+
+/// Accepts a decimal integer 0 … 32767 in ASCII digits; no sign, spaces or other characters.
+ParsedTagKey ParseTagKey(std::string_view text);
 
 }  // namespace pintag

@@ -13,24 +13,20 @@
 
 namespace pintag::server {
 
-/// Roles a bearer token can carry (issue 5): admin may do everything. The tokens and the names
-/// they are stored and created under are db's (`db::Role`, `db::ParseRole`); the application
-/// maps a verified token's role onto this one, so this layer needs no database.
-enum class Role { kAdmin, kCounter, kScanner };
+/// What a route requires, and what a verified token grants. Admin satisfies every requirement.
+/// The tokens and their stored role names are db's (`db::Role`); the application maps a verified
+/// token's role onto this, so this layer needs no database.
+enum class Access { kOpen, kCounter, kScanner, kAdmin };
 
-std::string_view ToString(Role role);  ///< "admin", "counter", "scanner", for messages
+std::string_view ToString(Access access);  ///< "open", "counter", "scanner", "admin"
+/// Whether a token granting `granted` may call a route requiring `required`.
+bool Allows(Access required, Access granted);
 
 /// Who is calling, once a bearer token was verified.
 struct Principal {
-  std::string id;  ///< token id or name, for logs; never the secret
-  Role role = Role::kCounter;
+  std::string id;                  ///< token id or name, for logs; never the secret
+  Access role = Access::kCounter;  ///< what the token was issued for: counter, scanner or admin
 };
-
-/// What a route requires. Admin satisfies every requirement.
-enum class Access { kOpen, kCounter, kScanner, kAdmin };
-
-std::string_view ToString(Access access);
-bool Allows(Access access, Role role);
 
 /// Header names compare case-insensitively (RFC 9110).
 struct CaseInsensitiveLess {

@@ -15,7 +15,8 @@ struct ApiInfo {
 
 /// The OpenAPI 3.1 document (JSON text) of every route that is not hidden: path parameters,
 /// documented query parameters, request media types, success media types, the problem+json error
-/// responses and bearer security where the route needs a role.
+/// responses, bearer security where the route needs a role, and that role (open, counter,
+/// scanner, admin) as the extension field "x-pintag-role" of every operation.
 std::string OpenApiJson(const Router& router, const ApiInfo& info = {});
 
 }  // namespace pintag::server

@@ -227,8 +227,8 @@ MarkerTexture AprilTagTexture(int id, int square_px = 512);
 /// The world's background photographs, a fixed list in a fixed order. Tuning: 22 colour photos
 /// from the Debian package opencv-doc (fruit, sweets, a baboon, buildings, …). Held out: 15 from
 /// python3-skimage (an astronaut, a cat, coffee, a red motorcycle, a retina, a colour wheel, grey
-/// textures, …) and 2 from lomiri-wallpapers-20.04. scripts/setup.sh installs the packages; a
-/// missing file throws std::runtime_error naming its package.
+/// textures, …) and 2 from lomiri-wallpapers-20.04. `scripts/setup.sh test` installs the
+/// packages; a missing file throws std::runtime_error naming its package.
 const std::vector<std::string>& BackgroundPhotos(World world = World::kTuning);
 
 /// What a printed label carries where its tag goes.

@@ -1,0 +1,25 @@
+#pragma once
+// UTF-8, decoded strictly: the one decoder behind the registry's text checks (pintag::db) and the
+// label's text sanitizing (pintag::label). Overlong forms, UTF-16 surrogates, code points beyond
+// U+10FFFF, stray continuation bytes and truncated sequences are all invalid.
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace pintag {
+
+/// One code point read from UTF-8 text.
+struct Utf8CodePoint {
+  char32_t value = 0;      ///< the code point; meaningful only when `length` > 0
+  std::size_t length = 0;  ///< its bytes, 1 to 4; 0 when the bytes there are not valid UTF-8
+};
+
+/// The code point that starts at byte `offset` of `text`. Precondition: offset < text.size().
+Utf8CodePoint DecodeUtf8(std::string_view text, std::size_t offset);
+
+/// Appends `code_point` as UTF-8. Precondition: a Unicode scalar value (at most U+10FFFF, not a
+/// surrogate), e.g. one DecodeUtf8 returned.
+void AppendUtf8(std::string& out, char32_t code_point);
+
+}  // namespace pintag

@@ -1,0 +1,54 @@
+#include "app/db_problems.hpp"
+
+#include <iostream>
+
+#include "pintag/server/problem.hpp"
+
+namespace pintag::app {
+
+using server::HttpError;
+
+void ThrowDbError(const db::Error& error, std::string title) {
+  switch (error.code) {
+    case db::ErrorCode::kInvalid:
+      throw HttpError(400, error.message, std::move(title));
+    case db::ErrorCode::kNotFound:
+      throw HttpError(404, error.message, std::move(title));
+    case db::ErrorCode::kConflict:
+      throw HttpError(409, error.message, std::move(title));
+    case db::ErrorCode::kUnauthorized:
+      throw HttpError(401, error.message, std::move(title));
+    case db::ErrorCode::kFull:
+      throw HttpError(507, error.message, std::move(title));
+    case db::ErrorCode::kBusy:
+      throw HttpError(503, "the database is busy; try again", "Service Unavailable");
+    case db::ErrorCode::kStorage:
+      break;
+  }
+  // Storage failures name files and SQLite internals: the operator sees them, the client not.
+  std::cerr << "pintag serve: database error: " << error.message << "\n";
+  throw HttpError(500, "the database failed to answer", "Database Error");
+}
+
+db::SortPlan LoadPlan(db::Connection& connection, std::string_view name) {
+  auto plan = db::GetPlan(connection, name);
+  if (!plan && plan.error().code == db::ErrorCode::kNotFound) {
+    throw HttpError(404, "no sort plan named '" + std::string(name.substr(0, 100)) + "'",
+                    "Unknown Sort Plan");
+  }
+  return Unwrap(std::move(plan));
+}
+
+db::PincodeRecord LoadActivePincode(db::Connection& connection, Pincode pincode) {
+  db::PincodeRecord record = Unwrap(db::LookupPincode(connection, pincode), "Unknown Pincode");
+  if (record.status == db::PincodeStatus::kRetired) {
+    throw HttpError(410,
+                    "pincode " + pincode.str() + " was retired" +
+                        (record.retired_at ? " on " + *record.retired_at : "") +
+                        "; no new labels are issued for it (printed labels still decode)",
+                    "Retired Pincode");
+  }
+  return record;
+}
+
+}  // namespace pintag::app

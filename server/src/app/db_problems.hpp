@@ -1,0 +1,36 @@
+#pragma once
+// Registry (pintag::db) errors as HTTP problems, and the registry lookups every route group makes
+// the same way: a sort plan by name, a pincode that may still be printed.
+
+#include <string>
+#include <string_view>
+
+#include "pintag/codec/pincode.hpp"
+#include "pintag/db/registry.hpp"
+#include "pintag/db/result.hpp"
+#include "pintag/db/sort_plan.hpp"
+#include "pintag/db/sqlite.hpp"
+
+namespace pintag::app {
+
+/// Throws the HttpError for a registry error: kInvalid 400, kNotFound 404, kConflict 409,
+/// kUnauthorized 401, kFull 507, kBusy 503, kStorage 500 (its message goes to stderr only).
+[[noreturn]] void ThrowDbError(const db::Error& error, std::string title = {});
+
+template <typename T>
+T Unwrap(db::Result<T> result, std::string title = {}) {
+  if (!result) ThrowDbError(result.error(), std::move(title));
+  return std::move(result).value();
+}
+inline void Unwrap(const db::Result<void>& result, std::string title = {}) {
+  if (!result) ThrowDbError(result.error(), std::move(title));
+}
+
+/// The sort plan called `name`; 404 "Unknown Sort Plan" when there is none.
+db::SortPlan LoadPlan(db::Connection& connection, std::string_view name);
+
+/// The record of a pincode labels may be printed for: 404 "Unknown Pincode" when the registry
+/// does not hold it, 410 "Retired Pincode" when it was retired (its printed labels still decode).
+db::PincodeRecord LoadActivePincode(db::Connection& connection, Pincode pincode);
+
+}  // namespace pintag::app

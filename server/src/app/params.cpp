@@ -1,0 +1,151 @@
+#include "app/params.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+#include "pintag/codec/label.hpp"
+#include "pintag/db/sort_plan.hpp"
+#include "pintag/server/problem.hpp"
+
+namespace pintag::app {
+
+using server::HttpError;
+using server::HttpRequest;
+
+namespace {
+
+// Untrusted text quoted back in a problem, cut so a huge parameter does not make a huge answer.
+std::string Quoted(std::string_view text) {
+  return "'" + std::string(text.substr(0, 40)) + (text.size() > 40 ? "…'" : "'");
+}
+
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+// The whole text as a number of type T, or nothing (no sign tricks, spaces or trailing bytes).
+template <typename T>
+std::optional<T> ParseWhole(std::string_view text) {
+  T value{};
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+}  // namespace
+
+Pincode PincodeParam(const HttpRequest& request) {
+  const ParsedPincode parsed = ParsePincode(request.pathParam("pin"));
+  if (!parsed) throw HttpError(400, parsed.error, "Malformed Pincode");
+  return *parsed.pincode;
+}
+
+TagKey KeyParam(const HttpRequest& request) {
+  const std::string text = request.pathParam("key");
+  const ParsedTagKey parsed = ParseTagKey(text);
+  if (!parsed) throw HttpError(400, parsed.error + ", got " + Quoted(text), "Malformed Key");
+  return *parsed.key;
+}
+
+std::int64_t TokenIdParam(const HttpRequest& request) {
+  const std::string text = request.pathParam("id");
+  const std::optional<std::int64_t> id = ParseWhole<std::int64_t>(text);
+  if (!id || *id <= 0)
+    throw HttpError(400, "a token id is a positive integer, got " + Quoted(text));
+  return *id;
+}
+
+std::string PlanNameParam(const HttpRequest& request) {
+  return request.pathParam("name");
+}
+
+std::string PlanNameValue(std::string_view text) {
+  return text.empty() ? std::string(db::kDefaultPlanName) : std::string(text);
+}
+
+std::string PlanQuery(const HttpRequest& request) {
+  return PlanNameValue(request.queryParam("plan").value_or(""));
+}
+
+server::QueryParamDoc PlanQueryDoc() {
+  return {"plan",
+          "sort plan whose bins are used (default: " + std::string(db::kDefaultPlanName) + ")"};
+}
+
+LabelSize LabelSizeValue(std::string_view text) {
+  const ParsedLabelSize parsed = ParseLabelSize(text);
+  if (!parsed) throw HttpError(400, parsed.error, "Bad Label Size");
+  return *parsed.size;
+}
+
+LabelSize LabelSizeQuery(const HttpRequest& request) {
+  const std::optional<std::string> text = request.queryParam("size");
+  return text ? LabelSizeValue(*text) : kLabel100x150;
+}
+
+server::QueryParamDoc LabelSizeQueryDoc() {
+  return {"size",
+          "label size: " + ToString(kLabel100x150) + " (default), a6, 4x6in or WxH mm|cm|in"};
+}
+
+double DpiQuery(const HttpRequest& request) {
+  return NumberQuery(request, "dpi", kMinLabelDpi, kMaxLabelDpi).value_or(LabelOptions{}.dpi);
+}
+
+server::QueryParamDoc DpiQueryDoc() {
+  return {"dpi",
+          "PNG resolution, " + Number(kMinLabelDpi) + " to " + Number(kMaxLabelDpi) + " (default " +
+              Number(LabelOptions{}.dpi) + "), recorded in the file",
+          "number"};
+}
+
+std::optional<double> NumberQuery(const HttpRequest& request, std::string_view name, double min,
+                                  double max) {
+  const std::optional<std::string> text = request.queryParam(name);
+  if (!text) return std::nullopt;
+  const std::optional<double> value = ParseWhole<double>(*text);
+  if (!value || !std::isfinite(*value) || *value < min || *value > max) {
+    throw HttpError(400, "query parameter '" + std::string(name) + "' must be a number from " +
+                             Number(min) + " to " + Number(max) + ", got " + Quoted(*text));
+  }
+  return value;
+}
+
+long long IntegerQuery(const HttpRequest& request, std::string_view name, long long fallback,
+                       long long min, long long max) {
+  const std::optional<std::string> text = request.queryParam(name);
+  if (!text) return fallback;
+  const std::optional<long long> value = ParseWhole<long long>(*text);
+  if (!value || *value < min || *value > max) {
+    throw HttpError(400, "query parameter '" + std::string(name) + "' must be an integer from " +
+                             std::to_string(min) + " to " + std::to_string(max) + ", got " +
+                             Quoted(*text));
+  }
+  return *value;
+}
+
+nlohmann::json JsonBody(const HttpRequest& request) {
+  nlohmann::json body = nlohmann::json::parse(request.body, nullptr, false);
+  if (body.is_discarded()) throw HttpError(400, "the body is not valid JSON", "Malformed JSON");
+  return body;
+}
+
+Pincode PincodeValue(const nlohmann::json& value, std::string_view where) {
+  std::string text;
+  if (value.is_string()) {
+    text = value.get<std::string>();
+  } else if (value.is_number_unsigned()) {
+    text = std::to_string(value.get<std::uint64_t>());
+  } else {
+    throw HttpError(400, std::string(where) + " must be a string of six digits",
+                    "Malformed Pincode");
+  }
+  const ParsedPincode parsed = ParsePincode(text);
+  if (!parsed) throw HttpError(400, std::string(where) + ": " + parsed.error, "Malformed Pincode");
+  return *parsed.pincode;
+}
+
+}  // namespace pintag::app

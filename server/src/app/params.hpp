@@ -1,0 +1,64 @@
+#pragma once
+// One parser per kind of parameter, shared by every route: pincodes, keys, token ids, sort plan
+// names, label sizes, dpi, numbers and integers within a range, JSON bodies. Each reads
+// its text strictly and answers bad input with a 400 problem naming the parameter and what it
+// accepts. The OpenAPI notes of the shared query parameters sit beside their parsers.
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "pintag/codec/label_size.hpp"
+#include "pintag/codec/pincode.hpp"
+#include "pintag/codec/tag_key.hpp"
+#include "pintag/server/http_types.hpp"
+#include "pintag/server/router.hpp"
+
+namespace pintag::app {
+
+// --- Path parameters -----------------------------------------------------------------------------
+
+/// {pin}: six digits, the first 1-9; else 400 "Malformed Pincode".
+Pincode PincodeParam(const server::HttpRequest& request);
+/// {key}: 0 to 32767; else 400 "Malformed Key".
+TagKey KeyParam(const server::HttpRequest& request);
+/// {id}: a token id, a positive integer; else 400.
+std::int64_t TokenIdParam(const server::HttpRequest& request);
+/// {name}: a sort plan's name, as given (the registry checks it when a plan is written).
+std::string PlanNameParam(const server::HttpRequest& request);
+
+// --- Query parameters ----------------------------------------------------------------------------
+
+/// ?plan=: the sort plan whose bins are used; absent or empty: the default plan.
+std::string PlanQuery(const server::HttpRequest& request);
+server::QueryParamDoc PlanQueryDoc();
+
+/// ?size=: a label size (100x150mm, a6, 4x6in, WxH mm|cm|in); absent: 100 x 150 mm.
+LabelSize LabelSizeQuery(const server::HttpRequest& request);
+server::QueryParamDoc LabelSizeQueryDoc();
+
+/// ?dpi=: a PNG's resolution, kMinLabelDpi to kMaxLabelDpi; absent: 300.
+double DpiQuery(const server::HttpRequest& request);
+server::QueryParamDoc DpiQueryDoc();
+
+/// A number within [min, max], if given.
+std::optional<double> NumberQuery(const server::HttpRequest& request, std::string_view name,
+                                  double min, double max);
+/// An integer within [min, max], or `fallback` when absent.
+long long IntegerQuery(const server::HttpRequest& request, std::string_view name,
+                       long long fallback, long long min, long long max);
+
+// --- Values in a body, or anywhere text arrives --------------------------------------------------
+
+/// The body parsed as JSON; 400 "Malformed JSON" when it is not.
+nlohmann::json JsonBody(const server::HttpRequest& request);
+/// A pincode given as a JSON string or number; `where` names it in the problem ("pincodes[3]").
+Pincode PincodeValue(const nlohmann::json& value, std::string_view where);
+/// A label size from its text; 400 "Bad Label Size".
+LabelSize LabelSizeValue(std::string_view text);
+/// A sort plan name from a query or a body; empty: the default plan.
+std::string PlanNameValue(std::string_view text);
+
+}  // namespace pintag::app

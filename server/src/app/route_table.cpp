@@ -1,0 +1,133 @@
+#include "app/route_table.hpp"
+
+#include <string>
+#include <vector>
+
+#include "app/params.hpp"
+#include "app/routes.hpp"
+
+namespace pintag::app {
+namespace {
+
+using server::Access;
+using server::QueryParamDoc;
+
+/// What /openapi.json says about a route beyond its method, path and role.
+struct RouteDoc {
+  const char* tag = "api";                 ///< OpenAPI tag: the group in the route list
+  std::string summary;                     ///< one line
+  std::vector<QueryParamDoc> query = {};   ///< documented query parameters
+  std::vector<std::string> consumes = {};  ///< request body media types; none: no body
+  std::vector<std::string> produces = {};  ///< success media types; none: application/json
+};
+
+/// One row of the table.
+struct AppRoute {
+  const char* method = "GET";
+  const char* path = "/";
+  Access role = Access::kAdmin;
+  RouteHandler handler = nullptr;
+  RouteDoc doc;
+};
+
+}  // namespace
+
+server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
+  const std::string max_tag_px = std::to_string(context->max_tag_px);
+  const std::vector<std::string> photo_types = {"image/jpeg",          "image/png",
+                                                "image/tiff",          "image/webp",
+                                                "multipart/form-data", "application/octet-stream"};
+  // clang-format off
+  const AppRoute table[] = {
+  // method    path                                 role              handler
+    {"GET",    "/api/v1/pincodes/{pin}",            Access::kOpen,    GetPincode,
+     {"registry", "A pincode: key, status, district, state, circle, region, division and every post office"}},
+    {"GET",    "/api/v1/pincodes",                  Access::kOpen,    SearchPincodes,
+     {"registry", "Search post offices by name prefix, district and/or state",
+      {{"q", "office name prefix (case-insensitive for ASCII)"},
+       {"district", "district, exact (case-insensitive for ASCII)"},
+       {"state", "state, exact (case-insensitive for ASCII)"},
+       {"limit", "page size, 1 to 500 (default 50)", "integer"},
+       {"offset", "rows to skip (default 0)", "integer"}}}},
+    {"GET",    "/api/v1/keys/{key}",                Access::kOpen,    GetKey,
+     {"registry", "The pincode a tag key belongs to (retired ones included)"}},
+    {"POST",   "/api/v1/pincodes",                  Access::kAdmin,   PostPincode,
+     {"registry", "Add a pincode (and its offices); answers 201 with the allocated key", {},
+      {"application/json"}}},
+    {"POST",   "/api/v1/pincodes/{pin}/retire",     Access::kAdmin,   PostRetirePincode,
+     {"registry", "Retire a pincode: it keeps its key, labels are no longer issued"}},
+
+    {"GET",    "/api/v1/tags/{pin}.png",            Access::kCounter, GetTagPng,
+     {"labels", "The pincode's PinTag as a PNG (quiet zone included)",
+      {{"px", "black square side in pixels, 64 to " + max_tag_px + " (default 256)", "integer"},
+       DpiQueryDoc()},
+      {}, {"image/png"}}},
+    {"GET",    "/api/v1/tags/{pin}.svg",            Access::kCounter, GetTagSvg,
+     {"labels", "The pincode's PinTag as SVG (quiet zone included)",
+      {{"mm", "black square side in millimetres, 5 to 500 (default 50)", "number"},
+       {"px", "black square side in pixels instead of mm, 64 to " + max_tag_px, "number"}},
+      {}, {"image/svg+xml"}}},
+    {"GET",    "/api/v1/labels/{pin}.pdf",          Access::kCounter, GetLabelPdf,
+     {"labels", "Printable label for a pincode (pdf) with its bin under the sort plan",
+      {LabelSizeQueryDoc(), PlanQueryDoc()}, {}, {"application/pdf"}}},
+    {"GET",    "/api/v1/labels/{pin}.png",          Access::kCounter, GetLabelPng,
+     {"labels", "Printable label for a pincode (png) with its bin under the sort plan",
+      {LabelSizeQueryDoc(), DpiQueryDoc(), PlanQueryDoc()}, {}, {"image/png"}}},
+    {"GET",    "/api/v1/labels/{pin}.svg",          Access::kCounter, GetLabelSvg,
+     {"labels", "Printable label for a pincode (svg) with its bin under the sort plan",
+      {LabelSizeQueryDoc(), PlanQueryDoc()}, {}, {"image/svg+xml"}}},
+    {"POST",   "/api/v1/labels",                    Access::kCounter, PostLabels,
+     {"labels", R"(Many labels as one PDF, a page each; body {"pincodes": [...], "size": "a6", "plan": "..."}; size and plan may be query parameters instead)",
+      {LabelSizeQueryDoc(), PlanQueryDoc()}, {"application/json"}, {"application/pdf"}}},
+
+    {"POST",   "/api/v1/detect",                    Access::kScanner, PostDetect,
+     {"detection", "Find every PinTag in a photo: pincode, key, status, office, bin, corners, pose",
+      {PlanQueryDoc(),
+       {"tag_size_mm", "black square side, millimetres (default: the tag of a 100x150mm label, 57.892; a6 57.062, 4x6in 58.889)", "number"},
+       {"fx", "focal length x, pixels (with fy: intrinsics given)", "number"},
+       {"fy", "focal length y, pixels", "number"},
+       {"cx", "principal point x, pixels (default: image centre)", "number"},
+       {"cy", "principal point y, pixels (default: image centre)", "number"},
+       {"overlay", "1: answer the photo with the tags outlined, as PNG; inline: the JSON with that PNG as a data URL in \"overlay\""}},
+      photo_types, {"application/json", "image/png"}}},
+
+    {"GET",    "/api/v1/route/{pin}",               Access::kOpen,    GetRoute,
+     {"routing", "The bin for a pincode under a sort plan (longest prefix wins)", {PlanQueryDoc()}}},
+    {"GET",    "/api/v1/sortplans",                 Access::kOpen,    GetSortPlans,
+     {"routing", "Every sort plan with its fallback bin and rule count"}},
+    {"GET",    "/api/v1/sortplans/{name}",          Access::kOpen,    GetSortPlan,
+     {"routing", "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv)",
+      {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}}},
+    {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   PutSortPlan,
+     {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON",
+      {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}}},
+
+    {"POST",   "/api/v1/tokens",                    Access::kAdmin,   PostToken,
+     {"tokens", R"(Create a token {"role", "label"}; the answer holds its secret, once)", {},
+      {"application/json"}}},
+    {"GET",    "/api/v1/tokens",                    Access::kAdmin,   GetTokens,
+     {"tokens", "Every token (never a secret), revoked ones included"}},
+    {"DELETE", "/api/v1/tokens/{id}",               Access::kAdmin,   RevokeToken,
+     {"tokens", "Revoke a token (permanent)"}},
+    {"POST",   "/api/v1/tokens/{id}/revoke",        Access::kAdmin,   RevokeToken,
+     {"tokens", "Revoke a token (same as DELETE)"}},
+  };
+  // clang-format on
+
+  server::Router router;
+  for (const AppRoute& row : table) {
+    server::Route route = server::MakeRoute(
+        row.method, row.path, row.role,
+        [context, handler = row.handler](const HttpRequest& request) {
+          return handler(*context, request);
+        },
+        row.doc.summary, row.doc.tag);
+    route.query = row.doc.query;
+    route.consumes = row.doc.consumes;
+    route.produces = row.doc.produces;
+    router.add(std::move(route));
+  }
+  return router;
+}
+
+}  // namespace pintag::app

@@ -1,0 +1,37 @@
+// `pintag keys lookup` and `pintag render` read a key with the parser the {key} route uses: the
+// same keys pass, the same text is refused with the same words.
+
+#include <gtest/gtest.h>
+
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+TEST(CliKeys, LookupByKeyFindsItsPincode) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult found = RunPintag("keys lookup --key 11684 --db " + db);
+  EXPECT_EQ(found.status, 0) << found.out;
+  EXPECT_NE(found.out.find("pincode  110001"), std::string::npos) << found.out;
+}
+
+TEST(CliKeys, KeysOutsideTheRangeAreRefusedAsTheApiRefusesThem) {
+  const TempDir dir;
+  for (const char* key : {"32768", "-1", "abc", "1e3", "0x10"}) {
+    for (const std::string& command :
+         {"keys lookup --db " + dir.file("never.db") + " --key " + key,
+          "render -o " + dir.file("tag.png") + " --size-px 128 --key " + key}) {
+      const CommandResult refused = RunPintag(command);
+      EXPECT_NE(refused.status, 0) << command << ": " << refused.out;
+      EXPECT_NE(refused.out.find("a key is an integer from 0 to 32767"), std::string::npos)
+          << command << ": " << refused.out;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
