@@ -108,6 +108,42 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
   }
 }
 
+Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path) {
+  try {
+    TemporaryBeside temporary(path);
+    {
+      const int fd = ::open(temporary.path().c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+      if (fd < 0) throw std::runtime_error(SystemError("cannot open " + temporary.path()));
+      std::size_t written = 0;
+      while (written < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+          const std::string error = SystemError("cannot write " + temporary.path());
+          ::close(fd);
+          throw std::runtime_error(error);
+        }
+        written += static_cast<std::size_t>(n);
+      }
+      const bool synced = ::fsync(fd) == 0;
+      ::close(fd);
+      if (!synced) throw std::runtime_error(SystemError("fsync " + temporary.path()));
+    }
+    Result<SnapshotInfo> verified = VerifySnapshot(temporary.path());
+    if (!verified) return verified.error();
+    if (::rename(temporary.path().c_str(), path.c_str()) != 0) {
+      return Error{ErrorCode::kStorage, SystemError("cannot rename the snapshot to " + path)};
+    }
+    temporary.keep();
+    Sync(Directory(path), true);
+    SnapshotInfo info = *verified;
+    info.path = path;
+    return info;
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::kStorage, e.what()};
+  }
+}
+
 Result<SnapshotInfo> VerifySnapshot(const std::string& path) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {

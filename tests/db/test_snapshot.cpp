@@ -254,6 +254,31 @@ TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSource) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("x.db")));
 }
 
+TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const std::string published = dir.file("published.db");
+  const auto written = WriteSnapshot(live, published);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  const std::string bytes = test::ReadFile(published);
+
+  const std::string target = dir.file("replica.db");
+  const auto installed = InstallSnapshot(bytes, target);
+  ASSERT_TRUE(installed.ok()) << installed.error().message;
+  EXPECT_EQ(installed->path, target);
+  EXPECT_EQ(installed->registry_version, written->registry_version);
+  EXPECT_EQ(test::ReadFile(target), bytes);
+
+  // A truncated download and garbage are refused; the installed snapshot stays.
+  const auto truncated = InstallSnapshot(std::string_view(bytes).substr(0, 100000), target);
+  ASSERT_FALSE(truncated.ok());
+  EXPECT_EQ(truncated.error().code, ErrorCode::kStorage) << truncated.error().message;
+  EXPECT_FALSE(InstallSnapshot("<html>502 Bad Gateway</html>", target).ok());
+  EXPECT_EQ(test::ReadFile(target), bytes);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
 TEST(ScanLogFile, AReplicaAppendsToItsOwnFile) {
   TempDir dir;
   auto log = OpenScanLogFile(dir.file("scans.db"));

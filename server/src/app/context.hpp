@@ -16,6 +16,8 @@ inline constexpr std::string_view kScansCounter = "pintag_scans_total";
 
 struct AppContext {
   std::shared_ptr<ConnectionPool> pool;
+  std::shared_ptr<ConnectionPool>
+      scan_log;  ///< where scans are logged: pool's file, or a replica's own
   std::shared_ptr<server::Metrics> metrics;
   std::int64_t max_pixels = 40'000'000;  ///< decoded pixels per uploaded photo
 };

@@ -165,7 +165,7 @@ class DetectService {
     scan.image_height = outcome.height;
     scan.result_json = outcome.result.dump();
     try {
-      auto connection = context_->pool->acquire();
+      auto connection = context_->scan_log->acquire();
       auto appended = db::AppendScan(*connection, scan);
       if (!appended) std::cerr << "pintag serve: scan log: " << appended.error().message << "\n";
     } catch (const std::exception& e) {

@@ -13,6 +13,8 @@ std::string_view ToString(Role role) {
       return "counter";
     case Role::kScanner:
       return "scanner";
+    case Role::kReplica:
+      return "replica";
   }
   return "unknown";
 }
@@ -27,6 +29,8 @@ std::string_view ToString(Access access) {
       return "scanner";
     case Access::kAdmin:
       return "admin";
+    case Access::kReplica:
+      return "replica";
   }
   return "unknown";
 }
@@ -34,7 +38,8 @@ std::string_view ToString(Access access) {
 bool Allows(Access access, Role role) {
   if (access == Access::kOpen || role == Role::kAdmin) return true;
   return (access == Access::kCounter && role == Role::kCounter) ||
-         (access == Access::kScanner && role == Role::kScanner);
+         (access == Access::kScanner && role == Role::kScanner) ||
+         (access == Access::kReplica && role == Role::kReplica);
 }
 
 bool CaseInsensitiveLess::operator()(std::string_view a, std::string_view b) const {

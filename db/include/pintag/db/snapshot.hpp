@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/sqlite.hpp"
@@ -28,6 +29,12 @@ struct SnapshotInfo {
 /// reader of `out_path` sees the old file or the new one, never part of one. kStorage when the
 /// directory cannot be written; the temporary file is removed on every failure.
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path);
+
+/// Puts a snapshot received as bytes (from a primary) at `path`: written to a temporary file
+/// beside it, fsynced, checked with VerifySnapshot, then renamed into place and the directory
+/// fsynced. Bytes that are not a whole snapshot of the current schema are refused with
+/// VerifySnapshot's error and `path` is left as it was.
+Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path);
 
 /// Opens `path` read-only and checks it is a whole PinTag database of the current schema
 /// (PRAGMA quick_check); its version and size. kStorage for a damaged or foreign file, kConflict

@@ -13,12 +13,13 @@
 
 namespace pintag::server {
 
-/// Roles a bearer token can carry (issue 5): admin may do everything. The tokens and the names
+/// Roles a bearer token can carry (issue 5): admin may do everything; replica only pulls
+/// registry snapshots (issue 22). The tokens and the names
 /// they are stored and created under are db's (`db::Role`, `db::ParseRole`); the application
 /// maps a verified token's role onto this one, so this layer needs no database.
-enum class Role { kAdmin, kCounter, kScanner };
+enum class Role { kAdmin, kCounter, kScanner, kReplica };
 
-std::string_view ToString(Role role);  ///< "admin", "counter", "scanner", for messages
+std::string_view ToString(Role role);  ///< "admin", "counter", "scanner", "replica"
 
 /// Who is calling, once a bearer token was verified.
 struct Principal {
@@ -27,7 +28,7 @@ struct Principal {
 };
 
 /// What a route requires. Admin satisfies every requirement.
-enum class Access { kOpen, kCounter, kScanner, kAdmin };
+enum class Access { kOpen, kCounter, kScanner, kAdmin, kReplica };
 
 std::string_view ToString(Access access);
 bool Allows(Access access, Role role);
