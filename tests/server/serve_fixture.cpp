@@ -22,10 +22,11 @@ std::string PintagExe() {
 }
 
 ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
-                             int timeout_s) {
+                             int timeout_s, int port) {
   int pipe_fds[2];
   if (::pipe2(pipe_fds, O_CLOEXEC) != 0) return;
-  std::vector<std::string> argv_text = {PintagExe(), "serve", "--port", "0", "--bind", "127.0.0.1"};
+  std::vector<std::string> argv_text = {PintagExe(),          "serve",  "--port",
+                                        std::to_string(port), "--bind", "127.0.0.1"};
   argv_text.insert(argv_text.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& a : argv_text) argv.push_back(a.data());

@@ -15,20 +15,23 @@ ConnectionPool::Lease::~Lease() {
   if (generation_ == pool_->generation_) pool_->idle_.push_back(std::move(connection_));
 }
 
-void ConnectionPool::renew() {
+void ConnectionPool::renew(const std::string& path) {
   std::vector<std::unique_ptr<db::Connection>> closing;
   {
     const std::lock_guard lock(mutex_);
     ++generation_;
+    path_ = path;
     closing.swap(idle_);
   }
 }
 
 ConnectionPool::Lease ConnectionPool::acquire() {
   std::uint64_t generation = 0;
+  std::string path;
   {
     const std::lock_guard lock(mutex_);
     generation = generation_;
+    path = path_;
     if (!idle_.empty()) {
       std::unique_ptr<db::Connection> connection = std::move(idle_.back());
       idle_.pop_back();
@@ -40,9 +43,9 @@ ConnectionPool::Lease ConnectionPool::acquire() {
     options.create = false;
     options.read_only = read_only_;
     options.busy_timeout_ms = busy_timeout_ms_;
-    return Lease(this, std::make_unique<db::Connection>(path_, options), generation);
+    return Lease(this, std::make_unique<db::Connection>(path, options), generation);
   } catch (const std::exception& e) {
-    std::cerr << "pintag serve: cannot open database " << path_ << ": " << e.what() << "\n";
+    std::cerr << "pintag serve: cannot open database " << path << ": " << e.what() << "\n";
     throw server::HttpError(503, "the database is not reachable", "Service Unavailable");
   }
 }

@@ -43,11 +43,9 @@ class ConnectionPool {
   /// Throws server::HttpError 503 when the database cannot be opened.
   Lease acquire();
 
-  /// Closes the idle connections; later leases open the path anew, and connections leased before
-  /// are closed when they come back.
-  void renew();
-
-  const std::string& path() const { return path_; }
+  /// Closes the idle connections; later leases open `path` (a replica's newly loaded snapshot),
+  /// and connections leased before are closed when they come back.
+  void renew(const std::string& path);
 
  private:
   std::string path_;

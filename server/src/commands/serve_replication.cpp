@@ -97,16 +97,16 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
       }
     }
   }
-  const db::Result<db::SnapshotInfo> verified = db::VerifySnapshot(db_path_);
-  if (!verified) throw std::runtime_error(verified.error().message);
-  loaded_ = *verified;
+  watcher_ = std::make_unique<replica::SnapshotWatcher>(
+      db_path_, [this](const db::SnapshotInfo& loaded) { pool_->renew(loaded.path); });
 
   const std::string scan_log =
       args_.scan_log.empty() ? Beside(db_path_, "-scans.db") : args_.scan_log;
   if (auto opened = db::OpenScanLogFile(scan_log); !opened) {
     throw std::runtime_error("scan log " + scan_log + ": " + opened.error().message);
   }
-  pool_ = std::make_shared<app::ConnectionPool>(db_path_, config.busy_timeout_ms, true);
+  pool_ =
+      std::make_shared<app::ConnectionPool>(watcher_->loaded().path, config.busy_timeout_ms, true);
   config.read_only = true;
   config.pool = pool_;
   config.scan_log_path = scan_log;
@@ -125,8 +125,6 @@ Replication::~Replication() {
 void Replication::start() {
   if (publisher_) publisher_->start(std::chrono::milliseconds(500));
   if (!args_.read_only) return;
-  watcher_ = std::make_unique<replica::SnapshotWatcher>(
-      db_path_, loaded_, [pool = pool_](const db::SnapshotInfo&) { pool->renew(); });
   watcher_->start(std::chrono::milliseconds(250));
   if (args_.follow.empty()) return;
   follower_ = std::make_unique<replica::SnapshotFollower>(
@@ -143,8 +141,8 @@ void Replication::reload() {
 std::string Replication::describe() const {
   if (publisher_) return "primary, publishing snapshots to " + args_.snapshot;
   if (!args_.read_only) return "";
-  std::string text =
-      "read-only replica at registry version " + std::to_string(loaded_.registry_version);
+  std::string text = "read-only replica at registry version " +
+                     std::to_string(watcher_->loaded().registry_version);
   if (!args_.follow.empty()) text += ", following " + args_.follow;
   return text;
 }

@@ -51,7 +51,6 @@ class Replication {
   std::string db_path_;
   std::shared_ptr<app::ConnectionPool> pool_;
   std::string token_;
-  db::SnapshotInfo loaded_;
   std::shared_ptr<replica::SnapshotPublisher> publisher_;
   std::unique_ptr<replica::SnapshotWatcher> watcher_;
   std::unique_ptr<replica::SnapshotFollower> follower_;

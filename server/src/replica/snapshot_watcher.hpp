@@ -1,13 +1,15 @@
 #pragma once
-// A read-only replica's side of a snapshot file: notices when another file was put at its path
-// (renamed into place by `pintag snapshot --out`, or by the follower), checks that file is a whole
-// snapshot, and then hands it on with `on_loaded`. A damaged or foreign file is reported once
-// and ignored: the replica goes on serving the snapshot it has.
+// A read-only replica's side of its snapshot file: notices when another file was put at the path
+// (renamed into place by `pintag snapshot --out`, or by the follower), checks it is a whole
+// snapshot, and hands it on. What is served is a hard link to the file that was checked
+// (`<path>.serving-N`), so a damaged file renamed into place later is never opened: it is
+// reported once and ignored, and the replica goes on serving what it has.
 
 #include <sys/types.h>
 
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <functional>
 #include <mutex>
 #include <optional>
@@ -20,11 +22,13 @@ namespace pintag::replica {
 
 class SnapshotWatcher {
  public:
+  /// Called with each newly loaded snapshot; its `path` is the file to open from now on.
   using OnLoaded = std::function<void(const db::SnapshotInfo&)>;
 
-  /// `loaded`: the snapshot already served from `path` (verified by the caller).
-  SnapshotWatcher(std::string path, db::SnapshotInfo loaded, OnLoaded on_loaded);
-  ~SnapshotWatcher();  ///< stops the thread
+  /// Loads the snapshot at `path` (removing serving links a previous run left). Throws
+  /// std::runtime_error when it is missing or not a whole snapshot.
+  SnapshotWatcher(std::string path, OnLoaded on_loaded);
+  ~SnapshotWatcher();  ///< stops the thread; the serving link stays until the next start
   SnapshotWatcher(const SnapshotWatcher&) = delete;
   SnapshotWatcher& operator=(const SnapshotWatcher&) = delete;
 
@@ -34,7 +38,7 @@ class SnapshotWatcher {
   /// Checks every `interval` on a thread of its own, until destroyed.
   void start(std::chrono::milliseconds interval);
 
-  /// The snapshot being served.
+  /// The snapshot being served (its path is the serving link).
   db::SnapshotInfo loaded() const;
 
  private:
@@ -46,11 +50,15 @@ class SnapshotWatcher {
     bool operator==(const Identity&) const = default;
   };
   static std::optional<Identity> Stat(const std::string& path);
+  /// Links the file now at path_ to a new serving name and checks it; the error when it is not
+  /// a whole snapshot. Requires mutex_.
+  db::Result<db::SnapshotInfo> linkAndVerify();
 
   std::string path_;
   OnLoaded on_loaded_;
   mutable std::mutex mutex_;  // one check at a time; guards the fields below
-  db::SnapshotInfo loaded_;
+  std::uint64_t links_made_ = 0;
+  std::optional<db::SnapshotInfo> loaded_;
   std::optional<Identity> seen_;  // the file last looked at, loaded or refused
   std::mutex stop_mutex_;
   std::condition_variable stop_changed_;
