@@ -274,13 +274,14 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
                             "GET /api/v1/tokens",
                             "DELETE /api/v1/tokens/{id}",
                             "POST /api/v1/tokens/{id}/revoke",
+                            "GET /api/v1/registry",
                             "GET /livez",
                             "GET /readyz",
                             "GET /metrics",
                             "GET /openapi.json"}) {
     EXPECT_EQ(listed.count(route), 1U) << route;
   }
-  EXPECT_EQ(listed.size(), 24U);
+  EXPECT_EQ(listed.size(), 25U);
 }
 
 TEST_F(ServeTest, StaticFilesFromTheWebDirectoryOnly) {
