@@ -11,7 +11,7 @@ set -euo pipefail
 binary="$1" dest="$2"
 uid=10001
 
-mkdir -p "$dest"/usr/{bin,lib,lib64,local/bin} "$dest"/{etc,tmp,var/lib/pintag,srv/pintag}
+mkdir -p "$dest"/usr/{bin,lib,lib64,local/bin} "$dest"/{etc,tmp,srv/pintag}
 chmod 1777 "$dest/tmp"
 # Debian's merged /usr: the loader is asked for /lib64/..., libraries are found under /lib/... .
 for link in bin lib lib64 sbin; do ln -sfn "usr/$link" "$dest/$link"; done

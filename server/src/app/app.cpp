@@ -66,7 +66,7 @@ server::HealthCheck DatabaseHealthCheck(const std::string& path) {
   };
 }
 
-server::HealthCheck SnapshotHealthCheck(std::shared_ptr<ConnectionPool> pool) {
+server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool) {
   return [pool]() -> std::optional<std::string> {
     try {
       auto connection = pool->acquire();

@@ -43,6 +43,6 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
 server::HealthCheck DatabaseHealthCheck(const std::string& path);
 
 /// Readiness of a read-only replica: the snapshot its pool opens now answers a query.
-server::HealthCheck SnapshotHealthCheck(std::shared_ptr<ConnectionPool> pool);
+server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool);
 
 }  // namespace pintag::app

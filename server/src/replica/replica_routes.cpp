@@ -10,7 +10,7 @@ namespace pintag::replica {
 using server::HttpRequest;
 using server::HttpResponse;
 
-void AddSnapshotRoute(server::Router& router, std::shared_ptr<SnapshotPublisher> publisher) {
+void AddSnapshotRoute(server::Router& router, const std::shared_ptr<SnapshotPublisher>& publisher) {
   server::Route route = server::MakeRoute(
       "GET", "/api/v1/registry/snapshot", server::Access::kReplica,
       [publisher](const HttpRequest& request) {

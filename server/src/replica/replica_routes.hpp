@@ -17,7 +17,7 @@ namespace pintag::replica {
 
 /// GET /api/v1/registry/snapshot (replica or admin token): the published snapshot as
 /// application/vnd.sqlite3 with ETag "<version>"; 304 when If-None-Match names the live version.
-void AddSnapshotRoute(server::Router& router, std::shared_ptr<SnapshotPublisher> publisher);
+void AddSnapshotRoute(server::Router& router, const std::shared_ptr<SnapshotPublisher>& publisher);
 
 /// What GET /api/v1/registry (open) reports.
 struct RegistryStatus {
