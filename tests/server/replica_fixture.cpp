@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "pintag/db/database.hpp"
+#include "pintag/db/snapshot.hpp"
 #include "pintag/db/tokens.hpp"
 
 namespace pintag::serve_test {
@@ -64,7 +65,8 @@ ServerProcess& ReplicaSetTest::startReplica(std::size_t index, std::vector<std::
                                             int port) {
   if (replicas_.size() <= index) replicas_.resize(index + 1);
   replicas_[index].reset();
-  args.insert(args.end(), {"--threads", "4", "--scan-log", replicaScanLog(index)});
+  // Threads beyond nginx's kept-alive connections (see docker/nginx/pintag.conf.template).
+  args.insert(args.end(), {"--threads", "12", "--scan-log", replicaScanLog(index)});
   replicas_[index] = std::make_unique<ServerProcess>(
       args, dir_.file("replica-" + std::to_string(index) + ".err"), 60, port);
   EXPECT_TRUE(replicas_[index]->ok()) << "replica " << index << " did not start:\n"
@@ -90,6 +92,14 @@ std::int64_t ReplicaSetTest::RegistryVersionAt(int port) {
   if (!r || r->status != 200) return -1;
   const auto body = nlohmann::json::parse(r->body, nullptr, false);
   return body.is_discarded() ? -1 : body.value("registry_version", std::int64_t{-1});
+}
+
+std::string ReplicaSetTest::publishTo(const std::string& name) {
+  const std::string path = dir_.file(name);
+  db::Connection live(primary_db_, {.create = false});
+  const auto written = db::WriteSnapshot(live, path);
+  EXPECT_TRUE(written.ok()) << written.error().message;
+  return path;
 }
 
 void ReplicaSetTest::addPincode(httplib::Client& client, const std::string& pin) {

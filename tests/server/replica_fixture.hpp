@@ -34,6 +34,9 @@ class ReplicaSetTest : public ::testing::Test {
 
   /// The registry version a server reports at GET /api/v1/registry; -1 when it does not answer.
   static std::int64_t RegistryVersionAt(int port);
+  /// A snapshot of the primary's database now, renamed into place as `name` in the scratch
+  /// directory; its path. Fails the test when it cannot be written.
+  std::string publishTo(const std::string& name);
   /// Adds pincode `pin` with one office through the primary's API.
   void addPincode(httplib::Client& client, const std::string& pin);
 

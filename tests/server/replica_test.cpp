@@ -159,11 +159,7 @@ TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem)
 }
 
 TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequestsInFlight) {
-  const std::string snapshot = dir_.file("served.db");
-  {
-    db::Connection live(primary_db_, {.create = false});
-    ASSERT_TRUE(db::WriteSnapshot(live, snapshot).ok());
-  }
+  const std::string snapshot = publishTo("served.db");
   ServerProcess& replica = startReadOnly(0, snapshot);
   ASSERT_TRUE(replica.ok());
   httplib::Client primary("127.0.0.1", primary_->port());
@@ -202,10 +198,8 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
   std::int64_t published_version = 0;
   for (int i = 0; i < 5; ++i) {
     addPincode(primary, std::to_string(999200 + i));
-    db::Connection live(primary_db_, {.create = false});
-    const auto written = db::WriteSnapshot(live, snapshot);
-    ASSERT_TRUE(written.ok()) << written.error().message;
-    published_version = written->registry_version;
+    publishTo("served.db");
+    published_version = RegistryVersionAt(primary_->port());
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     while (RegistryVersionAt(replica.port()) != published_version &&
            std::chrono::steady_clock::now() < deadline) {
@@ -228,11 +222,7 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
 }
 
 TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
-  const std::string snapshot = dir_.file("served.db");
-  {
-    db::Connection live(primary_db_, {.create = false});
-    ASSERT_TRUE(db::WriteSnapshot(live, snapshot).ok());
-  }
+  const std::string snapshot = publishTo("served.db");
   ServerProcess& replica = startReadOnly(0, snapshot);
   ASSERT_TRUE(replica.ok());
   const std::int64_t version = RegistryVersionAt(replica.port());

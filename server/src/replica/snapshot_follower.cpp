@@ -8,20 +8,15 @@
 namespace pintag::replica {
 
 std::string VersionETag(std::int64_t version) {
-  return "\"" + std::to_string(version) + "\"";
+  // Appended, not `"\"" + ...`: GCC 12 warns (-Wrestrict) about that concatenation wrongly.
+  std::string tag = "\"";
+  tag += std::to_string(version);
+  tag += '"';
+  return tag;
 }
 
 SnapshotFollower::SnapshotFollower(FollowOptions options, OnInstalled on_installed)
     : options_(std::move(options)), on_installed_(std::move(on_installed)) {}
-
-SnapshotFollower::~SnapshotFollower() {
-  {
-    const std::lock_guard lock(stop_mutex_);
-    stopping_ = true;
-  }
-  stop_changed_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
 
 db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     std::optional<std::int64_t> have) {
@@ -50,23 +45,18 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
 }
 
 void SnapshotFollower::start(Have have, std::chrono::milliseconds interval) {
-  thread_ = std::thread([this, have = std::move(have), interval] {
-    std::string last_error;
-    while (true) {
-      const auto fetched = fetch(have());
-      if (!fetched) {
-        if (fetched.error().message != last_error) {
-          std::cerr << "pintag serve: following " << options_.primary_url << ": "
-                    << fetched.error().message << "\n";
-        }
-        last_error = fetched.error().message;
-      } else {
-        last_error.clear();
-        if (*fetched) on_installed_(**fetched);
+  thread_.start(interval, [this, have = std::move(have), last_error = std::string()]() mutable {
+    const auto fetched = fetch(have());
+    if (!fetched) {
+      if (fetched.error().message != last_error) {
+        std::cerr << "pintag serve: following " << options_.primary_url << ": "
+                  << fetched.error().message << "\n";
       }
-      std::unique_lock lock(stop_mutex_);
-      if (stop_changed_.wait_for(lock, interval, [this] { return stopping_; })) return;
+      last_error = fetched.error().message;
+      return;
     }
+    last_error.clear();
+    if (*fetched) on_installed_(**fetched);
   });
 }
 

@@ -5,16 +5,14 @@
 // snapshot path (db::InstallSnapshot); a 304 means it is current.
 
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "replica/periodic_thread.hpp"
 
 namespace pintag::replica {
 
@@ -30,7 +28,7 @@ class SnapshotFollower {
   using OnInstalled = std::function<void(const db::SnapshotInfo&)>;
 
   SnapshotFollower(FollowOptions options, OnInstalled on_installed);
-  ~SnapshotFollower();  ///< stops the thread
+  ~SnapshotFollower() = default;  ///< stops the thread
   SnapshotFollower(const SnapshotFollower&) = delete;
   SnapshotFollower& operator=(const SnapshotFollower&) = delete;
 
@@ -47,10 +45,7 @@ class SnapshotFollower {
  private:
   FollowOptions options_;
   OnInstalled on_installed_;
-  std::mutex stop_mutex_;
-  std::condition_variable stop_changed_;
-  bool stopping_ = false;
-  std::thread thread_;
+  PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
 /// The ETag of a registry version: the number in double quotes.

@@ -11,15 +11,6 @@ namespace pintag::replica {
 SnapshotPublisher::SnapshotPublisher(std::string live_path, std::string out_path)
     : live_path_(std::move(live_path)), out_path_(std::move(out_path)) {}
 
-SnapshotPublisher::~SnapshotPublisher() {
-  {
-    const std::lock_guard lock(stop_mutex_);
-    stopping_ = true;
-  }
-  stop_changed_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
-
 db::Result<std::int64_t> SnapshotPublisher::liveVersion() {
   const std::lock_guard lock(mutex_);
   try {
@@ -65,18 +56,12 @@ db::Result<PublishedSnapshot> SnapshotPublisher::read() {
 }
 
 void SnapshotPublisher::start(std::chrono::milliseconds interval) {
-  thread_ = std::thread([this, interval] {
-    std::string last_error;
-    while (true) {
-      const db::Result<db::SnapshotInfo> published = publish();
-      if (!published && published.error().message != last_error) {
-        std::cerr << "pintag serve: cannot publish a snapshot: " << published.error().message
-                  << "\n";
-      }
-      last_error = published ? "" : published.error().message;
-      std::unique_lock lock(stop_mutex_);
-      if (stop_changed_.wait_for(lock, interval, [this] { return stopping_; })) return;
+  thread_.start(interval, [this, last_error = std::string()]() mutable {
+    const db::Result<db::SnapshotInfo> published = publish();
+    if (!published && published.error().message != last_error) {
+      std::cerr << "pintag serve: cannot publish a snapshot: " << published.error().message << "\n";
     }
+    last_error = published ? "" : published.error().message;
   });
 }
 

@@ -6,16 +6,15 @@
 // already returned.
 
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "pintag/db/sqlite.hpp"
+#include "replica/periodic_thread.hpp"
 
 namespace pintag::replica {
 
@@ -29,7 +28,7 @@ class SnapshotPublisher {
  public:
   /// `live_path`: the primary's database (must exist); `out_path`: the snapshot file it keeps.
   SnapshotPublisher(std::string live_path, std::string out_path);
-  ~SnapshotPublisher();  ///< stops the thread
+  ~SnapshotPublisher() = default;  ///< stops the thread
   SnapshotPublisher(const SnapshotPublisher&) = delete;
   SnapshotPublisher& operator=(const SnapshotPublisher&) = delete;
 
@@ -51,10 +50,7 @@ class SnapshotPublisher {
   std::mutex mutex_;  // guards the connection, published_ and the file's replacement
   std::optional<db::Connection> live_;
   std::optional<db::SnapshotInfo> published_;
-  std::mutex stop_mutex_;
-  std::condition_variable stop_changed_;
-  bool stopping_ = false;
-  std::thread thread_;
+  PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
 }  // namespace pintag::replica

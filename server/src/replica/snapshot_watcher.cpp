@@ -30,15 +30,6 @@ SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
   loaded_ = *loaded;
 }
 
-SnapshotWatcher::~SnapshotWatcher() {
-  {
-    const std::lock_guard lock(stop_mutex_);
-    stopping_ = true;
-  }
-  stop_changed_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
-
 std::optional<SnapshotWatcher::Identity> SnapshotWatcher::Stat(const std::string& path) {
   struct stat status {};
   if (::stat(path.c_str(), &status) != 0) return std::nullopt;
@@ -80,13 +71,7 @@ bool SnapshotWatcher::check() {
 }
 
 void SnapshotWatcher::start(std::chrono::milliseconds interval) {
-  thread_ = std::thread([this, interval] {
-    while (true) {
-      check();
-      std::unique_lock lock(stop_mutex_);
-      if (stop_changed_.wait_for(lock, interval, [this] { return stopping_; })) return;
-    }
-  });
+  thread_.start(interval, [this] { check(); });
 }
 
 db::SnapshotInfo SnapshotWatcher::loaded() const {

@@ -8,15 +8,14 @@
 #include <sys/types.h>
 
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 
 #include "pintag/db/snapshot.hpp"
+#include "replica/periodic_thread.hpp"
 
 namespace pintag::replica {
 
@@ -28,7 +27,7 @@ class SnapshotWatcher {
   /// Loads the snapshot at `path` (removing serving links a previous run left). Throws
   /// std::runtime_error when it is missing or not a whole snapshot.
   SnapshotWatcher(std::string path, OnLoaded on_loaded);
-  ~SnapshotWatcher();  ///< stops the thread; the serving link stays until the next start
+  ~SnapshotWatcher() = default;  ///< stops the thread; the serving link stays until the next start
   SnapshotWatcher(const SnapshotWatcher&) = delete;
   SnapshotWatcher& operator=(const SnapshotWatcher&) = delete;
 
@@ -60,10 +59,7 @@ class SnapshotWatcher {
   std::uint64_t links_made_ = 0;
   std::optional<db::SnapshotInfo> loaded_;
   std::optional<Identity> seen_;  // the file last looked at, loaded or refused
-  std::mutex stop_mutex_;
-  std::condition_variable stop_changed_;
-  bool stopping_ = false;
-  std::thread thread_;
+  PeriodicThread thread_;         // last: stopped before the members it uses go
 };
 
 }  // namespace pintag::replica
