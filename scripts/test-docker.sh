@@ -95,6 +95,17 @@ for port in "${replica_ports[@]}"; do
   wait_ready "$port" 120 || { "${compose[@]}" logs; exit 1; }
 done
 wait_ready "$PINTAG_NGINX_PORT" 60 || { "${compose[@]}" logs nginx; exit 1; }
+healthy() {  # healthy SERVICE: Docker's HEALTHCHECK says so within 60 s
+  local i
+  for ((i = 0; i < 60; ++i)); do
+    [[ "$("${DOCKER[@]}" inspect -f '{{.State.Health.Status}}' \
+      "$("${compose[@]}" ps -q "$1")" 2>/dev/null)" == healthy ]] && return 0
+    sleep 1
+  done
+  return 1
+}
+check "the image's HEALTHCHECK reports the primary healthy" healthy primary
+check "the image's HEALTHCHECK reports replica-1 healthy" healthy replica-1
 check "a replica refuses a write with 403 naming the primary" bash -c \
   "curl -s -X POST -H 'Content-Type: application/json' -d '{}' \
      http://127.0.0.1:$PINTAG_REPLICA1_PORT/api/v1/pincodes | grep -q 'Read-Only Replica.*127.0.0.1:$PINTAG_PRIMARY_PORT\|127.0.0.1:$PINTAG_PRIMARY_PORT.*Read-Only Replica'"
