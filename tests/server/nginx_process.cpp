@@ -29,6 +29,7 @@ std::string NginxExe() {
 /// Runs argv to completion; its exit status, -1 when it could not run.
 int Run(std::vector<std::string> args) {
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   const pid_t pid = ::fork();

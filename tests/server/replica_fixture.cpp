@@ -95,7 +95,7 @@ std::int64_t ReplicaSetTest::RegistryVersionAt(int port) {
 }
 
 std::string ReplicaSetTest::publishTo(const std::string& name) {
-  const std::string path = dir_.file(name);
+  std::string path = dir_.file(name);
   db::Connection live(primary_db_, {.create = false});
   const auto written = db::WriteSnapshot(live, path);
   EXPECT_TRUE(written.ok()) << written.error().message;

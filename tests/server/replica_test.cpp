@@ -169,6 +169,7 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
   std::atomic<bool> stop{false};
   std::atomic<int> answered{0}, failed{0}, went_back{0};
   std::vector<std::thread> clients;
+  clients.reserve(4);
   for (int t = 0; t < 4; ++t) {
     clients.emplace_back([&, t] {
       httplib::Client client("127.0.0.1", replica.port());
@@ -239,6 +240,7 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
   // Many connections at once, so the pool opens new ones after the junk arrived.
   std::vector<std::thread> clients;
   std::atomic<int> good{0};
+  clients.reserve(8);
   for (int t = 0; t < 8; ++t) {
     clients.emplace_back([&] {
       httplib::Client client("127.0.0.1", replica.port());

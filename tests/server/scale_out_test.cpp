@@ -103,6 +103,7 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
     }
   };
   std::vector<std::thread> clients;
+  clients.reserve(6);
   for (int t = 0; t < 6; ++t) {
     clients.emplace_back([&, t] {
       httplib::Client client("127.0.0.1", nginx.port());
