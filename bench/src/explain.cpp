@@ -2,34 +2,29 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdio>
 
-#include "cluster_quads.hpp"
-#include "grouping.hpp"
-#include "homography.hpp"
-#include "pintag/codec/geometry.hpp"
 #include "pintag/detector/detector.hpp"
-#include "quads.hpp"
-#include "red_blobs.hpp"
-#include "redness.hpp"
+#include "read_tag.hpp"
 #include "sweep.hpp"
 
 namespace pintag::bench {
 namespace {
 
-constexpr double kNear =
-    0.08;  ///< square units: a blob this near an element centre is that element
-
-cv::Point2d ToSquare(const cv::Matx33d& image_to_square, cv::Point2d p) {
-  const cv::Vec3d q = image_to_square * cv::Vec3d(p.x, p.y, 1);
-  return {q[0] / q[2], q[1] / q[2]};
+cv::Point2d Centre(const std::array<cv::Point2d, 4>& corners) {
+  return (corners[0] + corners[1] + corners[2] + corners[3]) * 0.25;
 }
 
-int NearestElement(cv::Point2d square_point, double radius) {
-  for (int e = 0; e < 4; ++e) {
-    const geometry::Point c = geometry::kElementCentres[e];
-    if (cv::norm(square_point - cv::Point2d(c.x, c.y)) <= radius) return e;
+/// Mean corner distance between two squares, over the four ways of pairing their corners in order.
+double CornerError(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  double best = 1e300;
+  for (int turn = 0; turn < 4; ++turn) {
+    double sum = 0;
+    for (int i = 0; i < 4; ++i)
+      sum += cv::norm(a[static_cast<std::size_t>(i)] - b[static_cast<std::size_t>((i + turn) % 4)]);
+    best = std::min(best, sum / 4);
   }
-  return -1;
+  return best;
 }
 
 }  // namespace
@@ -39,105 +34,46 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
   DetectorOptions options = tuned;
   options.intrinsics = CameraIntrinsics{camera.fx, camera.fy, camera.cx, camera.cy, {}};
   options.tag_size_m = kTagSideM;
-  const cv::Matx33d to_square = truth.homography.inv();
-
-  // Stage 1: red pixels within the red disk of each element.
-  const stage::RedRuns red = stage::FindRedRuns(bgr, {options.red_min_a, options.red_min_b});
-  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
-  for (const cv::Point2d& c : truth.corners_px) {
-    x0 = std::min(x0, c.x), y0 = std::min(y0, c.y), x1 = std::max(x1, c.x), y1 = std::max(y1, c.y);
-  }
-  std::array<bool, 4> red_at{};
-  for (const stage::RedRun& run : red.runs) {
-    if (run.y < y0 || run.y > y1 || run.x1 < x0 || run.x0 > x1) continue;
-    for (int x = run.x0; x <= run.x1; ++x) {
-      const int e =
-          NearestElement(ToSquare(to_square, {double(x), double(run.y)}), geometry::kRedRadius);
-      if (e >= 0) red_at[static_cast<std::size_t>(e)] = true;
-    }
-  }
-  const auto red_elements = std::count(red_at.begin(), red_at.end(), true);
-  if (red_elements < 3) {
-    return "1 red: only " + std::to_string(red_elements) + " of 4 elements have a red pixel";
-  }
-
-  // Stage 2: blobs kept by the size and shape limits near each element.
-  stage::BlobLimits limits;
-  limits.min_area = options.min_element_area_px;
-  limits.max_area = std::max<int>(limits.min_area,
-                                  static_cast<int>(options.max_element_area_ratio * bgr.total()));
-  limits.max_blobs = options.max_blobs;
-  std::vector<stage::RedBlob> blobs = stage::FindRedBlobs(red, limits);
-  const auto on_elements = [&](const std::vector<stage::RedBlob>& list) {
-    std::array<bool, 4> at{};
-    std::vector<int> indices;
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const int e = NearestElement(ToSquare(to_square, list[i].centroid), kNear);
-      if (e < 0) continue;
-      at[static_cast<std::size_t>(e)] = true;
-      indices.push_back(static_cast<int>(i));
-    }
-    return std::pair(static_cast<int>(std::count(at.begin(), at.end(), true)), indices);
-  };
-  if (on_elements(blobs).first < 3) return "2 blobs: < 3 elements give a red blob (size, shape)";
-
-  // Stage 3, as detector.cpp runs it: the ring check, clusters, then quads per cluster.
-  std::erase_if(blobs, [&](const stage::RedBlob& b) { return !stage::HasRing(bgr, b); });
-  // (Not a structured binding: lambdas below capture on_tag, which C++20 allows and clang 14
-  // does not.)
-  const std::pair<int, std::vector<int>> ring_kept = on_elements(blobs);
-  const std::vector<int>& on_tag = ring_kept.second;
-  if (ring_kept.first < 3) return "3a ring check: < 3 element blobs keep their green ring";
-  const std::vector<stage::BlobCluster> clusters = stage::ClusterBlobs(blobs, bgr.size());
-  const stage::BlobCluster* cluster = nullptr;
-  for (const stage::BlobCluster& c : clusters) {
-    const auto n = std::count_if(c.blobs.begin(), c.blobs.end(), [&](int b) {
-      return std::find(on_tag.begin(), on_tag.end(), b) != on_tag.end();
-    });
-    if (n >= 3) cluster = &c;
-  }
-  if (cluster == nullptr) return "3b grouping: no cluster holds >= 3 of the element blobs";
-  const cv::Point2d centre_px =
-      (truth.corners_px[0] + truth.corners_px[1] + truth.corners_px[2] + truth.corners_px[3]) *
-      0.25;
-  bool quad_on_tag = false, rough_ok = false;
-  // The same outline quads as detector.cpp (not the squares its blobs place when none of these
-  // decodes, nor the corner fit: misses there are counted at this stage or at the reason shown).
-  const std::vector<stage::Quad> quads = stage::ClusterQuads(
-      stage::MinChannel(bgr, cluster->roi), *cluster, blobs, options.min_square_px);
-  for (const stage::Quad& q : quads) {
-    if (cv::norm((q[0] + q[1] + q[2] + q[3]) * 0.25 - centre_px) >= 0.3 * truth.square_px) continue;
-    quad_on_tag = true;
-    rough_ok |= stage::AssignElements(stage::HomographyFromQuad(q), blobs, cluster->blobs,
-                                      stage::kRoughElementTolerance)
-                    .found >= 3;
-  }
-  if (!quad_on_tag) return "3c quad search: no quad on the tag in its cluster's region";
-  if (!rough_ok) return "3d quad found, but < 3 blobs fall on its elements";
-
-  // Later stages: what the detector says about candidates on the tag.
   options.return_rejected = true;
+
+  // The readers on the true corners: what the tag holds for them when the square is exact.
+  const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
+  stage::Quad exact;
+  for (std::size_t i = 0; i < 4; ++i) exact[i] = truth.corners_px[i];
+  const stage::CandidateReading at_truth = stage::ReadCandidate(bgr, exact, thresholds);
+  const std::string reader =
+      !at_truth.reading.payload.key ? "unread at true corners"
+      : *at_truth.reading.payload.key == TagKey(static_cast<std::uint16_t>(truth.id))
+          ? "read at true corners"
+          : "WRONG at true corners";
+
+  // The detector's candidates on the tag: the one nearest the truth decides.
   const DetectResult result = Detector(options).detect(bgr);
-  const cv::Point2d centre = centre_px;
-  // The most advanced stage any candidate on the tag reached decides.
-  std::string reason;
-  int rank = 0;
+  const cv::Point2d centre = Centre(truth.corners_px);
+  double best_error = 1e300;
+  std::string best_reason;
+  bool decoded = false;
   for (const Detection& d : result.detections) {
-    cv::Point2d c;
-    for (const Point2& p : d.corners) c += cv::Point2d(p.x, p.y) * 0.25;
-    if (cv::norm(c - centre) >= 0.3 * truth.square_px) continue;
-    if (d.key) return "8 decoded, but another key or off the tag";
-    const std::string& why = d.reject_reason;
-    const int r = why == "square edges not found"                ? 1
-                  : why == "red blobs do not match the elements" ? 2
-                  : why.find("orientation") != std::string::npos ? 3
-                                                                 : 4;
-    if (r > rank) {
-      rank = r;
-      reason = (r == 1 || r == 2 ? "4 " : r == 3 ? "5 " : "6 ") + why;
+    std::array<cv::Point2d, 4> corners;
+    for (std::size_t i = 0; i < 4; ++i) corners[i] = {d.corners[i].x, d.corners[i].y};
+    if (cv::norm(Centre(corners) - centre) >= 0.3 * truth.square_px) continue;
+    const double error = CornerError(corners, truth.corners_px);
+    if (error < best_error) {
+      best_error = error;
+      best_reason = d.key ? "decoded as another key" : d.reject_reason;
+      decoded = d.key.has_value();
     }
   }
-  return rank > 0 ? reason : "7 no candidate on the tag reached the decoder";
+  if (best_error > 1e299) return "1 no candidate; " + reader;
+  char text[256];
+  const char* band = best_error < 0.5 ? "< 0.5"
+                     : best_error < 1 ? "0.5-1"
+                     : best_error < 2 ? "1-2"
+                                      : ">= 2";
+  std::snprintf(text, sizeof text, "%s candidate, corners %s px off (%s); %s",
+                decoded ? "3 wrong" : "2", band,
+                best_reason.substr(0, best_reason.find(':')).c_str(), reader.c_str());
+  return text;
 }
 
 }  // namespace pintag::bench

@@ -58,6 +58,7 @@ struct Args {
   std::string detectors = "pintag,aruco,apriltag-d1,apriltag-d2";
   std::string pintag_options;  ///< JSON object of DetectorOptions fields, for tuning runs
   std::string dump_misses;     ///< directory for crops of the tags PinTag missed
+  std::string save_frames;     ///< directory for every PinTag (and tagless) frame as rendered
   int chunk = 24;
 };
 
@@ -69,6 +70,7 @@ void Usage(FILE* to) {
       "  --frames-per-bin N    frames per size x tilt x photometry bin (default 8)\n"
       "  --tagless N           tagless photograph frames (default 64)\n"
       "  --seed N              base seed of the sweep (default 1)\n"
+      "  --world W             held-out (default) or tuning: which world's scenes\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
       "  --csv FILE            also write one row per frame and detector\n"
@@ -83,6 +85,7 @@ void Usage(FILE* to) {
       "(tuning; the report says so)\n"
       "  --dump-misses DIR     write a PNG crop of every tag PinTag missed, named by bin and "
       "the stage that lost it\n"
+      "  --save-frames DIR     write every PinTag and tagless frame as rendered (PNG)\n"
       "  --quiet               no progress on stderr\n");
 }
 
@@ -110,6 +113,15 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--seed");
       if (v == nullptr) return false;
       args->sweep.seed = std::strtoull(v, nullptr, 10);
+    } else if (a == "--world") {
+      const char* v = value("--world");
+      if (v == nullptr) return false;
+      const std::string w = v;
+      if (w != "held-out" && w != "tuning") {
+        std::fprintf(stderr, "pintag_bench: --world is held-out or tuning\n");
+        return false;
+      }
+      args->sweep.world = w == "tuning" ? scene::World::kTuning : scene::World::kHeldOut;
     } else if (a == "--out") {
       const char* v = value("--out");
       if (v == nullptr) return false;
@@ -138,6 +150,10 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--dump-misses");
       if (v == nullptr) return false;
       args->dump_misses = v;
+    } else if (a == "--save-frames") {
+      const char* v = value("--save-frames");
+      if (v == nullptr) return false;
+      args->save_frames = v;
     } else if (a == "--quiet") {
       args->quiet = true;
     } else if (a == "--help" || a == "-h") {
@@ -200,11 +216,12 @@ struct CsvRow {
 int Main(int argc, char** argv) {
   Args args;
   if (!ParseArgs(argc, argv, &args)) return 2;
-  if (!args.dump_misses.empty()) {
+  for (const std::string& dir : {args.dump_misses, args.save_frames}) {
+    if (dir.empty()) continue;
     std::error_code ec;
-    std::filesystem::create_directories(args.dump_misses, ec);
+    std::filesystem::create_directories(dir, ec);
     if (ec) {
-      std::fprintf(stderr, "pintag_bench: cannot create %s: %s\n", args.dump_misses.c_str(),
+      std::fprintf(stderr, "pintag_bench: cannot create %s: %s\n", dir.c_str(),
                    ec.message().c_str());
       return 2;
     }
@@ -215,7 +232,8 @@ int Main(int argc, char** argv) {
   result.machine = GatherMachineInfo(PINTAG_SOURCE_DIR);
   for (int i = 0; i < argc; ++i) result.command_line += (i ? " " : "") + std::string(argv[i]);
   result.sweep = args.sweep;
-  result.photos = static_cast<int>(scene::BackgroundPhotos().size());
+  result.photos = static_cast<int>(scene::BackgroundPhotos(args.sweep.world).size());
+  result.camera = CameraFor(args.sweep.world);
   const scene::Camera camera = result.camera;
   const std::vector<FrameSpec> frames = MakeSweep(args.sweep, camera);
   for (const FrameSpec& f : frames) (f.tagless() ? result.tagless_frames : result.tagged_frames)++;
@@ -277,6 +295,17 @@ int Main(int argc, char** argv) {
         for (int m = 0; m < (f.tagless() ? 1 : kMarkerCount); ++m) {
           if (!f.tagless() && !needed[static_cast<std::size_t>(m)]) continue;
           scene::Scene s = scene::RenderScene(SceneFor(f, static_cast<Marker>(m), camera));
+          if (!args.save_frames.empty() && m == 0) {
+            char name[512];
+            std::snprintf(name, sizeof name, "%s/f%05d-%s.png", args.save_frames.c_str(), f.index,
+                          f.tagless()
+                              ? "tagless"
+                              : (std::to_string(kSizesPx[f.size_index]) + "px-" +
+                                 std::to_string(kTiltsDeg[f.tilt_index]) + "deg-" +
+                                 (f.hard ? "hard" : "mod") + "-key" + std::to_string(f.pintag_key))
+                                    .c_str());
+            cv::imwrite(name, s.bgr);
+          }
           rendered[i - begin].bgr[m] = std::move(s.bgr);
           rendered[i - begin].truth[m] = std::move(s.truth);
         }

@@ -14,6 +14,9 @@ std::uint64_t Mix(std::uint64_t h, std::uint64_t v) {
   return z ^ (z >> 31);
 }
 
+// The held-out world's salt: its frames' seeds are a stream the tuning world never draws from.
+constexpr std::uint64_t kHeldOutSalt = 0x48454C444F5554ULL;
+
 FrameSpec TaggedFrame(std::uint64_t base, int round, bool hard, int size_index, int tilt_index,
                       const scene::Camera& camera) {
   FrameSpec f;
@@ -43,6 +46,16 @@ FrameSpec TaggedFrame(std::uint64_t base, int round, bool hard, int size_index, 
 
 }  // namespace
 
+scene::Camera CameraFor(scene::World world) {
+  scene::Camera camera;
+  if (world == scene::World::kHeldOut) camera.fx = camera.fy = 1500;
+  return camera;
+}
+
+std::string ToString(scene::World world) {
+  return world == scene::World::kHeldOut ? "held-out" : "tuning";
+}
+
 std::string ToString(Marker marker) {
   switch (marker) {
     case Marker::kPinTag:
@@ -56,13 +69,15 @@ std::string ToString(Marker marker) {
 }
 
 std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camera& camera) {
+  const bool held_out = options.world == scene::World::kHeldOut;
+  const std::uint64_t seed = held_out ? Mix(options.seed, kHeldOutSalt) : options.seed;
   std::vector<FrameSpec> frames;
   // Rounds outermost: any stretch of the sweep mixes every bin, so drift in the machine's load
   // spreads over all bins instead of landing on a few.
   if (options.quick) {
     for (int s = 0; s < kSizeCount; ++s) {
       for (int t = 0; t < kTiltCount; ++t) {
-        frames.push_back(TaggedFrame(options.seed, 0, (s + t) % 2 == 1, s, t, camera));
+        frames.push_back(TaggedFrame(seed, 0, (s + t) % 2 == 1, s, t, camera));
       }
     }
   } else {
@@ -70,22 +85,37 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
       for (int hard = 0; hard < 2; ++hard) {
         for (int s = 0; s < kSizeCount; ++s) {
           for (int t = 0; t < kTiltCount; ++t) {
-            frames.push_back(TaggedFrame(options.seed, round, hard == 1, s, t, camera));
+            frames.push_back(TaggedFrame(seed, round, hard == 1, s, t, camera));
           }
         }
       }
     }
   }
   const int tagless = options.quick ? std::min(options.tagless_frames, 6) : options.tagless_frames;
-  const int photos = static_cast<int>(scene::BackgroundPhotos().size());
+  const int photos = static_cast<int>(scene::BackgroundPhotos(options.world).size());
   for (int i = 0; i < tagless; ++i) {
     FrameSpec f;
     f.hard = i % 2 == 1;
-    f.seed = Mix(Mix(options.seed, 0x7A6E55), static_cast<std::uint64_t>(i));
-    f.background_photo = photos > 0 ? i % photos : -1;
+    f.seed = Mix(Mix(seed, 0x7A6E55), static_cast<std::uint64_t>(i));
+    f.background_photo = i % photos;
+    if (held_out) {
+      // A label without its tag (text, border, the white place) in view, as on a parcel whose
+      // tag is out of the frame: the detector must not read a tag into a label's print.
+      scene::Rng rng(Mix(f.seed, 0xB1A4C));
+      f.blank_label_px = kSizesPx[rng.below(kSizeCount)];
+      const double margin = 1.1 * f.blank_label_px + 2;
+      f.centre = {rng.uniform(margin, camera.width - margin),
+                  rng.uniform(margin, camera.height - margin)};
+      f.tilt_axis_deg = rng.uniform(0, 360);
+      f.roll_deg = rng.uniform(0, 360);
+      f.blank_label_tilt_deg = kTiltsDeg[rng.below(kTiltCount)];
+    }
     frames.push_back(f);
   }
-  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].index = static_cast<int>(i);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    frames[i].index = static_cast<int>(i);
+    frames[i].world = options.world;
+  }
   return frames;
 }
 
@@ -104,27 +134,43 @@ int TruthId(const FrameSpec& frame, Marker marker) {
 
 scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Camera& camera) {
   scene::SceneSpec spec;
+  spec.world = frame.world;
   spec.camera = camera;
   spec.seed = frame.seed;
+  spec.print_seed = Mix(frame.seed, 0x9217);
   spec.real_background = true;
   spec.background_photo = frame.background_photo;
   spec.photometry =
       frame.hard ? scene::Photometry::Hard(frame.seed) : scene::Photometry::Moderate(frame.seed);
-  if (frame.tagless()) return spec;
+  spec.capture = frame.hard ? scene::PhoneCapture::Hard(frame.seed)
+                            : scene::PhoneCapture::Moderate(frame.seed);
+  const bool held_out = frame.world == scene::World::kHeldOut;
+  if (frame.tagless() && frame.blank_label_px == 0) return spec;
   scene::PlacedMarker placed;
+  placed.square_side_m = kTagSideM;
+  if (frame.tagless()) {  // a blank label: not a marker, so no truth id
+    placed.texture = scene::PrintedLabel(scene::LabelMarker::kNone, 0);
+    placed.pose = scene::MakePose(
+        camera, frame.centre, scene::DistanceForSquarePx(camera, frame.blank_label_px, kTagSideM),
+        frame.blank_label_tilt_deg, frame.tilt_axis_deg, frame.roll_deg);
+    spec.markers.push_back(std::move(placed));
+    return spec;
+  }
   placed.id = TruthId(frame, marker);
   switch (marker) {
     case Marker::kPinTag:
-      placed.texture = scene::PinTagTexture(placed.id);
+      placed.texture = held_out ? scene::PrintedLabel(scene::LabelMarker::kPinTag, placed.id)
+                                : scene::PinTagTexture(placed.id);
       break;
     case Marker::kAruco:
-      placed.texture = scene::ArucoTexture(placed.id);
+      placed.texture = held_out ? scene::PrintedLabel(scene::LabelMarker::kAruco, placed.id)
+                                : scene::ArucoTexture(placed.id);
       break;
     case Marker::kAprilTag:
-      placed.texture = scene::AprilTagTexture(placed.id);
+      placed.texture = held_out ? scene::PrintedLabel(scene::LabelMarker::kAprilTag, placed.id)
+                                : scene::AprilTagTexture(placed.id);
       break;
   }
-  placed.square_side_m = kTagSideM;
   placed.pose =
       scene::MakePose(camera, frame.centre,
                       scene::DistanceForSquarePx(camera, kSizesPx[frame.size_index], kTagSideM),

@@ -25,14 +25,25 @@ enum class Marker { kPinTag, kAruco, kAprilTag };
 inline constexpr int kMarkerCount = 3;
 std::string ToString(Marker marker);
 
+/// The camera of each world: the tuning world's (f = 1400 px) or the held-out world's (f = 1500 px,
+/// as phones' main cameras at 1080p), both 1920 × 1080.
+scene::Camera CameraFor(scene::World world);
+
+/// The world's name in reports and on the command line: "tuning" or "held-out".
+std::string ToString(scene::World world);
+
 struct SweepOptions {
+  scene::World world = scene::World::kHeldOut;
   int frames_per_bin = 8;   ///< frames per (size, tilt, photometry) bin
   int tagless_frames = 64;  ///< frames of photographs without a tag (moderate and hard alternate)
   bool quick = false;       ///< one frame per (size, tilt), photometry alternating; few tagless
-  std::uint64_t seed = 1;   ///< base seed of the whole sweep
+  /// Base seed of the whole sweep. The held-out world mixes it with a salt of its own, so the two
+  /// worlds never share a frame's seed.
+  std::uint64_t seed = 1;
 };
 
 struct FrameSpec {
+  scene::World world = scene::World::kHeldOut;
   int index = 0;           ///< position in the sweep
   int size_index = -1;     ///< into kSizesPx; −1 on a tagless frame
   int tilt_index = -1;     ///< into kTiltsDeg; −1 on a tagless frame
@@ -45,6 +56,10 @@ struct FrameSpec {
   int aruco_id = 0;           ///< 0 … 999 (DICT_5X5_1000)
   int apriltag_id = 0;        ///< 0 … 2319 (tag36h10)
   int background_photo = -1;  ///< tagless frames: the photograph, else chosen by the seed
+  /// Held-out tagless frames: a label without a tag in view, its tag's place this many px (0:
+  /// none) at this tilt (placed at `centre`, turned by the two angles above).
+  int blank_label_px = 0;
+  double blank_label_tilt_deg = 0;
 
   bool tagless() const { return size_index < 0; }
 };

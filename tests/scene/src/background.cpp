@@ -2,75 +2,91 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace pintag::scene {
 namespace {
 
 struct PhotoSource {
+  const char* package;  ///< the Debian package that installs them (scripts/setup.sh)
   const char* directory;
   std::vector<const char*> files;
 };
 
-// Colour photographs only (no logos, drawings or grey calibration shots). Several hold red and
-// round things (fruit, sweets, a baboon's nose, a red cup, a motorcycle): the tagless scenes
-// need them to show that the detector does not read tags into them.
-const std::vector<PhotoSource>& PhotoSources() {
-  static const std::vector<PhotoSource> sources = {
-      // Debian package opencv-doc: OpenCV's sample data.
-      {"/usr/share/doc/opencv-doc/examples/data", {"fruits.jpg",     "apple.jpg",
-                                                   "orange.jpg",     "smarties.png",
-                                                   "baboon.jpg",     "butterfly.jpg",
-                                                   "chicky_512.png", "rubberwhale1.png",
-                                                   "messi5.jpg",     "building.jpg",
-                                                   "home.jpg",       "aloeL.jpg",
-                                                   "leuvenA.jpg",    "squirrel_cls.jpg",
-                                                   "stuff.jpg",      "aero1.jpg",
-                                                   "board.jpg",      "ela_original.jpg",
-                                                   "pca_test1.jpg",  "graf1.png",
-                                                   "cards.png",      "licenseplate_motion.jpg"}},
-      // Debian package python3-skimage, where installed: scikit-image's sample data.
-      {"/usr/lib/python3/dist-packages/skimage/data",
-       {"astronaut.png", "chelsea.png", "coffee.png", "motorcycle_left.png", "rocket.jpg",
-        "retina.jpg", "ihc.png", "brick.png", "grass.png", "gravel.png"}},
+// Colour photographs (and, held out, a few grey ones and a colour wheel). Several hold red and
+// round things (fruit, sweets, a baboon's nose, a red cup, a motorcycle, a retina): the tagless
+// scenes need them to show that the detector does not read tags into them. The two worlds share
+// no photograph: nothing tuned on the first ever sees the second.
+const std::vector<PhotoSource>& PhotoSources(World world) {
+  static const std::vector<PhotoSource> tuning = {
+      {"opencv-doc",
+       "/usr/share/doc/opencv-doc/examples/data",
+       {"fruits.jpg",     "apple.jpg",
+        "orange.jpg",     "smarties.png",
+        "baboon.jpg",     "butterfly.jpg",
+        "chicky_512.png", "rubberwhale1.png",
+        "messi5.jpg",     "building.jpg",
+        "home.jpg",       "aloeL.jpg",
+        "leuvenA.jpg",    "squirrel_cls.jpg",
+        "stuff.jpg",      "aero1.jpg",
+        "board.jpg",      "ela_original.jpg",
+        "pca_test1.jpg",  "graf1.png",
+        "cards.png",      "licenseplate_motion.jpg"}},
   };
-  return sources;
+  static const std::vector<PhotoSource> held_out = {
+      {"python3-skimage",
+       "/usr/lib/python3/dist-packages/skimage/data",
+       {"astronaut.png", "chelsea.png", "coffee.png", "motorcycle_left.png", "motorcycle_right.png",
+        "rocket.jpg", "retina.jpg", "ihc.png", "brick.png", "grass.png", "gravel.png",
+        "hubble_deep_field.jpg", "color.png", "coins.png", "camera.png"}},
+      {"lomiri-wallpapers-20.04",
+       "/usr/share/backgrounds",
+       {"Kleiber_by_Lukas_Baubkus.jpg", "Infinite-Sea_by_Aury88.jpg"}},
+  };
+  return world == World::kHeldOut ? held_out : tuning;
 }
 
-std::vector<std::string> FindPhotos() {
+// The fixed list, every file required: a missing photograph would silently change every frame.
+std::vector<std::string> FindPhotos(World world) {
   std::vector<std::string> found;
   std::error_code error;
-  for (const PhotoSource& source : PhotoSources()) {
+  for (const PhotoSource& source : PhotoSources(world)) {
     for (const char* file : source.files) {
       const std::filesystem::path path = std::filesystem::path(source.directory) / file;
-      if (std::filesystem::is_regular_file(path, error)) found.push_back(path.string());
+      if (!std::filesystem::is_regular_file(path, error)) {
+        throw std::runtime_error("scene: background photograph " + path.string() +
+                                 " is missing; install the Debian package " + source.package +
+                                 " (scripts/setup.sh installs every package the tests need)");
+      }
+      found.push_back(path.string());
     }
-  }
-  // Extra photographs (e.g. the team's own): every .jpg / .png in $PINTAG_SCENE_PHOTOS.
-  if (const char* extra = std::getenv("PINTAG_SCENE_PHOTOS"); extra != nullptr && *extra) {
-    std::vector<std::string> more;
-    for (const auto& entry : std::filesystem::directory_iterator(extra, error)) {
-      const std::string ext = entry.path().extension().string();
-      if (ext == ".jpg" || ext == ".jpeg" || ext == ".png") more.push_back(entry.path().string());
-    }
-    std::sort(more.begin(), more.end());  // directory order is not stable
-    found.insert(found.end(), more.begin(), more.end());
   }
   return found;
 }
 
-/// Decoded photographs, loaded once per process (they are small).
+/// Decoded photographs, loaded once per process. Large ones are reduced (area averaging) to at
+/// most kMaxPhotoSide px: a crop of them fills a 1080p frame without aliasing.
+constexpr int kMaxPhotoSide = 2400;
 const cv::Mat& LoadPhoto(const std::string& path) {
   static std::mutex mutex;
   static std::map<std::string, cv::Mat> cache;
   const std::lock_guard lock(mutex);
   auto it = cache.find(path);
-  if (it == cache.end()) it = cache.emplace(path, cv::imread(path, cv::IMREAD_COLOR)).first;
+  if (it == cache.end()) {
+    cv::Mat photo = cv::imread(path, cv::IMREAD_COLOR);
+    if (photo.empty()) throw std::runtime_error("scene: cannot decode " + path);
+    const int side = std::max(photo.cols, photo.rows);
+    if (side > kMaxPhotoSide) {
+      const double f = static_cast<double>(kMaxPhotoSide) / side;
+      cv::resize(photo, photo, cv::Size(), f, f, cv::INTER_AREA);
+    }
+    it = cache.emplace(path, std::move(photo)).first;
+  }
   return it->second;
 }
 
@@ -80,9 +96,14 @@ cv::Scalar RandomColour(Rng& rng) {
 
 }  // namespace
 
-const std::vector<std::string>& BackgroundPhotos() {
-  static const std::vector<std::string> photos = FindPhotos();
-  return photos;
+const std::vector<std::string>& BackgroundPhotos(World world) {
+  // Each list is looked for on first use only: tuning runs need nothing held out installed.
+  if (world == World::kHeldOut) {
+    static const std::vector<std::string> held_out = FindPhotos(World::kHeldOut);
+    return held_out;
+  }
+  static const std::vector<std::string> tuning = FindPhotos(World::kTuning);
+  return tuning;
 }
 
 namespace detail {
@@ -144,8 +165,9 @@ cv::Mat ProceduralBackground(cv::Size size, Rng& rng) {
 }
 
 /// A random crop of `photo` with the aspect ratio of `size` (0.5 … 1 of the largest such crop),
-/// scaled to `size`, mirrored half the time.
-cv::Mat CropPhoto(const cv::Mat& photo, cv::Size size, Rng& rng) {
+/// scaled to `size` (bilinearly; `area_when_shrinking`: by area averaging where that shrinks it),
+/// mirrored half the time.
+cv::Mat CropPhoto(const cv::Mat& photo, cv::Size size, bool area_when_shrinking, Rng& rng) {
   const double aspect = static_cast<double>(size.width) / size.height;
   double w = photo.cols, h = photo.rows;
   if (w / h > aspect) {
@@ -156,16 +178,19 @@ cv::Mat CropPhoto(const cv::Mat& photo, cv::Size size, Rng& rng) {
   const double f = rng.uniform(0.5, 1.0);
   const int cw = std::max(2, static_cast<int>(w * f)), ch = std::max(2, static_cast<int>(h * f));
   const int x0 = rng.below(photo.cols - cw + 1), y0 = rng.below(photo.rows - ch + 1);
+  const bool shrinking = cw > size.width;
   cv::Mat out;
-  cv::resize(photo(cv::Rect(x0, y0, cw, ch)), out, size, 0, 0, cv::INTER_LINEAR);
+  cv::resize(photo(cv::Rect(x0, y0, cw, ch)), out, size, 0, 0,
+             area_when_shrinking && shrinking ? cv::INTER_AREA : cv::INTER_LINEAR);
   if (rng.chance(0.5)) cv::flip(out, out, 1);
   return out;
 }
 
-cv::Mat MakeBackground(const Camera& camera, bool real, int photo, Rng& rng, std::string& name) {
+cv::Mat MakeBackground(const Camera& camera, World world, bool real, int photo, Rng& rng,
+                       std::string& name) {
   const cv::Size size(camera.width, camera.height);
-  const auto& photos = BackgroundPhotos();
-  if (real && !photos.empty()) {
+  const auto& photos = BackgroundPhotos(world);
+  if (real) {
     // The photographs are small (about 0.3 Mpx), so a whole 1080p frame of one is soft; a collage
     // of crops keeps more of their detail and packs more red, round things into a frame.
     int tiles = 1;
@@ -183,11 +208,8 @@ cv::Mat MakeBackground(const Camera& camera, bool real, int photo, Rng& rng, std
         const cv::Rect cell(tx * size.width / tiles, ty * size.height / tiles,
                             (tx + 1) * size.width / tiles - tx * size.width / tiles,
                             (ty + 1) * size.height / tiles - ty * size.height / tiles);
-        if (source.empty()) {
-          out(cell).setTo(cv::Scalar(128, 128, 128));
-          continue;
-        }
-        CropPhoto(source, cell.size(), rng).copyTo(out(cell));
+        // The tuning world keeps the frames it was tuned on (bilinear throughout).
+        CropPhoto(source, cell.size(), world == World::kHeldOut, rng).copyTo(out(cell));
         if (!name.empty()) name += '+';
         name += std::filesystem::path(photos[index]).filename().string();
       }

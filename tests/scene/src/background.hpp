@@ -9,10 +9,12 @@
 
 namespace pintag::scene::detail {
 
-/// A CV_8UC3 background of the camera's frame size. Uses photographs when `real` is set and any
-/// are installed (`photo` ≥ 0: that one, else chosen by `rng`, alone or as a 2 × 2 or 3 × 3
-/// collage of crops), else draws one; `name` receives the file names or "procedural".
-cv::Mat MakeBackground(const Camera& camera, bool real, int photo, Rng& rng, std::string& name);
+/// A CV_8UC3 background of the camera's frame size. With `real`, the photographs of `world`
+/// (`photo` ≥ 0: that one, else chosen by `rng`, alone or as a 2 × 2 or 3 × 3 collage of crops;
+/// throws when one is not installed), else procedural clutter; `name` receives the file names or
+/// "procedural".
+cv::Mat MakeBackground(const Camera& camera, World world, bool real, int photo, Rng& rng,
+                       std::string& name);
 
 /// Procedural clutter: gradients, rectangles, disks (red and green among them), lines.
 cv::Mat ProceduralBackground(cv::Size size, Rng& rng);

@@ -158,6 +158,38 @@ void ApplyBayer(cv::Mat& frame) {
   cv::demosaicing(mosaic, frame, cv::COLOR_BayerBG2BGR);
 }
 
+/// A phone's processing in 8-bit sRGB: tone power, saturation and colour denoising on the
+/// differences from the channels' mean, then an unsharp mask on each channel.
+void ApplyProcessing(cv::Mat& frame, const Photometry& p) {
+  const bool tone = std::abs(p.tone_gamma - 1) > 1e-3;
+  const bool colour = std::abs(p.saturation - 1) > 1e-3 || p.chroma_denoise_px > 0.05;
+  if (!tone && !colour && p.sharpen <= 0) return;
+  cv::Mat f;
+  frame.convertTo(f, CV_32FC3, 1.0 / 255);
+  if (tone) cv::pow(cv::max(f, 0.0), p.tone_gamma, f);
+  if (colour) {
+    std::vector<cv::Mat> channels;
+    cv::split(f, channels);
+    const cv::Mat mean = (channels[0] + channels[1] + channels[2]) / 3;
+    for (cv::Mat& c : channels) {
+      cv::Mat difference = c - mean;
+      if (p.chroma_denoise_px > 0.05) {
+        cv::GaussianBlur(difference, difference, cv::Size(), p.chroma_denoise_px,
+                         p.chroma_denoise_px, cv::BORDER_REFLECT);
+      }
+      c = mean + p.saturation * difference;
+    }
+    cv::merge(channels, f);
+  }
+  if (p.sharpen > 0) {
+    cv::Mat soft;
+    cv::GaussianBlur(f, soft, cv::Size(), p.sharpen_sigma_px, p.sharpen_sigma_px,
+                     cv::BORDER_REFLECT);
+    f += p.sharpen * (f - soft);
+  }
+  f.convertTo(frame, CV_8UC3, 255);  // rounds and saturates
+}
+
 }  // namespace
 
 Photometry Photometry::Moderate(std::uint64_t seed) {
@@ -172,6 +204,11 @@ Photometry Photometry::Moderate(std::uint64_t seed) {
   p.noise_sigma = rng.uniform(1, 4);
   p.jpeg_quality = 75 + rng.below(21);
   p.exposure = rng.uniform(0.8, 1.15);
+  p.tone_gamma = rng.uniform(0.85, 1.15);
+  p.saturation = rng.uniform(0.95, 1.3);
+  p.chroma_denoise_px = rng.chance(0.5) ? rng.uniform(0.5, 1.5) : 0;
+  p.sharpen = rng.uniform(0, 1.0);
+  p.sharpen_sigma_px = rng.uniform(0.6, 1.2);
   return p;
 }
 
@@ -188,6 +225,11 @@ Photometry Photometry::Hard(std::uint64_t seed) {
   p.jpeg_quality = 40 + rng.below(31);
   p.exposure = rng.uniform(0.55, 1.3);
   p.bayer = rng.chance(0.5);
+  p.tone_gamma = rng.uniform(0.75, 1.25);
+  p.saturation = rng.uniform(0.85, 1.4);
+  p.chroma_denoise_px = rng.uniform(0.5, 2.0);
+  p.sharpen = rng.uniform(0.3, 1.6);
+  p.sharpen_sigma_px = rng.uniform(0.7, 1.5);
   return p;
 }
 
@@ -211,6 +253,7 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
   }
   if (p.noise_sigma > 0) ApplyNoise(frame, p.noise_sigma, rng);
   if (p.bayer) ApplyBayer(frame);
+  ApplyProcessing(frame, p);
   if (p.jpeg_quality > 0) {
     std::vector<std::uint8_t> bytes;
     cv::imencode(".jpg", frame, bytes,

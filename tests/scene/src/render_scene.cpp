@@ -7,9 +7,11 @@
 
 #include "background.hpp"
 #include "composite.hpp"
+#include "phone_capture.hpp"
 #include "photometry.hpp"
 #include "pintag/scene/rng.hpp"
 #include "pintag/scene/scene.hpp"
+#include "pyramid_warp.hpp"
 
 namespace pintag::scene {
 namespace {
@@ -96,8 +98,9 @@ Scene RenderScene(const SceneSpec& spec) {
   Rng noise_rng(rng.fork());
 
   Scene scene;
-  scene.bgr = detail::MakeBackground(camera, spec.real_background, spec.background_photo,
-                                     background_rng, scene.background);
+  const bool held_out = spec.world == World::kHeldOut;
+  scene.bgr = detail::MakeBackground(camera, spec.world, spec.real_background,
+                                     spec.background_photo, background_rng, scene.background);
 
   // Truth near to far, so that each marker is checked against the nearer ones' outlines; then
   // drawing far to near, so that a nearer marker covers a farther one.
@@ -132,15 +135,26 @@ Scene RenderScene(const SceneSpec& spec) {
     if (!drawable[*it]) continue;
     const PlacedMarker& marker = spec.markers[*it];
     MarkerTruth& truth = scene.truth[*it];
-    const int ss = spec.supersample > 0 ? spec.supersample : AutoSupersample(truth.square_px);
-    const detail::LinearTexture texture = detail::PrepareTexture(marker.texture, marker.occluders);
-    if (!detail::CompositeMarker(scene.bgr, texture,
-                                 truth.homography * TextureToSquare(marker.texture), ss)) {
-      truth.fully_visible = false;  // part of the texture behind the camera: nothing drawn
+    const cv::Matx33d image_from_texture = truth.homography * TextureToSquare(marker.texture);
+    bool drawn = false;
+    if (held_out) {
+      const detail::PrintErrors print =
+          detail::PrintErrors::Random(spec.print_seed ^ (0x9E37ULL * (*it + 1)));
+      drawn = detail::WarpThroughPyramid(scene.bgr, marker.texture, image_from_texture, print);
+    } else {
+      const int ss = spec.supersample > 0 ? spec.supersample : AutoSupersample(truth.square_px);
+      const detail::LinearTexture texture =
+          detail::PrepareTexture(marker.texture, marker.occluders);
+      drawn = detail::CompositeMarker(scene.bgr, texture, image_from_texture, ss);
     }
+    if (!drawn) truth.fully_visible = false;  // part of the texture behind the camera
   }
 
-  detail::ApplyPhotometry(scene.bgr, spec.photometry, noise_rng);
+  if (held_out) {
+    detail::ApplyPhoneCapture(scene.bgr, spec.capture, noise_rng);
+  } else {
+    detail::ApplyPhotometry(scene.bgr, spec.photometry, noise_rng);
+  }
   return scene;
 }
 

@@ -3,11 +3,15 @@
 //
 // A marker texture (a PinTag from the real renderer, or an ArUco / AprilTag marker) is placed with
 // a known pose in front of a known pinhole camera, over a background (a real photograph from a
-// Debian package where one is installed, procedural otherwise), then degraded: supersampled
-// anti-aliasing, lighting gradient, colour cast, defocus and motion blur, sensor noise, Bayer
-// demosaicing, JPEG. Everything is deterministic for a given seed (same binary, same photographs
-// installed): the random numbers come from pintag/scene/rng.hpp, not from std:: distributions.
-// All functions are safe to call from several threads at once.
+// fixed list installed by Debian packages, or procedural clutter), then degraded.
+//
+// Two worlds, two rendering paths (World). Tuning scenes: supersampled anti-aliasing in linear
+// light, lighting gradient, colour cast, defocus and motion blur, sensor noise, Bayer
+// demosaicing, JPEG. Held-out scenes, which no tuning run looks at: the marker printed on a label,
+// warped through an image pyramid in sRGB, then a phone's pipeline (PhoneCapture). Everything is
+// deterministic for a given seed (same binary; a missing photograph is an error, never a silent
+// change of frames): the random numbers come from pintag/scene/rng.hpp, not from std::
+// distributions. All functions are safe to call from several threads at once.
 
 #include <array>
 #include <cstdint>
@@ -65,6 +69,12 @@ double ViewTiltDeg(const Pose& pose);
 /// Projects a point given in the square's model frame (metres) to image pixels.
 cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, cv::Vec3d model_point_m);
 
+/// Which side of the benchmark a scene belongs to. Detector work is tuned on kTuning scenes only;
+/// kHeldOut scenes check it on what it never saw: other photographs, and a second rendering path
+/// (a printed label warped through an image pyramid with area averaging in sRGB, then a phone's
+/// pipeline: see PhoneCapture).
+enum class World { kTuning, kHeldOut };
+
 enum class Cast { kNone, kTungsten, kFluorescent, kShade };
 
 struct Photometry {
@@ -80,12 +90,54 @@ struct Photometry {
   /// Sample through an RGGB colour filter array and demosaic bilinearly, as a cheap camera does:
   /// colour fringes along sharp edges, colour noise.
   bool bayer = false;
+  // A phone's processing after the sensor, in 8-bit sRGB before the JPEG (the tuning world's own;
+  // the held-out world's phone is PhoneCapture, made differently):
+  double tone_gamma = 1.0;        ///< power on code values / 255 (below 1 brightens)
+  double saturation = 1.0;        ///< each channel's difference from the channels' mean, scaled
+  double chroma_denoise_px = 0;   ///< Gaussian sigma on those differences (colour noise reduction)
+  double sharpen = 0;             ///< unsharp mask on every channel, amount
+  double sharpen_sigma_px = 1.0;  ///< its Gaussian
   /// Random mild settings: gradient 0 … 0.3, any cast or none, defocus σ 0 … 1 px, motion blur
-  /// 0 … 2 px half the time, noise σ 1 … 4, JPEG quality 75 … 95, exposure 0.8 … 1.15.
+  /// 0 … 2 px half the time, noise σ 1 … 4, JPEG quality 75 … 95, exposure 0.8 … 1.15; tone gamma
+  /// 0.85 … 1.15, saturation 0.95 … 1.3, colour denoising σ 0.5 … 1.5 px half the time, sharpening
+  /// 0 … 1 (σ 0.6 … 1.2 px).
   static Photometry Moderate(std::uint64_t seed);
   /// Random harsh settings: gradient 0.3 … 0.6, a cast, defocus σ 0.8 … 2 px, motion blur
-  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer half the time.
+  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer half the time;
+  /// tone gamma 0.75 … 1.25, saturation 0.85 … 1.4, colour denoising σ 0.5 … 2 px, sharpening
+  /// 0.3 … 1.6 (σ 0.7 … 1.5 px).
   static Photometry Hard(std::uint64_t seed);
+};
+
+/// How a phone turns the light of a held-out scene into a JPEG, in order: illumination (exposure,
+/// falloff, the illuminant's cast left by the white balance) and optics (defocus, motion) in linear
+/// light; a Bayer sensor (one colour per pixel, shot and read noise, 12 bits) and an edge-aware
+/// demosaic; the sRGB curve with an S-shaped contrast curve, a saturation boost and an unsharp mask
+/// on luma; a 4:2:0 JPEG through libjpeg (TurboJPEG), decoded as any image viewer decodes it.
+struct PhoneCapture {
+  double exposure = 1.0;                  ///< overall gain
+  double gradient = 0;                    ///< brightness falloff across the frame, 0 … 0.5
+  double gradient_angle_deg = 0;          ///< direction of the falloff (image, clockwise)
+  cv::Matx33d cast = cv::Matx33d::eye();  ///< linear-light BGR → BGR the white balance left
+  double defocus_sigma_px = 0;            ///< Gaussian blur sigma
+  double motion_px = 0;                   ///< motion blur length
+  double motion_angle_deg = 0;            ///< its direction (image, clockwise)
+  int bayer_phase = 0;                    ///< 0 … 3: RGGB, GRBG, GBRG, BGGR
+  double read_noise = 0;                  ///< standard deviation, linear light (0 … 1)
+  double shot_noise = 0;                  ///< variance per unit of linear light
+  double contrast = 0;                    ///< S-curve strength after the sRGB curve, 0 … 0.5
+  double saturation = 1.0;                ///< chroma gain in YCbCr
+  double sharpen_amount = 0;              ///< unsharp mask on luma, 0 = none
+  double sharpen_sigma_px = 1.0;          ///< its Gaussian
+  int jpeg_quality = 90;                  ///< 1 … 100, always 4:2:0
+  /// Mild: exposure 0.8 … 1.15, falloff ≤ 0.25, a mild cast or none, defocus σ 0.2 … 0.8 px, a
+  /// little motion blur now and then, noise about 1 … 3 code values at mid-grey, quality 75 … 95,
+  /// light sharpening.
+  static PhoneCapture Moderate(std::uint64_t seed);
+  /// Harsh: exposure 0.5 … 1.3, falloff 0.2 … 0.5, a strong cast, defocus σ 0.6 … 1.5 px,
+  /// motion blur 1 … 4 px, noise about 3 … 8 code values at mid-grey, quality 45 … 90, strong
+  /// sharpening and contrast.
+  static PhoneCapture Hard(std::uint64_t seed);
 };
 
 /// Something stuck on or held over a marker (tape, a finger): a filled disk drawn on the marker's
@@ -110,12 +162,16 @@ struct PlacedMarker {
 };
 
 struct SceneSpec {
+  World world = World::kTuning;  ///< photographs, rendering path and which photometry applies
   Camera camera;
   std::vector<PlacedMarker> markers;
-  Photometry photometry;
+  Photometry photometry;  ///< the tuning world's degradations
+  PhoneCapture capture;   ///< the held-out world's
+  /// Held-out world: the print's colour error and paper (ink never matches the file exactly).
+  std::uint64_t print_seed = 0;
   std::uint64_t seed = 1;       ///< background choice and noise
-  bool real_background = true;  ///< use a photograph where one is installed
-  /// With real_background: the index into BackgroundPhotos() of the one photograph to crop;
+  bool real_background = true;  ///< a photograph of the world's list, else procedural clutter
+  /// With real_background: the index into BackgroundPhotos(world) of the one photograph to crop;
   /// −1 = chosen by the seed, sometimes as a collage of 2 × 2 or 3 × 3 crops of several photos.
   int background_photo = -1;
   /// Sub-samples per pixel side for markers; 0 = automatic: 4 up to a 160 px square, 3 to 320,
@@ -140,9 +196,12 @@ struct Scene {
   std::string background;  ///< which background: file name(s) joined by '+', or "procedural"
 };
 
-/// Renders the scene: background, markers (far to near, each inverse-mapped through its
-/// homography at `supersample`² points per pixel, blended in linear light), then the photometry.
-/// About 40 … 90 ms for a 1080p frame with a few markers on one core of the 2-core machines.
+/// Renders the scene: background, markers far to near, then the degradations. Tuning world: each
+/// marker inverse-mapped through its homography at `supersample`² points per pixel, blended in
+/// linear light, then `photometry` (about 40 … 90 ms for a 1080p frame on one core of the 2-core
+/// machines). Held-out world: each marker printed (`print_seed`), reduced by area averaging to the
+/// pyramid level nearest its size in the frame, warped bilinearly and blended in sRGB, then
+/// `capture`.
 Scene RenderScene(const SceneSpec& spec);
 
 /// A point in square units (x, y ∈ [0, 1], origin at C0) mapped to image pixels through
@@ -165,10 +224,19 @@ MarkerTexture ArucoTexture(int id, int square_px = 511);
 /// the image from the tag's bottom-left) and its pixel centres are at +0.5 (subtract 0.5).
 MarkerTexture AprilTagTexture(int id, int square_px = 512);
 
-/// Real photographs found on this machine, possibly empty: 22 colour photos from the Debian package
-/// opencv-doc (fruit, sweets, a baboon, buildings, …; scripts/debian-packages.txt installs it),
-/// 10 more from python3-skimage where installed, and every .jpg / .png in the directory named by
-/// $PINTAG_SCENE_PHOTOS. Fixed order.
-const std::vector<std::string>& BackgroundPhotos();
+/// The world's background photographs, a fixed list in a fixed order. Tuning: 22 colour photos
+/// from the Debian package opencv-doc (fruit, sweets, a baboon, buildings, …). Held out: 15 from
+/// python3-skimage (an astronaut, a cat, coffee, a red motorcycle, a retina, a colour wheel, grey
+/// textures, …) and 2 from lomiri-wallpapers-20.04. scripts/setup.sh installs the packages; a
+/// missing file throws std::runtime_error naming its package.
+const std::vector<std::string>& BackgroundPhotos(World world = World::kTuning);
+
+/// What a printed label carries where its tag goes.
+enum class LabelMarker { kPinTag, kAruco, kAprilTag, kNone };
+
+/// A 100 × 150 mm shipping label at 300 dpi as the counter prints it (pintag::label's layout and
+/// text), carrying `marker` with `id` in the tag's place at the tag's size (black square and
+/// quiet zone; kNone leaves the place white). The texture's square corners are that place's.
+MarkerTexture PrintedLabel(LabelMarker marker, int id);
 
 }  // namespace pintag::scene

@@ -1,0 +1,256 @@
+#include "phone_capture.hpp"
+
+#include <turbojpeg.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
+
+#include "srgb.hpp"
+
+namespace pintag::scene {
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+/// A white balance set for another light: each channel's gain, plus a little of the neighbouring
+/// channels (a sensor's colour filters overlap).
+cv::Matx33d RandomCast(Rng& rng, double strength) {
+  // Warm (tungsten) or cool (shade), or greenish (fluorescent), by `strength` (0 … 1).
+  cv::Vec3d gain(1, 1, 1);  // B, G, R
+  switch (rng.below(3)) {
+    case 0:
+      gain = {1 - 0.45 * strength, 1 - 0.15 * strength, 1};
+      break;
+    case 1:
+      gain = {1, 1 - 0.1 * strength, 1 - 0.3 * strength};
+      break;
+    default:
+      gain = {1 - 0.15 * strength, 1, 1 - 0.2 * strength};
+      break;
+  }
+  cv::Matx33d m = cv::Matx33d::eye();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      m(r, c) = (r == c ? 1.0 : rng.uniform(0, 0.04 * strength)) * gain[r];
+    }
+  }
+  return m;
+}
+
+/// The noise of a sensor whose code value at mid-grey moves by about `code_values` (8-bit sRGB).
+void SetNoise(PhoneCapture& p, double code_values, Rng& rng) {
+  // At linear 0.2 (sRGB ~124) one 8-bit code value is ~0.0035 of linear light.
+  const double sigma_mid = 0.0035 * code_values;
+  const double read_share = rng.uniform(0.15, 0.4);  // of the variance at mid-grey
+  p.read_noise = sigma_mid * std::sqrt(read_share);
+  p.shot_noise = sigma_mid * sigma_mid * (1 - read_share) / 0.2;
+}
+
+/// Linear light → sRGB in [0, 1] (exact curve, not the 8-bit table: the ISP works in more bits).
+float ToSrgb(float l) {
+  l = std::clamp(l, 0.0f, 1.0f);
+  return l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f;
+}
+
+void ApplyLight(cv::Mat& linear, const PhoneCapture& p) {
+  cv::transform(linear, linear, p.cast);
+  const double dx = std::cos(p.gradient_angle_deg * kDegToRad);
+  const double dy = std::sin(p.gradient_angle_deg * kDegToRad);
+  const double w = linear.cols - 1, h = linear.rows - 1;
+  const double corners[4] = {0, dx * w, dy * h, dx * w + dy * h};
+  const double lowest = *std::min_element(corners, corners + 4);
+  const double span = std::max(1e-9, *std::max_element(corners, corners + 4) - lowest);
+  for (int y = 0; y < linear.rows; ++y) {
+    auto* row = linear.ptr<float>(y);
+    for (int x = 0; x < linear.cols; ++x) {
+      const double t = (dx * x + dy * y - lowest) / span;
+      const auto gain = static_cast<float>(p.exposure * (1 - p.gradient * t));
+      row[3 * x] *= gain;
+      row[3 * x + 1] *= gain;
+      row[3 * x + 2] *= gain;
+    }
+  }
+}
+
+/// A line of `length` px at `angle` as a kernel: drawn anti-aliased at 8× and area-reduced.
+cv::Mat MotionKernel(double length, double angle_deg) {
+  constexpr int kFine = 8;
+  const int side = 2 * static_cast<int>(std::ceil(length / 2)) + 3;
+  cv::Mat fine = cv::Mat::zeros(side * kFine, side * kFine, CV_32F);
+  const double c = side * kFine / 2.0, half = length * kFine / 2;
+  const double dx = std::cos(angle_deg * kDegToRad) * half;
+  const double dy = std::sin(angle_deg * kDegToRad) * half;
+  constexpr int kShift = 4;
+  const auto at = [&](double v) { return static_cast<int>(std::lround(v * (1 << kShift))); };
+  cv::line(fine, cv::Point(at(c - dx), at(c - dy)), cv::Point(at(c + dx), at(c + dy)),
+           cv::Scalar(1), kFine / 2, cv::LINE_AA, kShift);
+  cv::Mat kernel;
+  cv::resize(fine, kernel, cv::Size(side, side), 0, 0, cv::INTER_AREA);
+  kernel /= cv::sum(kernel)[0];
+  return kernel;
+}
+
+/// One colour per pixel in the phase's Bayer pattern, with shot and read noise, as 12-bit values;
+/// then OpenCV's edge-aware demosaic. Returns linear light again.
+cv::Mat Sense(const cv::Mat& linear, const PhoneCapture& p, Rng& rng) {
+  // Phase 0 RGGB, 1 GRBG, 2 GBRG, 3 BGGR: where R sits in the 2 × 2 cell (x, y).
+  const int rx = p.bayer_phase == 1 || p.bayer_phase == 3 ? 1 : 0;
+  const int ry = p.bayer_phase >= 2 ? 1 : 0;
+  cv::Mat raw(linear.size(), CV_16UC1);
+  for (int y = 0; y < linear.rows; ++y) {
+    const auto* src = linear.ptr<float>(y);
+    auto* dst = raw.ptr<std::uint16_t>(y);
+    for (int x = 0; x < linear.cols; ++x) {
+      const bool r_row = ((y ^ ry) & 1) == 0, r_col = ((x ^ rx) & 1) == 0;
+      const int channel = r_row ? (r_col ? 2 : 1) : (r_col ? 1 : 0);  // BGR index
+      const double v = src[3 * x + channel];
+      const double sigma = std::sqrt(p.read_noise * p.read_noise + p.shot_noise * std::max(0.0, v));
+      const double noisy = v + sigma * rng.normal();
+      dst[x] = static_cast<std::uint16_t>(std::clamp(std::lround(noisy * 4095), 0L, 4095L));
+    }
+  }
+  // OpenCV names a pattern by the second row's second and third pixels.
+  constexpr std::array<int, 4> kCodes = {cv::COLOR_BayerBG2BGR_EA, cv::COLOR_BayerGB2BGR_EA,
+                                         cv::COLOR_BayerGR2BGR_EA, cv::COLOR_BayerRG2BGR_EA};
+  cv::Mat demosaiced;
+  cv::demosaicing(raw, demosaiced, kCodes[static_cast<std::size_t>(p.bayer_phase & 3)]);
+  cv::Mat out;
+  demosaiced.convertTo(out, CV_32FC3, 1.0 / 4095);
+  return out;
+}
+
+/// sRGB curve, S-curve, saturation and an unsharp mask on luma (BT.601 YCbCr, as JPEG stores).
+cv::Mat Process(const cv::Mat& linear, const PhoneCapture& p) {
+  const auto s_curve = [&](float v) {
+    return v - static_cast<float>(p.contrast * std::sin(2 * std::numbers::pi * v) /
+                                  (2 * std::numbers::pi));
+  };
+  cv::Mat luma(linear.size(), CV_32F), cb(linear.size(), CV_32F), cr(linear.size(), CV_32F);
+  for (int y = 0; y < linear.rows; ++y) {
+    const auto* src = linear.ptr<float>(y);
+    auto* l = luma.ptr<float>(y);
+    auto* b = cb.ptr<float>(y);
+    auto* r = cr.ptr<float>(y);
+    for (int x = 0; x < linear.cols; ++x) {
+      const float bv = s_curve(ToSrgb(src[3 * x])), gv = s_curve(ToSrgb(src[3 * x + 1]));
+      const float rv = s_curve(ToSrgb(src[3 * x + 2]));
+      l[x] = 0.299f * rv + 0.587f * gv + 0.114f * bv;
+      b[x] = 0.564f * (bv - l[x]) * static_cast<float>(p.saturation);
+      r[x] = 0.713f * (rv - l[x]) * static_cast<float>(p.saturation);
+    }
+  }
+  if (p.sharpen_amount > 0) {
+    cv::Mat soft;
+    cv::GaussianBlur(luma, soft, cv::Size(), p.sharpen_sigma_px, p.sharpen_sigma_px,
+                     cv::BORDER_REFLECT);
+    luma += static_cast<float>(p.sharpen_amount) * (luma - soft);
+  }
+  cv::Mat out(linear.size(), CV_8UC3);
+  const auto to8 = [](float v) {
+    return static_cast<std::uint8_t>(std::clamp(std::lround(v * 255.0f), 0L, 255L));
+  };
+  for (int y = 0; y < linear.rows; ++y) {
+    const auto* l = luma.ptr<float>(y);
+    const auto* b = cb.ptr<float>(y);
+    const auto* r = cr.ptr<float>(y);
+    auto* dst = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < linear.cols; ++x) {
+      dst[3 * x] = to8(l[x] + 1.773f * b[x]);
+      dst[3 * x + 1] = to8(l[x] - 0.344f * b[x] - 0.714f * r[x]);
+      dst[3 * x + 2] = to8(l[x] + 1.403f * r[x]);
+    }
+  }
+  return out;
+}
+
+/// 4:2:0 JPEG through TurboJPEG, decoded by OpenCV's libjpeg (fancy upsampling, as viewers do).
+cv::Mat JpegRoundTrip(const cv::Mat& bgr, int quality) {
+  const std::unique_ptr<void, int (*)(tjhandle)> compressor(tjInitCompress(), tjDestroy);
+  if (!compressor) throw std::runtime_error("PhoneCapture: tjInitCompress failed");
+  unsigned char* jpeg = nullptr;
+  unsigned long size = 0;  // NOLINT(google-runtime-int): TurboJPEG's type
+  const int status =
+      tjCompress2(compressor.get(), bgr.data, bgr.cols, static_cast<int>(bgr.step), bgr.rows,
+                  TJPF_BGR, &jpeg, &size, TJSAMP_420, std::clamp(quality, 1, 100), 0);
+  const std::unique_ptr<unsigned char, void (*)(unsigned char*)> owned(jpeg, tjFree);
+  if (status != 0) {
+    throw std::runtime_error(std::string("PhoneCapture: JPEG at quality ") +
+                             std::to_string(quality) + ": " + tjGetErrorStr2(compressor.get()));
+  }
+  const cv::Mat bytes(1, static_cast<int>(size), CV_8U, jpeg);
+  return cv::imdecode(bytes, cv::IMREAD_COLOR);
+}
+
+}  // namespace
+
+PhoneCapture PhoneCapture::Moderate(std::uint64_t seed) {
+  Rng rng(seed ^ 0x50686F6E654D6FULL);
+  PhoneCapture p;
+  p.exposure = rng.uniform(0.8, 1.15);
+  p.gradient = rng.uniform(0, 0.25);
+  p.gradient_angle_deg = rng.uniform(0, 360);
+  p.cast = rng.chance(0.7) ? RandomCast(rng, rng.uniform(0.1, 0.45)) : cv::Matx33d::eye();
+  p.defocus_sigma_px = rng.uniform(0.2, 0.8);
+  p.motion_px = rng.chance(0.25) ? rng.uniform(0.5, 1.5) : 0;
+  p.motion_angle_deg = rng.uniform(0, 180);
+  p.bayer_phase = rng.below(4);
+  SetNoise(p, rng.uniform(1, 3), rng);
+  p.contrast = rng.uniform(0, 0.3);
+  p.saturation = rng.uniform(1.0, 1.25);
+  p.sharpen_amount = rng.uniform(0.2, 0.8);
+  p.sharpen_sigma_px = rng.uniform(0.7, 1.2);
+  p.jpeg_quality = 75 + rng.below(21);
+  return p;
+}
+
+PhoneCapture PhoneCapture::Hard(std::uint64_t seed) {
+  Rng rng(seed ^ 0x50686F6E6548ULL);
+  PhoneCapture p;
+  p.exposure = rng.uniform(0.5, 1.3);
+  p.gradient = rng.uniform(0.2, 0.5);
+  p.gradient_angle_deg = rng.uniform(0, 360);
+  p.cast = RandomCast(rng, rng.uniform(0.5, 1.0));
+  p.defocus_sigma_px = rng.uniform(0.6, 1.5);
+  p.motion_px = rng.uniform(1, 4);
+  p.motion_angle_deg = rng.uniform(0, 180);
+  p.bayer_phase = rng.below(4);
+  SetNoise(p, rng.uniform(3, 8), rng);
+  p.contrast = rng.uniform(0.1, 0.5);
+  p.saturation = rng.uniform(0.9, 1.35);
+  p.sharpen_amount = rng.uniform(0.5, 1.5);
+  p.sharpen_sigma_px = rng.uniform(0.8, 1.5);
+  p.jpeg_quality = 45 + rng.below(46);
+  return p;
+}
+
+namespace detail {
+
+void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& p, Rng& rng) {
+  const auto& to_linear = SrgbToLinearTable();
+  cv::Mat linear(frame.size(), CV_32FC3);
+  for (int y = 0; y < frame.rows; ++y) {
+    const auto* src = frame.ptr<std::uint8_t>(y);
+    auto* dst = linear.ptr<float>(y);
+    for (int i = 0; i < frame.cols * 3; ++i) dst[i] = to_linear[src[i]];
+  }
+  ApplyLight(linear, p);
+  if (p.defocus_sigma_px > 0.05) {
+    cv::GaussianBlur(linear, linear, cv::Size(), p.defocus_sigma_px, p.defocus_sigma_px,
+                     cv::BORDER_REFLECT);
+  }
+  if (p.motion_px >= 0.25) {
+    cv::filter2D(linear, linear, -1, MotionKernel(p.motion_px, p.motion_angle_deg),
+                 cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+  }
+  frame = JpegRoundTrip(Process(Sense(linear, p, rng), p), p.jpeg_quality);
+}
+
+}  // namespace detail
+}  // namespace pintag::scene
