@@ -95,6 +95,59 @@ void Step2(Connection& connection) {
   if (connection.queryInt64("SELECT count(*) FROM pincodes") > 0) InsertDefaultPlan(connection);
 }
 
+// Version 3: a `replica` role for the servers that pull registry snapshots. SQLite cannot alter a
+// CHECK constraint, so the table is rebuilt; scan_log rows reference it, and deferring foreign
+// keys to the commit lets the parent rows be dropped and put back within the step.
+constexpr const char* kVersion3 = R"sql(
+PRAGMA defer_foreign_keys = ON;
+CREATE TEMP TABLE api_tokens_v2 AS SELECT * FROM api_tokens;
+DROP TABLE api_tokens;
+CREATE TABLE api_tokens (
+  id          INTEGER PRIMARY KEY,
+  role        TEXT NOT NULL CHECK (role IN ('admin', 'counter', 'scanner', 'replica')),
+  label       TEXT NOT NULL DEFAULT '',
+  salt        BLOB NOT NULL,
+  secret_hash BLOB NOT NULL,
+  created_at  TEXT NOT NULL,
+  revoked_at  TEXT
+);
+INSERT INTO api_tokens (id, role, label, salt, secret_hash, created_at, revoked_at)
+  SELECT id, role, label, salt, secret_hash, created_at, revoked_at FROM temp.api_tokens_v2;
+DROP TABLE temp.api_tokens_v2;
+)sql";
+
+// Version 4: the registry version, one counter that every committed change to what a replica
+// serves (pincodes, keys, offices, sort plans, tokens) increases. Snapshots carry it; replicas
+// compare it. Triggers, not the query functions, bump it, so the CLI, the importer and any
+// other writer count too (a per-row trigger costs about 0.5 s of the 2-3 s seed). The scan log
+// is not part of it: each server keeps its own.
+constexpr const char* kVersion4Table = R"sql(
+CREATE TABLE registry_version (
+  id      INTEGER PRIMARY KEY CHECK (id = 1),
+  version INTEGER NOT NULL CHECK (version >= 1)
+);
+INSERT INTO registry_version (id, version) VALUES (1, 1);
+)sql";
+
+constexpr const char* kVersionedTables[] = {"pincodes",   "tag_keys",   "offices",
+                                            "sort_plans", "sort_rules", "api_tokens"};
+
+void Step4(Connection& connection) {
+  connection.execute(kVersion4Table);
+  struct Event {
+    const char* name;
+    const char* sql;
+  };
+  for (const char* table : kVersionedTables) {
+    for (const Event event :
+         {Event{"insert", "INSERT"}, Event{"update", "UPDATE"}, Event{"delete", "DELETE"}}) {
+      connection.execute(std::string("CREATE TRIGGER ") + table + "_" + event.name +
+                         "_bumps_registry_version AFTER " + event.sql + " ON " + table +
+                         " BEGIN UPDATE registry_version SET version = version + 1; END;");
+    }
+  }
+}
+
 struct Migration {
   int version;
   void (*apply)(Connection&);
@@ -103,6 +156,8 @@ struct Migration {
 constexpr Migration kMigrations[] = {
     {1, [](Connection& c) { c.execute(kVersion1); }},
     {2, &Step2},
+    {3, [](Connection& c) { c.execute(kVersion3); }},
+    {4, &Step4},
 };
 static_assert(std::size(kMigrations) == kSchemaVersion);
 

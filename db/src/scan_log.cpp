@@ -5,6 +5,27 @@
 
 namespace pintag::db {
 
+Result<Connection> OpenScanLogFile(const std::string& path) {
+  return detail::Guard([&]() -> Result<Connection> {
+    Connection connection(path);
+    // The columns of the registry's scan_log (migration 2), so AppendScan and RecentScans work
+    // on either.
+    connection.execute(R"sql(
+CREATE TABLE IF NOT EXISTS scan_log (
+  id           INTEGER PRIMARY KEY,
+  scanned_at   TEXT NOT NULL,
+  token_id     INTEGER,
+  image_bytes  INTEGER NOT NULL CHECK (image_bytes >= 0),
+  image_width  INTEGER,
+  image_height INTEGER,
+  result_json  TEXT NOT NULL CHECK (json_valid(result_json))
+);
+CREATE INDEX IF NOT EXISTS scan_log_token ON scan_log (token_id, id);
+)sql");
+    return connection;
+  });
+}
+
 Result<std::int64_t> AppendScan(Connection& connection, const ScanRecord& scan) {
   if (scan.result_json.size() > kMaxJsonBytes) {
     return Error{ErrorCode::kInvalid, "scan result JSON is over 1 MiB"};

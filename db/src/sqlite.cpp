@@ -129,7 +129,9 @@ Connection::Connection(const std::string& path, const ConnectionOptions& options
   if (code != SQLITE_OK) Throw(raw, code, "cannot open database " + path);
   sqlite3_busy_timeout(raw, options.busy_timeout_ms);
   if (!options.read_only) execute("PRAGMA journal_mode=WAL");
-  execute("PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON;");
+  // Statement journals in memory: a statement that fires the registry-version triggers (one per
+  // row written) would otherwise write a temporary file per row, which made seeding 2x slower.
+  execute("PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON; PRAGMA temp_store=MEMORY;");
 }
 
 void Connection::execute(std::string_view sql) {
@@ -146,6 +148,23 @@ void Connection::execute(std::string_view sql) {
 std::int64_t Connection::queryInt64(std::string_view sql) {
   Statement statement(*this, sql);
   return statement.step() ? statement.getInt64(0) : 0;
+}
+
+void Connection::backupInto(Connection& destination) {
+  sqlite3_backup* backup = sqlite3_backup_init(destination.handle(), "main", handle(), "main");
+  if (backup == nullptr) {
+    Throw(destination.handle(), sqlite3_errcode(destination.handle()), "backup");
+  }
+  // -1: every page in one step, so the source is read under a single read transaction. A busy
+  // source (a rollback-journal writer) is waited for up to about 5 s.
+  int code = SQLITE_OK;
+  for (int attempt = 0; attempt < 500; ++attempt) {
+    code = sqlite3_backup_step(backup, -1);
+    if (code != SQLITE_BUSY && code != SQLITE_LOCKED) break;
+    sqlite3_sleep(10);
+  }
+  sqlite3_backup_finish(backup);
+  if (code != SQLITE_DONE) Throw(destination.handle(), code, "backup");
 }
 
 std::int64_t Connection::lastInsertRowid() const {

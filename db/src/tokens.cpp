@@ -92,6 +92,8 @@ const char* ToString(Role role) {
       return "counter";
     case Role::kScanner:
       return "scanner";
+    case Role::kReplica:
+      return "replica";
   }
   return "scanner";
 }
@@ -100,6 +102,7 @@ std::optional<Role> ParseRole(std::string_view text) {
   if (text == "admin") return Role::kAdmin;
   if (text == "counter") return Role::kCounter;
   if (text == "scanner") return Role::kScanner;
+  if (text == "replica") return Role::kReplica;
   return std::nullopt;
 }
 

@@ -45,6 +45,40 @@ TEST(Migrations, AnOlderFileIsUpgradedKeepingItsData) {
   EXPECT_EQ(routed->bin, "56");
 }
 
+TEST(Migrations, Version2TokensAndTheirScansSurviveTheReplicaRoleRebuild) {
+  TempDir dir;
+  const std::string path = dir.file("v2.db");
+  {
+    Connection connection(path);
+    MigrateTo(connection, 2);
+    connection.execute(
+        "INSERT INTO api_tokens (id, role, label, salt, secret_hash, created_at) VALUES "
+        "(5, 'scanner', 'old handheld', x'01', x'02', 'then');"
+        "INSERT INTO scan_log (scanned_at, token_id, image_bytes, result_json) VALUES "
+        "('then', 5, 100, '{}');");
+  }
+  auto opened = OpenDatabase(path);
+  ASSERT_TRUE(opened.ok()) << opened.error().message;
+  EXPECT_EQ(opened->upgraded_from, 2);
+  Connection& connection = opened.value().connection;
+  EXPECT_EQ(SchemaVersion(connection), kSchemaVersion);
+  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM api_tokens WHERE id = 5 AND "
+                                  "role = 'scanner' AND label = 'old handheld'"),
+            1);
+  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM scan_log WHERE token_id = 5"), 1);
+  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM pragma_foreign_key_check"), 0);
+  // The scan log still refers to the rebuilt table: an unknown token id is refused.
+  EXPECT_THROW(connection.execute("INSERT INTO scan_log (scanned_at, token_id, image_bytes, "
+                                  "result_json) VALUES ('now', 99, 1, '{}')"),
+               SqliteError);
+  connection.execute(
+      "INSERT INTO api_tokens (role, salt, secret_hash, created_at) VALUES "
+      "('replica', x'01', x'02', 'now')");
+  EXPECT_THROW(connection.execute("INSERT INTO api_tokens (role, salt, secret_hash, created_at) "
+                                  "VALUES ('root', x'01', x'02', 'now')"),
+               SqliteError);
+}
+
 TEST(Migrations, ANewerFileIsRefusedWithAClearMessage) {
   TempDir dir;
   const std::string path = dir.file("future.db");

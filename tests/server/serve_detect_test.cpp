@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
+#include "label_photo.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/scan_log.hpp"
@@ -24,51 +25,6 @@ namespace pintag::serve_test {
 namespace {
 
 using nlohmann::json;
-
-struct Photo {
-  std::string jpeg;
-  scene::MarkerTruth truth;
-  scene::Camera camera;
-  double square_mm = 0;
-};
-
-/// The label PNG for `pin` from the server, as a marker texture at a known pose in a 1080p scene.
-Photo PhotographLabel(httplib::Client& client, const httplib::Headers& auth, const std::string& pin,
-                      double tilt_deg) {
-  Photo photo;
-  auto r = client.Get("/api/v1/labels/" + pin + ".png?dpi=300", auth);
-  EXPECT_TRUE(r && r->status == 200);
-  if (!r || r->status != 200) return photo;
-  const std::vector<std::uint8_t> png(r->body.begin(), r->body.end());
-  scene::MarkerTexture texture;
-  texture.bgr = cv::imdecode(png, cv::IMREAD_COLOR);
-  EXPECT_FALSE(texture.bgr.empty());
-  // Where the renderer put the tag's black square on the label (exact in pixels).
-  const LabelOptions options;  // 100 x 150 mm, 300 dpi: what the server rendered
-  const LabelTagPixels at = TagPlacementPixels(options);
-  const double x0 = at.square_x - 0.5, y0 = at.square_y - 0.5, n = at.square_side;
-  texture.square_corners_px = {cv::Point2d{x0, y0}, cv::Point2d{x0 + n, y0},
-                               cv::Point2d{x0 + n, y0 + n}, cv::Point2d{x0, y0 + n}};
-  photo.square_mm = TagPlacement(options.size).square_side_mm;
-
-  scene::SceneSpec spec;
-  spec.seed = 7;
-  spec.photometry.noise_sigma = 2;
-  spec.photometry.defocus_sigma_px = 0.5;
-  scene::PlacedMarker marker;
-  marker.texture = texture;
-  marker.square_side_m = photo.square_mm / 1000;
-  const double distance = scene::DistanceForSquarePx(spec.camera, 220, marker.square_side_m);
-  marker.pose = scene::MakePose(spec.camera, {900, 500}, distance, tilt_deg, 30, 20);
-  spec.markers.push_back(marker);
-  const scene::Scene rendered = scene::RenderScene(spec);
-  photo.truth = rendered.truth.at(0);
-  photo.camera = spec.camera;
-  std::vector<std::uint8_t> jpeg;
-  cv::imencode(".jpg", rendered.bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 92});
-  photo.jpeg.assign(jpeg.begin(), jpeg.end());
-  return photo;
-}
 
 double RotationErrorDeg(const json& rotation_vector, const cv::Matx33d& truth) {
   const cv::Vec3d rvec(rotation_vector[0].get<double>(), rotation_vector[1].get<double>(),

@@ -38,10 +38,11 @@ CommandResult RunPintag(const std::string& arguments) {
 }
 
 ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
-                             int timeout_s) {
+                             int timeout_s, int port) {
   int pipe_fds[2];
   if (::pipe2(pipe_fds, O_CLOEXEC) != 0) return;
-  std::vector<std::string> argv_text = {PintagExe(), "serve", "--port", "0", "--bind", "127.0.0.1"};
+  std::vector<std::string> argv_text = {PintagExe(),          "serve",  "--port",
+                                        std::to_string(port), "--bind", "127.0.0.1"};
   argv_text.insert(argv_text.end(), args.begin(), args.end());
   std::vector<char*> argv;
   argv.reserve(argv_text.size() + 1);

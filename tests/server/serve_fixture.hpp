@@ -26,10 +26,11 @@ using pintag::test::WriteFile;
 /// One `pintag serve` child process.
 class ServerProcess {
  public:
-  /// Starts `pintag serve --port 0 --bind 127.0.0.1 <args>`, stderr to `stderr_file`, and waits
-  /// until it printed its URL (at most `timeout_s`). Check ok() afterwards.
+  /// Starts `pintag serve --port <port> --bind 127.0.0.1 <args>` (port 0: a free one), stderr to
+  /// `stderr_file`, and waits until it printed its URL (at most `timeout_s`). Check ok()
+  /// afterwards.
   ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,
-                int timeout_s = 60);
+                int timeout_s = 60, int port = 0);
   ~ServerProcess();
   ServerProcess(const ServerProcess&) = delete;
   ServerProcess& operator=(const ServerProcess&) = delete;

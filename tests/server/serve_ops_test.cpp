@@ -278,13 +278,15 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
                             "GET /api/v1/tokens",
                             "DELETE /api/v1/tokens/{id}",
                             "POST /api/v1/tokens/{id}/revoke",
+                            "GET /api/v1/registry",
+                            "GET /api/v1/registry/snapshot",
                             "GET /livez",
                             "GET /readyz",
                             "GET /metrics",
                             "GET /openapi.json"}) {
     EXPECT_EQ(listed.count(route), 1U) << route;
   }
-  EXPECT_EQ(listed.size(), 24U);
+  EXPECT_EQ(listed.size(), 26U);
 }
 
 // docs/API.md's route table is the route table: every operation /openapi.json lists, with the role
@@ -306,7 +308,7 @@ TEST_F(ServeTest, ApiDocListsEveryRouteWithItsRole) {
   std::set<std::string> documented;
   const std::string table = text.substr(begin, end - begin);
   const std::regex row(
-      R"(\| (GET|POST|PUT|DELETE) \| `([^`]+)` \| (open|counter|scanner|admin) \|)");
+      R"(\| (GET|POST|PUT|DELETE) \| `([^`]+)` \| (open|counter|scanner|replica|admin) \|)");
   for (auto it = std::sregex_iterator(table.begin(), table.end(), row);
        it != std::sregex_iterator(); ++it) {
     EXPECT_TRUE(

@@ -5,7 +5,9 @@
 #include "app/context.hpp"
 #include "app/route_table.hpp"
 #include "pintag/db/database.hpp"
+#include "pintag/db/snapshot.hpp"
 #include "pintag/db/tokens.hpp"
+#include "replica/replica_routes.hpp"
 
 namespace pintag::app {
 namespace {
@@ -16,6 +18,8 @@ server::Access Granted(db::Role role) {
       return server::Access::kAdmin;
     case db::Role::kCounter:
       return server::Access::kCounter;
+    case db::Role::kReplica:
+      return server::Access::kReplica;
     case db::Role::kScanner:
       break;
   }
@@ -70,15 +74,39 @@ server::HealthCheck DatabaseHealthCheck(const std::string& path) {
   };
 }
 
+server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool) {
+  return [pool]() -> std::optional<std::string> {
+    try {
+      auto connection = pool->acquire();
+      const db::Result<std::int64_t> version = db::RegistryVersion(*connection);
+      if (!version) return "snapshot unreadable: " + version.error().message;
+      connection->queryInt64("SELECT count(*) FROM (SELECT 1 FROM tag_keys LIMIT 1)");
+    } catch (const std::exception& e) {
+      return std::string("snapshot unreadable: ") + e.what();
+    }
+    return std::nullopt;
+  };
+}
+
 std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   auto context = std::make_shared<AppContext>();
-  context->pool = std::make_shared<ConnectionPool>(config.db_path, config.busy_timeout_ms);
+  context->pool = config.pool ? config.pool
+                              : std::make_shared<ConnectionPool>(
+                                    config.db_path, config.busy_timeout_ms, config.read_only);
+  context->scan_log =
+      config.scan_log_path.empty()
+          ? context->pool
+          : std::make_shared<ConnectionPool>(config.scan_log_path, config.busy_timeout_ms);
   context->metrics = std::make_shared<server::Metrics>();
   context->max_pixels = config.max_pixels;
   context->max_batch = config.max_batch;
   context->max_tag_px = config.max_tag_px;
+  context->read_only = config.read_only;
+  context->primary_url = config.primary_url;
+  context->publisher = config.publisher;
   DefineCounters(*context->metrics);
   server::Router router = AppRouter(context);
+  if (config.read_only) router = replica::ReadOnlyRouter(router, config.primary_url);
 
   server::ApiOptions options;
   options.max_body_bytes = config.max_body_bytes;
@@ -87,9 +115,12 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
       "PinTag labels, detection, registry and routing. Errors are application/problem+json "
       "(RFC 9457). Roles: admin (everything), counter (labels), scanner (detect); lookups are "
       "open.";
+  // A replica's file is replaced by design; its readiness is the snapshot it serves now.
+  server::HealthCheck health =
+      config.read_only ? SnapshotHealthCheck(context->pool) : DatabaseHealthCheck(config.db_path);
   return std::make_shared<const server::Api>(
-      std::move(router), RegistryTokenVerifier(context->pool), DatabaseHealthCheck(config.db_path),
-      context->metrics, std::move(options));
+      std::move(router), RegistryTokenVerifier(context->pool), std::move(health), context->metrics,
+      std::move(options));
 }
 
 }  // namespace pintag::app

@@ -10,7 +10,9 @@
 #include <optional>
 #include <string>
 
+#include "app/connection_pool.hpp"
 #include "pintag/server/api.hpp"
+#include "replica/snapshot_publisher.hpp"
 
 namespace pintag::app {
 
@@ -22,6 +24,14 @@ struct AppConfig {
   std::size_t max_batch = 100;                                ///< labels per POST /labels
   int max_tag_px = 4096;                                      ///< largest tag PNG square side
   int busy_timeout_ms = 5000;                                 ///< SQLite lock wait
+  /// A read-only replica (issue 22): db_path is a snapshot, reloaded through `pool`; writes
+  /// answer 403 naming primary_url; scans go to scan_log_path.
+  bool read_only = false;
+  std::string primary_url;
+  std::string scan_log_path;  ///< an existing scan log file (db::OpenScanLogFile); none = db_path
+  std::shared_ptr<ConnectionPool> pool;  ///< connections to db_path; made here when not given
+  /// A primary's snapshot for its replicas (GET /api/v1/registry/snapshot); none = no route.
+  std::shared_ptr<replica::SnapshotPublisher> publisher;
 };
 
 /// Builds the Api. Throws std::runtime_error when the web dir does not exist.
@@ -31,5 +41,8 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
 /// now at that path (never created), a real query on the registry, and the same file (device
 /// and inode) the server opened at start. Nothing when ready, else why not.
 server::HealthCheck DatabaseHealthCheck(const std::string& path);
+
+/// Readiness of a read-only replica: the snapshot its pool opens now answers a query.
+server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool);
 
 }  // namespace pintag::app

@@ -6,31 +6,46 @@
 
 namespace pintag::app {
 
-ConnectionPool::ConnectionPool(std::string path, int busy_timeout_ms)
-    : path_(std::move(path)), busy_timeout_ms_(busy_timeout_ms) {}
+ConnectionPool::ConnectionPool(std::string path, int busy_timeout_ms, bool read_only)
+    : path_(std::move(path)), busy_timeout_ms_(busy_timeout_ms), read_only_(read_only) {}
 
 ConnectionPool::Lease::~Lease() {
   if (!connection_ || pool_ == nullptr) return;
   const std::lock_guard lock(pool_->mutex_);
-  pool_->idle_.push_back(std::move(connection_));
+  if (generation_ == pool_->generation_) pool_->idle_.push_back(std::move(connection_));
+}
+
+void ConnectionPool::renew(const std::string& path) {
+  std::vector<std::unique_ptr<db::Connection>> closing;
+  {
+    const std::lock_guard lock(mutex_);
+    ++generation_;
+    path_ = path;
+    closing.swap(idle_);
+  }
 }
 
 ConnectionPool::Lease ConnectionPool::acquire() {
+  std::uint64_t generation = 0;
+  std::string path;
   {
     const std::lock_guard lock(mutex_);
+    generation = generation_;
+    path = path_;
     if (!idle_.empty()) {
       std::unique_ptr<db::Connection> connection = std::move(idle_.back());
       idle_.pop_back();
-      return Lease(this, std::move(connection));
+      return Lease(this, std::move(connection), generation);
     }
   }
   try {
     db::ConnectionOptions options;
     options.create = false;
+    options.read_only = read_only_;
     options.busy_timeout_ms = busy_timeout_ms_;
-    return Lease(this, std::make_unique<db::Connection>(path_, options));
+    return Lease(this, std::make_unique<db::Connection>(path, options), generation);
   } catch (const std::exception& e) {
-    std::cerr << "pintag serve: cannot open database " << path_ << ": " << e.what() << "\n";
+    std::cerr << "pintag serve: cannot open database " << path << ": " << e.what() << "\n";
     throw server::HttpError(503, "the database is not reachable", "Service Unavailable");
   }
 }

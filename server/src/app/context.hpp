@@ -4,10 +4,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <string_view>
 
 #include "app/connection_pool.hpp"
 #include "pintag/server/metrics.hpp"
+#include "replica/snapshot_publisher.hpp"
 
 namespace pintag::app {
 
@@ -19,10 +21,17 @@ inline constexpr std::string_view kUnknownKeysCounter = "pintag_detections_unkno
 
 struct AppContext {
   std::shared_ptr<ConnectionPool> pool;
+  /// Where scans are logged: the pool's file, or a replica's own (docs/SCALING.md).
+  std::shared_ptr<ConnectionPool> scan_log;
   std::shared_ptr<server::Metrics> metrics;  ///< the counters above are defined in it
   std::int64_t max_pixels = 40'000'000;      ///< decoded pixels per uploaded photo
   std::size_t max_batch = 100;               ///< labels per POST /api/v1/labels; more is 413
   int max_tag_px = 4096;                     ///< largest ?px= of a tag image (square side)
+  /// Replication (docs/SCALING.md): which this server is, its primary when a replica, and the
+  /// snapshot it hands replicas when a primary started with --snapshot (else none).
+  bool read_only = false;
+  std::string primary_url;
+  std::shared_ptr<replica::SnapshotPublisher> publisher;
 };
 
 }  // namespace pintag::app

@@ -156,7 +156,7 @@ void Log(const AppContext& context, const HttpRequest& request, std::size_t byte
   scan.image_height = outcome.height;
   scan.result_json = outcome.result_json;
   try {
-    auto connection = context.pool->acquire();
+    auto connection = context.scan_log->acquire();
     auto appended = db::AppendScan(*connection, scan);
     if (!appended) std::cerr << "pintag serve: scan log: " << appended.error().message << "\n";
   } catch (const std::exception& e) {

@@ -102,6 +102,12 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON",
       {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}}},
 
+    {"GET",    "/api/v1/registry",                  Access::kOpen,    GetRegistryStatus,
+     {"replication", "Which registry version this server serves, and whether it is the primary or a replica"}},
+    {"GET",    "/api/v1/registry/snapshot",         Access::kReplica, GetRegistrySnapshot,
+     {"replication", "The registry as an SQLite snapshot for read-only replicas (ETag: its registry version)",
+      {}, {}, {"application/vnd.sqlite3"}}},
+
     {"POST",   "/api/v1/tokens",                    Access::kAdmin,   PostToken,
      {"tokens", R"(Create a token {"role", "label"}; the answer holds its secret, once)", {},
       {"application/json"}}},

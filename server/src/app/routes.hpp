@@ -42,6 +42,10 @@ HttpResponse GetSortPlans(const AppContext& context, const HttpRequest& request)
 HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request);
 HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request);
 
+// replication_routes.cpp: the registry version served, and the primary's snapshot.
+HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& request);
+HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& request);
+
 // token_routes.cpp: bearer tokens.
 HttpResponse PostToken(const AppContext& context, const HttpRequest& request);
 HttpResponse GetTokens(const AppContext& context, const HttpRequest& request);

@@ -21,10 +21,10 @@ json TokenJson(const db::TokenInfo& token) {
 HttpResponse PostToken(const AppContext& context, const HttpRequest& request) {
   const json body = JsonBody(request);
   if (!body.is_object() || !body.contains("role") || !body["role"].is_string()) {
-    throw HttpError(400, R"(expected {"role": "admin|counter|scanner", "label": "…"})");
+    throw HttpError(400, R"(expected {"role": "admin|counter|scanner|replica", "label": "…"})");
   }
   const auto role = db::ParseRole(body["role"].get<std::string>());
-  if (!role) throw HttpError(400, "role must be admin, counter or scanner");
+  if (!role) throw HttpError(400, "role must be admin, counter, scanner or replica");
   std::string label;
   if (body.contains("label")) {
     if (!body["label"].is_string()) throw HttpError(400, "'label' must be a string");

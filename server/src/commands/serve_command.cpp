@@ -15,6 +15,7 @@
 #include "app/app.hpp"
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "commands/serve_replication.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/server/http_server.hpp"
@@ -34,6 +35,7 @@ struct ServeArgs {
   int max_tag_px = 4096;
   int read_timeout_s = 5;
   int write_timeout_s = 5;
+  ReplicationArgs replication;
 };
 
 /// On an empty token table, creates the first admin token and returns its secret; "" when tokens
@@ -55,10 +57,12 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
-  OpenDb(args.db);  // creates and seeds a missing file, migrates an old one
+  const bool read_only = args.replication.read_only || !args.replication.follow.empty();
+  if (!read_only) OpenDb(args.db);  // creates and seeds a missing file, migrates an old one
 
   app::AppConfig config;
   config.db_path = args.db;
+  Replication replication(args.replication, config);
   if (!args.web.empty()) config.web_dir = args.web;
   config.max_body_bytes = static_cast<std::size_t>(args.max_body_mb * 1024 * 1024);
   config.max_pixels = args.max_pixels;
@@ -77,18 +81,22 @@ void Run(const ServeArgs& args) {
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);  // a replica reloads its snapshot
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   server::HttpServer http(app::BuildApi(config), options);
   std::string error;
   if (!http.bind(&error)) throw std::runtime_error(error);
-  const std::string first_admin = FirstAdminToken(args.db);
+  const std::string first_admin = read_only ? "" : FirstAdminToken(args.db);
+  replication.start();
 
   const bool any = args.bind == "0.0.0.0" || args.bind == "::";
   const std::string host = any ? "127.0.0.1" : args.bind;
   const std::string url = "http://" + host + ":" + std::to_string(http.port());
   std::cout << "PinTag serving " << url << "/ (database " << args.db << ", " << args.threads
             << " threads" << (any ? ", all interfaces" : "") << ")\n";
+  if (const std::string role = replication.describe(); !role.empty())
+    std::cout << "  " << role << "\n";
   std::cout << "  API: " << url << "/api/v1/   OpenAPI: " << url
             << "/openapi.json   health: " << url << "/readyz\n";
   if (!first_admin.empty()) {
@@ -97,16 +105,20 @@ void Run(const ServeArgs& args) {
               << "  " << first_admin << "\n"
               << "  e.g. curl -H 'Authorization: Bearer " << first_admin << "' " << url
               << "/api/v1/tokens\n";
-  } else {
+  } else if (!read_only) {
     std::cout << "Tokens: pintag token create --role admin|counter|scanner --db " << args.db
               << "\n";
   }
   std::cout << "Stop with Ctrl-C.\n" << std::flush;
 
   std::atomic<bool> finished{false};
-  std::thread waiter([&http, &finished, signals] {
+  std::thread waiter([&http, &finished, &replication, signals] {
     int signal = 0;
     sigwait(&signals, &signal);
+    while (signal == SIGHUP && !finished) {
+      replication.reload();
+      sigwait(&signals, &signal);
+    }
     if (finished) return;
     std::cerr << "pintag serve: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
               << ", finishing requests in flight\n";
@@ -160,6 +172,7 @@ void AddServeCommand(CLI::App& app) {
   cmd->add_option("--write-timeout", args->write_timeout_s, "seconds per write of a response")
       ->check(CLI::Range(1, 3600))
       ->capture_default_str();
+  AddReplicationOptions(cmd, args->replication);
   cmd->callback([args] { Run(*args); });
 }
 

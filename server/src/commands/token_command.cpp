@@ -21,7 +21,7 @@ struct TokenArgs {
 
 void Create(const TokenArgs& args) {
   const auto role = db::ParseRole(args.role);
-  if (!role) throw UsageError("--role must be admin, counter or scanner");
+  if (!role) throw UsageError("--role must be admin, counter, scanner or replica");
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token) throw std::runtime_error(token.error().message);
@@ -58,7 +58,7 @@ void AddTokenCommand(CLI::App& app) {
   };
 
   CLI::App* create = token->add_subcommand("create", "Create a token and print its secret once");
-  create->add_option("--role", args->role, "admin, counter or scanner")->required();
+  create->add_option("--role", args->role, "admin, counter, scanner or replica")->required();
   create->add_option("--label", args->label, "a note on who or what uses it");
   add_db(create);
   create->callback([args] { Create(*args); });

@@ -15,6 +15,8 @@ std::string_view ToString(Access access) {
       return "scanner";
     case Access::kAdmin:
       return "admin";
+    case Access::kReplica:
+      return "replica";
   }
   return "unknown";
 }

@@ -11,7 +11,8 @@ namespace pintag::db {
 
 /// The schema version this build writes. Version 1: pincodes, offices, key table. Version 2:
 /// sort plans and rules, API tokens, scan log (and the default plan when pincodes exist).
-inline constexpr int kSchemaVersion = 2;
+/// Version 3: the `replica` token role. Version 4: the registry version (snapshot.hpp).
+inline constexpr int kSchemaVersion = 4;
 
 struct OpenOptions {
   bool create = true;          ///< create the file when it does not exist

@@ -21,6 +21,11 @@ struct ScanRecord {
   std::string result_json;  ///< what was read; must be valid JSON (checked), at most 1 MiB
 };
 
+/// A scan log of its own in the file `path`, created when missing. A read-only replica appends
+/// here: its registry is a snapshot that is replaced whole and opened read-only. `token_id` then
+/// names a token of the snapshot the request was verified against, without a foreign key.
+Result<Connection> OpenScanLogFile(const std::string& path);
+
 /// Appends a scan; returns its id. kInvalid for bad JSON or an unknown token id.
 Result<std::int64_t> AppendScan(Connection& connection, const ScanRecord& scan);
 /// The newest scans first; `limit` 1–1000; only that token's when `token_id` is given.

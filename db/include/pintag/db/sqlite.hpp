@@ -108,6 +108,11 @@ class Connection {
   /// The single integer a query such as `SELECT count(*) ...` or `PRAGMA user_version` yields.
   std::int64_t queryInt64(std::string_view sql);
 
+  /// Copies this whole database into `destination` with SQLite's online backup API, in one pass
+  /// under one read transaction, so the copy is the state of one instant even while other
+  /// connections write. `destination`'s previous content is replaced. Throws SqliteError.
+  void backupInto(Connection& destination);
+
   std::int64_t lastInsertRowid() const;
   int changes() const;
   bool inTransaction() const;

@@ -15,8 +15,9 @@
 
 namespace pintag::db {
 
-enum class Role { kAdmin, kCounter, kScanner };
-const char* ToString(Role role);                       ///< "admin", "counter", "scanner"
+/// kReplica: a read-only replica pulling registry snapshots from the primary, and nothing else.
+enum class Role { kAdmin, kCounter, kScanner, kReplica };
+const char* ToString(Role role);                       ///< "admin", "counter", "scanner", "replica"
 std::optional<Role> ParseRole(std::string_view text);  ///< exact lower-case names
 
 struct TokenInfo {

@@ -13,12 +13,13 @@
 
 namespace pintag::server {
 
-/// What a route requires, and what a verified token grants. Admin satisfies every requirement.
+/// What a route requires, and what a verified token grants. Admin satisfies every requirement;
+/// replica only pulls registry snapshots (docs/SCALING.md).
 /// The tokens and their stored role names are db's (`db::Role`); the application maps a verified
 /// token's role onto this, so this layer needs no database.
-enum class Access { kOpen, kCounter, kScanner, kAdmin };
+enum class Access { kOpen, kCounter, kScanner, kAdmin, kReplica };
 
-std::string_view ToString(Access access);  ///< "open", "counter", "scanner", "admin"
+std::string_view ToString(Access access);  ///< "open", "counter", "scanner", "admin", "replica"
 /// Whether a token granting `granted` may call a route requiring `required`.
 bool Allows(Access required, Access granted);
 

@@ -1,0 +1,44 @@
+#pragma once
+// Registry snapshots: a consistent, self-contained copy of a live database that read-only
+// replicas serve. The registry version (schema version 4) is a counter that every committed
+// change to pincodes, keys, offices, sort plans or tokens increases; a snapshot holds the
+// version of the instant it copies, so two files with the same version hold the same registry.
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "pintag/db/result.hpp"
+#include "pintag/db/sqlite.hpp"
+
+namespace pintag::db {
+
+/// The registry version of an open database: 1 for a new file, then increasing.
+Result<std::int64_t> RegistryVersion(Connection& connection);
+
+struct SnapshotInfo {
+  std::string path;                   ///< where the snapshot is
+  std::int64_t registry_version = 0;  ///< the version it holds
+  std::uint64_t bytes = 0;            ///< its size
+};
+
+/// Copies `source` to `out_path` with SQLite's online backup API (writers on other connections
+/// go on meanwhile). The copy is made in a temporary file beside `out_path`, left without the
+/// scan log (each server keeps its own), switched to a rollback journal (a single file that
+/// opens read-only anywhere), fsynced and renamed into place, and the directory fsynced: a
+/// reader of `out_path` sees the old file or the new one, never part of one. kStorage when the
+/// directory cannot be written; the temporary file is removed on every failure.
+Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path);
+
+/// Puts a snapshot received as bytes (from a primary) at `path`: written to a temporary file
+/// beside it, fsynced, checked with VerifySnapshot, then renamed into place and the directory
+/// fsynced. Bytes that are not a whole snapshot of the current schema are refused with
+/// VerifySnapshot's error and `path` is left as it was.
+Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path);
+
+/// Opens `path` read-only and checks it is a whole PinTag database of the current schema
+/// (PRAGMA quick_check); its version and size. kStorage for a damaged or foreign file, kConflict
+/// for another schema version, kNotFound when it does not exist.
+Result<SnapshotInfo> VerifySnapshot(const std::string& path);
+
+}  // namespace pintag::db

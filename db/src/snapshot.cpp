@@ -1,0 +1,175 @@
+#include "pintag/db/snapshot.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+#include "guard.hpp"
+#include "pintag/db/database.hpp"
+
+namespace pintag::db {
+namespace {
+
+std::string SystemError(const std::string& what) {
+  return what + ": " + std::strerror(errno);
+}
+
+/// fsync on a file or a directory; throws std::runtime_error.
+void Sync(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), (directory ? O_DIRECTORY : 0) | O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(SystemError("cannot open " + path));
+  const bool synced = ::fsync(fd) == 0;
+  const std::string error = synced ? "" : SystemError("fsync " + path);
+  ::close(fd);
+  if (!synced) throw std::runtime_error(error);
+}
+
+/// A fresh empty file beside `target`, removed (with any SQLite side files) unless kept.
+class TemporaryBeside {
+ public:
+  explicit TemporaryBeside(const std::string& target) {
+    std::string name = target + ".tmp-XXXXXX";
+    std::vector<char> buffer(name.begin(), name.end());
+    buffer.push_back('\0');
+    const int fd = ::mkstemp(buffer.data());
+    if (fd < 0) {
+      throw std::runtime_error(SystemError("cannot create a temporary file beside " + target));
+    }
+    ::close(fd);
+    path_ = buffer.data();
+  }
+  TemporaryBeside(const TemporaryBeside&) = delete;
+  TemporaryBeside& operator=(const TemporaryBeside&) = delete;
+  ~TemporaryBeside() {
+    for (const char* suffix : {"-journal", "-wal", "-shm"}) ::unlink((path_ + suffix).c_str());
+    if (!kept_) ::unlink(path_.c_str());
+  }
+  const std::string& path() const { return path_; }
+  void keep() { kept_ = true; }
+
+ private:
+  std::string path_;
+  bool kept_ = false;
+};
+
+std::string Directory(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  return parent.empty() ? "." : parent.string();
+}
+
+}  // namespace
+
+Result<std::int64_t> RegistryVersion(Connection& connection) {
+  return detail::Guard([&]() -> Result<std::int64_t> {
+    Statement s = connection.prepare("SELECT version FROM registry_version WHERE id = 1");
+    if (!s.step()) return Error{ErrorCode::kStorage, "the registry version row is missing"};
+    return s.getInt64(0);
+  });
+}
+
+Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path) {
+  try {
+    TemporaryBeside temporary(out_path);
+    SnapshotInfo info;
+    info.path = out_path;
+    {
+      Connection copy(temporary.path(), {.create = false});
+      source.backupInto(copy);
+      // A rollback journal keeps the snapshot one file, which read-only servers open without
+      // needing to create -wal and -shm files beside it.
+      copy.execute("PRAGMA journal_mode=DELETE");
+      if (copy.queryInt64("SELECT count(*) FROM (SELECT 1 FROM scan_log LIMIT 1)") > 0) {
+        copy.execute("DELETE FROM scan_log");
+        copy.execute("VACUUM");
+      }
+      Result<std::int64_t> version = RegistryVersion(copy);
+      if (!version) return version.error();
+      info.registry_version = *version;
+    }
+    Sync(temporary.path(), false);
+    info.bytes = std::filesystem::file_size(temporary.path());
+    if (::rename(temporary.path().c_str(), out_path.c_str()) != 0) {
+      return Error{ErrorCode::kStorage, SystemError("cannot rename the snapshot to " + out_path)};
+    }
+    temporary.keep();
+    Sync(Directory(out_path), true);
+    return info;
+  } catch (const SqliteError& e) {
+    return detail::ToError(e);
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::kStorage, e.what()};
+  }
+}
+
+Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path) {
+  try {
+    TemporaryBeside temporary(path);
+    {
+      const int fd = ::open(temporary.path().c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+      if (fd < 0) throw std::runtime_error(SystemError("cannot open " + temporary.path()));
+      std::size_t written = 0;
+      while (written < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+          const std::string error = SystemError("cannot write " + temporary.path());
+          ::close(fd);
+          throw std::runtime_error(error);
+        }
+        written += static_cast<std::size_t>(n);
+      }
+      const bool synced = ::fsync(fd) == 0;
+      ::close(fd);
+      if (!synced) throw std::runtime_error(SystemError("fsync " + temporary.path()));
+    }
+    Result<SnapshotInfo> verified = VerifySnapshot(temporary.path());
+    if (!verified) return verified.error();
+    if (::rename(temporary.path().c_str(), path.c_str()) != 0) {
+      return Error{ErrorCode::kStorage, SystemError("cannot rename the snapshot to " + path)};
+    }
+    temporary.keep();
+    Sync(Directory(path), true);
+    SnapshotInfo info = *verified;
+    info.path = path;
+    return info;
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::kStorage, e.what()};
+  }
+}
+
+Result<SnapshotInfo> VerifySnapshot(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    return Error{ErrorCode::kNotFound, "snapshot " + path + " does not exist"};
+  }
+  try {
+    Connection connection(path, {.create = false, .read_only = true});
+    const int version = SchemaVersion(connection);
+    if (version != kSchemaVersion) {
+      return Error{ErrorCode::kConflict, "snapshot " + path + " has schema version " +
+                                             std::to_string(version) + "; this pintag reads " +
+                                             std::to_string(kSchemaVersion)};
+    }
+    Statement check = connection.prepare("PRAGMA quick_check");
+    const std::string verdict = check.step() ? check.getText(0) : "no answer";
+    if (verdict != "ok") {
+      return Error{ErrorCode::kStorage, "snapshot " + path + " is damaged: " + verdict};
+    }
+    Result<std::int64_t> registry_version = RegistryVersion(connection);
+    if (!registry_version) return registry_version.error();
+    return SnapshotInfo{path, *registry_version, std::filesystem::file_size(path)};
+  } catch (const SqliteError& e) {
+    return Error{ErrorCode::kStorage, "snapshot " + path + ": " + e.what()};
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::kStorage, e.what()};
+  }
+}
+
+}  // namespace pintag::db

@@ -1,0 +1,150 @@
+#include "commands/serve_replication.hpp"
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "commands/commands.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/db/snapshot.hpp"
+
+namespace pintag::cli {
+namespace {
+
+std::string Beside(const std::string& path, const std::string& suffix) {
+  const std::filesystem::path p(path);
+  return (p.parent_path() / (p.stem().string() + suffix)).string();
+}
+
+std::string ReadToken(const ReplicationArgs& args) {
+  std::string token;
+  if (!args.follow_token_file.empty()) {
+    std::ifstream in(args.follow_token_file);
+    if (!in) throw UsageError("cannot read --follow-token-file " + args.follow_token_file);
+    std::getline(in, token);
+  } else if (const char* env = std::getenv("PINTAG_FOLLOW_TOKEN")) {
+    token = env;
+  }
+  while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
+  if (token.empty()) {
+    throw UsageError(
+        "--follow needs a replica token: set PINTAG_FOLLOW_TOKEN or give "
+        "--follow-token-file (make one on the primary: pintag token create --role "
+        "replica)");
+  }
+  return token;
+}
+
+}  // namespace
+
+void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
+  serve->add_flag("--read-only", args.read_only,
+                  "serve --db as a read-only snapshot (a replica): writes answer 403 naming the "
+                  "primary; a newer snapshot renamed into place, or SIGHUP, reloads it");
+  serve->add_option("--follow", args.follow,
+                    "pull newer snapshots from this primary URL (implies --read-only; token in "
+                    "PINTAG_FOLLOW_TOKEN or --follow-token-file)");
+  serve->add_option("--follow-token-file", args.follow_token_file,
+                    "file holding the replica token for --follow");
+  serve
+      ->add_option("--follow-interval-ms", args.follow_interval_ms,
+                   "how often to ask the primary for a newer snapshot")
+      ->check(CLI::Range(50, 3'600'000))
+      ->capture_default_str();
+  serve->add_option("--primary", args.primary,
+                    "the primary's URL, named when a replica refuses a write (default: --follow)");
+  serve->add_option("--scan-log", args.scan_log,
+                    "a replica's own scan log file (default: <db name>-scans.db beside --db)");
+  serve->add_option("--snapshot", args.snapshot,
+                    "publish registry snapshots for replicas to this file, after every change "
+                    "(GET /api/v1/registry/snapshot)");
+}
+
+Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
+    : args_(args), db_path_(config.db_path) {
+  if (!args_.follow.empty()) args_.read_only = true;
+  if (args_.read_only && !args_.snapshot.empty()) {
+    throw UsageError("--snapshot publishes a primary's registry; a --read-only replica has none");
+  }
+  if (!args_.read_only) {
+    if (args_.snapshot.empty()) return;
+    publisher_ = std::make_shared<replica::SnapshotPublisher>(db_path_, args_.snapshot);
+    const auto published = publisher_->publish();
+    if (!published) throw std::runtime_error(published.error().message);
+    config.publisher = publisher_;
+    return;
+  }
+
+  if (!args_.follow.empty()) {
+    token_ = ReadToken(args_);
+    // A replica with no usable snapshot yet waits for its primary.
+    if (!db::VerifySnapshot(db_path_)) {
+      replica::SnapshotFollower first({args_.follow, token_, db_path_}, nullptr);
+      std::string last_error;
+      while (true) {
+        const auto fetched = first.fetch(std::nullopt);
+        if (fetched && *fetched) break;
+        const std::string error = fetched ? "no snapshot" : fetched.error().message;
+        if (error != last_error) {
+          std::cerr << "pintag serve: waiting for a snapshot from " << args_.follow << ": " << error
+                    << "\n";
+        }
+        last_error = error;
+        std::this_thread::sleep_for(std::chrono::milliseconds(args_.follow_interval_ms));
+      }
+    }
+  }
+  watcher_ = std::make_unique<replica::SnapshotWatcher>(
+      db_path_, [this](const db::SnapshotInfo& loaded) { pool_->renew(loaded.path); });
+
+  const std::string scan_log =
+      args_.scan_log.empty() ? Beside(db_path_, "-scans.db") : args_.scan_log;
+  if (auto opened = db::OpenScanLogFile(scan_log); !opened) {
+    throw std::runtime_error("scan log " + scan_log + ": " + opened.error().message);
+  }
+  pool_ =
+      std::make_shared<app::ConnectionPool>(watcher_->loaded().path, config.busy_timeout_ms, true);
+  config.read_only = true;
+  config.pool = pool_;
+  config.scan_log_path = scan_log;
+  config.primary_url = !args_.primary.empty()  ? args_.primary
+                       : !args_.follow.empty() ? args_.follow
+                                               : "its primary (this replica was not told which)";
+}
+
+Replication::~Replication() {
+  // Threads stop before what they call into goes away.
+  follower_.reset();
+  watcher_.reset();
+  publisher_.reset();
+}
+
+void Replication::start() {
+  if (publisher_) publisher_->start(std::chrono::milliseconds(500));
+  if (!args_.read_only) return;
+  watcher_->start(std::chrono::milliseconds(250));
+  if (args_.follow.empty()) return;
+  follower_ = std::make_unique<replica::SnapshotFollower>(
+      replica::FollowOptions{args_.follow, token_, db_path_},
+      [watcher = watcher_.get()](const db::SnapshotInfo&) { watcher->check(); });
+  follower_->start([watcher = watcher_.get()] { return watcher->loaded().registry_version; },
+                   std::chrono::milliseconds(args_.follow_interval_ms));
+}
+
+void Replication::reload() {
+  if (watcher_) watcher_->check();
+}
+
+std::string Replication::describe() const {
+  if (publisher_) return "primary, publishing snapshots to " + args_.snapshot;
+  if (!args_.read_only) return "";
+  std::string text = "read-only replica at registry version " +
+                     std::to_string(watcher_->loaded().registry_version);
+  if (!args_.follow.empty()) text += ", following " + args_.follow;
+  return text;
+}
+
+}  // namespace pintag::cli

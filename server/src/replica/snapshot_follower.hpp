@@ -1,0 +1,54 @@
+#pragma once
+// A read-only replica that follows a primary: polls the primary's
+// GET /api/v1/registry/snapshot with If-None-Match (the version it holds) and a replica token;
+// a 200 carries a newer snapshot, which is checked and renamed into place at the replica's
+// snapshot path (db::InstallSnapshot); a 304 means it is current.
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "pintag/db/result.hpp"
+#include "pintag/db/snapshot.hpp"
+#include "replica/periodic_thread.hpp"
+
+namespace pintag::replica {
+
+struct FollowOptions {
+  std::string primary_url;           ///< e.g. http://127.0.0.1:8090
+  std::string token;                 ///< a replica (or admin) token's secret
+  std::string path;                  ///< where the replica's snapshot lives
+  std::chrono::seconds timeout{30};  ///< per request to the primary
+};
+
+class SnapshotFollower {
+ public:
+  using OnInstalled = std::function<void(const db::SnapshotInfo&)>;
+
+  SnapshotFollower(FollowOptions options, OnInstalled on_installed);
+  ~SnapshotFollower() = default;  ///< stops the thread
+  SnapshotFollower(const SnapshotFollower&) = delete;
+  SnapshotFollower& operator=(const SnapshotFollower&) = delete;
+
+  /// Asks the primary once. The installed snapshot when there was a newer one; nothing when the
+  /// replica is current; an error (with the primary's answer) when the primary could not be
+  /// reached, refused the token or sent something that is not a whole snapshot.
+  db::Result<std::optional<db::SnapshotInfo>> fetch(std::optional<std::int64_t> have);
+
+  /// The registry version the replica serves now (nothing before its first snapshot).
+  using Have = std::function<std::optional<std::int64_t>()>;
+  /// Polls every `interval` on a thread of its own, until destroyed.
+  void start(Have have, std::chrono::milliseconds interval);
+
+ private:
+  FollowOptions options_;
+  OnInstalled on_installed_;
+  PeriodicThread thread_;  // last: stopped before the members it uses go
+};
+
+/// The ETag of a registry version: the number in double quotes.
+std::string VersionETag(std::int64_t version);
+
+}  // namespace pintag::replica

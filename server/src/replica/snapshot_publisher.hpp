@@ -1,0 +1,56 @@
+#pragma once
+// The primary's side of registry snapshots: keeps one snapshot file of the live database current.
+// A background thread republishes after every change to the registry version, whoever made it
+// (the API, `pintag import`, `pintag token`); a request for the snapshot republishes first when
+// the live version moved since, so a replica never gets a snapshot older than a write that
+// already returned.
+
+#include <chrono>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "pintag/db/result.hpp"
+#include "pintag/db/snapshot.hpp"
+#include "pintag/db/sqlite.hpp"
+#include "replica/periodic_thread.hpp"
+
+namespace pintag::replica {
+
+/// A published snapshot's bytes and what they hold.
+struct PublishedSnapshot {
+  db::SnapshotInfo info;
+  std::string bytes;
+};
+
+class SnapshotPublisher {
+ public:
+  /// `live_path`: the primary's database (must exist); `out_path`: the snapshot file it keeps.
+  SnapshotPublisher(std::string live_path, std::string out_path);
+  ~SnapshotPublisher() = default;  ///< stops the thread
+  SnapshotPublisher(const SnapshotPublisher&) = delete;
+  SnapshotPublisher& operator=(const SnapshotPublisher&) = delete;
+
+  /// The live database's registry version now.
+  db::Result<std::int64_t> liveVersion();
+  /// The snapshot of the live version (published first if it is not yet), with its bytes.
+  db::Result<PublishedSnapshot> read();
+  /// Publishes when the live version differs from the published one; the published info.
+  db::Result<db::SnapshotInfo> publish();
+
+  /// Checks every `interval` on a thread of its own, until destroyed.
+  void start(std::chrono::milliseconds interval);
+
+ private:
+  db::Result<db::SnapshotInfo> publishLocked();
+
+  std::string live_path_;
+  std::string out_path_;
+  std::mutex mutex_;  // guards the connection, published_ and the file's replacement
+  std::optional<db::Connection> live_;
+  std::optional<db::SnapshotInfo> published_;
+  PeriodicThread thread_;  // last: stopped before the members it uses go
+};
+
+}  // namespace pintag::replica

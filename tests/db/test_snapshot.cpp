@@ -1,0 +1,300 @@
+// Registry snapshots: the registry version moves with every change a replica must see and with
+// nothing else; a snapshot is a consistent, self-contained, read-only-openable copy that replaces
+// its target atomically.
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <thread>
+#include <vector>
+
+#include "db_test_util.hpp"
+#include "pintag/db/registry.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/db/snapshot.hpp"
+#include "pintag/db/sort_plan.hpp"
+#include "pintag/db/tokens.hpp"
+
+namespace pintag::db {
+namespace {
+
+using test::TempDir;
+
+std::int64_t VersionOf(Connection& connection) {
+  auto version = RegistryVersion(connection);
+  EXPECT_TRUE(version.ok()) << version.error().message;
+  return version.ok() ? *version : -1;
+}
+
+std::string KeysCsv(Connection& connection) {
+  auto rows = ListKeys(connection);
+  EXPECT_TRUE(rows.ok());
+  std::string out;
+  if (!rows.ok()) return out;
+  for (const KeyRow& row : *rows) {
+    out += row.pincode.str() + "," + std::to_string(row.key.value()) + "," + ToString(row.status) +
+           "\n";
+  }
+  return out;
+}
+
+PostOffice TestOffice(const std::string& name) {
+  PostOffice office;
+  office.name = name;
+  office.district = "Testpur";
+  office.state = "Test State";
+  office.circle = "Test";
+  office.region = "T";
+  office.division = "TD";
+  return office;
+}
+
+TEST(RegistryVersion, EveryChangeAReplicaServesIncreasesIt) {
+  TempDir dir;
+  Connection connection = test::OpenExisting(test::CopyOfSeeded(dir));
+  std::int64_t last = VersionOf(connection);
+  EXPECT_GE(last, 1);
+  const auto increased = [&](const char* what) {
+    const std::int64_t now = VersionOf(connection);
+    EXPECT_GT(now, last) << what;
+    last = now;
+  };
+  ASSERT_TRUE(AddPincode(connection, Pincode(999001), {TestOffice("Snapshot Nagar")}).ok());
+  increased("adding a pincode");
+  ASSERT_TRUE(RetirePincode(connection, Pincode(999001)).ok());
+  increased("retiring a pincode");
+  ASSERT_TRUE(SavePlan(connection, {"hub", "floor", "", {{"56", "south"}}}).ok());
+  increased("saving a sort plan");
+  ASSERT_TRUE(DeletePlan(connection, "hub").ok());
+  increased("deleting a sort plan");
+  auto token = CreateToken(connection, Role::kScanner, "handheld");
+  ASSERT_TRUE(token.ok());
+  increased("creating a token");
+  ASSERT_TRUE(RevokeToken(connection, token->info.id).ok());
+  increased("revoking a token");
+}
+
+TEST(RegistryVersion, ReadsAndTheScanLogLeaveItAlone) {
+  TempDir dir;
+  Connection connection = test::OpenExisting(test::CopyOfSeeded(dir));
+  const std::int64_t before = VersionOf(connection);
+  ASSERT_TRUE(LookupPincode(connection, Pincode(110001)).ok());
+  ASSERT_TRUE(Search(connection, {.name_prefix = "Conn", .limit = 5}).ok());
+  ASSERT_TRUE(Route(connection, Pincode(560001), kDefaultPlanName).ok());
+  ASSERT_TRUE(AppendScan(connection, {.image_bytes = 10, .result_json = "{}"}).ok());
+  ASSERT_FALSE(AddPincode(connection, Pincode(110001)).ok());  // refused: nothing committed
+  EXPECT_EQ(VersionOf(connection), before);
+}
+
+TEST(Snapshot, HoldsTheRegistryAndItsVersionAndOpensReadOnly) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  ASSERT_TRUE(AddPincode(live, Pincode(999002), {TestOffice("Copy Nagar")}).ok());
+  ASSERT_TRUE(AppendScan(live, {.image_bytes = 10, .result_json = R"({"tags": []})"}).ok());
+  const std::string out = dir.file("snapshot.db");
+
+  const auto written = WriteSnapshot(live, out);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  EXPECT_EQ(written->path, out);
+  EXPECT_EQ(written->registry_version, VersionOf(live));
+  EXPECT_EQ(written->bytes, std::filesystem::file_size(out));
+  // One file: no WAL beside it, and no temporary left in the directory.
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"registry.db", "registry.db-shm", "registry.db-wal",
+                                             "snapshot.db"}));
+
+  ::chmod(out.c_str(), 0444);
+  auto opened = OpenDatabase(out, {.create = false, .read_only = true});
+  ASSERT_TRUE(opened.ok()) << opened.error().message;
+  Connection& copy = opened.value().connection;
+  EXPECT_EQ(KeysCsv(copy), KeysCsv(live));
+  EXPECT_EQ(LookupPincode(copy, Pincode(999002)).value().offices.at(0).name, "Copy Nagar");
+  EXPECT_EQ(VersionOf(copy), written->registry_version);
+  EXPECT_EQ(copy.queryInt64("SELECT count(*) FROM scan_log"), 0);  // each server keeps its own
+  EXPECT_EQ(copy.queryInt64("SELECT count(*) FROM sort_rules"),
+            live.queryInt64("SELECT count(*) FROM sort_rules"));
+  Statement mode = copy.prepare("PRAGMA journal_mode");
+  ASSERT_TRUE(mode.step());
+  EXPECT_EQ(mode.getText(0), "delete");
+  EXPECT_EQ(test::IntegrityCheck(copy), "ok");
+
+  const auto verified = VerifySnapshot(out);
+  ASSERT_TRUE(verified.ok()) << verified.error().message;
+  EXPECT_EQ(verified->registry_version, written->registry_version);
+}
+
+TEST(Snapshot, ReplacesTheTargetAtomicallyWhileAReaderHoldsTheOldOne) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const std::string out = dir.file("snapshot.db");
+  const auto first = WriteSnapshot(live, out);
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  Connection old_reader(out, {.create = false, .read_only = true});
+  ASSERT_EQ(old_reader.queryInt64("SELECT count(*) FROM pincodes WHERE pincode = 999003"), 0);
+
+  ASSERT_TRUE(AddPincode(live, Pincode(999003), {TestOffice("Later Nagar")}).ok());
+  const auto second = WriteSnapshot(live, out);
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  EXPECT_GT(second->registry_version, first->registry_version);
+
+  // The reader opened before the rename still reads the first snapshot, whole.
+  EXPECT_EQ(old_reader.queryInt64("SELECT count(*) FROM pincodes WHERE pincode = 999003"), 0);
+  EXPECT_EQ(VersionOf(old_reader), first->registry_version);
+  EXPECT_EQ(test::IntegrityCheck(old_reader), "ok");
+  Connection new_reader(out, {.create = false, .read_only = true});
+  EXPECT_EQ(new_reader.queryInt64("SELECT count(*) FROM pincodes WHERE pincode = 999003"), 1);
+  EXPECT_EQ(VersionOf(new_reader), second->registry_version);
+}
+
+TEST(Snapshot, IsConsistentWhileAWriterCommits) {
+  TempDir dir;
+  const std::string path = test::CopyOfSeeded(dir);
+  const std::int64_t seeded_pincodes = 19159;
+  std::atomic<bool> stop{false};
+  std::atomic<int> added{0};
+  std::thread writer([&] {
+    Connection connection = test::OpenExisting(path);
+    for (int i = 0; i < 400 && !stop; ++i) {
+      const auto result = AddPincode(connection, Pincode(990000 + i),
+                                     {TestOffice("A"), TestOffice("B"), TestOffice("C")});
+      if (!result.ok()) ADD_FAILURE() << result.error().message;
+      ++added;
+    }
+  });
+  Connection source = test::OpenExisting(path);
+  std::int64_t last_version = 0;
+  std::int64_t last_count = 0;
+  for (int i = 0; i < 8; ++i) {
+    const std::string out = dir.file("snap-" + std::to_string(i) + ".db");
+    const auto written = WriteSnapshot(source, out);
+    ASSERT_TRUE(written.ok()) << written.error().message;
+    Connection copy(out, {.create = false, .read_only = true});
+    // A pincode, its key and its three offices are one transaction: a snapshot has all or none.
+    const std::int64_t pincodes = copy.queryInt64("SELECT count(*) FROM pincodes");
+    EXPECT_EQ(copy.queryInt64("SELECT count(*) FROM tag_keys"), pincodes);
+    EXPECT_EQ(copy.queryInt64("SELECT count(*) FROM offices WHERE pincode >= 990000"),
+              3 * (pincodes - seeded_pincodes));
+    EXPECT_GE(written->registry_version, last_version);
+    EXPECT_GE(pincodes, last_count);
+    EXPECT_EQ(written->registry_version == last_version, pincodes == last_count);
+    last_version = written->registry_version;
+    last_count = pincodes;
+  }
+  stop = true;
+  writer.join();
+  EXPECT_GT(added.load(), 0);
+}
+
+TEST(Snapshot, AnUnwritableTargetIsAnErrorAndLeavesNothingBehind) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const auto missing_dir = WriteSnapshot(live, dir.file("no/such/dir/snapshot.db"));
+  ASSERT_FALSE(missing_dir.ok());
+  EXPECT_EQ(missing_dir.error().code, ErrorCode::kStorage);
+  EXPECT_NE(missing_dir.error().message.find("no/such/dir"), std::string::npos)
+      << missing_dir.error().message;
+
+  // The target is a directory: the rename fails and the temporary copy is removed.
+  std::filesystem::create_directory(dir.file("taken"));
+  const auto taken = WriteSnapshot(live, dir.file("taken"));
+  ASSERT_FALSE(taken.ok());
+  EXPECT_EQ(taken.error().code, ErrorCode::kStorage);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+TEST(Snapshot, VerifyRefusesWhatIsNotAWholeSnapshot) {
+  TempDir dir;
+  EXPECT_EQ(VerifySnapshot(dir.file("missing.db")).error().code, ErrorCode::kNotFound);
+  const std::string junk = test::WriteFile(dir.file("junk.db"), std::string(8192, 'x'));
+  EXPECT_EQ(VerifySnapshot(junk).error().code, ErrorCode::kStorage);
+
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const std::string out = dir.file("snapshot.db");
+  ASSERT_TRUE(WriteSnapshot(live, out).ok());
+  // Cut in half, as a copy interrupted mid-transfer would be.
+  const std::string whole = test::ReadFile(out);
+  const std::string cut = test::WriteFile(dir.file("cut.db"), whole.substr(0, whole.size() / 2));
+  const auto verified = VerifySnapshot(cut);
+  ASSERT_FALSE(verified.ok());
+  EXPECT_EQ(verified.error().code, ErrorCode::kStorage) << verified.error().message;
+}
+
+TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSource) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  TempDir dir;
+  const std::string live = test::CopyOfSeeded(dir);
+  const std::string out = dir.file("published.db");
+  const auto made =
+      test::RunCommand(test::PintagExe() + " snapshot --db " + live + " --out " + out);
+  ASSERT_EQ(made.exit_code, 0) << made.out;
+  std::int64_t expected = 0;
+  {
+    Connection connection = test::OpenExisting(live);
+    expected = VersionOf(connection);
+  }
+  EXPECT_NE(made.out.find("registry version " + std::to_string(expected)), std::string::npos)
+      << made.out;
+  const auto verified = test::RunCommand(test::PintagExe() + " snapshot --verify " + out);
+  EXPECT_EQ(verified.exit_code, 0);
+  EXPECT_EQ(verified.out, made.out);
+
+  const std::string missing = dir.file("missing.db");
+  const auto refused = test::RunCommand(test::PintagExe() + " snapshot --db " + missing +
+                                        " --out " + dir.file("x.db") + " 2>&1");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.out.find("does not exist"), std::string::npos) << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(missing));  // never created and seeded
+  EXPECT_FALSE(std::filesystem::exists(dir.file("x.db")));
+}
+
+TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const std::string published = dir.file("published.db");
+  const auto written = WriteSnapshot(live, published);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  const std::string bytes = test::ReadFile(published);
+
+  const std::string target = dir.file("replica.db");
+  const auto installed = InstallSnapshot(bytes, target);
+  ASSERT_TRUE(installed.ok()) << installed.error().message;
+  EXPECT_EQ(installed->path, target);
+  EXPECT_EQ(installed->registry_version, written->registry_version);
+  EXPECT_EQ(test::ReadFile(target), bytes);
+
+  // A truncated download and garbage are refused; the installed snapshot stays.
+  const auto truncated = InstallSnapshot(std::string_view(bytes).substr(0, 100000), target);
+  ASSERT_FALSE(truncated.ok());
+  EXPECT_EQ(truncated.error().code, ErrorCode::kStorage) << truncated.error().message;
+  EXPECT_FALSE(InstallSnapshot("<html>502 Bad Gateway</html>", target).ok());
+  EXPECT_EQ(test::ReadFile(target), bytes);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+TEST(ScanLogFile, AReplicaAppendsToItsOwnFile) {
+  TempDir dir;
+  auto log = OpenScanLogFile(dir.file("scans.db"));
+  ASSERT_TRUE(log.ok()) << log.error().message;
+  Connection& connection = log.value();
+  ASSERT_TRUE(AppendScan(connection, {.token_id = 7, .image_bytes = 5, .result_json = "[]"}).ok());
+  ASSERT_FALSE(AppendScan(connection, {.image_bytes = 5, .result_json = "{not json"}).ok());
+  const auto scans = RecentScans(connection, 10);
+  ASSERT_TRUE(scans.ok()) << scans.error().message;
+  ASSERT_EQ(scans->size(), 1u);
+  EXPECT_EQ(scans->at(0).token_id, 7);
+  // Reopening keeps what was logged.
+  auto again = OpenScanLogFile(dir.file("scans.db"));
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(RecentScans(again.value(), 10).value().size(), 1u);
+}
+
+}  // namespace
+}  // namespace pintag::db

@@ -1,0 +1,261 @@
+// Read-only replicas (`pintag serve --read-only`, `--follow`) against a real primary: what they
+// serve and refuse, where their scans go, how they take a newer snapshot while requests are in
+// flight, and what they do with a file that is not one.
+
+#include <atomic>
+#include <thread>
+
+#include "label_photo.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/registry.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/db/snapshot.hpp"
+#include "replica_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+json Body(const httplib::Result& r) {
+  if (!r) return {};
+  const json body = json::parse(r->body, nullptr, false);
+  return body.is_discarded() ? json() : body;
+}
+
+std::int64_t CountRows(const std::string& path, const std::string& table) {
+  db::Connection connection(path, {.create = false, .read_only = true});
+  return connection.queryInt64("SELECT count(*) FROM " + table);
+}
+
+TEST_F(ReplicaSetTest, AFollowerServesReadsAndRefusesWritesNamingThePrimary) {
+  ServerProcess& replica = startFollower(0);
+  ASSERT_TRUE(replica.ok());
+  httplib::Client client("127.0.0.1", replica.port());
+  client.set_read_timeout(30, 0);
+
+  const json status = Body(client.Get("/api/v1/registry"));
+  EXPECT_EQ(status["role"], "replica");
+  EXPECT_EQ(status["primary"], primaryUrl());
+  EXPECT_EQ(status["registry_version"], RegistryVersionAt(primary_->port()));
+
+  const auto lookup = client.Get("/api/v1/pincodes/110001");
+  ASSERT_TRUE(lookup);
+  EXPECT_EQ(lookup->status, 200);
+  EXPECT_EQ(Body(lookup)["key"], 11684);
+  const auto label = client.Get("/api/v1/labels/110001.png?dpi=100", Auth(counter_token_));
+  ASSERT_TRUE(label);
+  EXPECT_EQ(label->status, 200);
+  EXPECT_EQ(label->get_header_value("Content-Type"), "image/png");
+  const auto batch = client.Post("/api/v1/labels", Auth(counter_token_),
+                                 R"({"pincodes": ["110001", "560001"]})", "application/json");
+  ASSERT_TRUE(batch);
+  EXPECT_EQ(batch->status, 200);
+
+  // Every registry write is refused before any token is asked for, naming the primary.
+  const std::vector<std::pair<std::string, std::string>> writes = {
+      {"POST", "/api/v1/pincodes"},
+      {"POST", "/api/v1/pincodes/110001/retire"},
+      {"PUT", "/api/v1/sortplans/hub"},
+      {"POST", "/api/v1/tokens"},
+      {"DELETE", "/api/v1/tokens/1"}};
+  for (const auto& [method, path] : writes) {
+    for (const httplib::Headers& headers : {httplib::Headers{}, Auth(admin_token_)}) {
+      httplib::Request request;
+      request.method = method;
+      request.path = path;
+      request.headers = headers;
+      request.body = R"({"pincode": "999001"})";
+      request.set_header("Content-Type", "application/json");
+      const auto r = client.send(request);
+      ASSERT_TRUE(r) << method << " " << path;
+      EXPECT_EQ(r->status, 403) << method << " " << path << ": " << r->body;
+      EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json");
+      const json problem = Body(r);
+      EXPECT_EQ(problem["title"], "Read-Only Replica");
+      EXPECT_NE(problem.value("detail", "").find(primaryUrl()), std::string::npos) << r->body;
+    }
+  }
+  // The primary was not changed by any of them.
+  httplib::Client primary("127.0.0.1", primary_->port());
+  EXPECT_EQ(primary.Get("/api/v1/pincodes/999001")->status, 404);
+  EXPECT_EQ(Body(primary.Get("/api/v1/pincodes/110001"))["status"], "active");
+}
+
+TEST_F(ReplicaSetTest, AReplicaLogsScansInItsOwnFileAndTheSnapshotStaysUntouched) {
+  ServerProcess& replica = startFollower(0);
+  ASSERT_TRUE(replica.ok());
+  httplib::Client primary("127.0.0.1", primary_->port());
+  const Photo photo = PhotographLabel(primary, Auth(counter_token_), "110001", 20,
+                                      scene::Camera{700, 700, 400, 300, 800, 600});
+  ASSERT_FALSE(photo.jpeg.empty());
+  httplib::Client client("127.0.0.1", replica.port());
+  client.set_read_timeout(30, 0);
+  for (int i = 0; i < 3; ++i) {
+    const auto r = client.Post("/api/v1/detect", Auth(scanner_token_), photo.jpeg, "image/jpeg");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body;
+    const json out = Body(r);
+    ASSERT_EQ(out["tags"].size(), 1U) << r->body;
+    EXPECT_EQ(out["tags"][0]["pincode"], "110001");
+  }
+  EXPECT_EQ(CountRows(replicaScanLog(0), "scan_log"), 3);
+  EXPECT_EQ(CountRows(replicaDb(0), "scan_log"), 0);
+  EXPECT_EQ(CountRows(primary_db_, "scan_log"), 0);
+}
+
+TEST_F(ReplicaSetTest, AFollowerServesAPincodeAddedOnThePrimary) {
+  ServerProcess& replica = startFollower(0);
+  ASSERT_TRUE(replica.ok());
+  httplib::Client client("127.0.0.1", replica.port());
+  EXPECT_EQ(client.Get("/api/v1/pincodes/999123")->status, 404);
+  httplib::Client primary("127.0.0.1", primary_->port());
+  addPincode(primary, "999123");
+  // Polled, not timed: the deadline only stops a broken follower from hanging the test.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  int status = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    const auto r = client.Get("/api/v1/pincodes/999123");
+    status = r ? r->status : 0;
+    if (status == 200) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(status, 200) << stderrOf("replica-0");
+  EXPECT_EQ(RegistryVersionAt(replica.port()), RegistryVersionAt(primary_->port()));
+}
+
+TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem) {
+  httplib::Client primary("127.0.0.1", primary_->port());
+  primary.set_read_timeout(30, 0);
+  EXPECT_EQ(primary.Get("/api/v1/registry/snapshot")->status, 401);
+  EXPECT_EQ(primary.Get("/api/v1/registry/snapshot", Auth(scanner_token_))->status, 403);
+  // A replica token opens nothing else.
+  EXPECT_EQ(primary.Get("/api/v1/labels/110001.pdf", Auth(replica_token_))->status, 403);
+  EXPECT_EQ(primary.Get("/api/v1/tokens", Auth(replica_token_))->status, 403);
+
+  const auto full = primary.Get("/api/v1/registry/snapshot", Auth(replica_token_));
+  ASSERT_TRUE(full);
+  ASSERT_EQ(full->status, 200);
+  EXPECT_EQ(full->get_header_value("Content-Type"), "application/vnd.sqlite3");
+  const std::string etag = full->get_header_value("ETag");
+  EXPECT_EQ(etag, "\"" + std::to_string(RegistryVersionAt(primary_->port())) + "\"");
+  const std::string copy = WriteFile(dir_.file("downloaded.db"), full->body);
+  const auto verified = db::VerifySnapshot(copy);
+  ASSERT_TRUE(verified.ok()) << verified.error().message;
+  EXPECT_EQ("\"" + std::to_string(verified->registry_version) + "\"", etag);
+
+  httplib::Headers current = Auth(replica_token_);
+  current.emplace("If-None-Match", etag);
+  const auto unchanged = primary.Get("/api/v1/registry/snapshot", current);
+  ASSERT_TRUE(unchanged);
+  EXPECT_EQ(unchanged->status, 304);
+  EXPECT_TRUE(unchanged->body.empty());
+
+  addPincode(primary, "999124");
+  const auto changed = primary.Get("/api/v1/registry/snapshot", current);
+  ASSERT_TRUE(changed);
+  EXPECT_EQ(changed->status, 200);
+  EXPECT_NE(changed->get_header_value("ETag"), etag);
+}
+
+TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequestsInFlight) {
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess& replica = startReadOnly(0, snapshot);
+  ASSERT_TRUE(replica.ok());
+  httplib::Client primary("127.0.0.1", primary_->port());
+  const Photo photo = PhotographLabel(primary, Auth(counter_token_), "110001", 20);
+  ASSERT_FALSE(photo.jpeg.empty());
+
+  std::atomic<bool> stop{false};
+  std::atomic<int> answered{0}, failed{0}, went_back{0};
+  std::vector<std::thread> clients;
+  clients.reserve(4);
+  for (int t = 0; t < 4; ++t) {
+    clients.emplace_back([&, t] {
+      httplib::Client client("127.0.0.1", replica.port());
+      client.set_read_timeout(30, 0);
+      std::int64_t last_version = 0;
+      while (!stop) {
+        httplib::Result r =
+            t == 0 ? client.Post("/api/v1/detect", Auth(scanner_token_), photo.jpeg, "image/jpeg")
+                   : client.Get("/api/v1/registry");
+        if (!r || r->status != 200) {
+          ++failed;
+          continue;
+        }
+        ++answered;
+        const json body = Body(r);
+        if (t == 0) {
+          if (body["tags"].size() != 1 || body["tags"][0]["pincode"] != "110001") ++failed;
+        } else {
+          const std::int64_t version = body.value("registry_version", std::int64_t{0});
+          if (version < last_version) ++went_back;
+          last_version = version;
+        }
+      }
+    });
+  }
+  // Five newer registries, each published by rename while the clients keep asking.
+  std::int64_t published_version = 0;
+  for (int i = 0; i < 5; ++i) {
+    addPincode(primary, std::to_string(999200 + i));
+    publishTo("served.db");
+    published_version = RegistryVersionAt(primary_->port());
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (RegistryVersionAt(replica.port()) != published_version &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    ASSERT_EQ(RegistryVersionAt(replica.port()), published_version);
+  }
+  stop = true;
+  for (std::thread& c : clients) c.join();
+  EXPECT_EQ(failed.load(), 0);
+  EXPECT_EQ(went_back.load(), 0);
+  EXPECT_GT(answered.load(), 20);
+  httplib::Client client("127.0.0.1", replica.port());
+  EXPECT_EQ(client.Get("/api/v1/pincodes/999204")->status, 200);
+  EXPECT_EQ(client.Get("/readyz")->status, 200);
+
+  // SIGHUP asks for a look now; the process goes on serving.
+  replica.signal(SIGHUP);
+  EXPECT_EQ(RegistryVersionAt(replica.port()), published_version);
+}
+
+TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess& replica = startReadOnly(0, snapshot);
+  ASSERT_TRUE(replica.ok());
+  const std::int64_t version = RegistryVersionAt(replica.port());
+  ASSERT_GT(version, 0);
+  const std::string junk = WriteFile(dir_.file("junk.db"), std::string(1 << 16, 'x'));
+  std::filesystem::rename(junk, snapshot);
+  replica.signal(SIGHUP);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (stderrOf("replica-0").find("ignoring the new file") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_NE(stderrOf("replica-0").find("ignoring the new file"), std::string::npos);
+  // Many connections at once, so the pool opens new ones after the junk arrived.
+  std::vector<std::thread> clients;
+  std::atomic<int> good{0};
+  clients.reserve(8);
+  for (int t = 0; t < 8; ++t) {
+    clients.emplace_back([&] {
+      httplib::Client client("127.0.0.1", replica.port());
+      for (int i = 0; i < 5; ++i) {
+        const auto r = client.Get("/api/v1/pincodes/560001");
+        if (r && r->status == 200) ++good;
+      }
+    });
+  }
+  for (std::thread& c : clients) c.join();
+  EXPECT_EQ(good.load(), 40);
+  EXPECT_EQ(RegistryVersionAt(replica.port()), version);
+  httplib::Client client("127.0.0.1", replica.port());
+  EXPECT_EQ(client.Get("/readyz")->status, 200);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
