@@ -20,9 +20,9 @@
 
 #include "homography.hpp"
 #include "pintag/scene/rng.hpp"
-#include "read_tag.hpp"
 #include "reading/decision.hpp"
 #include "reading/model_reader.hpp"
+#include "reading/read_tag.hpp"
 #include "reading/region_fit.hpp"
 #include "reading/region_system.hpp"
 #include "sweep.hpp"

@@ -9,21 +9,21 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "dark_squares.hpp"
+#include "candidates/dark_squares.hpp"
+#include "candidates/frame_scan.hpp"
+#include "candidates/grouping.hpp"
+#include "candidates/quads.hpp"
+#include "candidates/red_blobs.hpp"
+#include "candidates/redness.hpp"
 #include "detectors.hpp"
-#include "frame_scan.hpp"
-#include "grouping.hpp"
 #include "homography.hpp"
-#include "orientation.hpp"
-#include "payload.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/scene/scene.hpp"
-#include "pose.hpp"
-#include "quads.hpp"
+#include "pose/pose.hpp"
 #include "reading/model_reader.hpp"
-#include "red_blobs.hpp"
-#include "redness.hpp"
-#include "sampling.hpp"
+#include "reading/orientation.hpp"
+#include "reading/payload.hpp"
+#include "reading/sampling.hpp"
 #include "sweep.hpp"
 
 namespace pintag::bench {

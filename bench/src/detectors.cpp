@@ -83,9 +83,14 @@ class PinTagDetector final : public MarkerDetector {
     return out;
   }
   std::vector<std::pair<std::string, double>> lastStageTimes() const override {
-    return {{"redness", timings_.redness_ms}, {"blobs", timings_.blobs_ms},
-            {"quads", timings_.quads_ms},     {"decode", timings_.decode_ms},
-            {"pose", timings_.pose_ms},       {"total", timings_.total_ms}};
+    return {{"1 redness", timings_.redness_ms},
+            {"2-3a blobs", timings_.blobs_ms},
+            {"3b-4 quads", timings_.quads_ms},
+            {"5a sample", timings_.sample_ms},
+            {"5b model fit", timings_.model_fit_ms},
+            {"5c codeword", timings_.codeword_ms},
+            {"7 pose", timings_.pose_ms},
+            {"total", timings_.total_ms}};
   }
 
  private:

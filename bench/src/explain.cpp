@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "pintag/detector/detector.hpp"
-#include "read_tag.hpp"
+#include "reading/read_tag.hpp"
 #include "sweep.hpp"
 
 namespace pintag::bench {

@@ -54,6 +54,7 @@ struct Args {
   bool all_cores = true;
   int all_cores_every = 2;  ///< the all-cores pass times every this-many-th chunk (1 in --quick)
   bool require_zero_misreads = false;
+  bool explain_misses = true;  ///< ExplainMiss on every missed tag (a second detect call)
   bool quiet = false;
   std::string detectors = "pintag,aruco,apriltag-d1,apriltag-d2";
   std::string pintag_options;  ///< JSON object of DetectorOptions fields, for tuning runs
@@ -86,6 +87,7 @@ void Usage(FILE* to) {
       "  --dump-misses DIR     write a PNG crop of every tag PinTag missed, named by bin and "
       "the stage that lost it\n"
       "  --save-frames DIR     write every PinTag and tagless frame as rendered (PNG)\n"
+      "  --no-explain          skip the per-miss diagnosis (long misread runs: it detects again)\n"
       "  --quiet               no progress on stderr\n");
 }
 
@@ -154,6 +156,8 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--save-frames");
       if (v == nullptr) return false;
       args->save_frames = v;
+    } else if (a == "--no-explain") {
+      args->explain_misses = false;
     } else if (a == "--quiet") {
       args->quiet = true;
     } else if (a == "--help" || a == "-h") {
@@ -370,7 +374,8 @@ int Main(int argc, char** argv) {
           stats.cpu_ms_one_thread.push_back(cpu_ms);
           const Outcome outcome = Score(f, r.truthFor(f, d.marker()), found);
           stats.add(f, outcome);
-          if (d.marker() == Marker::kPinTag && outcome.counted && !outcome.found) {
+          if (d.marker() == Marker::kPinTag && outcome.counted && !outcome.found &&
+              args.explain_misses) {
             const std::string why = ExplainMiss(
                 r.image(f, d.marker()), r.truthFor(f, d.marker()).front(), camera, pintag_options);
             ++stats.misses[why][f.hard][static_cast<std::size_t>(f.size_index)];

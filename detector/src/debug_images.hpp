@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "grouping.hpp"
+#include "candidates/grouping.hpp"
+#include "candidates/quads.hpp"
+#include "candidates/red_blobs.hpp"
 #include "pintag/detector/detection.hpp"
-#include "quads.hpp"
-#include "red_blobs.hpp"
 
 namespace pintag::stage {
 

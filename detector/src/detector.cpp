@@ -16,20 +16,20 @@
 #include <thread>
 #include <vector>
 
-#include "camera_model.hpp"
-#include "cluster_quads.hpp"
-#include "dark_squares.hpp"
+#include "candidates/cluster_quads.hpp"
+#include "candidates/dark_squares.hpp"
+#include "candidates/frame_scan.hpp"
+#include "candidates/grouping.hpp"
+#include "candidates/quads.hpp"
+#include "candidates/red_blobs.hpp"
+#include "candidates/redness.hpp"
 #include "debug_images.hpp"
 #include "duplicates.hpp"
-#include "frame_scan.hpp"
-#include "grouping.hpp"
 #include "homography.hpp"
 #include "pintag/codec/geometry.hpp"
-#include "pose.hpp"
-#include "quads.hpp"
-#include "read_tag.hpp"
-#include "red_blobs.hpp"
-#include "redness.hpp"
+#include "pose/camera_model.hpp"
+#include "pose/pose.hpp"
+#include "reading/read_tag.hpp"
 
 namespace pintag {
 namespace {
@@ -52,7 +52,17 @@ struct ClusterOutput {
   std::vector<Detection> detections;
   Candidates candidates;
   double quads_ms = 0;
-  double decode_ms = 0;
+  stage::ReadingTimes reading;  ///< summed over the candidates; model_read counted in model_reads
+  int model_reads = 0;
+  int model_skipped = 0;
+
+  void add(const stage::ReadingTimes& t) {
+    reading.sample_ms += t.sample_ms;
+    reading.model_fit_ms += t.model_fit_ms;
+    reading.codeword_ms += t.codeword_ms;
+    model_reads += t.model_read ? 1 : 0;
+    model_skipped += t.model_skipped ? 1 : 0;
+  }
 };
 
 Point2 ToPoint(cv::Point2d p) {
@@ -104,7 +114,7 @@ Detection Rejected(const stage::Quad& quad, std::string reason,
 // One quad of a cluster through stages 4 to 6; true when it decoded.
 bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stage::RedBlob>& blobs,
                  const stage::BlobCluster& cluster, stage::Quad quad,
-                 const DetectorOptions& options, ClusterOutput* out) {
+                 const DetectorOptions& options, stage::ModelBudget* budget, ClusterOutput* out) {
   auto t1 = Clock::now();
   const stage::ElementAssignment rough = stage::AssignElements(
       stage::HomographyFromQuad(quad), blobs, cluster.blobs, stage::kRoughElementTolerance);
@@ -126,18 +136,20 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   out->candidates.read.push_back(quad);
   // A square moved by the corner fit must pass step 4's element check too.
   stage::ElementAssignment fitted_assignment;
-  const stage::CandidateReading candidate =
-      stage::ReadCandidate(bgr, quad, thresholds, [&](const stage::Quad& fitted) {
+  const stage::CandidateReading candidate = stage::ReadCandidate(
+      bgr, quad, thresholds,
+      [&](const stage::Quad& fitted) {
         fitted_assignment =
             stage::AssignElements(stage::HomographyFromQuad(fitted), blobs, cluster.blobs);
         return fitted_assignment.found >= cluster.min_elements && !fitted_assignment.conflict;
-      });
+      },
+      budget);
   const stage::TagReading& reading = candidate.reading;
   if (candidate.corners_fitted) {
     quad = candidate.quad;
     assignment = fitted_assignment;
   }
-  out->decode_ms += Ms(t2, Clock::now());
+  out->add(candidate.times);
   if (!reading.payload.key) {
     // The last reader's word: the model's when it was tried, else the direct samples'.
     if (!reading.orientation.ok) {
@@ -154,7 +166,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
 
 void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs,
                     const stage::BlobCluster& cluster, const DetectorOptions& options,
-                    ClusterOutput* out) {
+                    stage::ModelBudget* budget, ClusterOutput* out) {
   const auto t0 = Clock::now();
   const cv::Mat dark = stage::MinChannel(bgr, cluster.roi);
   const std::vector<stage::Quad> quads =
@@ -164,7 +176,7 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
 
   bool decoded = false;
   for (const stage::Quad& quad : quads) {
-    decoded = ProcessQuad(bgr, dark, blobs, cluster, quad, options, out) || decoded;
+    decoded = ProcessQuad(bgr, dark, blobs, cluster, quad, options, budget, out) || decoded;
   }
   if (decoded) return;
   // The outline gave no tag (a dim quiet zone on dark ground merges with the ground, or leaves
@@ -173,20 +185,20 @@ void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs
       stage::ClusterElementQuads(cluster, blobs, options.min_square_px);
   out->candidates.found.insert(out->candidates.found.end(), placed.begin(), placed.end());
   for (const stage::Quad& quad : placed) {
-    if (ProcessQuad(bgr, dark, blobs, cluster, quad, options, out)) break;
+    if (ProcessQuad(bgr, dark, blobs, cluster, quad, options, budget, out)) break;
   }
 }
 
 // A square found by its darkness alone (stage 3e) through stages 4 to 6. Its corners are refined
 // already; there are no red blobs to hold against its elements, so the readers' rules decide.
 void ProcessDarkSquare(const cv::Mat& bgr, const stage::Quad& quad, const DetectorOptions& options,
-                       ClusterOutput* out) {
-  const auto start = Clock::now();
+                       stage::ModelBudget* budget, ClusterOutput* out) {
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
   const stage::CandidateReading candidate = stage::ReadCandidate(
       bgr, quad, thresholds,
-      [&](const stage::Quad& fitted) { return stage::ElementsOutshineCentre(bgr, fitted); });
-  out->decode_ms += Ms(start, Clock::now());
+      [&](const stage::Quad& fitted) { return stage::ElementsOutshineCentre(bgr, fitted); },
+      budget);
+  out->add(candidate.times);
   const stage::TagReading& reading = candidate.reading;
   if (reading.payload.key) {
     out->detections.push_back(MakeDetection(candidate.quad, reading, {}));
@@ -220,8 +232,13 @@ void ForEach(std::size_t count, int threads, const std::function<void(std::size_
 // Adds what each candidate's work gave to the result.
 void Collect(std::vector<ClusterOutput>& outputs, DetectResult* result, Candidates* candidates) {
   for (ClusterOutput& o : outputs) {
-    result->timings.quads_ms += o.quads_ms;
-    result->timings.decode_ms += o.decode_ms;
+    StageTimings& t = result->timings;
+    t.quads_ms += o.quads_ms;
+    t.sample_ms += o.reading.sample_ms;
+    t.model_fit_ms += o.reading.model_fit_ms;
+    t.codeword_ms += o.reading.codeword_ms;
+    t.model_reads += o.model_reads;
+    t.model_skipped += o.model_skipped;
     for (Detection& d : o.detections) result->detections.push_back(std::move(d));
     candidates->found.insert(candidates->found.end(), o.candidates.found.begin(),
                              o.candidates.found.end());
@@ -245,7 +262,8 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
 // rejected when asked for) is appended to `result`, and the stage times are added to its timings.
 void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_area_px,
                 int min_cluster_blobs, const DetectorOptions& options,
-                const stage::DebugImages* debug, DetectResult* result, Candidates* candidates) {
+                const stage::DebugImages* debug, stage::ModelBudget* budget, DetectResult* result,
+                Candidates* candidates) {
   const auto t_red = Clock::now();
   if (debug != nullptr && debug->enabled()) debug->redness(stage::RunsToMask(red));
 
@@ -261,15 +279,21 @@ void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_a
     return InsideDecodedTag(b.centroid, result->detections, decoded_before) ||
            !stage::HasRing(bgr, b);
   });
-  const std::vector<stage::BlobCluster> clusters =
+  std::vector<stage::BlobCluster> clusters =
       stage::ClusterBlobs(blobs, bgr.size(), min_cluster_blobs);
+  // The model reads go first to the clusters most like a tag: those with the most blobs.
+  std::stable_sort(clusters.begin(), clusters.end(),
+                   [](const stage::BlobCluster& a, const stage::BlobCluster& b) {
+                     return a.blobs.size() > b.blobs.size();
+                   });
   const auto t_blobs = Clock::now();
   result->timings.blobs_ms += Ms(t_red, t_blobs);
   if (debug != nullptr) debug->blobs(bgr, blobs, clusters);
 
   std::vector<ClusterOutput> outputs(clusters.size());
-  ForEach(clusters.size(), options.threads,
-          [&](std::size_t i) { ProcessCluster(bgr, blobs, clusters[i], options, &outputs[i]); });
+  ForEach(clusters.size(), options.threads, [&](std::size_t i) {
+    ProcessCluster(bgr, blobs, clusters[i], options, budget, &outputs[i]);
+  });
   Collect(outputs, result, candidates);
 }
 
@@ -278,7 +302,7 @@ void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_a
 // is not read again. Reading it again from the dark square's corners found 3 more of 1,309 tags
 // over seeds 1-3 and doubled the time of those frames (seconds on hard-light 32 px tags).
 void RunDarkSquarePass(const cv::Mat& bgr, const cv::Mat& dark_half, const DetectorOptions& options,
-                       DetectResult* result, Candidates* candidates) {
+                       stage::ModelBudget* budget, DetectResult* result, Candidates* candidates) {
   const auto start = Clock::now();
   const std::size_t decoded_before = result->detections.size();
   stage::DarkSquareLimits limits;
@@ -293,7 +317,7 @@ void RunDarkSquarePass(const cv::Mat& bgr, const cv::Mat& dark_half, const Detec
   std::vector<ClusterOutput> outputs(squares.size());
   ForEach(squares.size(), options.threads, [&](std::size_t i) {
     outputs[i].candidates.found.push_back(squares[i]);
-    ProcessDarkSquare(bgr, squares[i], options, &outputs[i]);
+    ProcessDarkSquare(bgr, squares[i], options, budget, &outputs[i]);
   });
   Collect(outputs, result, candidates);
 }
@@ -343,14 +367,16 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   result.timings.redness_ms += Ms(start, Clock::now());
 
   Candidates candidates;
+  stage::ModelBudget budget(std::max(0, options_.max_model_reads));
   RunRedPass(bgr, scan.red, static_cast<int>(options_.max_element_area_ratio * bgr.total()),
-             kMainMinClusterBlobs, options_, &debug, &result, &candidates);
+             kMainMinClusterBlobs, options_, &debug, &budget, &result, &candidates);
   if (faint_pass) {
     RunRedPass(bgr, scan.faint, options_.faint_max_element_area_px,
-               std::max(2, options_.faint_min_blobs), options_, nullptr, &result, &candidates);
+               std::max(2, options_.faint_min_blobs), options_, nullptr, &budget, &result,
+               &candidates);
   }
   if (options_.dark_square_candidates) {
-    RunDarkSquarePass(bgr, scan.dark_half, options_, &result, &candidates);
+    RunDarkSquarePass(bgr, scan.dark_half, options_, &budget, &result, &candidates);
   }
   debug.quads(bgr, candidates.found);
   stage::RemoveDuplicates(&result.detections);

@@ -6,7 +6,7 @@
 #include <array>
 #include <opencv2/core.hpp>
 
-#include "quads.hpp"
+#include "candidates/quads.hpp"
 
 namespace pintag::stage {
 

@@ -38,6 +38,7 @@ void VisitOptions(Options& o, Visit&& visit) {
   visit("faint_max_element_area_px", o.faint_max_element_area_px);
   visit("faint_min_blobs", o.faint_min_blobs);
   visit("dark_square_candidates", o.dark_square_candidates);
+  visit("max_model_reads", o.max_model_reads);
   visit("threads", o.threads);
   visit("debug_dir", o.debug_dir);
   visit("return_rejected", o.return_rejected);
@@ -95,9 +96,12 @@ json ToJson(const DetectResult& r) {
                      {"cy", r.intrinsics.cy},
                      {"distortion", r.intrinsics.distortion}};
   j["intrinsics_source"] = std::string(ToString(r.intrinsics_source));
-  j["timings_ms"] = {{"redness", r.timings.redness_ms}, {"blobs", r.timings.blobs_ms},
-                     {"quads", r.timings.quads_ms},     {"decode", r.timings.decode_ms},
-                     {"pose", r.timings.pose_ms},       {"total", r.timings.total_ms}};
+  const StageTimings& t = r.timings;
+  j["timings_ms"] = {{"redness", t.redness_ms},     {"blobs", t.blobs_ms},
+                     {"quads", t.quads_ms},         {"sample", t.sample_ms},
+                     {"model_fit", t.model_fit_ms}, {"codeword", t.codeword_ms},
+                     {"pose", t.pose_ms},           {"total", t.total_ms}};
+  j["model_reads"] = {{"read", t.model_reads}, {"skipped_over_budget", t.model_skipped}};
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }

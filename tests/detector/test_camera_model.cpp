@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "camera_model.hpp"
+#include "pose/camera_model.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "cluster_quads.hpp"
+#include "candidates/cluster_quads.hpp"
 #include "homography.hpp"
 
 namespace pintag::stage {

@@ -5,8 +5,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "dark_squares.hpp"
-#include "frame_scan.hpp"
+#include "candidates/dark_squares.hpp"
+#include "candidates/frame_scan.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::stage {

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <opencv2/core.hpp>
 
-#include "frame_scan.hpp"
-#include "quads.hpp"
+#include "candidates/frame_scan.hpp"
+#include "candidates/quads.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "grouping.hpp"
+#include "candidates/grouping.hpp"
 #include "homography.hpp"
 
 namespace pintag::stage {

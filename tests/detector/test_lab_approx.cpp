@@ -5,11 +5,11 @@
 #include <cmath>
 #include <random>
 
-#include "lab_approx.hpp"
+#include "candidates/lab_approx.hpp"
+#include "candidates/redness.hpp"
 #include "pintag/codec/cielab.hpp"
 #include "pintag/codec/palette.hpp"
 #include "pintag/detector/options.hpp"
-#include "redness.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "orientation.hpp"
+#include "reading/orientation.hpp"
 
 namespace pintag::stage {
 namespace {

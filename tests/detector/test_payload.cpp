@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "payload.hpp"
+#include "reading/payload.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -5,7 +5,7 @@
 #include <numbers>
 #include <opencv2/calib3d.hpp>
 
-#include "pose.hpp"
+#include "pose/pose.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "quads.hpp"
+#include "candidates/quads.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::stage {

@@ -4,8 +4,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "red_blobs.hpp"
-#include "redness.hpp"
+#include "candidates/red_blobs.hpp"
+#include "candidates/redness.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include "candidates/redness.hpp"
 #include "pintag/codec/cielab.hpp"
 #include "pintag/codec/geometry.hpp"
 #include "pintag/codec/tag_raster.hpp"
-#include "redness.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "pintag/detector/detector.hpp"
-#include "read_tag.hpp"
+#include "reading/read_tag.hpp"
 
 namespace pintag {
 namespace {

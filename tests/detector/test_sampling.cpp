@@ -4,7 +4,7 @@
 
 #include "homography.hpp"
 #include "pintag/codec/cells.hpp"
-#include "sampling.hpp"
+#include "reading/sampling.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::stage {

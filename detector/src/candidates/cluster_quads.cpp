@@ -1,4 +1,4 @@
-#include "cluster_quads.hpp"
+#include "candidates/cluster_quads.hpp"
 
 #include <algorithm>
 #include <array>

@@ -12,9 +12,9 @@
 
 #include <vector>
 
-#include "grouping.hpp"
-#include "quads.hpp"
-#include "red_blobs.hpp"
+#include "candidates/grouping.hpp"
+#include "candidates/quads.hpp"
+#include "candidates/red_blobs.hpp"
 
 namespace pintag::stage {
 

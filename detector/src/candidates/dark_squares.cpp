@@ -1,4 +1,4 @@
-#include "dark_squares.hpp"
+#include "candidates/dark_squares.hpp"
 
 #include <algorithm>
 #include <array>

@@ -12,7 +12,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "quads.hpp"
+#include "candidates/quads.hpp"
 
 namespace pintag::stage {
 

@@ -1,11 +1,11 @@
-#include "frame_scan.hpp"
+#include "candidates/frame_scan.hpp"
 
 #include <algorithm>
 #include <cstdint>
 #include <opencv2/core/hal/intrin.hpp>
 #include <vector>
 
-#include "quads.hpp"
+#include "candidates/quads.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 
-#include "redness.hpp"
+#include "candidates/redness.hpp"
 
 namespace pintag::stage {
 

@@ -1,4 +1,4 @@
-#include "grouping.hpp"
+#include "candidates/grouping.hpp"
 
 #include <algorithm>
 #include <array>

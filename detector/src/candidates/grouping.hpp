@@ -6,7 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "red_blobs.hpp"
+#include "candidates/red_blobs.hpp"
 
 namespace pintag::stage {
 

@@ -1,4 +1,4 @@
-#include "lab_approx.hpp"
+#include "candidates/lab_approx.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "quads.hpp"
+#include "candidates/quads.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "red_blobs.hpp"
+#include "candidates/red_blobs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
-#include "lab_approx.hpp"
+#include "candidates/lab_approx.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -5,7 +5,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "redness.hpp"
+#include "candidates/redness.hpp"
 
 namespace pintag::stage {
 

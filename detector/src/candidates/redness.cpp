@@ -1,4 +1,4 @@
-#include "redness.hpp"
+#include "candidates/redness.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <mutex>
 #include <utility>
 
-#include "frame_scan.hpp"
-#include "lab_approx.hpp"
+#include "candidates/frame_scan.hpp"
+#include "candidates/lab_approx.hpp"
 
 namespace pintag::stage {
 namespace {

@@ -1,4 +1,4 @@
-#include "camera_model.hpp"
+#include "pose/camera_model.hpp"
 
 #include <cmath>
 #include <numbers>

@@ -1,4 +1,4 @@
-#include "pose.hpp"
+#include "pose/pose.hpp"
 
 #include <Eigen/Geometry>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "orientation.hpp"
+#include "reading/orientation.hpp"
 
 #include <algorithm>
 #include <cmath>

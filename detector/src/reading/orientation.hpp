@@ -12,7 +12,7 @@
 
 #include "pintag/codec/cells.hpp"
 #include "pintag/detector/detection.hpp"
-#include "sampling.hpp"
+#include "reading/sampling.hpp"
 
 namespace pintag::stage {
 

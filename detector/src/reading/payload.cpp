@@ -1,4 +1,4 @@
-#include "payload.hpp"
+#include "reading/payload.hpp"
 
 namespace pintag::stage {
 

@@ -1,14 +1,21 @@
-#include "read_tag.hpp"
+#include "reading/read_tag.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <utility>
 
 #include "homography.hpp"
 #include "reading/decision.hpp"
-#include "sampling.hpp"
+#include "reading/sampling.hpp"
 
 namespace pintag::stage {
 namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Ms(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
+}
 
 // The model's codeword as an oriented reading, for the codec and the detection's cells.
 OrientationResult AsOrientation(const reading::CodewordDecision& d) {
@@ -46,19 +53,35 @@ PayloadResult DecodeReading(const OrientationResult& orientation) {
 
 CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
                                const BitThresholds& thresholds,
-                               const std::function<bool(const Quad&)>& accept_fitted) {
+                               const std::function<bool(const Quad&)>& accept_fitted,
+                               ModelBudget* budget) {
   CandidateReading c;
   c.quad = quad;
   TagReading& r = c.reading;
+  const auto t0 = Clock::now();
   r.orientation = ReadOrientation(SampleCells(bgr, HomographyFromQuad(quad)), thresholds);
   if (r.orientation.ok) r.payload = DecodeReading(r.orientation);
+  const auto t1 = Clock::now();
+  c.times.sample_ms = Ms(t0, t1);
   if (r.payload.key) {
     r.reader = Reader::kDirect;
     return c;
   }
   // Small or blurred cells mix: read the tag through a model of its pixels.
   if (MeanSidePx(HomographyFromQuad(quad)) > reading::kModelMaxSidePx) return c;
-  r.model = reading::ReadThroughModel(bgr, {quad[0], quad[1], quad[2], quad[3]});
+  if (budget != nullptr && !budget->take()) {
+    c.times.model_skipped = true;
+    r.payload.error = "model: this frame's model reads are spent (max_model_reads)";
+    return c;
+  }
+  c.times.model_read = true;
+  const reading::FittedModel model =
+      reading::FitModel(bgr, {quad[0], quad[1], quad[2], quad[3]}, &r.model.error);
+  r.model.fit = model.fit;
+  const auto t2 = Clock::now();
+  c.times.model_fit_ms = Ms(t1, t2);
+  if (model.fit.ok) r.model.decision = reading::DecideCodeword(model);
+  c.times.codeword_ms = Ms(t2, Clock::now());
   const std::string refused = reading::RefuseCodeword(r.model);
   if (!refused.empty()) {
     r.payload.key.reset();

@@ -4,13 +4,14 @@
 // square of at most kModelMaxSidePx, the model of what the photo holds (reading/model_reader.hpp),
 // which moves the corners to where the model fits and decides the codeword over the whole code.
 
+#include <atomic>
 #include <functional>
 #include <opencv2/core.hpp>
 
-#include "orientation.hpp"
-#include "payload.hpp"
-#include "quads.hpp"
+#include "candidates/quads.hpp"
 #include "reading/model_reader.hpp"
+#include "reading/orientation.hpp"
+#include "reading/payload.hpp"
 
 namespace pintag::stage {
 
@@ -35,16 +36,39 @@ struct TagReading {
   bool throughModel() const { return reader == Reader::kModel; }
 };
 
+/// The model reads one frame may still make (DetectorOptions::max_model_reads), shared by the
+/// frame's worker threads.
+class ModelBudget {
+ public:
+  explicit ModelBudget(int reads) : left_(reads) {}
+  /// Takes one read; false when none is left.
+  bool take() { return left_.fetch_sub(1) > 0; }
+
+ private:
+  std::atomic<int> left_;
+};
+
+/// What reading one candidate cost, by stage.
+struct ReadingTimes {
+  double sample_ms = 0;     ///< 5a + 6: direct samples, orientation, payload
+  double model_fit_ms = 0;  ///< 5b
+  double codeword_ms = 0;   ///< 5c + 6 for the model's codeword
+  bool model_read = false;
+  bool model_skipped = false;  ///< the budget was spent
+};
+
 /// A candidate square read as the detector reads it. When the model decides, the corners are the
 /// ones it refined; `accept_fitted`, when given, may refuse them (the red path checks that its
-/// blobs still sit on the elements).
+/// blobs still sit on the elements). Without a budget the model may always read.
 struct CandidateReading {
   TagReading reading;
   Quad quad{};                  ///< the corners the reading was made on
   bool corners_fitted = false;  ///< they are the model's
+  ReadingTimes times;
 };
 CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
                                const BitThresholds& thresholds,
-                               const std::function<bool(const Quad&)>& accept_fitted = {});
+                               const std::function<bool(const Quad&)>& accept_fitted = {},
+                               ModelBudget* budget = nullptr);
 
 }  // namespace pintag::stage

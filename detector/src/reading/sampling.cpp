@@ -1,10 +1,10 @@
-#include "sampling.hpp"
+#include "reading/sampling.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "lab_approx.hpp"
+#include "candidates/lab_approx.hpp"
 #include "pintag/codec/geometry.hpp"
 
 namespace pintag::stage {

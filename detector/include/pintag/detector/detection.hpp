@@ -60,14 +60,20 @@ struct Detection {
   double min_known_margin = 0;  ///< smallest |margin| among bits that were read
 };
 
-/// Milliseconds spent per stage in one detect() call.
+/// Milliseconds spent per stage of DESIGN.md §3 in one detect() call (summed over worker threads
+/// when DetectorOptions::threads > 1), and how many candidates the model reader read.
 struct StageTimings {
-  double redness_ms = 0;
-  double blobs_ms = 0;
-  double quads_ms = 0;   ///< clustering, quads, grouping, corner refinement, homography
-  double decode_ms = 0;  ///< sampling, blur-model readers, corner fit, orientation, payload, parity
-  double pose_ms = 0;
+  double redness_ms =
+      0;                ///< 1: the frame scan (both redness levels, the half-resolution dark image)
+  double blobs_ms = 0;  ///< 2-3a: red blobs, their rings, clusters of blobs
+  double quads_ms = 0;  ///< 3b-4: quads, dark squares, corner refinement, element check
+  double sample_ms = 0;     ///< 5a + 6 on direct samples: cells, orientation, payload, parity
+  double model_fit_ms = 0;  ///< 5b: the model reader's fit (blur, corners, colours)
+  double codeword_ms = 0;   ///< 5c + 6 for the model: the codeword decision and the codec's check
+  double pose_ms = 0;       ///< 7
   double total_ms = 0;
+  int model_reads = 0;    ///< candidates the model reader fitted
+  int model_skipped = 0;  ///< candidates it did not read: DetectorOptions::max_model_reads spent
 };
 
 struct DetectResult {

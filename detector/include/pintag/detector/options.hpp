@@ -68,6 +68,13 @@ struct DetectorOptions {
   /// colour cast have washed below both red thresholds), outside the tags the red passes decoded.
   bool dark_square_candidates = true;
 
+  // --- time ---
+  /// Candidates per frame that the model reader (stage 5b-5c, milliseconds each) may read after
+  /// the direct reader failed on them. Spent in the order candidates come: the main red pass, its
+  /// clusters with the most blobs first, then the faint pass, then dark squares. With threads > 1
+  /// which candidates of one pass get the last reads depends on timing. 0 turns the model off.
+  int max_model_reads = 16;
+
   // --- execution and diagnostics ---
   int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread
   std::string debug_dir;  ///< when set, each stage writes an image here (debug only; slow)
