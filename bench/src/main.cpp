@@ -422,11 +422,11 @@ int Main(int argc, char** argv) {
   std::snprintf(
       summary, sizeof summary,
       "%zu frames; PinTag recall %.1f %%, misreads %d, tagless false positives %d, "
-      "median %.2f ms%s",
+      "mean %.2f ms%s",
       frames.size(), pintag.recall(-1, -1, -1).percent(), pintag.misreads, pintag.false_positives,
-      Median(pintag.time_ms_one_thread),
+      Mean(pintag.time_ms_one_thread),
       result.markers.size() > 1 && result.markers[1].name == "ArUco"
-          ? (" (ArUco " + std::to_string(Median(result.markers[1].time_ms_one_thread)) + " ms)")
+          ? (" (ArUco " + std::to_string(Mean(result.markers[1].time_ms_one_thread)) + " ms)")
                 .c_str()
           : "");
   progress.finish(summary);

@@ -1,6 +1,7 @@
 #include "metrics.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <numbers>
 
 namespace pintag::bench {
@@ -91,6 +92,13 @@ std::vector<double> MarkerStats::allCornerErrors() const {
   std::vector<double> all;
   for (const auto& v : corner_error_px) all.insert(all.end(), v.begin(), v.end());
   return all;
+}
+
+double Mean(const std::vector<double>& values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  double sum = 0;
+  for (const double v : values) sum += v;
+  return sum / static_cast<double>(values.size());
 }
 
 double Percentile(std::vector<double> values, double percent) {

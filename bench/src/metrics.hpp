@@ -74,6 +74,8 @@ struct MarkerStats {
 
 /// Percentile (0 … 100) by linear interpolation; NaN when empty.
 double Percentile(std::vector<double> values, double percent);
+/// The arithmetic mean; NaN when empty.
+double Mean(const std::vector<double>& values);
 inline double Median(const std::vector<double>& values) {
   return Percentile(values, 50);
 }
