@@ -88,6 +88,35 @@ TEST(Regressions, ReadsTheTagsOfTheReadFolder) {
   EXPECT_GE(read, kReadFolderMinRead) << "of " << cases.size();
 }
 
+// DetectorOptions::max_model_reads bounds the model reader per frame: with none allowed, the tags
+// that only the model reads are not read, each such candidate is counted as skipped, and no model
+// time is spent; with the default, those tags are read and the reads are counted.
+TEST(Regressions, ModelReadsStayWithinTheFramesBudget) {
+  const std::vector<RegressionCase> cases = LoadFolder("read");
+  DetectorOptions none;
+  none.max_model_reads = 0;
+  const Detector without_model(none);
+  const Detector with_default;
+  int read_only_by_model = 0;
+  for (const RegressionCase& c : cases) {
+    const DetectResult spent = without_model.detect(c.bgr);
+    const DetectResult full = with_default.detect(c.bgr);
+    EXPECT_EQ(spent.timings.model_reads, 0) << c.name;
+    EXPECT_EQ(spent.timings.model_fit_ms, 0.0) << c.name;
+    EXPECT_LE(full.timings.model_reads, with_default.options().max_model_reads) << c.name;
+    const std::vector<int> before = Keys(spent), after = Keys(full);
+    const bool direct = std::find(before.begin(), before.end(), c.key) != before.end();
+    const bool model = std::find(after.begin(), after.end(), c.key) != after.end();
+    if (!direct && model) {
+      ++read_only_by_model;
+      EXPECT_GT(spent.timings.model_skipped, 0) << c.name;
+      EXPECT_GT(full.timings.model_reads, 0) << c.name;
+    }
+  }
+  // Most of the folder's tags are small ones only the model reads.
+  EXPECT_GE(read_only_by_model, 5);
+}
+
 TEST(Regressions, NoWrongKeyOnFramesThatOnceGaveOne) {
   const std::vector<RegressionCase> cases = LoadFolder("misread-detect");
   ASSERT_GE(cases.size(), 3U);
