@@ -119,9 +119,30 @@ TagRaster RenderTagRaster(TagKey key, const TagRasterOptions& options) {
   // circles of radius at least 0.1 × kMinTagSquarePx = 6.4 px, which bulge at most 1/(8 × 6.4)
   // = 0.02 px into a pixel between its corners, short of the nearest sub-sample (1/(2 × ss) px
   // in). Only pixels on a boundary, a few percent of the tag, are supersampled.
-  const auto corner_cell = [&](int gx, int gy) {
-    return LocateCellQuickly(static_cast<double>(gx - margin) / n,
-                             static_cast<double>(gy - margin) / n);
+  // Only grid points within an element's bounding box need classifying: the rest of the square is
+  // black and the rest of the image quiet zone (LocateCell says the same there: a point at least
+  // the ring's radius from the element centre along x or y is outside the ring).
+  const auto fill_corner_row = [&](std::vector<geometry::CellAt>& row, int gy, int from, int to) {
+    const double v = static_cast<double>(gy - margin) / n;
+    const bool in_square_rows = v >= 0 && v < 1;
+    for (int gx = from; gx <= to; ++gx) {
+      const double u = static_cast<double>(gx - margin) / n;
+      row[gx] = in_square_rows && u >= 0 && u < 1
+                    ? geometry::CellAt{geometry::Region::kBlack, -1, -1}
+                    : geometry::CellAt{};
+    }
+    if (!in_square_rows) return;
+    const double cy = v < 0.5 ? geometry::kElementCentres[0].y : geometry::kElementCentres[3].y;
+    if (std::abs(v - cy) >= geometry::kGreenOuterRadius) return;
+    for (const double cx : {geometry::kElementCentres[0].x, geometry::kElementCentres[1].x}) {
+      const int lo = std::max(
+          from, static_cast<int>(std::floor((cx - geometry::kGreenOuterRadius) * n)) + margin);
+      const int hi = std::min(
+          to, static_cast<int>(std::ceil((cx + geometry::kGreenOuterRadius) * n)) + margin);
+      for (int gx = lo; gx <= hi; ++gx) {
+        row[gx] = LocateCellQuickly(static_cast<double>(gx - margin) / n, v);
+      }
+    }
   };
   const auto same = [](const geometry::CellAt& a, const geometry::CellAt& b) {
     return a.region == b.region && a.element == b.element && a.index == b.index;
@@ -131,11 +152,11 @@ TagRaster RenderTagRaster(TagKey key, const TagRasterOptions& options) {
   const int last = std::min(side - 1, margin + n);
   std::vector<geometry::CellAt> top(static_cast<std::size_t>(side) + 1);
   std::vector<geometry::CellAt> bottom(top.size());
-  for (int gx = first; gx <= last + 1; ++gx) top[gx] = corner_cell(gx, first);
+  fill_corner_row(top, first, first, last + 1);
 
   TagRaster raster{RgbImage(side, side), margin, n};
   for (int py = first; py <= last; ++py) {
-    for (int gx = first; gx <= last + 1; ++gx) bottom[gx] = corner_cell(gx, py + 1);
+    fill_corner_row(bottom, py + 1, first, last + 1);
     for (int px = first; px <= last; ++px) {
       const geometry::CellAt& cell = top[px];
       if (same(cell, top[px + 1]) && same(cell, bottom[px]) && same(cell, bottom[px + 1])) {
