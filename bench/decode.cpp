@@ -73,6 +73,8 @@ std::vector<std::uint8_t> PhoneJpeg() {
   return {bytes.begin(), bytes.end()};
 }
 
+// Google Benchmark's names and its `for (auto _ : state)` loop, as in stages.cpp.
+// NOLINTBEGIN(readability-identifier-naming, clang-analyzer-deadcode.DeadStores)
 const std::vector<std::uint8_t>& Jpeg() {
   static const std::vector<std::uint8_t> jpeg = PhoneJpeg();
   return jpeg;
@@ -137,6 +139,7 @@ void BM_Baseline_OpenImageIo(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_Baseline_OpenImageIo)->Unit(benchmark::kMillisecond);
+// NOLINTEND(readability-identifier-naming, clang-analyzer-deadcode.DeadStores)
 
 }  // namespace
 }  // namespace pintag::bench

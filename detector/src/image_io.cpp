@@ -14,6 +14,7 @@
 #include <array>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -349,13 +350,13 @@ const char* ToString(ImageError error) {
 }
 
 ImageFormat SniffImageFormat(std::span<const std::uint8_t> b) {
-  const auto starts = [&](const char* magic, std::size_t length, std::size_t at = 0) {
-    return b.size() >= at + length && std::memcmp(b.data() + at, magic, length) == 0;
+  const auto starts = [&](std::initializer_list<std::uint8_t> magic, std::size_t at = 0) {
+    return b.size() >= at + magic.size() && std::equal(magic.begin(), magic.end(), b.begin() + at);
   };
-  if (starts("\xFF\xD8\xFF", 3)) return ImageFormat::kJpeg;
-  if (starts("\x89PNG\r\n\x1a\n", 8)) return ImageFormat::kPng;
-  if (starts("II*\0", 4) || starts("MM\0*", 4)) return ImageFormat::kTiff;
-  if (starts("RIFF", 4) && starts("WEBP", 4, 8)) return ImageFormat::kWebp;
+  if (starts({0xFF, 0xD8, 0xFF})) return ImageFormat::kJpeg;
+  if (starts({0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'})) return ImageFormat::kPng;
+  if (starts({'I', 'I', 42, 0}) || starts({'M', 'M', 0, 42})) return ImageFormat::kTiff;
+  if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return ImageFormat::kWebp;
   return ImageFormat::kUnknown;
 }
 
