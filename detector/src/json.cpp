@@ -17,6 +17,14 @@ json PoseJson(const PoseSolution& p) {
           {"distance_m", p.distance_m},      {"reprojection_error_px", p.reprojection_error_px}};
 }
 
+/// The square's centre: tag point (0.5, 0.5) through the homography (not the corners' mean,
+/// which perspective moves off the centre).
+json CentreJson(const std::array<double, 9>& h) {
+  const double w = h[6] * 0.5 + h[7] * 0.5 + h[8];
+  if (w == 0) return nullptr;
+  return json::array({(h[0] * 0.5 + h[1] * 0.5 + h[2]) / w, (h[3] * 0.5 + h[4] * 0.5 + h[5]) / w});
+}
+
 const char* BitName(Bit b) {
   return b == Bit::kOne ? "1" : b == Bit::kZero ? "0" : "?";
 }
@@ -57,6 +65,7 @@ json ToJson(const Detection& d) {
     j["element_centres_px"].push_back(Xy(d.element_centres[i]));
   }
   j["elements_seen"] = d.element_seen;
+  j["centre_px"] = CentreJson(d.homography);
   j["homography"] = d.homography;
   j["square_px"] = d.square_px;
   if (d.key) {

@@ -9,8 +9,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <tuple>
 
 #include "pintag/codec/cells.hpp"
+#include "pintag/codec/cielab.hpp"
 #include "pintag/codec/geometry.hpp"
 #include "pintag/codec/palette.hpp"
 #include "pintag/codec/png_io.hpp"
@@ -117,6 +119,61 @@ TEST(TagRaster, EdgesAreAntiAliasedOnlyWhenSupersampled) {
   EXPECT_EQ(BlendedPixels(RenderTagRaster(TagKey(4321), {200, 1}).image), 0);
   // Each of the 4 elements has 3 circles and 12 radial edges of ~20 px; expect hundreds.
   EXPECT_GT(BlendedPixels(RenderTagRaster(TagKey(4321), {200, 4}).image), 400);
+}
+
+/// Every pixel supersampled, as the renderer once did: the reference its shortcut (pixels inside
+/// one cell take that cell's colour unsampled) must match exactly.
+RgbImage SupersampleEveryPixel(TagKey key, int n, int ss) {
+  const TagCells cells = EncodeCells(key);
+  const int margin = QuietZonePx(n);
+  RgbImage image(n + 2 * margin, n + 2 * margin);
+  for (int py = 0; py < image.height; ++py) {
+    for (int px = 0; px < image.width; ++px) {
+      double r = 0, g = 0, b = 0;
+      for (int sy = 0; sy < ss; ++sy) {
+        for (int sx = 0; sx < ss; ++sx) {
+          const geometry::CellAt cell = geometry::LocateCell((px - margin + (sx + 0.5) / ss) / n,
+                                                             (py - margin + (sy + 0.5) / ss) / n);
+          PaletteColour colour = PaletteColour::kWhite;
+          if (cell.region == geometry::Region::kBlack) colour = PaletteColour::kBlack;
+          if (cell.region == geometry::Region::kRed) {
+            colour = cells.red[cell.element][cell.index] ? PaletteColour::kRedOne
+                                                         : PaletteColour::kRedZero;
+          }
+          if (cell.region == geometry::Region::kGreen) {
+            colour = cells.green[cell.element][cell.index] ? PaletteColour::kGreenOne
+                                                           : PaletteColour::kGreenZero;
+          }
+          const Rgb8 c = kPalette[static_cast<int>(colour)].srgb;
+          r += SrgbToLinear(c.r);
+          g += SrgbToLinear(c.g);
+          b += SrgbToLinear(c.b);
+        }
+      }
+      const double w = 1.0 / (ss * ss);
+      image.set(px, py, {LinearToSrgb(r * w), LinearToSrgb(g * w), LinearToSrgb(b * w)});
+    }
+  }
+  return image;
+}
+
+TEST(TagRaster, OnlyBoundaryPixelsNeedSamplingAndTheResultIsExact) {
+  for (const auto& [key, n, ss] :
+       {std::tuple{1, kMinTagSquarePx, 4}, std::tuple{22222, 65, 4}, std::tuple{4321, 200, 4},
+        std::tuple{32767, 512, 4}, std::tuple{99, 301, 2}, std::tuple{7, 128, 1}}) {
+    const RgbImage fast = RenderTagRaster(TagKey(key), {n, ss}).image;
+    const RgbImage reference = SupersampleEveryPixel(TagKey(key), n, ss);
+    ASSERT_EQ(fast.width, reference.width);
+    int differing = 0;
+    for (int y = 0; y < fast.height; ++y) {
+      for (int x = 0; x < fast.width; ++x) {
+        const Rgb8 a = fast.at(x, y);
+        const Rgb8 b = reference.at(x, y);
+        differing += a.r != b.r || a.g != b.g || a.b != b.b;
+      }
+    }
+    EXPECT_EQ(differing, 0) << "key " << key << ", " << n << " px, supersample " << ss;
+  }
 }
 
 TEST(PngIo, RecordsTheRequestedDpiInFileAndMemory) {

@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/image_io.hpp"
@@ -84,8 +86,13 @@ TEST(ImageIo, PixelLimitCheckedFromTheHeader) {
   const std::string path = Write("big.png", 400, 300);
   const LoadResult r = LoadImageFile(path, 100000);
   EXPECT_FALSE(r.image);
-  EXPECT_NE(r.error.find("too large"), std::string::npos) << r.error;
+  EXPECT_EQ(r.kind, ImageError::kTooLarge) << r.error;
+  EXPECT_EQ(r.claimed_width, 400);
+  EXPECT_EQ(r.claimed_height, 300);
+  EXPECT_NE(r.error.find("400 x 300"), std::string::npos) << r.error;
   EXPECT_TRUE(LoadImageFile(path, 120000).image);
+  const LoadResult jpeg = LoadImageFile(Write("big.jpg", 400, 300), 100000);
+  EXPECT_EQ(jpeg.kind, ImageError::kTooLarge) << jpeg.error;
 }
 
 TEST(ImageIo, BadInputIsAnErrorNeverACrash) {
@@ -113,6 +120,144 @@ TEST(ImageIo, BadInputIsAnErrorNeverACrash) {
       EXPECT_TRUE(Detector().detect(*r.image).detections.empty());
     }
   }
+}
+
+std::vector<std::uint8_t> Encode(const char* ext, const cv::Mat& image,
+                                 const std::vector<int>& params = {}) {
+  std::vector<std::uint8_t> bytes;
+  EXPECT_TRUE(cv::imencode(ext, image, bytes, params));
+  return bytes;
+}
+
+/// A phone-like frame: smooth shading, sharp coloured edges and sensor noise, so the JPEG has both
+/// flat and busy blocks and the 4:2:0 chroma upsampling matters.
+cv::Mat PhoneLikeFrame(int width, int height) {
+  cv::Mat image(height, width, CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      image.at<cv::Vec3b>(y, x) = {static_cast<std::uint8_t>(x * 255 / width),
+                                   static_cast<std::uint8_t>(y * 255 / height),
+                                   static_cast<std::uint8_t>(((x / 37 + y / 23) % 2) * 200 + 30)};
+    }
+  }
+  cv::Mat noise(height, width, CV_8UC3);
+  cv::randn(noise, 0, 6);
+  cv::add(image, noise, image);
+  return image;
+}
+
+TEST(ImageIo, ErrorsAreTypedNotToldByTheirText) {
+  EXPECT_EQ(LoadImageBytes({}).kind, ImageError::kUnsupported);
+  const std::string gif = "GIF89a not supported";
+  EXPECT_EQ(LoadImageBytes({reinterpret_cast<const std::uint8_t*>(gif.data()), gif.size()}).kind,
+            ImageError::kUnsupported);
+  EXPECT_EQ(LoadImageFile(TempPath("does-not-exist.jpg")).kind, ImageError::kUnreadable);
+  const std::vector<std::uint8_t> tiff = Encode(".tiff", PhoneLikeFrame(10, 10));
+  EXPECT_EQ(SniffImageFormat(tiff), ImageFormat::kTiff);
+  const LoadResult ok = LoadImageBytes(Encode(".jpg", PhoneLikeFrame(64, 48)));
+  EXPECT_EQ(ok.kind, ImageError::kNone);
+  ASSERT_TRUE(ok.image);
+  EXPECT_EQ(ok.image->format, "jpeg");
+}
+
+// A cut upload would otherwise decode with a grey (JPEG) or black (PNG) bottom and be read as a
+// partial photo.
+TEST(ImageIo, EveryTruncationIsCorrupt) {
+  for (const char* ext : {".jpg", ".png"}) {
+    const std::vector<std::uint8_t> whole = Encode(ext, PhoneLikeFrame(64, 48));
+    for (std::size_t n = 8; n + 1 < whole.size(); n += 7) {
+      const LoadResult r = LoadImageBytes({whole.data(), n});
+      EXPECT_FALSE(r.image) << ext << " cut at " << n << " of " << whole.size();
+      EXPECT_EQ(r.kind, ImageError::kCorrupt) << ext << " cut at " << n << ": " << r.error;
+    }
+  }
+}
+
+TEST(ImageIo, UnusualButWholeJpegsLoad) {
+  const cv::Mat frame = PhoneLikeFrame(200, 100);
+  for (const std::vector<int>& params :
+       {std::vector<int>{cv::IMWRITE_JPEG_PROGRESSIVE, 1},
+        std::vector<int>{cv::IMWRITE_JPEG_RST_INTERVAL, 2}, std::vector<int>{}}) {
+    std::vector<std::uint8_t> jpeg = Encode(".jpg", frame, params);
+    jpeg.insert(jpeg.end(), 100, 0x55);  // some phones append data after the end of the image
+    const LoadResult r = LoadImageBytes(jpeg);
+    ASSERT_TRUE(r.image) << r.error;
+    EXPECT_EQ(r.image->bgr.cols, 200);
+  }
+}
+
+// libjpeg-turbo straight to BGR against OpenCV's own JPEG reader: the same pixels within rounding.
+TEST(ImageIo, JpegPixelsMatchOpenCv) {
+  for (int quality : {75, 95}) {
+    const std::vector<std::uint8_t> jpeg =
+        Encode(".jpg", PhoneLikeFrame(640, 360), {cv::IMWRITE_JPEG_QUALITY, quality});
+    const LoadResult r = LoadImageBytes(jpeg);
+    ASSERT_TRUE(r.image) << r.error;
+    const cv::Mat reference = cv::imdecode(jpeg, cv::IMREAD_COLOR);
+    ASSERT_EQ(r.image->bgr.size(), reference.size());
+    cv::Mat diff;
+    cv::absdiff(r.image->bgr, reference, diff);
+    double max_diff = 0;
+    cv::minMaxLoc(diff.reshape(1), nullptr, &max_diff);
+    EXPECT_LE(max_diff, 2) << "quality " << quality;
+    EXPECT_LT(cv::mean(diff)[0], 0.5) << "quality " << quality;
+  }
+}
+
+// Every EXIF orientation, written into a real JPEG by OpenImageIO, gives the upright image that
+// OpenCV's reader (which also applies EXIF orientation) gives.
+TEST(ImageIo, EveryExifOrientationMatchesOpenCv) {
+  for (int orientation = 1; orientation <= 8; ++orientation) {
+    const std::string path =
+        Write("oriented" + std::to_string(orientation) + ".jpg", 40, 30,
+              [orientation](OIIO::ImageSpec& spec) { spec.attribute("Orientation", orientation); });
+    const LoadResult r = LoadImageFile(path);
+    ASSERT_TRUE(r.image) << r.error;
+    EXPECT_EQ(r.image->exif_orientation, orientation);
+    const cv::Mat reference = cv::imread(path, cv::IMREAD_COLOR);
+    ASSERT_EQ(r.image->bgr.size(), reference.size()) << orientation;
+    cv::Mat diff;
+    cv::absdiff(r.image->bgr, reference, diff);
+    double max_diff = 0;
+    cv::minMaxLoc(diff.reshape(1), nullptr, &max_diff);
+    EXPECT_LE(max_diff, 2) << "orientation " << orientation;
+  }
+}
+
+TEST(ImageIo, ScaledJpegDecoding) {
+  const cv::Mat frame = PhoneLikeFrame(640, 360);
+  const std::vector<std::uint8_t> jpeg = Encode(".jpg", frame, {cv::IMWRITE_JPEG_QUALITY, 95});
+  LoadOptions options;
+  options.scale_denominator = 2;
+  const LoadResult r = LoadImageBytes(jpeg, options);
+  ASSERT_TRUE(r.image) << r.error;
+  EXPECT_EQ(r.image->bgr.cols, 320);
+  EXPECT_EQ(r.image->bgr.rows, 180);
+  EXPECT_EQ(r.claimed_width, 640);  // the limit applies to the stored size
+  cv::Mat halved;
+  cv::resize(frame, halved, {320, 180}, 0, 0, cv::INTER_AREA);
+  cv::Mat diff;
+  cv::absdiff(r.image->bgr, halved, diff);
+  EXPECT_LT(cv::mean(diff)[0], 6);
+}
+
+TEST(ImageIo, JpegPlanesAsStored) {
+  const cv::Mat frame = PhoneLikeFrame(640, 360);
+  const std::vector<std::uint8_t> jpeg = Encode(".jpg", frame, {cv::IMWRITE_JPEG_QUALITY, 95});
+  const JpegPlanesResult r = LoadJpegPlanes(jpeg);
+  ASSERT_TRUE(r.planes) << r.error;
+  EXPECT_EQ(r.planes->y.size(), cv::Size(640, 360));
+  EXPECT_EQ(r.planes->cb.size(), cv::Size(320, 180));  // OpenCV writes 4:2:0
+  EXPECT_EQ(r.planes->cr.size(), cv::Size(320, 180));
+  cv::Mat ycrcb;
+  cv::cvtColor(cv::imdecode(jpeg, cv::IMREAD_COLOR), ycrcb, cv::COLOR_BGR2YCrCb);
+  cv::Mat luma;
+  cv::extractChannel(ycrcb, luma, 0);
+  cv::Mat diff;
+  cv::absdiff(r.planes->y, luma, diff);
+  EXPECT_LT(cv::mean(diff)[0], 1.5);
+  const std::vector<std::uint8_t> png = Encode(".png", frame);
+  EXPECT_EQ(LoadJpegPlanes(png).kind, ImageError::kUnsupported);
 }
 
 TEST(ImageIo, DegenerateSizes) {

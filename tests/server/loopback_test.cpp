@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 #include <httplib.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <fstream>
 
 #include "pintag/server/http_server.hpp"
@@ -307,6 +311,42 @@ TEST_F(LoopbackTest, ListenBacklogIsRaised) {
   int send_q = -1;
   fields >> state >> recv_q >> send_q;
   EXPECT_EQ(send_q, 64) << line;
+}
+
+// The server runs in this process, so the socket it accepted for our connection is one of our own
+// descriptors: the one whose local port is the server's and whose peer is our client socket.
+TEST_F(LoopbackTest, AcceptedConnectionsHaveNagleOff) {
+  const int client = pintag::test::ConnectLoopback(server_->port());
+  ASSERT_GE(client, 0);
+  ASSERT_TRUE(pintag::test::SendAll(client, "GET /livez HTTP/1.1\r\nHost: x\r\n\r\n"));
+  // Keep-alive: the connection stays open after the answer, so the server still holds its end.
+  const std::string response = pintag::test::ReceiveUntil(
+      client, 5, [](const std::string& r) { return r.find("\r\n\r\n") != std::string::npos; });
+  EXPECT_EQ(response.rfind("HTTP/1.1 200", 0), 0u) << response;
+  sockaddr_in client_address{};
+  socklen_t length = sizeof client_address;
+  ASSERT_EQ(getsockname(client, reinterpret_cast<sockaddr*>(&client_address), &length), 0);
+
+  int accepted = -1;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd")) {
+    const int fd = std::stoi(entry.path().filename().string());
+    sockaddr_in local{}, peer{};
+    socklen_t local_length = sizeof local, peer_length = sizeof peer;
+    if (fd == client || getsockname(fd, reinterpret_cast<sockaddr*>(&local), &local_length) != 0 ||
+        getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &peer_length) != 0 ||
+        local.sin_family != AF_INET) {
+      continue;
+    }
+    if (ntohs(local.sin_port) == server_->port() && peer.sin_port == client_address.sin_port) {
+      accepted = fd;
+    }
+  }
+  ASSERT_GE(accepted, 0) << "the server's end of the connection was not found";
+  int nodelay = 0;
+  socklen_t size = sizeof nodelay;
+  ASSERT_EQ(getsockopt(accepted, IPPROTO_TCP, TCP_NODELAY, &nodelay, &size), 0);
+  EXPECT_NE(nodelay, 0);
+  close(client);
 }
 
 TEST(Loopback, PortInUseIsAClearError) {

@@ -2,6 +2,7 @@
 #include <cairo-svg.h>
 #include <cairo.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -166,17 +167,19 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
   }
   cairo_surface_flush(surface.get());
 
+  // Row pointers rather than a set() per pixel: this copy was an eighth of a 300 dpi label's time.
   RgbImage image(px.width, px.height);
   const unsigned char* data = cairo_image_surface_get_data(surface.get());
   const int stride = cairo_image_surface_get_stride(surface.get());
   for (int y = 0; y < px.height; ++y) {
     const auto* row =
         reinterpret_cast<const std::uint32_t*>(data + static_cast<std::size_t>(y) * stride);
-    for (int x = 0; x < px.width; ++x) {
+    std::uint8_t* out = image.pixels.data() + static_cast<std::size_t>(y) * px.width * 3;
+    for (int x = 0; x < px.width; ++x, out += 3) {
       const std::uint32_t v = row[x];  // RGB24: 0xXXRRGGBB in native endianness
-      image.set(x, y,
-                {static_cast<std::uint8_t>(v >> 16), static_cast<std::uint8_t>(v >> 8),
-                 static_cast<std::uint8_t>(v)});
+      out[0] = static_cast<std::uint8_t>(v >> 16);
+      out[1] = static_cast<std::uint8_t>(v >> 8);
+      out[2] = static_cast<std::uint8_t>(v);
     }
   }
 
@@ -185,14 +188,16 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
     const TagRaster raster = RenderTagRaster(label.key, {tag.square_side, supersample});
     const int x0 = tag.square_x - raster.square_origin_px;
     const int y0 = tag.square_y - raster.square_origin_px;
-    for (int y = 0; y < raster.image.height; ++y) {
-      for (int x = 0; x < raster.image.width; ++x) {
-        const int tx = x0 + x;
-        const int ty = y0 + y;
-        if (tx >= 0 && ty >= 0 && tx < image.width && ty < image.height) {
-          image.set(tx, ty, raster.image.at(x, y));
-        }
-      }
+    // The part of the raster inside the label, row by row.
+    const int from_x = std::max(0, -x0);
+    const int to_x = std::min(raster.image.width, image.width - x0);
+    for (int y = std::max(0, -y0); y < std::min(raster.image.height, image.height - y0); ++y) {
+      if (to_x <= from_x) break;
+      std::memcpy(
+          image.pixels.data() + (static_cast<std::size_t>(y0 + y) * image.width + x0 + from_x) * 3,
+          raster.image.pixels.data() +
+              (static_cast<std::size_t>(y) * raster.image.width + from_x) * 3,
+          static_cast<std::size_t>(to_x - from_x) * 3);
     }
   }
   return image;

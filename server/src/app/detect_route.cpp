@@ -1,26 +1,26 @@
-// POST /api/v1/detect: photo bytes -> header check (format, pixel limit, whole file) -> decode
-// (OpenImageIO, EXIF) -> Detector -> keys -> registry (pincode, status, office) -> sort plan (bin)
-// -> JSON; on request with the photo annotated, as PNG instead of the JSON (?overlay=1) or inside
-// it as a data URL (?overlay=inline). Every call that reaches the handler is written to the scan
-// log, refusals of the photo included.
+// POST /api/v1/detect: photo bytes -> loader (format, pixel limit and whole file from the header,
+// then decode, EXIF) -> Detector -> keys -> registry (pincode, status, office) -> sort plan (bin)
+// -> JSON (the detector's form of each tag, with what the registry says); on request with the photo
+// annotated, as PNG instead of the JSON (?overlay=1) or inside it as a data URL (?overlay=inline).
+// Every call that reaches the handler is written to the scan log, refusals of the photo included.
 
 #include <charconv>
 #include <chrono>
-#include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "app/data_url.hpp"
 #include "app/db_problems.hpp"
-#include "app/image_header.hpp"
 #include "app/params.hpp"
 #include "app/registry_json.hpp"
 #include "app/routes.hpp"
+#include "app/tag_outline.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/detector/detector.hpp"
+#include "pintag/detector/json.hpp"
 
 namespace pintag::app {
 namespace {
@@ -31,26 +31,16 @@ double Ms(Clock::time_point since) {
   return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
 }
 
-json Xy(double x, double y) {
-  return json::array({x, y});
-}
-
 /// What one decoded tag resolves to in the registry and the plan.
 struct Resolved {
   std::optional<db::PincodeRecord> record;
   std::optional<db::Routing> routing;
 };
 
-Point2 Centre(const Detection& d) {
-  const auto& h = d.homography;
-  const double w = h[6] * 0.5 + h[7] * 0.5 + h[8];
-  if (w == 0) return {};
-  return {(h[0] * 0.5 + h[1] * 0.5 + h[2]) / w, (h[3] * 0.5 + h[4] * 0.5 + h[5]) / w};
-}
-
+/// The detector's JSON of the tag (the CLI prints the same), with what the registry and the plan
+/// say about its key.
 json TagJson(const Detection& d, const Resolved& r) {
-  json tag;
-  tag["key"] = d.key->value();
+  json tag = ToJson(d);
   if (r.record) {
     const db::PostOffice* office = MainOffice(*r.record);
     tag["pincode"] = r.record->pincode.str();
@@ -68,50 +58,21 @@ json TagJson(const Detection& d, const Resolved& r) {
     tag["state"] = nullptr;
     tag["bin"] = nullptr;
   }
-  tag["corners_px"] = json::array();
-  for (const Point2& p : d.corners) tag["corners_px"].push_back(Xy(p.x, p.y));
-  const Point2 centre = Centre(d);
-  tag["centre_px"] = Xy(centre.x, centre.y);
-  tag["square_px"] = d.square_px;
-  tag["pose"] = {{"rotation_vector", d.pose.rotation_vector},
-                 {"quaternion_wxyz", d.pose.quaternion},
-                 {"translation_m", d.pose.translation},
-                 {"distance_m", d.pose.distance_m},
-                 {"reprojection_error_px", d.pose.reprojection_error_px}};
-  tag["pose_ambiguous"] = d.pose_ambiguous;
   return tag;
-}
-
-cv::Point ToPixel(double x, double y) {
-  return {static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y))};
 }
 
 std::string OverlayPng(cv::Mat image, const DetectResult& result,
                        const std::vector<Resolved>& resolved) {
-  const double scale = std::max(1.0, std::max(image.cols, image.rows) / 1200.0);
-  const int thickness = static_cast<int>(std::lround(2 * scale));
   for (std::size_t i = 0; i < result.detections.size(); ++i) {
     const Detection& d = result.detections[i];
     const bool known = resolved[i].record.has_value();
-    const cv::Scalar colour = known ? cv::Scalar(0, 220, 255) : cv::Scalar(0, 0, 255);
-    for (int c = 0; c < 4; ++c) {
-      cv::line(image, ToPixel(d.corners[c].x, d.corners[c].y),
-               ToPixel(d.corners[(c + 1) % 4].x, d.corners[(c + 1) % 4].y), colour, thickness,
-               cv::LINE_AA);
-    }
-    cv::circle(image, ToPixel(d.corners[0].x, d.corners[0].y), 3 * thickness, colour, -1,
-               cv::LINE_AA);
-    std::string text = known ? resolved[i].record->pincode.str()
-                             : "key " + std::to_string(d.key->value()) + " unknown";
-    if (known && resolved[i].routing) text += "  bin " + resolved[i].routing->bin;
+    std::string caption = known ? resolved[i].record->pincode.str()
+                                : "key " + std::to_string(d.key->value()) + " unknown";
+    if (known && resolved[i].routing) caption += "  bin " + resolved[i].routing->bin;
     char distance[32];
     std::snprintf(distance, sizeof distance, "  %.2f m", d.pose.distance_m);
-    text += distance;
-    const cv::Point at = ToPixel(d.corners[0].x, d.corners[0].y) + cv::Point(0, -5 * thickness);
-    cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.7 * scale, {0, 0, 0}, 3 * thickness,
-                cv::LINE_AA);
-    cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, 0.7 * scale, {255, 255, 255}, thickness,
-                cv::LINE_AA);
+    caption += distance;
+    DrawTagOutline(image, d, known ? cv::Scalar(0, 220, 255) : cv::Scalar(0, 0, 255), caption);
   }
   std::vector<std::uint8_t> png;
   if (!cv::imencode(".png", image, png)) throw std::runtime_error("cannot encode the overlay");
@@ -184,34 +145,27 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
     plan = LoadPlan(*connection, plan_name);
   }
 
-  // The photo: format and claimed size from the header, before anything is decoded.
+  // The loader tells the format from the first bytes, checks the header's size against the pixel
+  // limit before decoding and refuses truncated files; its error kind is the HTTP status.
   const std::span<const std::uint8_t> data(reinterpret_cast<const std::uint8_t*>(bytes.data()),
                                            bytes.size());
-  const ImageHeader header = InspectImage(data);
-  if (header.format.empty()) {
-    throw HttpError(415, "the body is not a JPEG, PNG, TIFF or WebP image",
-                    "Unsupported Image Format");
-  }
-  if (header.width > 0 && header.height > 0) {
-    outcome->width = header.width;
-    outcome->height = header.height;
-    const std::int64_t pixels = std::int64_t{header.width} * header.height;
-    if (pixels > context.max_pixels) {
-      throw HttpError(413,
-                      "the image is " + std::to_string(header.width) + " x " +
-                          std::to_string(header.height) + " pixels; at most " +
-                          std::to_string(context.max_pixels) + " pixels are decoded",
-                      "Image Too Large");
-    }
-  }
-  if (!header.complete) throw HttpError(400, header.problem, "Corrupt Image");
   const Clock::time_point decode_start = Clock::now();
   const LoadResult loaded = LoadImageBytes(data, context.max_pixels);
-  if (!loaded.image) {
-    // TIFF and WebP sizes are checked by the loader, from the header too.
-    if (loaded.error.rfind("image too large", 0) == 0)
+  if (loaded.claimed_width > 0) {
+    outcome->width = loaded.claimed_width;
+    outcome->height = loaded.claimed_height;
+  }
+  switch (loaded.kind) {
+    case ImageError::kNone:
+      break;
+    case ImageError::kUnsupported:
+      throw HttpError(415, "the body is not a JPEG, PNG, TIFF or WebP image",
+                      "Unsupported Image Format");
+    case ImageError::kTooLarge:
       throw HttpError(413, loaded.error, "Image Too Large");
-    throw HttpError(400, loaded.error, "Corrupt Image");
+    case ImageError::kCorrupt:
+    case ImageError::kUnreadable:
+      throw HttpError(400, loaded.error, "Corrupt Image");
   }
   const double decode_ms = Ms(decode_start);
   const cv::Mat& image = loaded.image->bgr;

@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "app/tag_outline.hpp"
 #include "commands/commands.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/detector/detector.hpp"
@@ -33,26 +34,22 @@ struct DetectArgs {
   bool rejected = false;
 };
 
-cv::Point ToPixel(const Point2& p) {
-  return {static_cast<int>(std::lround(p.x)), static_cast<int>(std::lround(p.y))};
-}
-
+/// The shared outline (app/tag_outline.hpp), plus what only the command draws: the pose axes.
 void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
-  const double scale = std::max(1.0, std::max(image.cols, image.rows) / 1200.0);
-  const int thickness = static_cast<int>(std::lround(2 * scale));
+  const int thickness = app::OutlineThickness(image);
   const cv::Matx33d k(result.intrinsics.fx, 0, result.intrinsics.cx, 0, result.intrinsics.fy,
                       result.intrinsics.cy, 0, 0, 1);
   const cv::Mat dist = result.intrinsics.distortion.empty()
                            ? cv::Mat()
                            : cv::Mat(result.intrinsics.distortion, true).reshape(1, 1);
   for (const Detection& d : result.detections) {
-    const cv::Scalar outline = d.key ? cv::Scalar(0, 255, 255) : cv::Scalar(0, 0, 255);
-    for (int i = 0; i < 4; ++i) {
-      cv::line(image, ToPixel(d.corners[i]), ToPixel(d.corners[(i + 1) % 4]), outline, thickness,
-               cv::LINE_AA);
+    if (!d.key) {
+      app::DrawTagOutline(image, d, cv::Scalar(0, 0, 255), {});
+      continue;
     }
-    cv::circle(image, ToPixel(d.corners[0]), 3 * thickness, outline, -1, cv::LINE_AA);
-    if (!d.key) continue;
+    char caption[64];
+    std::snprintf(caption, sizeof caption, "%d  %.2f m", d.key->value(), d.pose.distance_m);
+    app::DrawTagOutline(image, d, cv::Scalar(0, 255, 255), caption);
     // Pose axes from the square's centre: x (red) towards C1, y (green) towards C3, z (blue) out
     // of the tag towards the viewer.
     const double a = tag_size_m / 2;
@@ -65,13 +62,6 @@ void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
       cv::arrowedLine(image, projected[0], projected[i + 1], colours[i], thickness, cv::LINE_AA, 0,
                       0.15);
     }
-    char label[64];
-    std::snprintf(label, sizeof label, "%d  %.2f m", d.key->value(), d.pose.distance_m);
-    const cv::Point at = ToPixel(d.corners[0]) + cv::Point(0, -4 * thickness);
-    cv::putText(image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.6 * scale, {0, 0, 0}, 3 * thickness,
-                cv::LINE_AA);
-    cv::putText(image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.6 * scale, {255, 255, 255}, thickness,
-                cv::LINE_AA);
   }
 }
 

@@ -13,6 +13,8 @@
 #include "pintag/server/http_server.hpp"
 
 #include <httplib.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <sys/socket.h>
 
 #include <atomic>
@@ -176,10 +178,15 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
   s.set_keep_alive_max_count(
       static_cast<std::size_t>(std::max(1, impl->options.keep_alive_max_requests)));
   // The default socket options plus remembering the listening socket, to raise its backlog
-  // after cpp-httplib's own listen(fd, 5).
+  // after cpp-httplib's own listen(fd, 5). TCP_NODELAY: without it Nagle's algorithm holds a
+  // response's last segment until the client's delayed ACK (about 40 ms), every request of a
+  // reused connection. Set on the listening socket, Linux gives it to every accepted connection
+  // (they are cloned from the listener), which is the only socket cpp-httplib lets us configure.
+  s.set_tcp_nodelay(true);
   s.set_socket_options([impl](int fd) {
     int yes = 1;
     ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &yes, sizeof yes);
     impl->listen_fd = fd;
   });
   s.set_pre_routing_handler([impl](const httplib::Request& req, httplib::Response& res) {

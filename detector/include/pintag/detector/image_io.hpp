@@ -1,6 +1,9 @@
 #pragma once
-// Photo bytes -> pixels through OpenImageIO (JPEG, PNG, TIFF, WebP), EXIF orientation applied,
-// EXIF focal length kept. The size in the header is checked before any pixel is decoded.
+// Photo bytes -> pixels. JPEG goes through libjpeg-turbo (TurboJPEG) directly; PNG, TIFF and WebP
+// through OpenImageIO. EXIF orientation is applied and the EXIF focal length kept. The format is
+// told from the first bytes once, and the size in the header is checked against the pixel limit
+// before any pixel is decoded; a truncated JPEG or PNG is refused rather than decoded with a grey
+// or missing bottom.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -14,20 +17,69 @@ namespace pintag {
 
 inline constexpr std::int64_t kDefaultMaxPixels = 40'000'000;  ///< 40 MP
 
+/// Why a photo was not loaded: what an HTTP front end maps to 415, 413 and 400.
+enum class ImageError {
+  kNone,
+  kUnsupported,  ///< not a JPEG, PNG, TIFF or WebP (or empty)
+  kTooLarge,     ///< the header claims more pixels than allowed
+  kCorrupt,      ///< truncated, malformed or undecodable
+  kUnreadable,   ///< the file could not be opened (LoadImageFile)
+};
+
+/// "unsupported", "too_large", "corrupt", "unreadable" ("none" for kNone).
+const char* ToString(ImageError error);
+
+enum class ImageFormat { kUnknown, kJpeg, kPng, kTiff, kWebp };
+
+/// From the first bytes alone; kUnknown for anything else.
+ImageFormat SniffImageFormat(std::span<const std::uint8_t> bytes);
+
+struct LoadOptions {
+  std::int64_t max_pixels = kDefaultMaxPixels;  ///< limit on the stored (full-size) pixels
+  /// JPEG only: decode at 1/scale_denominator of the size (1, 2, 4 or 8; libjpeg-turbo skips the
+  /// work, it does not resize afterwards). Other formats ignore it and load at full size.
+  int scale_denominator = 1;
+};
+
 struct LoadedImage {
   cv::Mat bgr;  ///< CV_8UC3, upright (EXIF orientation applied)
   ExifCamera exif;
   int exif_orientation = 1;  ///< as found in the file, 1 … 8
-  std::string format;        ///< OpenImageIO format name, e.g. "jpeg"
+  std::string format;        ///< "jpeg", "png", "tiff" or "webp"
 };
 
 struct LoadResult {
   std::optional<LoadedImage> image;  ///< set on success
-  std::string error;                 ///< why not, on failure
+  ImageError kind = ImageError::kNone;
+  std::string error;  ///< why not, on failure, for people
+  /// The stored size the header claims (before orientation), when it was read: set for too-large
+  /// images too, 0 when the header was not reached.
+  int claimed_width = 0;
+  int claimed_height = 0;
 };
 
+LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, const LoadOptions& options);
 LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes,
                           std::int64_t max_pixels = kDefaultMaxPixels);
 LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels = kDefaultMaxPixels);
+
+/// A JPEG's planes as stored, for a reader that wants full-resolution luma and the chroma at the
+/// resolution the file kept (4:2:0 phones: half in each direction). Not reoriented.
+struct JpegPlanes {
+  cv::Mat y;   ///< CV_8UC1, full size
+  cv::Mat cb;  ///< CV_8UC1, subsampled as stored
+  cv::Mat cr;
+  int orientation = 1;  ///< EXIF orientation, for the caller to apply
+};
+
+struct JpegPlanesResult {
+  std::optional<JpegPlanes> planes;
+  ImageError kind = ImageError::kNone;
+  std::string error;
+};
+
+/// Greyscale JPEGs give empty cb and cr.
+JpegPlanesResult LoadJpegPlanes(std::span<const std::uint8_t> bytes,
+                                std::int64_t max_pixels = kDefaultMaxPixels);
 
 }  // namespace pintag
