@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pintag/server/problem.hpp"
+#include "process_metrics.hpp"
 
 namespace pintag::server {
 namespace {
@@ -70,7 +71,8 @@ Api::Api(Router router, TokenVerifier verifier, HealthCheck health,
   Route metrics_route = MakeRoute(
       "GET", "/metrics", Access::kOpen,
       [metrics = metrics_](const HttpRequest&) {
-        return HttpResponse::Bytes(std::string(Metrics::kContentType), metrics->renderPrometheus());
+        return HttpResponse::Bytes(std::string(Metrics::kContentType),
+                                   metrics->renderPrometheus() + ProcessMetricsText());
       },
       "Prometheus metrics (text exposition format)", "operations");
   metrics_route.produces = {"text/plain"};

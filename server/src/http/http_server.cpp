@@ -19,6 +19,7 @@
 #include <chrono>
 #include <thread>
 
+#include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
 namespace pintag::server {
@@ -28,6 +29,7 @@ struct RequestState {
   bool active = false;
   std::chrono::steady_clock::time_point start;
   Admission admission;
+  std::string request_id;
 };
 thread_local RequestState t_state;
 
@@ -45,6 +47,7 @@ HeaderMap Headers(const httplib::Request& req) {
 
 HttpRequest ToRequest(const httplib::Request& req) {
   HttpRequest request;
+  request.request_id = t_state.request_id;
   request.method = req.method;
   request.path = req.path;
   for (const auto& [name, value] : req.params) request.query.emplace(name, value);
@@ -73,7 +76,11 @@ struct HttpServer::Impl {
   }
 
   httplib::Server::HandlerResponse preRoute(const httplib::Request& req, httplib::Response& res) {
-    t_state = RequestState{true, std::chrono::steady_clock::now(), {}};
+    t_state = RequestState{true, std::chrono::steady_clock::now(), {}, {}};
+    t_state.request_id = RequestIdFrom(req.has_header("X-Request-Id")
+                                           ? std::optional(req.get_header_value("X-Request-Id"))
+                                           : std::nullopt);
+    res.set_header("X-Request-Id", t_state.request_id);
     t_state.admission = api->admit(req.method, req.path, Headers(req));
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
@@ -137,6 +144,11 @@ struct HttpServer::Impl {
 
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).
   httplib::Server::HandlerResponse onError(const httplib::Request&, httplib::Response& res) {
+    // A request cpp-httplib refused before routing (malformed, too long) still gets an id.
+    if (!t_state.active) {
+      t_state.request_id = RequestIdFrom(std::nullopt);
+      res.set_header("X-Request-Id", t_state.request_id);
+    }
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     const HttpResponse problem =
         res.status == 413 ? tooLarge()
@@ -154,6 +166,16 @@ struct HttpServer::Impl {
       label = t_state.admission.route_label;
     }
     api->metrics().observeRequest(label, req.method, res.status, seconds);
+    const std::string principal =
+        t_state.admission.principal ? t_state.admission.principal->id : "";
+    LogAccess({.request_id = t_state.request_id,
+               .client = req.remote_addr,
+               .method = req.method,
+               .path = req.path,
+               .status = res.status,
+               .bytes = res.body.size(),
+               .seconds = seconds,
+               .principal = principal});
     t_state = RequestState{};
   }
 };
@@ -190,7 +212,15 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
         return impl->onError(req, res);
       }));
   s.set_exception_handler(
-      [](const httplib::Request&, httplib::Response& res, const std::exception_ptr&) {
+      [](const httplib::Request& req, httplib::Response& res, const std::exception_ptr& thrown) {
+        std::string what = "a non-standard exception";
+        try {
+          if (thrown) std::rethrow_exception(thrown);
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+        }
+        LogRequestError(t_state.request_id, req.method + " " + req.path + ": " + what);
         Apply(ProblemResponse(500, "the server failed to handle this request"), res);
       });
   s.set_logger(
