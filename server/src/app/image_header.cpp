@@ -79,6 +79,38 @@ ImageHeader InspectPng(std::span<const std::uint8_t> b) {
   }
 }
 
+std::uint32_t Le24(const std::uint8_t* p) {
+  return p[0] | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16);
+}
+
+/// The canvas size from the first chunk: VP8X (extended), VP8L (lossless) or "VP8 " (lossy).
+ImageHeader InspectWebp(std::span<const std::uint8_t> b) {
+  ImageHeader h;
+  h.format = "webp";
+  const auto chunk = [&](const char* fourcc) {
+    return b.size() >= 16 && std::memcmp(b.data() + 12, fourcc, 4) == 0;
+  };
+  if (chunk("VP8X")) {
+    if (b.size() < 30) return Incomplete(h, "truncated WebP header");
+    h.width = static_cast<int>(Le24(b.data() + 24) + 1);
+    h.height = static_cast<int>(Le24(b.data() + 27) + 1);
+  } else if (chunk("VP8L")) {
+    if (b.size() < 25 || b[20] != 0x2f) return Incomplete(h, "truncated WebP header");
+    const std::uint32_t bits = b[21] | (std::uint32_t{b[22]} << 8) | (std::uint32_t{b[23]} << 16) |
+                               (std::uint32_t{b[24]} << 24);
+    h.width = static_cast<int>((bits & 0x3FFF) + 1);
+    h.height = static_cast<int>(((bits >> 14) & 0x3FFF) + 1);
+  } else if (chunk("VP8 ")) {
+    if (b.size() < 30 || b[23] != 0x9d || b[24] != 0x01 || b[25] != 0x2a)
+      return Incomplete(h, "truncated WebP header");
+    h.width = static_cast<int>((b[26] | (b[27] << 8)) & 0x3FFF);
+    h.height = static_cast<int>((b[28] | (b[29] << 8)) & 0x3FFF);
+  } else {
+    return Incomplete(h, "a WebP file without an image chunk");
+  }
+  return h;
+}
+
 ImageHeader Format(const char* name) {
   ImageHeader h;
   h.format = name;
@@ -98,7 +130,7 @@ ImageHeader InspectImage(std::span<const std::uint8_t> b) {
                         (b[0] == 'M' && b[1] == 'M' && b[2] == 0 && b[3] == 42))) {
     return Format("tiff");
   }
-  if (starts("RIFF") && starts("WEBP", 8)) return Format("webp");
+  if (starts("RIFF") && starts("WEBP", 8)) return InspectWebp(b);
   return {};
 }
 
