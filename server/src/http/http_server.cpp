@@ -15,6 +15,7 @@
 #include <httplib.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <thread>
@@ -55,6 +56,44 @@ HttpRequest ToRequest(const httplib::Request& req) {
   return request;
 }
 
+/// cpp-httplib's server with its one-request entry point opened, for answerRaw.
+class Server : public httplib::Server {
+ public:
+  using httplib::Server::process_request;
+};
+
+/// A connection whose client sent `in` and then waits: reads drain `in`, writes fill `out`.
+class MemoryStream : public httplib::Stream {
+ public:
+  explicit MemoryStream(std::string_view in) : in_(in) {}
+  bool is_readable() const override { return true; }
+  bool is_writable() const override { return true; }
+  ssize_t read(char* ptr, size_t size) override {
+    const std::size_t n = std::min(size, in_.size());
+    std::copy_n(in_.data(), n, ptr);
+    in_.remove_prefix(n);
+    return static_cast<ssize_t>(n);
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    out_.append(ptr, size);
+    return static_cast<ssize_t>(size);
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    ip = "127.0.0.1";
+    port = 0;
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    ip = "127.0.0.1";
+    port = 0;
+  }
+  socket_t socket() const override { return INVALID_SOCKET; }
+  std::string take() { return std::move(out_); }
+
+ private:
+  std::string_view in_;
+  std::string out_;
+};
+
 bool AnnouncesBody(const httplib::Request& req) {
   return req.has_header("Transfer-Encoding") ||
          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
@@ -65,7 +104,7 @@ bool AnnouncesBody(const httplib::Request& req) {
 struct HttpServer::Impl {
   std::shared_ptr<const Api> api;
   ServerOptions options;
-  httplib::Server server;
+  Server server;
   std::atomic<int> listen_fd{-1};
   int port = 0;
   std::thread thread;
@@ -293,6 +332,13 @@ bool HttpServer::running() const {
 
 int HttpServer::port() const {
   return impl_->port;
+}
+
+std::string HttpServer::answerRaw(std::string_view request) {
+  MemoryStream stream(request);
+  bool closed = false;
+  impl_->server.process_request(stream, /*close_connection=*/true, closed, nullptr);
+  return stream.take();
 }
 
 }  // namespace pintag::server

@@ -21,6 +21,7 @@ namespace {
 using Field = std::pair<std::string_view, nlohmann::json>;
 
 std::atomic<LogFormat> g_format{LogFormat::kText};
+std::atomic<bool> g_access_enabled{true};
 
 // Time in UTC with milliseconds, as an operator greps it and a shipper parses it.
 constexpr const char* kTextPattern = "%Y-%m-%dT%H:%M:%S.%eZ %l %v";
@@ -95,7 +96,12 @@ void ConfigureLog(LogFormat format) {
                        spdlog::pattern_time_type::utc);
 }
 
+void SetAccessLogEnabled(bool enabled) {
+  g_access_enabled = enabled;
+}
+
 void LogAccess(const AccessRecord& r) {
+  if (!g_access_enabled) return;
   std::vector<Field> fields = {{"id", std::string(r.request_id)},
                                {"client", std::string(r.client)},
                                {"method", std::string(r.method)},

@@ -21,6 +21,10 @@ std::optional<LogFormat> ParseLogFormat(std::string_view text);
 /// Chooses the format of every later line; text until called. Call before serving.
 void ConfigureLog(LogFormat format);
 
+/// Turns the access lines off (or on again): the fuzz targets answer millions of requests, and
+/// their reports must not drown. Errors and events are still written.
+void SetAccessLogEnabled(bool enabled);
+
 /// One answered request.
 struct AccessRecord {
   std::string_view request_id;
