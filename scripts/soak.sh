@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Soak: one `pintag serve` on loopback under wrk's mixed traffic (scripts/soak.lua: lookups,
 # searches, routes, label PDFs and PNGs, detections of a 1080p JPEG), every answer checked.
-#   scripts/soak.sh                       60 s at 64 connections after a 15 s warm-up
+#   scripts/soak.sh                       60 s at 64 connections after a 30 s warm-up
 #   SOAK_SECONDS=6 SOAK_WARMUP_SECONDS=3 SOAK_CONNECTIONS=16 scripts/soak.sh   (the test suite's)
 # Passes when no answer was wrong or missing (0 errors, 0 socket errors, 0 timeouts) and the
 # server's resident memory grew less than 10 % from the end of the warm-up to the end. Prints one
@@ -11,7 +11,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 exe="${PINTAG_EXE:-$root/build/server/pintag}"
 seconds="${SOAK_SECONDS:-60}"
-warmup="${SOAK_WARMUP_SECONDS:-15}"
+warmup="${SOAK_WARMUP_SECONDS:-30}"
 connections="${SOAK_CONNECTIONS:-64}"
 for tool in wrk oiiotool; do
   command -v "$tool" >/dev/null || { echo "soak.sh: $tool is missing" >&2; exit 1; }
@@ -68,9 +68,14 @@ echo "$warm"
 check "$warm"
 rss_warm="$(rss)"
 echo "soak.sh: ${seconds}s at $connections connections"
+# Resident memory every 5 s, to tell a leak (steady growth) from caches filling (a plateau).
+(while sleep 5; do printf '%s ' "$(rss)"; done >"$work/rss.txt" 2>/dev/null) &
+sampler=$!
 result="$(run "$seconds")"
+kill "$sampler" 2>/dev/null || true
 echo "$result"
 rss_end="$(rss)"
+echo "soak-memory-series-kib $(cat "$work/rss.txt")"
 growth="$(awk -v a="$rss_warm" -v b="$rss_end" 'BEGIN {printf "%.1f", (b - a) * 100 / a}')"
 echo "soak-memory rss_after_warmup_kib=$rss_warm rss_end_kib=$rss_end growth_percent=$growth"
 check "$result"
