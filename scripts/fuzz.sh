@@ -8,7 +8,7 @@
 #                                       fuzz/regressions/<target>/ once fixed)
 #   scripts/fuzz.sh --smoke [target …]  the bounded run of the test suite: every seed and every
 #                                       regression input once, then PINTAG_FUZZ_SMOKE_RUNS
-#                                       (default 3000) mutations from a fixed seed
+#                                       (default 500) mutations from a fixed seed
 # Targets: image_detect http_request json_body csv_import parsers (default: all). Each run's
 # executions are appended to build-fuzz/fuzz-runs.txt (docs/RELIABILITY.md records them).
 set -euo pipefail
@@ -47,7 +47,7 @@ for target in "${targets[@]}"; do
   regressions="$root/fuzz/regressions/$target"
   crashes="$build/crashes/$target"
   mkdir -p "$crashes"
-  log="$build/fuzz-$target.log"
+  log="$build/fuzz-$target$( [[ $smoke == 1 ]] && echo -smoke).log"
   inputs=()
   [[ -d "$regressions" ]] && inputs+=("$regressions"/*)
   [[ -d "$seeds" ]] && inputs+=("$seeds"/*)
@@ -62,7 +62,7 @@ for target in "${targets[@]}"; do
   mkdir -p "$corpus"
   if [[ $smoke == 1 ]]; then
     corpus="$(mktemp -d)"
-    args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-3000}" -seed=1 -max_len=65536 -timeout=30)
+    args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-500}" -seed=1 -max_len=65536 -timeout=30)
   else
     args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30)
   fi
