@@ -5,11 +5,14 @@
 #   scripts/build.sh pintag             only the named targets (scripts/start.sh builds `pintag`)
 #   PINTAG_TESTS=ON scripts/build.sh    configure again first, requiring the tests and benchmarks
 #                                       (scripts/test.sh; see PINTAG_TESTS in CMakeLists.txt)
+#   PINTAG_SANITIZE=ON                  with ASan and UBSan (use its own PINTAG_BUILD_DIR;
+#                                       scripts/test.sh --sanitize does both)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${PINTAG_BUILD_DIR:-$root/build}"
 options=(-G Ninja -DCMAKE_BUILD_TYPE=Release)
 command -v ccache >/dev/null && options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+[[ -n "${PINTAG_SANITIZE:-}" ]] && options+=(-DPINTAG_SANITIZE="$PINTAG_SANITIZE")
 if [[ -n "${PINTAG_TESTS:-}" ]]; then
   cmake -S "$root" -B "$build" "${options[@]}" -DPINTAG_TESTS="$PINTAG_TESTS"
 elif [[ ! -f "$build/build.ninja" ]]; then

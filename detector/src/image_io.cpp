@@ -227,16 +227,18 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
 
 // ---- PNG: structure checked here, pixels through OpenImageIO ----
 
-/// The size IHDR claims, after walking the chunks to IEND: libpng decodes a truncated file's
-/// missing rows as zeros, so a cut upload is caught here. Empty `problem` when whole.
-struct PngHeader {
+/// The size a PNG's or WebP's header claims, read before any decoder runs. Empty `problem` when
+/// the header (for PNG: every chunk to IEND) is whole.
+struct HeaderSize {
   int width = 0;
   int height = 0;
   std::string problem;
 };
 
-PngHeader InspectPng(std::span<const std::uint8_t> b) {
-  PngHeader h;
+/// Walks the chunks from IHDR to IEND: libpng decodes a truncated file's missing rows as zeros,
+/// so a cut upload is caught here.
+HeaderSize InspectPng(std::span<const std::uint8_t> b) {
+  HeaderSize h;
   std::size_t pos = 8;
   bool first = true;
   while (true) {
@@ -262,6 +264,45 @@ PngHeader InspectPng(std::span<const std::uint8_t> b) {
     if (std::memcmp(&b[pos + 4], "IEND", 4) == 0) return h;
     pos += 12 + length;
   }
+}
+
+/// A WebP's canvas size from its first chunk (VP8X extended, VP8L lossless, or "VP8 " lossy).
+/// OpenImageIO decodes a WebP as soon as it opens it, so the pixel limit must be checked here,
+/// before it does: a tiny file claiming 16383 × 16383 would otherwise be decoded.
+HeaderSize InspectWebp(std::span<const std::uint8_t> b) {
+  HeaderSize h;
+  const auto le24 = [&](std::size_t at) {
+    return b[at] | (std::uint32_t{b[at + 1]} << 8) | (std::uint32_t{b[at + 2]} << 16);
+  };
+  const auto chunk = [&](const char* fourcc) {
+    return b.size() >= 16 && std::memcmp(b.data() + 12, fourcc, 4) == 0;
+  };
+  if (chunk("VP8X")) {
+    if (b.size() < 30) {
+      h.problem = "the WebP header is truncated";
+      return h;
+    }
+    h.width = static_cast<int>(le24(24) + 1);
+    h.height = static_cast<int>(le24(27) + 1);
+  } else if (chunk("VP8L")) {
+    if (b.size() < 25 || b[20] != 0x2f) {
+      h.problem = "the WebP header is truncated";
+      return h;
+    }
+    const std::uint32_t bits = le24(21) | (std::uint32_t{b[24]} << 24);
+    h.width = static_cast<int>((bits & 0x3FFFU) + 1);
+    h.height = static_cast<int>(((bits >> 14) & 0x3FFFU) + 1);
+  } else if (chunk("VP8 ")) {
+    if (b.size() < 30 || b[23] != 0x9d || b[24] != 0x01 || b[25] != 0x2a) {
+      h.problem = "the WebP header is truncated";
+      return h;
+    }
+    h.width = static_cast<int>((b[26] | (b[27] << 8)) & 0x3FFF);
+    h.height = static_cast<int>((b[28] | (b[29] << 8)) & 0x3FFF);
+  } else {
+    h.problem = "a WebP file without an image chunk";
+  }
+  return h;
 }
 
 // ---- PNG, TIFF, WebP (and CMYK JPEG): OpenImageIO ----
@@ -362,11 +403,14 @@ ImageFormat SniffImageFormat(std::span<const std::uint8_t> b) {
 
 LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, const LoadOptions& options) {
   if (bytes.empty()) return Fail(ImageError::kUnsupported, "no image: the input is empty");
-  switch (SniffImageFormat(bytes)) {
+  const ImageFormat format = SniffImageFormat(bytes);
+  switch (format) {
     case ImageFormat::kJpeg:
       return LoadJpeg(bytes, options);
-    case ImageFormat::kPng: {
-      const PngHeader header = InspectPng(bytes);
+    case ImageFormat::kPng:
+    case ImageFormat::kWebp: {
+      const HeaderSize header =
+          format == ImageFormat::kPng ? InspectPng(bytes) : InspectWebp(bytes);
       if (header.width > 0 && header.height > 0 &&
           OverLimit(header.width, header.height, options.max_pixels)) {
         return Fail(ImageError::kTooLarge,
@@ -376,12 +420,10 @@ LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, const LoadOptions
       if (!header.problem.empty()) {
         return Fail(ImageError::kCorrupt, header.problem, header.width, header.height);
       }
-      return LoadWithOpenImageIo(bytes, ImageFormat::kPng, options);
+      return LoadWithOpenImageIo(bytes, format, options);
     }
     case ImageFormat::kTiff:
       return LoadWithOpenImageIo(bytes, ImageFormat::kTiff, options);
-    case ImageFormat::kWebp:
-      return LoadWithOpenImageIo(bytes, ImageFormat::kWebp, options);
     case ImageFormat::kUnknown:
       break;
   }

@@ -1,7 +1,6 @@
 #include "app/db_problems.hpp"
 
-#include <iostream>
-
+#include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
 namespace pintag::app {
@@ -26,7 +25,7 @@ void ThrowDbError(const db::Error& error, std::string title) {
       break;
   }
   // Storage failures name files and SQLite internals: the operator sees them, the client not.
-  std::cerr << "pintag serve: database error: " << error.message << "\n";
+  server::LogEvent("database error: " + error.message, /*warning=*/true);
   throw HttpError(500, "the database failed to answer", "Database Error");
 }
 

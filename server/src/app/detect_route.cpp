@@ -7,7 +7,6 @@
 #include <charconv>
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "app/data_url.hpp"
@@ -21,6 +20,7 @@
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
+#include "pintag/server/log.hpp"
 
 namespace pintag::app {
 namespace {
@@ -119,9 +119,10 @@ void Log(const AppContext& context, const HttpRequest& request, std::size_t byte
   try {
     auto connection = context.scan_log->acquire();
     auto appended = db::AppendScan(*connection, scan);
-    if (!appended) std::cerr << "pintag serve: scan log: " << appended.error().message << "\n";
+    if (!appended)
+      server::LogRequestError(request.request_id, "scan log: " + appended.error().message);
   } catch (const std::exception& e) {
-    std::cerr << "pintag serve: scan log: " << e.what() << "\n";
+    server::LogRequestError(request.request_id, std::string("scan log: ") + e.what());
   }
 }
 
@@ -261,6 +262,15 @@ HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
   } catch (const HttpError& e) {
     outcome.result_json =
         json{{"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}}.dump();
+    Log(context, request, bytes.size(), outcome);
+    throw;
+  } catch (const std::exception& e) {
+    // Unexpected (a decoder or OpenCV failure): the scan log still records the upload; the
+    // message goes to the server log with the request id (InvokeHandler), not to the client.
+    outcome.result_json =
+        json{{"error",
+              {{"status", 500}, {"detail", "unexpected failure: " + std::string(e.what())}}}}
+            .dump(-1, ' ', false, json::error_handler_t::replace);
     Log(context, request, bytes.size(), outcome);
     throw;
   }

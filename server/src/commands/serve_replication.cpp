@@ -41,26 +41,39 @@ std::string ReadToken(const ReplicationArgs& args) {
 }  // namespace
 
 void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
-  serve->add_flag("--read-only", args.read_only,
-                  "serve --db as a read-only snapshot (a replica): writes answer 403 naming the "
-                  "primary; a newer snapshot renamed into place, or SIGHUP, reloads it");
-  serve->add_option("--follow", args.follow,
-                    "pull newer snapshots from this primary URL (implies --read-only; token in "
-                    "PINTAG_FOLLOW_TOKEN or --follow-token-file)");
-  serve->add_option("--follow-token-file", args.follow_token_file,
-                    "file holding the replica token for --follow");
+  serve
+      ->add_flag("--read-only", args.read_only,
+                 "serve --db as a read-only snapshot (a replica): writes answer 403 naming the "
+                 "primary; a newer snapshot renamed into place, or SIGHUP, reloads it")
+      ->envname("PINTAG_READ_ONLY");
+  serve
+      ->add_option("--follow", args.follow,
+                   "pull newer snapshots from this primary URL (implies --read-only; token in "
+                   "PINTAG_FOLLOW_TOKEN or --follow-token-file)")
+      ->envname("PINTAG_FOLLOW");
+  serve
+      ->add_option("--follow-token-file", args.follow_token_file,
+                   "file holding the replica token for --follow")
+      ->envname("PINTAG_FOLLOW_TOKEN_FILE");
   serve
       ->add_option("--follow-interval-ms", args.follow_interval_ms,
                    "how often to ask the primary for a newer snapshot")
       ->check(CLI::Range(50, 3'600'000))
-      ->capture_default_str();
-  serve->add_option("--primary", args.primary,
-                    "the primary's URL, named when a replica refuses a write (default: --follow)");
-  serve->add_option("--scan-log", args.scan_log,
-                    "a replica's own scan log file (default: <db name>-scans.db beside --db)");
-  serve->add_option("--snapshot", args.snapshot,
-                    "publish registry snapshots for replicas to this file, after every change "
-                    "(GET /api/v1/registry/snapshot)");
+      ->capture_default_str()
+      ->envname("PINTAG_FOLLOW_INTERVAL_MS");
+  serve
+      ->add_option("--primary", args.primary,
+                   "the primary's URL, named when a replica refuses a write (default: --follow)")
+      ->envname("PINTAG_PRIMARY");
+  serve
+      ->add_option("--scan-log", args.scan_log,
+                   "a replica's own scan log file (default: <db name>-scans.db beside --db)")
+      ->envname("PINTAG_SCAN_LOG");
+  serve
+      ->add_option("--snapshot", args.snapshot,
+                   "publish registry snapshots for replicas to this file, after every change "
+                   "(GET /api/v1/registry/snapshot)")
+      ->envname("PINTAG_SNAPSHOT");
 }
 
 Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)

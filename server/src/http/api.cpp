@@ -6,11 +6,15 @@
 #include <nlohmann/json.hpp>
 
 #include "pintag/server/problem.hpp"
+#include "process_metrics.hpp"
 
 namespace pintag::server {
 namespace {
 
 constexpr std::size_t kMaxTokenLength = 4096;
+// cpp-httplib 0.11.4 bounds each header line (8 KiB) but not how many come: past these, 431.
+constexpr std::size_t kMaxHeaderCount = 100;
+constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
 
 std::string Lower(std::string_view text) {
   std::string out(text);
@@ -70,7 +74,8 @@ Api::Api(Router router, TokenVerifier verifier, HealthCheck health,
   Route metrics_route = MakeRoute(
       "GET", "/metrics", Access::kOpen,
       [metrics = metrics_](const HttpRequest&) {
-        return HttpResponse::Bytes(std::string(Metrics::kContentType), metrics->renderPrometheus());
+        return HttpResponse::Bytes(std::string(Metrics::kContentType),
+                                   metrics->renderPrometheus() + ProcessMetricsText());
       },
       "Prometheus metrics (text exposition format)", "operations");
   metrics_route.produces = {"text/plain"};
@@ -87,6 +92,15 @@ Api::Api(Router router, TokenVerifier verifier, HealthCheck health,
 Admission Api::admit(std::string_view method, std::string_view path,
                      const HeaderMap& headers) const {
   Admission admission;
+  std::size_t header_bytes = 0;
+  for (const auto& [name, value] : headers) header_bytes += name.size() + value.size() + 4;
+  if (headers.size() > kMaxHeaderCount || header_bytes > kMaxHeaderBytes) {
+    admission.rejection =
+        ProblemResponse(431, "at most " + std::to_string(kMaxHeaderCount) + " request headers of " +
+                                 std::to_string(kMaxHeaderBytes) + " bytes in all are read");
+    admission.route_label = "unmatched";
+    return admission;
+  }
   admission.match = router_.match(method, path);
   const Route* route = admission.match.route;
   if (route == nullptr) {

@@ -17,10 +17,12 @@
 #include <netinet/tcp.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <thread>
 
+#include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
 namespace pintag::server {
@@ -30,6 +32,7 @@ struct RequestState {
   bool active = false;
   std::chrono::steady_clock::time_point start;
   Admission admission;
+  std::string request_id;
 };
 thread_local RequestState t_state;
 
@@ -47,12 +50,51 @@ HeaderMap Headers(const httplib::Request& req) {
 
 HttpRequest ToRequest(const httplib::Request& req) {
   HttpRequest request;
+  request.request_id = t_state.request_id;
   request.method = req.method;
   request.path = req.path;
   for (const auto& [name, value] : req.params) request.query.emplace(name, value);
   request.headers = Headers(req);
   return request;
 }
+
+/// cpp-httplib's server with its one-request entry point opened, for answerRaw.
+class Server : public httplib::Server {
+ public:
+  using httplib::Server::process_request;
+};
+
+/// A connection whose client sent `in` and then waits: reads drain `in`, writes fill `out`.
+class MemoryStream : public httplib::Stream {
+ public:
+  explicit MemoryStream(std::string_view in) : in_(in) {}
+  bool is_readable() const override { return true; }
+  bool is_writable() const override { return true; }
+  ssize_t read(char* ptr, size_t size) override {
+    const std::size_t n = std::min(size, in_.size());
+    std::copy_n(in_.data(), n, ptr);
+    in_.remove_prefix(n);
+    return static_cast<ssize_t>(n);
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    out_.append(ptr, size);
+    return static_cast<ssize_t>(size);
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    ip = "127.0.0.1";
+    port = 0;
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    ip = "127.0.0.1";
+    port = 0;
+  }
+  socket_t socket() const override { return INVALID_SOCKET; }
+  std::string take() { return std::move(out_); }
+
+ private:
+  std::string_view in_;
+  std::string out_;
+};
 
 bool AnnouncesBody(const httplib::Request& req) {
   return req.has_header("Transfer-Encoding") ||
@@ -64,7 +106,7 @@ bool AnnouncesBody(const httplib::Request& req) {
 struct HttpServer::Impl {
   std::shared_ptr<const Api> api;
   ServerOptions options;
-  httplib::Server server;
+  Server server;
   std::atomic<int> listen_fd{-1};
   int port = 0;
   std::thread thread;
@@ -75,7 +117,11 @@ struct HttpServer::Impl {
   }
 
   httplib::Server::HandlerResponse preRoute(const httplib::Request& req, httplib::Response& res) {
-    t_state = RequestState{true, std::chrono::steady_clock::now(), {}};
+    t_state = RequestState{true, std::chrono::steady_clock::now(), {}, {}};
+    t_state.request_id = RequestIdFrom(req.has_header("X-Request-Id")
+                                           ? std::optional(req.get_header_value("X-Request-Id"))
+                                           : std::nullopt);
+    res.set_header("X-Request-Id", t_state.request_id);
     t_state.admission = api->admit(req.method, req.path, Headers(req));
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
@@ -139,6 +185,11 @@ struct HttpServer::Impl {
 
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).
   httplib::Server::HandlerResponse onError(const httplib::Request&, httplib::Response& res) {
+    // A request cpp-httplib refused before routing (malformed, too long) still gets an id.
+    if (!t_state.active) {
+      t_state.request_id = RequestIdFrom(std::nullopt);
+      res.set_header("X-Request-Id", t_state.request_id);
+    }
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     const HttpResponse problem =
         res.status == 413 ? tooLarge()
@@ -156,6 +207,16 @@ struct HttpServer::Impl {
       label = t_state.admission.route_label;
     }
     api->metrics().observeRequest(label, req.method, res.status, seconds);
+    const std::string principal =
+        t_state.admission.principal ? t_state.admission.principal->id : "";
+    LogAccess({.request_id = t_state.request_id,
+               .client = req.remote_addr,
+               .method = req.method,
+               .path = req.path,
+               .status = res.status,
+               .bytes = res.body.size(),
+               .seconds = seconds,
+               .principal = principal});
     t_state = RequestState{};
   }
 };
@@ -197,7 +258,15 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
         return impl->onError(req, res);
       }));
   s.set_exception_handler(
-      [](const httplib::Request&, httplib::Response& res, const std::exception_ptr&) {
+      [](const httplib::Request& req, httplib::Response& res, const std::exception_ptr& thrown) {
+        std::string what = "a non-standard exception";
+        try {
+          if (thrown) std::rethrow_exception(thrown);
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+        }
+        LogRequestError(t_state.request_id, req.method + " " + req.path + ": " + what);
         Apply(ProblemResponse(500, "the server failed to handle this request"), res);
       });
   s.set_logger(
@@ -270,6 +339,13 @@ bool HttpServer::running() const {
 
 int HttpServer::port() const {
   return impl_->port;
+}
+
+std::string HttpServer::answerRaw(std::string_view request) {
+  MemoryStream stream(request);
+  bool closed = false;
+  impl_->server.process_request(stream, /*close_connection=*/true, closed, nullptr);
+  return stream.take();
 }
 
 }  // namespace pintag::server

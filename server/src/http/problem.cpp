@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "pintag/server/log.hpp"
+
 namespace pintag::server {
 
 HttpError::HttpError(int status, std::string detail, std::string title, std::string type)
@@ -81,11 +83,20 @@ HttpResponse InvokeHandler(const Handler& handler, const HttpRequest& request) {
     }
     return response;
   } catch (const HttpError& error) {
+    if (error.problem().status >= 500) {
+      LogRequestError(request.request_id, request.method + " " + request.path + ": " +
+                                              std::to_string(error.problem().status) + " " +
+                                              error.problem().detail);
+    }
     return ProblemResponse(error.problem());
-  } catch (const std::exception&) {
-    // The message may hold paths or SQL; it belongs in the server log, not the answer.
+  } catch (const std::exception& error) {
+    // The message may hold paths or SQL: it belongs in the server log, not the answer.
+    LogRequestError(request.request_id, request.method + " " + request.path +
+                                            ": unexpected exception: " + error.what());
     return ProblemResponse(500, "the server failed to handle this request");
   } catch (...) {
+    LogRequestError(request.request_id,
+                    request.method + " " + request.path + ": unexpected non-standard exception");
     return ProblemResponse(500, "the server failed to handle this request");
   }
 }

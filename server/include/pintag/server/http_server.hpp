@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "pintag/server/api.hpp"
 
@@ -45,6 +46,11 @@ class HttpServer {
 
   /// The bound port (useful with port 0); 0 before bind().
   int port() const;
+
+  /// Serves the raw bytes of one HTTP/1.1 request from memory, through the same parsing, limits,
+  /// routing and handlers as a socket, and returns the raw bytes of the answer. No socket, no
+  /// thread: for the whole-request fuzz target (fuzz/http_request_fuzzer.cpp).
+  std::string answerRaw(std::string_view request);
 
  private:
   struct Impl;

@@ -54,6 +54,7 @@ struct HttpRequest {
   std::vector<FormPart> parts;         ///< the parts of a multipart/form-data body
   std::string content_type;            ///< media type of the body without parameters, lower case
   std::optional<Principal> principal;  ///< set when the route needs a role and the token passed
+  std::string request_id;  ///< X-Request-Id: the client's when sane, else made up (log.hpp)
 
   /// The path parameter `name`; empty when absent.
   std::string pathParam(std::string_view name) const;

@@ -40,6 +40,7 @@ HttpResponse ProblemResponse(int status, std::string detail);
 
 /// The one wrapper: runs `handler`, turning HttpError into its problem, any other exception into
 /// a 500 problem (details are not leaked), and an error status with an empty body into a problem.
+/// Every 5xx, with its exception's message, goes to the server log under the request's id.
 HttpResponse InvokeHandler(const Handler& handler, const HttpRequest& request);
 
 }  // namespace pintag::server

@@ -1,0 +1,63 @@
+#include "fuzz_support.hpp"
+
+#include <stdlib.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "app/app.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/tokens.hpp"
+#include "pintag/server/log.hpp"
+
+namespace pintag::fuzz {
+namespace {
+
+FuzzRegistry Make() {
+  std::string dir = (std::filesystem::temp_directory_path() / "pintag-fuzz-XXXXXX").string();
+  if (::mkdtemp(dir.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  FuzzRegistry registry;
+  registry.db_path = dir + "/registry.db";
+  auto opened = db::OpenDatabase(registry.db_path);
+  if (!opened) throw std::runtime_error(opened.error().message);
+  auto& connection = opened.value().connection;
+  const auto token = [&](db::Role role) {
+    auto made = db::CreateToken(connection, role, "fuzz");
+    if (!made) throw std::runtime_error(made.error().message);
+    return made->secret;
+  };
+  registry.admin_token = token(db::Role::kAdmin);
+  registry.counter_token = token(db::Role::kCounter);
+  registry.scanner_token = token(db::Role::kScanner);
+  app::AppConfig config;
+  config.db_path = registry.db_path;
+  config.max_pixels = 1 << 20;  // small photos keep executions fast; limits are tested elsewhere
+  config.max_batch = 4;
+  config.max_tag_px = 256;
+  registry.api = app::BuildApi(config);
+  return registry;
+}
+
+void ReplaceAll(std::string& text, std::string_view from, const std::string& to) {
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at)) {
+    text.replace(at, from.size(), to);
+    at += to.size();
+  }
+}
+
+}  // namespace
+
+const FuzzRegistry& Registry() {
+  static const FuzzRegistry registry = Make();
+  return registry;
+}
+
+std::string WithTokens(std::string text) {
+  const FuzzRegistry& r = Registry();
+  ReplaceAll(text, "@ADMIN@", r.admin_token);
+  ReplaceAll(text, "@COUNTER@", r.counter_token);
+  ReplaceAll(text, "@SCANNER@", r.scanner_token);
+  return text;
+}
+
+}  // namespace pintag::fuzz

@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# libFuzzer targets (fuzz/), built with Debian's clang-14 (-fsanitize=fuzzer,address,undefined)
+# into build-fuzz/ (override with PINTAG_FUZZ_BUILD_DIR).
+#   scripts/fuzz.sh [target …]          run each target for PINTAG_FUZZ_SECONDS (default 1800) on
+#                                       a corpus in build-fuzz/corpus/<target>, grown from the
+#                                       seeds in fuzz/corpus/<target>; crashes are written to
+#                                       build-fuzz/crashes/<target>/ (keep one in
+#                                       fuzz/regressions/<target>/ once fixed)
+#   scripts/fuzz.sh --smoke [target …]  the bounded run of the test suite: every seed and every
+#                                       regression input once, then PINTAG_FUZZ_SMOKE_RUNS
+#                                       (default 500) mutations from a fixed seed
+# Targets: image_detect http_request json_body csv_import parsers (default: all). Each run's
+# executions are appended to build-fuzz/fuzz-runs.txt (docs/RELIABILITY.md records them).
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${PINTAG_FUZZ_BUILD_DIR:-$root/build-fuzz}"
+smoke=0
+if [[ "${1:-}" == "--smoke" ]]; then
+  smoke=1
+  shift
+fi
+targets=("$@")
+[[ ${#targets[@]} -gt 0 ]] || targets=(image_detect http_request json_body csv_import parsers)
+
+for tool in clang++-14; do
+  command -v "$tool" >/dev/null ||
+    { echo "fuzz.sh: $tool is missing (Debian clang-14 and libclang-rt-14-dev)" >&2; exit 1; }
+done
+if [[ ! -f "$build/build.ninja" ]]; then
+  options=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14
+           -DPINTAG_FUZZ=ON -DPINTAG_TESTS=OFF)
+  command -v ccache >/dev/null && options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  cmake -S "$root" -B "$build" "${options[@]}" >/dev/null
+fi
+build_targets=()
+for target in "${targets[@]}"; do build_targets+=(--target "fuzz_$target"); done
+cmake --build "$build" --parallel "$(nproc)" "${build_targets[@]}"
+
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
+# fontconfig keeps its caches until exit (the label renderer loads the font): not our leak.
+export LSAN_OPTIONS="suppressions=$root/tests/sanitize/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+status=0
+for target in "${targets[@]}"; do
+  exe="$build/fuzz/fuzz_$target"
+  seeds="$root/fuzz/corpus/$target"
+  regressions="$root/fuzz/regressions/$target"
+  crashes="$build/crashes/$target"
+  mkdir -p "$crashes"
+  log="$build/fuzz-$target$( [[ $smoke == 1 ]] && echo -smoke).log"
+  inputs=()
+  [[ -d "$regressions" ]] && inputs+=("$regressions"/*)
+  [[ -d "$seeds" ]] && inputs+=("$seeds"/*)
+  # Every kept input once, as plain files (a regression must stay fixed).
+  if [[ ${#inputs[@]} -gt 0 ]] && ! "$exe" -runs=1 "${inputs[@]}" >"$log" 2>&1; then
+    echo "fuzz.sh: $target fails on a kept input:" >&2
+    tail -40 "$log" >&2
+    status=1
+    continue
+  fi
+  corpus="$build/corpus/$target"
+  mkdir -p "$corpus"
+  if [[ $smoke == 1 ]]; then
+    corpus="$(mktemp -d)"
+    args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-500}" -seed=1 -max_len=65536 -timeout=30)
+  else
+    args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30)
+  fi
+  dirs=("$corpus")
+  [[ -d "$seeds" ]] && dirs+=("$seeds")
+  if "$exe" "${args[@]}" -artifact_prefix="$crashes/" -print_final_stats=1 "${dirs[@]}" \
+    >>"$log" 2>&1; then
+    runs="$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$')"
+    echo "fuzz.sh: $target: ${runs:-?} executions, no failure"
+    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}" \
+      >>"$build/fuzz-runs.txt"
+  else
+    echo "fuzz.sh: $target FAILED; the input is in $crashes/:" >&2
+    tail -60 "$log" >&2
+    status=1
+  fi
+  [[ $smoke == 1 ]] && rm -rf "$corpus"
+done
+exit "$status"

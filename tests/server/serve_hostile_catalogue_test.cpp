@@ -1,0 +1,546 @@
+// The bad-input catalogue (docs/RELIABILITY.md lists it): hostile requests against a real
+// `pintag serve`, each a named case sent as raw bytes on loopback, each answered with its 4xx
+// problem+json, and after each the server still answers a lookup and /readyz.
+
+#include <unistd.h>
+
+#include <chrono>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "pintag/test/loopback_socket.hpp"
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+// --- Images, whole and broken ----------------------------------------------------------------
+
+std::string Encoded(const std::string& extension, int width = 64, int height = 48) {
+  cv::Mat image(height, width, CV_8UC3);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<std::uint8_t> bytes;
+  if (!cv::imencode(extension, image, bytes)) ADD_FAILURE() << "cannot encode " << extension;
+  return {bytes.begin(), bytes.end()};
+}
+std::string Truncated(const std::string& bytes) {
+  return bytes.substr(0, bytes.size() / 2);
+}
+/// The header kept, everything after it noise: a file that claims to be one and is not.
+std::string Corrupted(std::string bytes, std::size_t keep) {
+  for (std::size_t i = keep; i < bytes.size(); ++i) bytes[i] = static_cast<char>((i * 131) ^ 0x5A);
+  return bytes;
+}
+
+void Put32(std::string& out, std::uint32_t v) {
+  for (int shift : {24, 16, 8, 0}) out += static_cast<char>((v >> shift) & 0xFF);
+}
+/// A PNG signature and an IHDR claiming width x height, and nothing else of note.
+std::string PngHeaderClaiming(std::uint32_t width, std::uint32_t height) {
+  std::string png = "\x89PNG\r\n\x1a\n";
+  Put32(png, 13);
+  png += "IHDR";
+  Put32(png, width);
+  Put32(png, height);
+  png += std::string("\x08\x02\x00\x00\x00", 5);
+  Put32(png, 0);  // CRC left wrong: the size is refused before anything checks it
+  png += std::string(64, '\0');
+  return png;
+}
+/// A baseline JPEG whose SOF0 claims width x height.
+std::string JpegClaiming(int width, int height) {
+  std::string jpeg = Encoded(".jpg");
+  for (std::size_t i = 2; i + 9 < jpeg.size(); ++i) {
+    if (static_cast<unsigned char>(jpeg[i]) == 0xFF &&
+        static_cast<unsigned char>(jpeg[i + 1]) == 0xC0) {
+      jpeg[i + 5] = static_cast<char>(height >> 8);
+      jpeg[i + 6] = static_cast<char>(height & 0xFF);
+      jpeg[i + 7] = static_cast<char>(width >> 8);
+      jpeg[i + 8] = static_cast<char>(width & 0xFF);
+      break;
+    }
+  }
+  return jpeg;
+}
+/// A little-endian TIFF whose one IFD claims width x height, 8-bit grey in one strip.
+std::string TiffClaiming(std::uint32_t width, std::uint32_t height) {
+  std::string tiff = "II*";
+  tiff += '\0';
+  const auto u16 = [&](std::uint16_t v) {
+    tiff += static_cast<char>(v & 0xFF);
+    tiff += static_cast<char>(v >> 8);
+  };
+  const auto u32 = [&](std::uint32_t v) {
+    for (int shift : {0, 8, 16, 24}) tiff += static_cast<char>((v >> shift) & 0xFF);
+  };
+  u32(8);
+  u16(9);
+  const auto entry = [&](std::uint16_t tag, std::uint16_t type, std::uint32_t value) {
+    u16(tag);
+    u16(type);
+    u32(1);
+    u32(value);
+  };
+  entry(256, 4, width);   // ImageWidth, LONG
+  entry(257, 4, height);  // ImageLength
+  entry(258, 3, 8);       // BitsPerSample
+  entry(259, 3, 1);       // Compression: none
+  entry(262, 3, 1);       // PhotometricInterpretation: grey
+  entry(273, 4, 128);     // StripOffsets
+  entry(277, 3, 1);       // SamplesPerPixel
+  entry(278, 4, height);  // RowsPerStrip
+  entry(279, 4, 64);      // StripByteCounts
+  u32(0);
+  tiff += std::string(128 + 64 - tiff.size(), '\0');
+  return tiff;
+}
+/// A WebP (VP8X) whose canvas claims width x height (each at most 2^24).
+std::string WebpClaiming(std::uint32_t width, std::uint32_t height) {
+  std::string chunk = "VP8X";
+  chunk += std::string("\x0a\x00\x00\x00", 4);
+  chunk += std::string(4, '\0');  // flags, reserved
+  for (std::uint32_t v : {width - 1, height - 1}) {
+    for (int shift : {0, 8, 16}) chunk += static_cast<char>((v >> shift) & 0xFF);
+  }
+  std::string webp = "RIFF";
+  const std::uint32_t size = static_cast<std::uint32_t>(4 + chunk.size());
+  for (int shift : {0, 8, 16, 24}) webp += static_cast<char>((size >> shift) & 0xFF);
+  return webp + "WEBP" + chunk;
+}
+
+// --- Requests --------------------------------------------------------------------------------
+
+struct Answer {
+  int status = 0;
+  std::string head;
+  std::string body;
+};
+
+Answer Parse(const std::string& raw) {
+  Answer answer;
+  if (raw.rfind("HTTP/1.1 ", 0) == 0) answer.status = std::atoi(raw.c_str() + 9);
+  const std::size_t end = raw.find("\r\n\r\n");
+  answer.head = raw.substr(0, end);
+  if (end != std::string::npos) answer.body = raw.substr(end + 4);
+  return answer;
+}
+
+/// The whole answer: the connection is asked to close, so it ends when the server closes it.
+Answer Send(int port, const std::string& request, int quiet_s = 10) {
+  return Parse(test::SendRaw(port, request, quiet_s));
+}
+
+/// A request with Connection: close and, for a body, its Content-Length (unless `length` says
+/// otherwise: "" leaves it out).
+std::string Request(const std::string& method, const std::string& target,
+                    const std::vector<std::string>& headers, const std::string& body = {},
+                    std::optional<std::string> length = std::nullopt) {
+  std::string out = method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n";
+  for (const std::string& h : headers) out += h + "\r\n";
+  const std::string declared = length.value_or(std::to_string(body.size()));
+  if (!declared.empty() && (!body.empty() || length)) out += "Content-Length: " + declared + "\r\n";
+  return out + "\r\n" + body;
+}
+
+std::string Multipart(const std::string& boundary, const std::string& name,
+                      const std::string& content, const std::string& type = "image/jpeg") {
+  return "--" + boundary + "\r\nContent-Disposition: form-data; name=\"" + name +
+         "\"; filename=\"p.jpg\"\r\nContent-Type: " + type + "\r\n\r\n" + content + "\r\n--" +
+         boundary + "--\r\n";
+}
+
+class HostileCatalogue : public ServeTest {
+ protected:
+  std::string bearer(const std::string& token) const { return "Authorization: Bearer " + token; }
+  std::string scannerAuth() const { return bearer(scanner_token_); }
+  std::string counterAuth() const { return bearer(counter_token_); }
+  std::string adminAuth() const { return bearer(admin_token_); }
+
+  std::string detect(const std::string& body, const std::string& type = "image/jpeg") const {
+    return Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: " + type}, body);
+  }
+
+  /// Sends `request`; expects `status` as problem+json (and `title` when given); then checks
+  /// the server still answers.
+  void expectRefused(const std::string& request, int status, const std::string& title = {}) {
+    const Answer answer = Send(server_->port(), request);
+    EXPECT_EQ(answer.status, status) << answer.head << "\n" << answer.body.substr(0, 400);
+    EXPECT_NE(answer.head.find("Content-Type: application/problem+json"), std::string::npos)
+        << answer.head;
+    const json problem = json::parse(answer.body, nullptr, false);
+    ASSERT_FALSE(problem.is_discarded()) << answer.body.substr(0, 300);
+    EXPECT_EQ(problem.value("status", 0), status);
+    EXPECT_TRUE(problem.contains("type") && problem.contains("title") &&
+                problem.contains("detail"));
+    if (!title.empty()) {
+      EXPECT_EQ(problem.value("title", ""), title) << problem.dump();
+    }
+    expectHealthy();
+  }
+
+  void expectHealthy() {
+    const auto ready = client().Get("/readyz");
+    ASSERT_TRUE(ready) << "the server stopped answering";
+    EXPECT_EQ(ready->status, 200);
+    const auto lookup = client().Get("/api/v1/pincodes/110001");
+    ASSERT_TRUE(lookup);
+    EXPECT_EQ(lookup->status, 200);
+    EXPECT_EQ(::kill(server_->pid(), 0), 0) << "the server process is gone";
+  }
+};
+
+// --- Photos: truncated, corrupt, bombs, degenerate -------------------------------------------
+
+TEST_F(HostileCatalogue, TruncatedJpeg) {
+  expectRefused(detect(Truncated(Encoded(".jpg"))), 400, "Corrupt Image");
+}
+TEST_F(HostileCatalogue, TruncatedPng) {
+  expectRefused(detect(Truncated(Encoded(".png")), "image/png"), 400, "Corrupt Image");
+}
+TEST_F(HostileCatalogue, TruncatedTiff) {
+  expectRefused(detect(Truncated(Encoded(".tiff")), "image/tiff"), 400, "Corrupt Image");
+}
+TEST_F(HostileCatalogue, TruncatedWebp) {
+  expectRefused(detect(Truncated(Encoded(".webp")), "image/webp"), 400, "Corrupt Image");
+}
+TEST_F(HostileCatalogue, CorruptJpegScanData) {
+  expectRefused(detect(Corrupted(Encoded(".jpg"), 200)), 400, "Corrupt Image");
+}
+TEST_F(HostileCatalogue, CorruptPngChunks) {
+  expectRefused(detect(Corrupted(Encoded(".png"), 33), "image/png"), 400, "Corrupt Image");
+}
+TEST_F(HostileCatalogue, CorruptTiffDirectory) {
+  expectRefused(detect(Corrupted(Encoded(".tiff"), 8), "image/tiff"), 400);
+}
+TEST_F(HostileCatalogue, CorruptWebpBitstream) {
+  expectRefused(detect(Corrupted(Encoded(".webp"), 30), "image/webp"), 400);
+}
+TEST_F(HostileCatalogue, PngDecompressionBombHeader) {
+  expectRefused(detect(PngHeaderClaiming(60000, 60000), "image/png"), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, JpegDecompressionBombHeader) {
+  expectRefused(detect(JpegClaiming(65000, 65000)), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, TiffDecompressionBombHeader) {
+  expectRefused(detect(TiffClaiming(100000, 100000), "image/tiff"), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, WebpDecompressionBombHeader) {
+  expectRefused(detect(WebpClaiming(16000, 16000), "image/webp"), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, LosslessWebpDecompressionBombHeader) {
+  // A VP8L chunk: signature 0x2f, then 14 bits each of width - 1 and height - 1.
+  std::string webp = std::string("RIFF\x20\x00\x00\x00WEBPVP8L\x10\x00\x00\x00\x2f", 21);
+  const std::uint32_t bits = (16383u) | (16383u << 14);
+  for (int shift : {0, 8, 16, 24}) webp += static_cast<char>((bits >> shift) & 0xFF);
+  webp += std::string(16, '\0');
+  expectRefused(detect(webp, "image/webp"), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, FortyMegapixelsPlusOne) {
+  // The default limit is 40'000'000 pixels: one more is refused from the header alone.
+  expectRefused(detect(PngHeaderClaiming(40'000'001, 1), "image/png"), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, ZeroByteImage) {
+  expectRefused(
+      Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: image/jpeg"}, "", "0"), 400,
+      "No Image");
+}
+TEST_F(HostileCatalogue, PostWithoutLengthIsCutOffByTheReadTimeout) {
+  // Neither Content-Length nor chunked: the body is read until the client stops sending, and a
+  // client that sends nothing more is answered once --read-timeout passes.
+  startServer({"--read-timeout", "1"});
+  expectRefused(Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: image/jpeg"}),
+                400);
+}
+TEST_F(HostileCatalogue, OnePixelImageIsReadWithNoTags) {
+  // Documented behaviour: a whole image too small to hold a tag is a valid photo of nothing.
+  const Answer answer = Send(server_->port(), detect(Encoded(".png", 1, 1), "image/png"));
+  EXPECT_EQ(answer.status, 200) << answer.body;
+  const json out = json::parse(answer.body, nullptr, false);
+  ASSERT_FALSE(out.is_discarded()) << answer.body;
+  EXPECT_EQ(out["tag_count"], 0);
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, RandomBytesAsAPhoto) {
+  expectRefused(detect(std::string(4096, '\x7f')), 415, "Unsupported Image Format");
+}
+TEST_F(HostileCatalogue, PdfAsAPhoto) {
+  expectRefused(detect("%PDF-1.4\n%\xe2\xe3\n1 0 obj<<>>endobj\n", "image/jpeg"), 415);
+}
+
+// --- Content types ----------------------------------------------------------------------------
+
+TEST_F(HostileCatalogue, PhotoAsTextPlain) {
+  expectRefused(detect(Encoded(".jpg"), "text/plain"), 415);
+}
+TEST_F(HostileCatalogue, PhotoWithoutContentType) {
+  expectRefused(Request("POST", "/api/v1/detect", {scannerAuth()}, Encoded(".jpg")), 415);
+}
+TEST_F(HostileCatalogue, JsonBodyAsXml) {
+  expectRefused(Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/xml"},
+                        R"(<pincodes><p>110001</p></pincodes>)"),
+                415);
+}
+TEST_F(HostileCatalogue, JsonRouteWithoutContentType) {
+  expectRefused(Request("POST", "/api/v1/labels", {counterAuth()}, R"({"pincodes":["110001"]})"),
+                415);
+}
+TEST_F(HostileCatalogue, MalformedJsonBody) {
+  expectRefused(Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"},
+                        R"({"pincodes":["110001")"),
+                400, "Malformed JSON");
+}
+TEST_F(HostileCatalogue, DeeplyNestedJsonBody) {
+  const std::string nested = std::string(100000, '[') + std::string(100000, ']');
+  expectRefused(
+      Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"}, nested),
+      400);
+}
+
+// --- Bodies and multipart ---------------------------------------------------------------------
+
+TEST_F(HostileCatalogue, DeclaredBodyOverTheLimit) {
+  // 25 MiB + 1 declared: refused from the header, before a byte of the body is read.
+  expectRefused(Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: image/jpeg"}, "",
+                        std::to_string(25 * 1024 * 1024 + 1)),
+                413);
+}
+TEST_F(HostileCatalogue, ContentLengthOverflow) {
+  expectRefused(Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: image/jpeg"}, "",
+                        "99999999999999999999999"),
+                413);
+}
+TEST_F(HostileCatalogue, NegativeContentLength) {
+  expectRefused(
+      Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: image/jpeg"}, "", "-5"),
+      400);
+}
+TEST_F(HostileCatalogue, ChunkedBodyOverTheLimit) {
+  startServer({"--max-body-mb", "0.05"});
+  std::string chunked;
+  const std::string chunk(16 * 1024, 'x');
+  for (int i = 0; i < 8; ++i) chunked += "4000\r\n" + chunk + "\r\n";
+  chunked += "0\r\n\r\n";
+  expectRefused(Request("POST", "/api/v1/detect",
+                        {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"},
+                        chunked, ""),
+                413);
+}
+TEST_F(HostileCatalogue, OversizedMultipartPart) {
+  startServer({"--max-body-mb", "0.05"});
+  const std::string body = Multipart("b0undary", "image", std::string(80 * 1024, 'j'));
+  expectRefused(
+      Request("POST", "/api/v1/detect",
+              {scannerAuth(), "Content-Type: multipart/form-data; boundary=b0undary"}, body),
+      413);
+}
+TEST_F(HostileCatalogue, MultipartWithoutBoundary) {
+  expectRefused(
+      Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: multipart/form-data"},
+              Multipart("x", "image", Encoded(".jpg"))),
+      400);
+}
+TEST_F(HostileCatalogue, MultipartWithAWrongBoundary) {
+  expectRefused(Request("POST", "/api/v1/detect",
+                        {scannerAuth(), "Content-Type: multipart/form-data; boundary=declared"},
+                        Multipart("other", "image", Encoded(".jpg"))),
+                400);
+}
+TEST_F(HostileCatalogue, MultipartCutOffBeforeItsEnd) {
+  const std::string body = Multipart("cut", "image", Encoded(".jpg"));
+  expectRefused(Request("POST", "/api/v1/detect",
+                        {scannerAuth(), "Content-Type: multipart/form-data; boundary=cut"},
+                        body.substr(0, body.size() - 12)),
+                400);
+}
+TEST_F(HostileCatalogue, MultipartWithoutAnImagePart) {
+  expectRefused(Request("POST", "/api/v1/detect",
+                        {scannerAuth(), "Content-Type: multipart/form-data; boundary=b"},
+                        Multipart("b", "photo", Encoded(".jpg"))),
+                400);
+}
+TEST_F(HostileCatalogue, GetWithABody) {
+  expectRefused(Request("GET", "/api/v1/pincodes/110001", {}, "unexpected"), 400);
+}
+
+// --- Slow clients and floods ------------------------------------------------------------------
+
+TEST_F(HostileCatalogue, SlowlorisHeadersAreCutOffByTheReadTimeout) {
+  startServer({"--read-timeout", "1"});
+  // Three clients that never finish their headers, on a server with four workers.
+  std::vector<int> slow;
+  for (int i = 0; i < 3; ++i) {
+    const int fd = test::ConnectLoopback(server_->port());
+    ASSERT_GE(fd, 0);
+    ASSERT_TRUE(test::SendAll(fd, "GET /api/v1/pincodes/110001 HTTP/1.1\r\nHost: x\r\nX-A: "));
+    slow.push_back(fd);
+  }
+  expectHealthy();  // the others are served meanwhile
+  for (const int fd : slow) {
+    // The server gives up on each: it answers 400 (cpp-httplib's, as problem+json) and closes.
+    const std::string answer = test::ReceiveUntil(fd, 5);
+    EXPECT_EQ(answer.rfind("HTTP/1.1 400", 0), 0U) << answer.substr(0, 200);
+    EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
+    ::close(fd);
+  }
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, HeaderFloodOfManyHeaders) {
+  std::vector<std::string> headers;
+  for (int i = 0; i < 5000; ++i)
+    headers.push_back("X-Flood-" + std::to_string(i) + ": " + std::string(40, 'f'));
+  expectRefused(Request("GET", "/api/v1/pincodes/110001", headers), 431);
+}
+TEST_F(HostileCatalogue, OneHeaderLongerThanAllowed) {
+  const Answer answer = Send(server_->port(), Request("GET", "/api/v1/pincodes/110001",
+                                                      {"X-Long: " + std::string(64 * 1024, 'l')}));
+  EXPECT_EQ(answer.status, 400) << answer.head;
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, RequestLineLongerThanAllowed) {
+  const Answer answer =
+      Send(server_->port(), Request("GET", "/api/v1/pincodes/" + std::string(20000, '1'), {}));
+  EXPECT_GE(answer.status, 400) << answer.head;
+  EXPECT_LT(answer.status, 500) << answer.head;
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, GarbageInsteadOfARequestLine) {
+  const Answer answer =
+      Send(server_->port(), "\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03\r\n\r\n");
+  EXPECT_TRUE(answer.status == 400 || answer.status == 0) << answer.head;
+  expectHealthy();
+}
+
+// --- Paths and static files -------------------------------------------------------------------
+
+class HostileStaticCatalogue : public HostileCatalogue {
+ protected:
+  void SetUp() override {
+    HostileCatalogue::SetUp();
+    std::filesystem::create_directories(dir_.file("web"));
+    WriteFile(dir_.file("web/index.html"), "<p>hello</p>");
+    startServer({"--web", dir_.file("web")});
+  }
+};
+
+TEST_F(HostileStaticCatalogue, PathTraversalToTheDatabase) {
+  expectRefused(Request("GET", "/../registry.db", {}), 404);
+}
+TEST_F(HostileStaticCatalogue, EncodedPathTraversal) {
+  expectRefused(Request("GET", "/%2e%2e/%2e%2e/etc/passwd", {}), 404);
+}
+TEST_F(HostileStaticCatalogue, DoubleEncodedPathTraversal) {
+  expectRefused(Request("GET", "/%252e%252e/registry.db", {}), 404);
+}
+TEST_F(HostileStaticCatalogue, BackslashPathTraversal) {
+  expectRefused(Request("GET", "/..%5c..%5cetc%5cpasswd", {}), 404);
+}
+TEST_F(HostileStaticCatalogue, NulByteInThePath) {
+  expectRefused(Request("GET", "/index.html%00.png", {}), 404);
+}
+
+// --- Registry parameters: pincodes, keys, plans, SQL ------------------------------------------
+
+TEST_F(HostileCatalogue, PincodeWithLetters) {
+  expectRefused(Request("GET", "/api/v1/pincodes/11000A", {}), 400, "Malformed Pincode");
+}
+TEST_F(HostileCatalogue, PincodeStartingWithZero) {
+  expectRefused(Request("GET", "/api/v1/pincodes/011001", {}), 400, "Malformed Pincode");
+}
+TEST_F(HostileCatalogue, PincodeOfHugeDigits) {
+  expectRefused(Request("GET", "/api/v1/pincodes/" + std::string(400, '9'), {}), 400);
+}
+TEST_F(HostileCatalogue, SqlInjectionInAPincode) {
+  expectRefused(Request("GET", "/api/v1/pincodes/1'%20OR%20'1'='1", {}), 400);
+}
+TEST_F(HostileCatalogue, SqlInjectionInASearch) {
+  const Answer answer =
+      Send(server_->port(),
+           Request("GET", "/api/v1/pincodes?q=%27%3B%20DROP%20TABLE%20pincodes%3B%20--", {}));
+  // A search for strange text is a search that finds nothing, not an error.
+  EXPECT_EQ(answer.status, 200) << answer.body;
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, KeyOutOfRange) {
+  expectRefused(Request("GET", "/api/v1/keys/32768", {}), 400, "Malformed Key");
+}
+TEST_F(HostileCatalogue, NegativeKey) {
+  expectRefused(Request("GET", "/api/v1/keys/-1", {}), 400, "Malformed Key");
+}
+TEST_F(HostileCatalogue, UnknownPlanName) {
+  expectRefused(Request("GET", "/api/v1/route/110001?plan=%27%20OR%201%3D1%20--", {}), 404);
+}
+TEST_F(HostileCatalogue, PlanNameTraversalOnWrite) {
+  // The decoded slashes make it a path no route has.
+  expectRefused(Request("PUT", "/api/v1/sortplans/..%2F..%2Fetc",
+                        {adminAuth(), "Content-Type: text/csv"}, "prefix,bin\n*,Z\n"),
+                404);
+}
+TEST_F(HostileCatalogue, SqlInjectionInAPlanNameIsStoredAsAName) {
+  // Documented behaviour: every statement binds its values, so the text is a (strange) name.
+  const std::string name = "x%27%3B%20DROP%20TABLE%20sort_plans%3B--";
+  const Answer put =
+      Send(server_->port(), Request("PUT", "/api/v1/sortplans/" + name,
+                                    {adminAuth(), "Content-Type: text/csv"}, "prefix,bin\n*,Z\n"));
+  EXPECT_EQ(put.status, 201) << put.body;
+  const auto back = client().Get("/api/v1/sortplans/" + name);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->status, 200);
+  EXPECT_NE(back->body.find("DROP TABLE sort_plans"), std::string::npos) << back->body;
+  const auto plans = client().Get("/api/v1/sortplans/default");
+  ASSERT_TRUE(plans);
+  EXPECT_EQ(plans->status, 200);
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, LabelSizeOutOfRange) {
+  expectRefused(Request("GET", "/api/v1/labels/110001.pdf?size=1x1000mm", {counterAuth()}), 400);
+}
+TEST_F(HostileCatalogue, LabelDpiAbsurd) {
+  expectRefused(Request("GET", "/api/v1/labels/110001.png?dpi=1e308", {counterAuth()}), 400);
+}
+
+// --- Batches and tokens -----------------------------------------------------------------------
+
+TEST_F(HostileCatalogue, HugeBatchList) {
+  json pins = json::array();
+  for (int i = 0; i < 100000; ++i) pins.push_back("110001");
+  expectRefused(Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"},
+                        json{{"pincodes", pins}}.dump()),
+                413);
+}
+TEST_F(HostileCatalogue, MissingToken) {
+  expectRefused(Request("GET", "/api/v1/labels/110001.pdf", {}), 401);
+}
+TEST_F(HostileCatalogue, WrongToken) {
+  expectRefused(Request("GET", "/api/v1/labels/110001.pdf", {bearer("pt_1_not-a-real-secret")}),
+                401);
+}
+TEST_F(HostileCatalogue, HugeToken) {
+  expectRefused(Request("GET", "/api/v1/labels/110001.pdf", {bearer(std::string(8000, 't'))}), 401);
+}
+TEST_F(HostileCatalogue, RevokedToken) {
+  const auto revoke =
+      client().Delete("/api/v1/tokens/" + std::to_string(counter_token_id_), admin());
+  ASSERT_TRUE(revoke);
+  ASSERT_LT(revoke->status, 300) << revoke->body;
+  expectRefused(Request("GET", "/api/v1/labels/110001.pdf", {counterAuth()}), 401);
+}
+TEST_F(HostileCatalogue, ScannerTokenOnAnAdminRoute) {
+  expectRefused(Request("GET", "/api/v1/tokens", {scannerAuth()}), 403);
+}
+TEST_F(HostileCatalogue, CounterTokenOnTheScannerRoute) {
+  expectRefused(Request("POST", "/api/v1/detect", {counterAuth(), "Content-Type: image/jpeg"},
+                        Encoded(".jpg")),
+                403);
+}
+TEST_F(HostileCatalogue, BasicAuthInsteadOfBearer) {
+  expectRefused(Request("GET", "/api/v1/tokens", {"Authorization: Basic YWRtaW46YWRtaW4="}), 401);
+}
+TEST_F(HostileCatalogue, UnknownMethod) {
+  expectRefused(Request("PATCH", "/api/v1/pincodes/110001", {}), 405);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test

@@ -1,0 +1,229 @@
+// The operator's view of a real `pintag serve`: one access line per request on stderr (text or
+// JSON), the X-Request-Id echoed, failures logged under that id and written to the scan log,
+// every serve flag also from a PINTAG_* variable, and the process_* metrics.
+
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "pintag/db/database.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+/// The server's stderr lines that mention `needle`, waiting up to 5 s for the first (the access
+/// line is written after the response, so it may trail the client's read by a moment).
+std::vector<std::string> LogLines(const std::string& file, const std::string& needle) {
+  std::vector<std::string> found;
+  for (int attempt = 0; attempt < 500 && found.empty(); ++attempt) {
+    if (attempt > 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    std::istringstream text(ReadFile(file));
+    for (std::string line; std::getline(text, line);) {
+      if (line.find(needle) != std::string::npos) found.push_back(line);
+    }
+  }
+  return found;
+}
+
+class ServeLogTest : public ServeTest {
+ protected:
+  std::string stderrFile() const { return dir_.file("stderr.log"); }
+};
+
+TEST_F(ServeLogTest, EveryRequestGetsOneAccessLineWithItsEchoedRequestId) {
+  auto ok = client().Get("/api/v1/pincodes/110001", {{"X-Request-Id", "lookup-42"}});
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 200);
+  EXPECT_EQ(ok->get_header_value("X-Request-Id"), "lookup-42");
+  const std::vector<std::string> lines = LogLines(stderrFile(), "id=lookup-42");
+  ASSERT_EQ(lines.size(), 1U) << ReadFile(stderrFile());
+  const std::string& line = lines[0];
+  EXPECT_NE(line.find(" info access "), std::string::npos) << line;
+  EXPECT_NE(line.find("client=127.0.0.1"), std::string::npos) << line;
+  EXPECT_NE(line.find("method=GET"), std::string::npos) << line;
+  EXPECT_NE(line.find("path=/api/v1/pincodes/110001"), std::string::npos) << line;
+  EXPECT_NE(line.find("status=200"), std::string::npos) << line;
+  EXPECT_NE(line.find("bytes=" + std::to_string(ok->body.size())), std::string::npos) << line;
+  EXPECT_TRUE(std::regex_search(line, std::regex(R"( ms=[0-9.]+)"))) << line;
+  EXPECT_TRUE(
+      std::regex_match(line.substr(0, 24), std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z)")))
+      << line;
+
+  auto missing = client().Get("/api/v1/no-such-route", {{"X-Request-Id", "missing-1"}});
+  ASSERT_TRUE(missing);
+  EXPECT_EQ(missing->status, 404);
+  EXPECT_EQ(missing->get_header_value("X-Request-Id"), "missing-1");
+  const auto missing_lines = LogLines(stderrFile(), "id=missing-1");
+  ASSERT_EQ(missing_lines.size(), 1U);
+  EXPECT_NE(missing_lines[0].find("status=404"), std::string::npos) << missing_lines[0];
+}
+
+TEST_F(ServeLogTest, AnInsaneOrMissingRequestIdIsReplacedByARandomOne) {
+  const std::regex generated("[0-9a-f]{32}");
+  for (const std::string& bad : {std::string("has spaces in it"), std::string(129, 'a'),
+                                 std::string("quote\"and=equals"), std::string()}) {
+    httplib::Headers headers;
+    if (!bad.empty()) headers.emplace("X-Request-Id", bad);
+    auto r = client().Get("/livez", headers);
+    ASSERT_TRUE(r);
+    EXPECT_TRUE(std::regex_match(r->get_header_value("X-Request-Id"), generated))
+        << "for '" << bad << "': " << r->get_header_value("X-Request-Id");
+  }
+  auto a = client().Get("/livez");
+  auto b = client().Get("/livez");
+  ASSERT_TRUE(a && b);
+  EXPECT_NE(a->get_header_value("X-Request-Id"), b->get_header_value("X-Request-Id"));
+}
+
+TEST_F(ServeLogTest, QueryStringsAndTokensStayOutOfTheLog) {
+  auto r = client().Get("/api/v1/pincodes?q=secret-query-value&limit=1&token=hunter2",
+                        Auth(counter_token_));
+  ASSERT_TRUE(r);
+  const std::string id = r->get_header_value("X-Request-Id");
+  ASSERT_EQ(LogLines(stderrFile(), "id=" + id).size(), 1U);
+  const std::string log = ReadFile(stderrFile());
+  EXPECT_EQ(log.find("secret-query-value"), std::string::npos);
+  EXPECT_EQ(log.find("hunter2"), std::string::npos);
+  EXPECT_EQ(log.find(counter_token_), std::string::npos);
+}
+
+TEST_F(ServeLogTest, AuthenticatedRequestsNameTheTokenIdNotItsSecret) {
+  auto r = client().Get("/api/v1/tokens", admin());
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  const auto lines = LogLines(stderrFile(), "id=" + r->get_header_value("X-Request-Id"));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_TRUE(std::regex_search(lines[0], std::regex(R"( token=\d+$)"))) << lines[0];
+  EXPECT_EQ(lines[0].find(admin_token_), std::string::npos);
+}
+
+TEST_F(ServeLogTest, JsonFormatWritesOneObjectPerLine) {
+  startServer({"--log-format", "json"});
+  auto r = client().Get("/api/v1/pincodes/560001?x=1", {{"X-Request-Id", "json-7"}});
+  ASSERT_TRUE(r);
+  const auto lines = LogLines(stderrFile(), "\"json-7\"");
+  ASSERT_EQ(lines.size(), 1U);
+  const json line = json::parse(lines[0], nullptr, false);
+  ASSERT_FALSE(line.is_discarded()) << lines[0];
+  EXPECT_EQ(line["event"], "access");
+  EXPECT_EQ(line["level"], "info");
+  EXPECT_EQ(line["id"], "json-7");
+  EXPECT_EQ(line["method"], "GET");
+  EXPECT_EQ(line["path"], "/api/v1/pincodes/560001");
+  EXPECT_EQ(line["status"], r->status);
+  EXPECT_EQ(line["bytes"], r->body.size());
+  EXPECT_EQ(line["client"], "127.0.0.1");
+  EXPECT_TRUE(line["ms"].is_number());
+  EXPECT_TRUE(line["time"].is_string());
+}
+
+TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLog) {
+  // A real storage failure under the running server: the sort rules table disappears, so
+  // loading the plan for /detect fails with an SQLite error the client must not see.
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db_path_.c_str(), &raw), SQLITE_OK);
+    sqlite3_busy_timeout(raw, 5000);
+    char* message = nullptr;
+    const int rc = sqlite3_exec(raw, "PRAGMA foreign_keys=OFF; DROP TABLE sort_rules;", nullptr,
+                                nullptr, &message);
+    sqlite3_free(message);
+    sqlite3_close(raw);
+    ASSERT_EQ(rc, SQLITE_OK);
+  }
+  httplib::MultipartFormDataItems form = {{"image", "not looked at", "p.jpg", "image/jpeg"}};
+  httplib::Headers headers = scanner();
+  headers.emplace("X-Request-Id", "detect-fails-1");
+  auto r = client().Post("/api/v1/detect", headers, form);
+  const json problem = ExpectProblem(r, 500);
+  EXPECT_EQ(problem["detail"].get<std::string>().find("sort_rules"), std::string::npos)
+      << "the SQL error reached the client: " << problem.dump();
+
+  const auto lines = LogLines(stderrFile(), "detect-fails-1");
+  ASSERT_EQ(lines.size(), 2U) << ReadFile(stderrFile());
+  EXPECT_NE(lines[0].find(" error error id=detect-fails-1"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("POST /api/v1/detect: 500"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("status=500"), std::string::npos) << lines[1];
+  EXPECT_NE(ReadFile(stderrFile()).find("sort_rules"), std::string::npos)
+      << "the operator should see SQLite's message";
+
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  auto scans = db::RecentScans(opened.value().connection, 1);
+  ASSERT_TRUE(scans);
+  ASSERT_EQ(scans->size(), 1U);
+  const json result = json::parse(scans->front().result_json);
+  EXPECT_EQ(result["error"]["status"], 500) << scans->front().result_json;
+}
+
+TEST_F(ServeLogTest, ProcessMetricsDescribeTheServerProcess) {
+  const auto r = client().Get("/metrics");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  const auto value = [&](const std::string& name) {
+    std::smatch m;
+    const std::regex line("\n" + name + " ([0-9.e+]+)\n");
+    EXPECT_TRUE(std::regex_search(r->body, m, line)) << name << " missing";
+    return m.empty() ? -1.0 : std::stod(m[1].str());
+  };
+  EXPECT_GT(value("process_resident_memory_bytes"), 1e6);
+  EXPECT_GT(value("process_virtual_memory_bytes"), value("process_resident_memory_bytes"));
+  EXPECT_GT(value("process_cpu_seconds_total"), 0);
+  EXPECT_GE(value("process_open_fds"), 4);  // stdin, stdout, stderr, the listening socket
+  EXPECT_GT(value("process_max_fds"), value("process_open_fds"));
+  const double now =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const double start = value("process_start_time_seconds");
+  EXPECT_LE(start, now + 2);
+  EXPECT_GT(start, now - 600) << "the server started during this test";
+  EXPECT_NE(r->body.find("# TYPE process_cpu_seconds_total counter"), std::string::npos);
+}
+
+TEST_F(ServeLogTest, EnvironmentVariablesConfigureServeAndFlagsWin) {
+  ::setenv("PINTAG_LOG_FORMAT", "json", 1);
+  ::setenv("PINTAG_MAX_BATCH", "2", 1);
+  startServer();
+  ::unsetenv("PINTAG_MAX_BATCH");
+  auto r = client().Get("/livez", {{"X-Request-Id", "env-json"}});
+  ASSERT_TRUE(r);
+  const auto lines = LogLines(stderrFile(), "\"env-json\"");
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_FALSE(json::parse(lines[0], nullptr, false).is_discarded()) << lines[0];
+  // PINTAG_MAX_BATCH=2: a batch of three is refused.
+  const json batch = {{"pincodes", {"110001", "110001", "110001"}}};
+  ExpectProblem(client().Post("/api/v1/labels", counter(), batch.dump(), "application/json"), 413);
+
+  startServer({"--log-format", "text"});  // the flag wins over PINTAG_LOG_FORMAT=json
+  ::unsetenv("PINTAG_LOG_FORMAT");
+  r = client().Get("/livez", {{"X-Request-Id", "flag-text"}});
+  ASSERT_TRUE(r);
+  const auto text_lines = LogLines(stderrFile(), "flag-text");
+  ASSERT_EQ(text_lines.size(), 1U);
+  EXPECT_NE(text_lines[0].find("id=flag-text"), std::string::npos) << text_lines[0];
+}
+
+TEST(ServeHelp, NamesTheEnvironmentVariableOfEveryOption) {
+  const CommandResult help = RunPintag("serve --help");
+  ASSERT_EQ(help.status, 0) << help.out;
+  for (const char* name :
+       {"PINTAG_DB", "PINTAG_PORT", "PINTAG_BIND", "PINTAG_THREADS", "PINTAG_WEB",
+        "PINTAG_MAX_BODY_MB", "PINTAG_MAX_PIXELS", "PINTAG_MAX_BATCH", "PINTAG_MAX_TAG_PX",
+        "PINTAG_READ_TIMEOUT", "PINTAG_WRITE_TIMEOUT", "PINTAG_LOG_FORMAT", "PINTAG_READ_ONLY",
+        "PINTAG_FOLLOW", "PINTAG_FOLLOW_TOKEN_FILE", "PINTAG_FOLLOW_INTERVAL_MS", "PINTAG_PRIMARY",
+        "PINTAG_SCAN_LOG", "PINTAG_SNAPSHOT"}) {
+    EXPECT_NE(help.out.find(std::string(name) + ")"), std::string::npos) << name;
+  }
+  const CommandResult bad = RunPintag("serve --log-format xml --port 1");
+  EXPECT_NE(bad.status, 0);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
