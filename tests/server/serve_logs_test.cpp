@@ -19,12 +19,15 @@ namespace {
 
 using nlohmann::json;
 
-/// The server's stderr lines that mention `needle`, waiting up to 5 s for the first (the access
-/// line is written after the response, so it may trail the client's read by a moment).
-std::vector<std::string> LogLines(const std::string& file, const std::string& needle) {
+/// The server's stderr lines that mention `needle`, waiting up to 5 s until there are at least
+/// `expected` of them (the access line is written after the response, so it may trail the
+/// client's read by a moment; an error line logged before the response does not mean it is there).
+std::vector<std::string> LogLines(const std::string& file, const std::string& needle,
+                                  std::size_t expected = 1) {
   std::vector<std::string> found;
-  for (int attempt = 0; attempt < 500 && found.empty(); ++attempt) {
+  for (int attempt = 0; attempt < 500 && found.size() < expected; ++attempt) {
     if (attempt > 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    found.clear();
     std::istringstream text(ReadFile(file));
     for (std::string line; std::getline(text, line);) {
       if (line.find(needle) != std::string::npos) found.push_back(line);
@@ -147,7 +150,7 @@ TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLo
   EXPECT_EQ(problem["detail"].get<std::string>().find("sort_rules"), std::string::npos)
       << "the SQL error reached the client: " << problem.dump();
 
-  const auto lines = LogLines(stderrFile(), "detect-fails-1");
+  const auto lines = LogLines(stderrFile(), "detect-fails-1", 2);
   ASSERT_EQ(lines.size(), 2U) << ReadFile(stderrFile());
   EXPECT_NE(lines[0].find(" error error id=detect-fails-1"), std::string::npos) << lines[0];
   EXPECT_NE(lines[0].find("POST /api/v1/detect: 500"), std::string::npos) << lines[0];
