@@ -142,7 +142,7 @@ int Main(int argc, char** argv) {
         csv,
         "frame,size_px,tilt_deg,hard,draw,truth,key,winner,lead,excess,distance,"
         "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
-        "evaluations,ms,residual,free_residual,refused\n");
+        "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused\n");
   }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
@@ -185,14 +185,15 @@ int Main(int argc, char** argv) {
           if (csv != nullptr) {
             std::fprintf(csv,
                          "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
-                         "%.3f,%d,%.2f,%.1f,%.1f,%s\n",
+                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s\n",
                          f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
                          d, truth.id, refused.empty() ? dec.winner->value() : -1,
                          dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
                          dec.runner_up_distance, m.fit.luma_noise, m.fit.chroma_noise,
                          m.fit.luma_blur.major, m.fit.luma_blur.minor, m.fit.luma_blur.sharpen,
                          m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
-                         m.fit.evaluations, ms, dec.residual, dec.free_residual,
+                         m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
+                         m.fit.chroma_samples,
                          refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str());
           }
           Count& c = at(f);

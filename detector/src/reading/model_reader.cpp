@@ -256,13 +256,18 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
     return model;
   }
   // Each channel's noise: the free model's residual per degree of freedom (model error included).
-  const auto variance = [](double residual, std::size_t samples_used) {
+  // The free chroma fit spends one colour per region in each of Cb and Cr, so it has twice the
+  // regions' unknowns: counting them once made a small tag's chroma noise look smaller than it is
+  // and its colour evidence (in noise units) larger, which is how wrong codewords won by a lead.
+  const auto variance = [](double residual, std::size_t samples_used, int channels) {
+    const double unknowns = static_cast<double>(channels) * kModelRegions;
     return std::max(residual, 1e-12) /
-           std::max(1.0, static_cast<double>(samples_used) - kModelRegions);
+           std::max(1.0,
+                    static_cast<double>(channels) * static_cast<double>(samples_used) - unknowns);
   };
-  const double luma_variance = variance(free_luma.residual[0], model.luma.samples);
+  const double luma_variance = variance(free_luma.residual[0], model.luma.samples, 1);
   const double chroma_variance =
-      variance(free_chroma.residual[0] + free_chroma.residual[1], 2 * model.chroma.samples);
+      variance(free_chroma.residual[0] + free_chroma.residual[1], model.chroma.samples, 2);
   fit.luma_noise = std::sqrt(luma_variance);
   fit.chroma_noise = std::sqrt(chroma_variance);
   fit.luma_samples = model.luma.samples;
