@@ -47,7 +47,8 @@ for target in "${targets[@]}"; do
   regressions="$root/fuzz/regressions/$target"
   crashes="$build/crashes/$target"
   mkdir -p "$crashes"
-  log="$build/fuzz-$target$( [[ $smoke == 1 ]] && echo -smoke).log"
+  log="$build/fuzz-$target.log"
+  [[ $smoke == 1 ]] && log="$build/fuzz-$target-smoke.log"
   inputs=()
   [[ -d "$regressions" ]] && inputs+=("$regressions"/*)
   [[ -d "$seeds" ]] && inputs+=("$seeds"/*)
