@@ -57,9 +57,10 @@ inline constexpr double kModelMaxSidePx = 170;
 /// enough for cells of 7 px and more.
 inline constexpr double kRefineCornersMaxSidePx = 72;
 
-/// Fits the model to the square with `corners` in `bgr` (8-bit BGR): blur search, corners refined
-/// (squares up to kRefineCornersMaxSidePx), final fit. fit.ok false and `error` set when it cannot.
-FittedModel FitModel(const cv::Mat& bgr, const Corners& corners, std::string* error);
+/// Fits the model to the square starting at the corners `start` in `bgr` (8-bit BGR): blur search,
+/// corners refined (squares up to kRefineCornersMaxSidePx), final fit. fit.ok false and `error` set
+/// when it cannot.
+FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error);
 
 /// The codeword that explains a fitted model best, and by how much (codeword_search.hpp).
 CodewordDecision DecideCodeword(const FittedModel& model);
