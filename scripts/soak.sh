@@ -71,23 +71,25 @@ sample_rss() {  # file: appends a sample every 0.5 s until killed
 }
 peak() { sort -n "$1" | tail -1; }
 
-echo "soak.sh: warm-up ${warmup}s at $connections connections"
-sample_rss "$work/rss-warm.txt" &
-sampler=$!
-warm="$(run "$warmup")"
-kill "$sampler" 2>/dev/null || true
-echo "$warm"
-check "$warm"
-rss >>"$work/rss-warm.txt"
-rss_warm="$(peak "$work/rss-warm.txt")"
-echo "soak.sh: ${seconds}s at $connections connections"
-sample_rss "$work/rss-run.txt" &
-sampler=$!
-result="$(run "$seconds")"
-kill "$sampler" 2>/dev/null || true
-echo "$result"
-rss >>"$work/rss-run.txt"
-rss_end="$(peak "$work/rss-run.txt")"
+# phase NAME SECONDS LABEL: wrk for SECONDS while sampling memory into $work/rss-NAME.txt; sets
+# phase_result (the soak-result line) and phase_peak (KiB).
+phase() {
+  echo "soak.sh: $3 ${2}s at $connections connections"
+  sample_rss "$work/rss-$1.txt" &
+  local sampler=$!
+  phase_result="$(run "$2")"
+  kill "$sampler" 2>/dev/null || true
+  echo "$phase_result"
+  rss >>"$work/rss-$1.txt"
+  phase_peak="$(peak "$work/rss-$1.txt")"
+}
+
+phase warm "$warmup" warm-up
+check "$phase_result"
+rss_warm="$phase_peak"
+phase run "$seconds" measured
+result="$phase_result"
+rss_end="$phase_peak"
 echo "soak-memory-series-kib $(awk 'NR % 10 == 0' "$work/rss-run.txt" | tr '\n' ' ')"
 growth="$(awk -v a="$rss_warm" -v b="$rss_end" 'BEGIN {printf "%.1f", (b - a) * 100 / a}')"
 echo "soak-memory peak_warmup_kib=$rss_warm peak_run_kib=$rss_end growth_percent=$growth"
