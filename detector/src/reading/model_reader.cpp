@@ -258,7 +258,7 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
   // Each channel's noise: the free model's residual per degree of freedom (model error included).
   // The free chroma fit spends one colour per region in each of Cb and Cr, so it has twice the
   // regions' unknowns: counting them once made a small tag's chroma noise look smaller than it is
-  // and its colour evidence (in noise units) larger, which is how wrong codewords won by a lead.
+  // and its colour evidence (in noise units) larger, one way a wrong codeword could win by a lead.
   const auto variance = [](double residual, std::size_t samples_used, int channels) {
     const double unknowns = static_cast<double>(channels) * kModelRegions;
     return std::max(residual, 1e-12) /
