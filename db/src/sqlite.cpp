@@ -2,7 +2,30 @@
 
 #include <sqlite3.h>
 
+#include <unordered_map>
+
 namespace pintag::db {
+
+/// The compiled statements of one connection, by SQL text. A slot is busy while a Statement holds
+/// it. Bounded: the SQL PinTag runs is a fixed set, but a search builds its WHERE from the filters
+/// given, and a bound keeps any future dynamic SQL from growing the cache without end.
+struct StatementCache {
+  static constexpr std::size_t kMaxStatements = 64;
+  struct Slot {
+    sqlite3_stmt* statement = nullptr;
+    bool busy = false;
+  };
+  // Node-based: a Slot's address stays valid while other slots are added.
+  std::unordered_map<std::string, Slot> slots;
+
+  StatementCache() = default;
+  StatementCache(const StatementCache&) = delete;
+  StatementCache& operator=(const StatementCache&) = delete;
+  ~StatementCache() {
+    for (auto& [sql, slot] : slots) sqlite3_finalize(slot.statement);
+  }
+};
+
 namespace {
 
 [[noreturn]] void Throw(sqlite3* db, int code, std::string_view context) {
@@ -19,16 +42,15 @@ void Check(sqlite3* db, int code, std::string_view context) {
 
 }  // namespace
 
-void Statement::Finalizer::operator()(sqlite3_stmt* statement) const {
-  sqlite3_finalize(statement);
-}
-
-Statement::Statement(Connection& connection, std::string_view sql)
-    : db_(connection.handle()), sql_(sql) {
-  sqlite3_stmt* raw = nullptr;
-  const int code = sqlite3_prepare_v2(db_, sql.data(), static_cast<int>(sql.size()), &raw, nullptr);
-  statement_.reset(raw);
-  Check(db_, code, "prepare");
+void Statement::Release::operator()(sqlite3_stmt* statement) const {
+  if (slot_busy == nullptr) {
+    sqlite3_finalize(statement);
+    return;
+  }
+  // A failed step's error is repeated by sqlite3_reset; it was reported when it happened.
+  sqlite3_reset(statement);
+  sqlite3_clear_bindings(statement);
+  *slot_busy = false;
 }
 
 Statement& Statement::bind(int index, std::int64_t value) {
@@ -134,6 +156,32 @@ Connection::Connection(const std::string& path, const ConnectionOptions& options
   execute("PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON; PRAGMA temp_store=MEMORY;");
 }
 
+Connection::Connection(Connection&&) noexcept = default;
+Connection& Connection::operator=(Connection&&) noexcept = default;
+Connection::~Connection() = default;
+
+Statement Connection::prepare(std::string_view sql) {
+  if (!statements_) statements_ = std::make_unique<StatementCache>();
+  auto& slots = statements_->slots;
+  const std::string key(sql);
+  if (auto found = slots.find(key); found != slots.end() && !found->second.busy) {
+    found->second.busy = true;
+    return Statement(db_.get(), found->second.statement, &found->second.busy);
+  }
+  const bool cache = slots.size() < StatementCache::kMaxStatements && !slots.contains(key);
+  sqlite3_stmt* raw = nullptr;
+  const int code = sqlite3_prepare_v3(db_.get(), sql.data(), static_cast<int>(sql.size()),
+                                      cache ? SQLITE_PREPARE_PERSISTENT : 0, &raw, nullptr);
+  if (code != SQLITE_OK) {
+    sqlite3_finalize(raw);
+    Throw(db_.get(), code, "prepare");
+  }
+  if (!cache) return Statement(db_.get(), raw, nullptr);
+  StatementCache::Slot& slot = slots[key];
+  slot = {raw, true};
+  return Statement(db_.get(), raw, &slot.busy);
+}
+
 void Connection::execute(std::string_view sql) {
   const std::string text(sql);
   char* error = nullptr;
@@ -146,7 +194,7 @@ void Connection::execute(std::string_view sql) {
 }
 
 std::int64_t Connection::queryInt64(std::string_view sql) {
-  Statement statement(*this, sql);
+  Statement statement = prepare(sql);
   return statement.step() ? statement.getInt64(0) : 0;
 }
 

@@ -6,6 +6,11 @@
 // opened with SQLITE_OPEN_NOMUTEX (no per-call locking), and statements share the connection's
 // error state and transaction anyway. Give each thread its own Connection (or guard one with a
 // mutex); WAL lets any number of reader connections run beside the one writer.
+//
+// Prepared statements are cached per Connection, keyed by their SQL text: compiling a statement
+// cost a lookup more than running it. A Statement that ends goes back to the cache reset and
+// unbound; two live Statements with the same SQL get separate compiled copies. A Connection must
+// outlive its Statements.
 
 #include <cstdint>
 #include <memory>
@@ -35,12 +40,13 @@ class SqliteError : public std::runtime_error {
 };
 
 class Connection;
+struct StatementCache;
 
-/// A prepared statement. Move-only; finalized in its destructor. Parameters are numbered from 1,
+/// A prepared statement. Move-only; returned to its connection's cache (or finalized) in its
+/// destructor. Parameters are numbered from 1,
 /// columns from 0. Text is bound and read with its length, so embedded NULs survive.
 class Statement {
  public:
-  Statement(Connection& connection, std::string_view sql);
   Statement(Statement&&) noexcept = default;
   Statement& operator=(Statement&&) noexcept = default;
   Statement(const Statement&) = delete;
@@ -76,12 +82,18 @@ class Statement {
   std::string getBlob(int column) const;
 
  private:
-  struct Finalizer {
+  friend class Connection;
+  /// Where the statement goes when it ends: back to its cache slot (`slot` non-null), else
+  /// finalized.
+  struct Release {
+    bool* slot_busy = nullptr;
     void operator()(sqlite3_stmt* statement) const;
   };
+  Statement(sqlite3* db, sqlite3_stmt* statement, bool* slot_busy)
+      : db_(db), statement_(statement, Release{slot_busy}) {}
+
   sqlite3* db_;
-  std::unique_ptr<sqlite3_stmt, Finalizer> statement_;
-  std::string sql_;
+  std::unique_ptr<sqlite3_stmt, Release> statement_;
 };
 
 /// How to open a Connection.
@@ -96,15 +108,16 @@ struct ConnectionOptions {
 class Connection {
  public:
   explicit Connection(const std::string& path, const ConnectionOptions& options = {});
-  Connection(Connection&&) noexcept = default;
-  Connection& operator=(Connection&&) noexcept = default;
+  Connection(Connection&&) noexcept;
+  Connection& operator=(Connection&&) noexcept;
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
-  ~Connection() = default;
+  ~Connection();
 
   /// Runs one or more SQL statements without parameters (schema, pragmas). Never user input.
   void execute(std::string_view sql);
-  Statement prepare(std::string_view sql) { return Statement(*this, sql); }
+  /// A statement for `sql`, compiled once per connection and then taken from its cache.
+  Statement prepare(std::string_view sql);
   /// The single integer a query such as `SELECT count(*) ...` or `PRAGMA user_version` yields.
   std::int64_t queryInt64(std::string_view sql);
 
@@ -126,6 +139,8 @@ class Connection {
     void operator()(sqlite3* db) const;
   };
   std::unique_ptr<sqlite3, Closer> db_;
+  // Declared after db_, so its statements are finalized before the connection closes.
+  std::unique_ptr<StatementCache> statements_;
   std::string path_;
 };
 
