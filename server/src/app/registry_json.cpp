@@ -2,6 +2,8 @@
 
 namespace pintag::app {
 
+using server::JsonWriter;
+
 const db::PostOffice* MainOffice(const db::PincodeRecord& record) {
   for (const char* type : {"HO", "SO"}) {
     for (const db::PostOffice& office : record.offices) {
@@ -11,50 +13,72 @@ const db::PostOffice* MainOffice(const db::PincodeRecord& record) {
   return record.offices.empty() ? nullptr : &record.offices.front();
 }
 
-namespace {
-
-template <typename T>
-nlohmann::json Optional(const std::optional<T>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+void WriteOffice(JsonWriter& out, const db::PostOffice& office, Pincode pincode) {
+  out.beginObject();
+  out.key("name").value(office.name);
+  out.key("branch_type").value(office.branch_type);
+  out.key("delivery").value(office.delivery);
+  out.key("circle").value(office.circle);
+  out.key("region").value(office.region);
+  out.key("division").value(office.division);
+  out.key("district").value(office.district);
+  out.key("state").value(office.state);
+  out.key("taluk").value(office.taluk);
+  out.key("latitude").value(office.latitude);
+  out.key("longitude").value(office.longitude);
+  out.key("country").value("India");
+  out.key("pincode").value(pincode.str());
+  out.endObject();
 }
 
-}  // namespace
-
-nlohmann::json OfficeJson(const db::PostOffice& office, Pincode pincode) {
-  return {{"name", office.name},
-          {"branch_type", Optional(office.branch_type)},
-          {"delivery", Optional(office.delivery)},
-          {"circle", office.circle},
-          {"region", office.region},
-          {"division", office.division},
-          {"district", office.district},
-          {"state", office.state},
-          {"taluk", Optional(office.taluk)},
-          {"latitude", Optional(office.latitude)},
-          {"longitude", Optional(office.longitude)},
-          {"country", "India"},
-          {"pincode", pincode.str()}};
-}
-
-nlohmann::json RecordJson(const db::PincodeRecord& record) {
-  nlohmann::json offices = nlohmann::json::array();
-  for (const db::PostOffice& office : record.offices)
-    offices.push_back(OfficeJson(office, record.pincode));
+std::string RecordJson(const db::PincodeRecord& record) {
+  JsonWriter out;
+  out.beginObject();
+  out.key("pincode").value(record.pincode.str());
+  out.key("key").value(int{record.key.value()});
+  out.key("status").value(db::ToString(record.status));
   const db::PostOffice* main = MainOffice(record);
-  return {{"pincode", record.pincode.str()},
-          {"key", record.key.value()},
-          {"status", db::ToString(record.status)},
-          {"office", main ? nlohmann::json(main->name) : nlohmann::json(nullptr)},
-          {"district", record.district},
-          {"state", record.state},
-          {"circle", record.circle},
-          {"region", record.region},
-          {"division", record.division},
-          {"added_at", record.added_at},
-          {"retired_at", Optional(record.retired_at)},
-          {"key_allocated_at", record.key_allocated_at},
-          {"office_count", record.offices.size()},
-          {"offices", std::move(offices)}};
+  out.key("office");
+  if (main != nullptr) {
+    out.value(main->name);
+  } else {
+    out.null();
+  }
+  out.key("district").value(record.district);
+  out.key("state").value(record.state);
+  out.key("circle").value(record.circle);
+  out.key("region").value(record.region);
+  out.key("division").value(record.division);
+  out.key("added_at").value(record.added_at);
+  out.key("retired_at").value(record.retired_at);
+  out.key("key_allocated_at").value(record.key_allocated_at);
+  out.key("office_count").value(record.offices.size());
+  out.key("offices").beginArray();
+  for (const db::PostOffice& office : record.offices) WriteOffice(out, office, record.pincode);
+  out.endArray();
+  out.endObject();
+  return out.take();
+}
+
+std::string SearchPageJson(const db::SearchPage& page) {
+  JsonWriter out;
+  out.beginObject();
+  out.key("total").value(std::int64_t{page.total});
+  out.key("limit").value(page.limit);
+  out.key("offset").value(page.offset);
+  out.key("results").beginArray();
+  for (const db::OfficeHit& hit : page.hits) {
+    out.beginObject();
+    out.key("pincode").value(hit.pincode.str());
+    out.key("key").value(int{hit.key.value()});
+    out.key("status").value(db::ToString(hit.status));
+    out.key("office");
+    WriteOffice(out, hit.office, hit.pincode);
+    out.endObject();
+  }
+  out.endArray();
+  out.endObject();
+  return out.take();
 }
 
 }  // namespace pintag::app

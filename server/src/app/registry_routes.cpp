@@ -39,7 +39,7 @@ HttpResponse GetPincode(const AppContext& context, const HttpRequest& request) {
   const Pincode pincode = PincodeParam(request);
   auto connection = context.pool->acquire();
   return HttpResponse::Json(
-      RecordJson(Unwrap(db::LookupPincode(*connection, pincode), "Unknown Pincode")).dump());
+      RecordJson(Unwrap(db::LookupPincode(*connection, pincode), "Unknown Pincode")));
 }
 
 HttpResponse GetKey(const AppContext& context, const HttpRequest& request) {
@@ -50,7 +50,7 @@ HttpResponse GetKey(const AppContext& context, const HttpRequest& request) {
     throw HttpError(404, "key " + std::to_string(key.value()) + " is not allocated to any pincode",
                     "Unknown Key");
   }
-  return HttpResponse::Json(RecordJson(Unwrap(std::move(record))).dump());
+  return HttpResponse::Json(RecordJson(Unwrap(std::move(record))));
 }
 
 HttpResponse SearchPincodes(const AppContext& context, const HttpRequest& request) {
@@ -65,19 +65,7 @@ HttpResponse SearchPincodes(const AppContext& context, const HttpRequest& reques
   query.offset = static_cast<int>(IntegerQuery(request, "offset", 0, 0, 1'000'000'000));
   auto connection = context.pool->acquire();
   const db::SearchPage page = Unwrap(db::Search(*connection, query));
-  json results = json::array();
-  for (const db::OfficeHit& hit : page.hits) {
-    results.push_back({{"pincode", hit.pincode.str()},
-                       {"key", hit.key.value()},
-                       {"status", db::ToString(hit.status)},
-                       {"office", OfficeJson(hit.office, hit.pincode)}});
-  }
-  return HttpResponse::Json(json{
-      {"total", page.total},
-      {"limit", page.limit},
-      {"offset", page.offset},
-      {"results",
-       std::move(results)}}.dump());
+  return HttpResponse::Json(SearchPageJson(page));
 }
 
 HttpResponse PostPincode(const AppContext& context, const HttpRequest& request) {
@@ -96,7 +84,7 @@ HttpResponse PostPincode(const AppContext& context, const HttpRequest& request) 
   if (!added && added.error().code == db::ErrorCode::kConflict) {
     throw HttpError(409, added.error().message, "Pincode Exists");
   }
-  HttpResponse response = HttpResponse::Json(RecordJson(Unwrap(std::move(added))).dump(), 201);
+  HttpResponse response = HttpResponse::Json(RecordJson(Unwrap(std::move(added))), 201);
   response.headers.emplace_back("Location", "/api/v1/pincodes/" + pincode.str());
   return response;
 }
@@ -105,7 +93,7 @@ HttpResponse PostRetirePincode(const AppContext& context, const HttpRequest& req
   const Pincode pincode = PincodeParam(request);
   auto connection = context.pool->acquire();
   return HttpResponse::Json(
-      RecordJson(Unwrap(db::RetirePincode(*connection, pincode), "Unknown Pincode")).dump());
+      RecordJson(Unwrap(db::RetirePincode(*connection, pincode), "Unknown Pincode")));
 }
 
 }  // namespace pintag::app
