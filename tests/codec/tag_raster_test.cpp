@@ -160,7 +160,9 @@ RgbImage SupersampleEveryPixel(TagKey key, int n, int ss) {
 TEST(TagRaster, OnlyBoundaryPixelsNeedSamplingAndTheResultIsExact) {
   for (const auto& [key, n, ss] :
        {std::tuple{1, kMinTagSquarePx, 4}, std::tuple{22222, 65, 4}, std::tuple{4321, 200, 4},
-        std::tuple{32767, 512, 4}, std::tuple{99, 301, 2}, std::tuple{7, 128, 1}}) {
+        std::tuple{32767, 512, 4}, std::tuple{99, 301, 2}, std::tuple{7, 128, 1},
+        // Sizes drawn before, with other keys: the layout kept for a size serves every key.
+        std::tuple{12345, 512, 4}, std::tuple{2, kMinTagSquarePx, 4}}) {
     const RgbImage fast = RenderTagRaster(TagKey(key), {n, ss}).image;
     const RgbImage reference = SupersampleEveryPixel(TagKey(key), n, ss);
     ASSERT_EQ(fast.width, reference.width);
