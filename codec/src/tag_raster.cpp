@@ -164,7 +164,7 @@ TagLayout BuildTagLayout(int n, int ss) {
   layout.last = std::min(layout.side - 1, margin + n);
   const int first = layout.first;
   const int last = layout.last;
-  const auto drawn = static_cast<std::size_t>(last - first + 1);
+  const std::size_t drawn = static_cast<std::size_t>(last) - first + 1;
   layout.ids.reserve(drawn * drawn);
   std::vector<std::uint8_t> top(static_cast<std::size_t>(layout.side) + 1);
   std::vector<std::uint8_t> bottom(top.size());
