@@ -4,6 +4,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "pintag/detector/tag_outline.hpp"
+
 namespace pintag::stage {
 
 void DebugImages::write(const std::string& name, const cv::Mat& image) const {
@@ -39,16 +41,7 @@ void DebugImages::detections(const cv::Mat& bgr, const std::vector<Detection>& d
   cv::Mat out = bgr.clone();
   for (const Detection& d : detections) {
     const cv::Scalar colour = d.key ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255);
-    for (int i = 0; i < 4; ++i) {
-      cv::line(
-          out, {static_cast<int>(d.corners[i].x), static_cast<int>(d.corners[i].y)},
-          {static_cast<int>(d.corners[(i + 1) % 4].x), static_cast<int>(d.corners[(i + 1) % 4].y)},
-          colour, 2, cv::LINE_AA);
-    }
-    const std::string label = d.key ? std::to_string(d.key->value()) : d.reject_reason;
-    cv::putText(out, label,
-                {static_cast<int>(d.corners[0].x), static_cast<int>(d.corners[0].y) - 4},
-                cv::FONT_HERSHEY_SIMPLEX, 0.6, colour, 2);
+    DrawTagOutline(out, d, colour, d.key ? std::to_string(d.key->value()) : d.reject_reason);
   }
   write("4_detections.png", out);
 }

@@ -14,12 +14,12 @@
 #include "app/params.hpp"
 #include "app/registry_json.hpp"
 #include "app/routes.hpp"
-#include "app/tag_outline.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
+#include "pintag/detector/tag_outline.hpp"
 #include "pintag/server/log.hpp"
 
 namespace pintag::app {

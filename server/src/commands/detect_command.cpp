@@ -11,11 +11,11 @@
 #include <optional>
 #include <vector>
 
-#include "app/tag_outline.hpp"
 #include "commands/commands.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
+#include "pintag/detector/tag_outline.hpp"
 
 namespace pintag::cli {
 namespace {
@@ -34,9 +34,10 @@ struct DetectArgs {
   bool rejected = false;
 };
 
-/// The shared outline (app/tag_outline.hpp), plus what only the command draws: the pose axes.
+/// The shared outline (pintag/detector/tag_outline.hpp), plus what only the command draws: the pose
+/// axes.
 void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
-  const int thickness = app::OutlineThickness(image);
+  const int thickness = OutlineThickness(image);
   const cv::Matx33d k(result.intrinsics.fx, 0, result.intrinsics.cx, 0, result.intrinsics.fy,
                       result.intrinsics.cy, 0, 0, 1);
   const cv::Mat dist = result.intrinsics.distortion.empty()
@@ -44,12 +45,12 @@ void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
                            : cv::Mat(result.intrinsics.distortion, true).reshape(1, 1);
   for (const Detection& d : result.detections) {
     if (!d.key) {
-      app::DrawTagOutline(image, d, cv::Scalar(0, 0, 255), {});
+      DrawTagOutline(image, d, cv::Scalar(0, 0, 255), {});
       continue;
     }
     char caption[64];
     std::snprintf(caption, sizeof caption, "%d  %.2f m", d.key->value(), d.pose.distance_m);
-    app::DrawTagOutline(image, d, cv::Scalar(0, 255, 255), caption);
+    DrawTagOutline(image, d, cv::Scalar(0, 255, 255), caption);
     // Pose axes from the square's centre: x (red) towards C1, y (green) towards C3, z (blue) out
     // of the tag towards the viewer.
     const double a = tag_size_m / 2;

@@ -1,14 +1,14 @@
 #pragma once
 // The one drawing of a found tag on a photo: its square outlined, a dot on C0 (the corner the tag
-// is read from) and a caption above it. The HTTP overlay, `pintag detect --overlay` and (once the
-// detector takes it) the detector's debug images all draw with it, so they look alike.
+// is read from) and a caption above it. The HTTP overlay, `pintag detect --overlay` and the
+// detector's debug images (--debug-dir) all draw with it, so they look alike.
 
 #include <opencv2/core.hpp>
 #include <string>
 
 #include "pintag/detector/detection.hpp"
 
-namespace pintag::app {
+namespace pintag {
 
 /// Line width in pixels for a photo of this size: 2 px up to 1200 px, thicker beyond, so an
 /// outline stays visible when a 12 MP photo is shown scaled down.
@@ -18,4 +18,4 @@ int OutlineThickness(const cv::Mat& image);
 void DrawTagOutline(cv::Mat& image, const Detection& detection, const cv::Scalar& colour,
                     const std::string& caption);
 
-}  // namespace pintag::app
+}  // namespace pintag

@@ -1,10 +1,10 @@
-#include "app/tag_outline.hpp"
+#include "pintag/detector/tag_outline.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-namespace pintag::app {
+namespace pintag {
 namespace {
 
 cv::Point ToPixel(const Point2& p) {
@@ -40,4 +40,4 @@ void DrawTagOutline(cv::Mat& image, const Detection& detection, const cv::Scalar
               cv::LINE_AA);
 }
 
-}  // namespace pintag::app
+}  // namespace pintag
