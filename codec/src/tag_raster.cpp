@@ -192,24 +192,34 @@ TagLayout BuildTagLayout(int n, int ss) {
 }
 
 /// The layout for a square of `n` px at `ss` × `ss` sub-samples, from a small process-wide cache:
-/// a counter or label server draws the same few sizes all day. Sizes past kLargestCached are
-/// built per call (a layout is about 1.2 bytes per pixel).
+/// a counter or label server draws the same few sizes all day. The least recently drawn size
+/// goes first; sizes past kLargestCached are built per call (a layout is about 1.2 bytes per
+/// pixel, 5 MB at 2048 px).
 std::shared_ptr<const TagLayout> TagLayoutFor(int n, int ss) {
   constexpr int kLargestCached = 2048;
   constexpr std::size_t kMaxLayouts = 8;
   if (n > kLargestCached) return std::make_shared<const TagLayout>(BuildTagLayout(n, ss));
+  using Entry = std::pair<std::pair<int, int>, std::shared_ptr<const TagLayout>>;
   static std::mutex mutex;
-  static std::vector<std::pair<std::pair<int, int>, std::shared_ptr<const TagLayout>>> cache;
+  static std::vector<Entry> cache;  // most recently used last
   const std::pair<int, int> size{n, ss};
+  const auto take = [&]() -> std::shared_ptr<const TagLayout> {
+    const auto found =
+        std::find_if(cache.begin(), cache.end(), [&](const Entry& e) { return e.first == size; });
+    if (found == cache.end()) return nullptr;
+    std::rotate(found, found + 1, cache.end());
+    return cache.back().second;
+  };
   {
     const std::lock_guard lock(mutex);
-    for (const auto& [cached_size, layout] : cache) {
-      if (cached_size == size) return layout;
-    }
+    if (auto layout = take()) return layout;
   }
+  // Built outside the lock, so other sizes are served meanwhile; a thread that built the same
+  // size first wins.
   auto layout = std::make_shared<const TagLayout>(BuildTagLayout(n, ss));
   const std::lock_guard lock(mutex);
-  if (cache.size() >= kMaxLayouts) cache.erase(cache.begin());  // the oldest size goes
+  if (auto built = take()) return built;
+  if (cache.size() >= kMaxLayouts) cache.erase(cache.begin());
   cache.emplace_back(size, layout);
   return layout;
 }

@@ -157,29 +157,38 @@ Connection::Connection(const std::string& path, const ConnectionOptions& options
 }
 
 Connection::Connection(Connection&&) noexcept = default;
-Connection& Connection::operator=(Connection&&) noexcept = default;
+Connection& Connection::operator=(Connection&& other) noexcept {
+  // The cached statements go before the connection they were compiled on.
+  statements_.reset();
+  db_ = std::move(other.db_);
+  statements_ = std::move(other.statements_);
+  path_ = std::move(other.path_);
+  return *this;
+}
 Connection::~Connection() = default;
 
 Statement Connection::prepare(std::string_view sql) {
   if (!statements_) statements_ = std::make_unique<StatementCache>();
   auto& slots = statements_->slots;
   const std::string key(sql);
-  if (auto found = slots.find(key); found != slots.end() && !found->second.busy) {
+  const auto found = slots.find(key);
+  if (found != slots.end() && !found->second.busy) {
     found->second.busy = true;
     return Statement(db_.get(), found->second.statement, &found->second.busy);
   }
-  const bool cache = slots.size() < StatementCache::kMaxStatements && !slots.contains(key);
+  const bool cache = found == slots.end() && slots.size() < StatementCache::kMaxStatements;
   sqlite3_stmt* raw = nullptr;
   const int code = sqlite3_prepare_v3(db_.get(), sql.data(), static_cast<int>(sql.size()),
                                       cache ? SQLITE_PREPARE_PERSISTENT : 0, &raw, nullptr);
-  if (code != SQLITE_OK) {
-    sqlite3_finalize(raw);
-    Throw(db_.get(), code, "prepare");
-  }
-  if (!cache) return Statement(db_.get(), raw, nullptr);
+  // Finalized on any way out until it is handed over (a failed prepare, or a throwing insert).
+  std::unique_ptr<sqlite3_stmt, Statement::Release> compiled(raw, Statement::Release{});
+  if (code != SQLITE_OK) Throw(db_.get(), code, "prepare");
+  if (raw == nullptr)
+    throw SqliteError("prepare: no statement in the SQL text", SQLITE_MISUSE, SQLITE_MISUSE);
+  if (!cache) return Statement(db_.get(), compiled.release(), nullptr);
   StatementCache::Slot& slot = slots[key];
-  slot = {raw, true};
-  return Statement(db_.get(), raw, &slot.busy);
+  slot = {compiled.release(), true};
+  return Statement(db_.get(), slot.statement, &slot.busy);
 }
 
 void Connection::execute(std::string_view sql) {

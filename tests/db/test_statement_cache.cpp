@@ -71,6 +71,7 @@ TEST_F(StatementCacheTest, AStatementLeftMidwayHoldsNoSnapshotOnceItEnds) {
 TEST_F(StatementCacheTest, BadSqlThrowsEveryTimeAndManyDistinctStatementsAllWork) {
   for (int attempt = 0; attempt < 2; ++attempt) {
     EXPECT_THROW(connection_.prepare("SELECT nope FROM t"), SqliteError);
+    EXPECT_THROW(connection_.prepare(" -- only a comment"), SqliteError);
   }
   // More distinct statements than the cache keeps: the ones past its bound are compiled per use.
   for (int round = 0; round < 2; ++round) {

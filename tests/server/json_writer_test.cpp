@@ -86,6 +86,22 @@ TEST(JsonWriter, DoublesReadBackExactlyAndNonFiniteAreNull) {
   EXPECT_TRUE(parsed[values.size() + 1].is_null());
 }
 
+TEST(JsonWriter, WholeDoublesStayFloatsAndIntegersOfEveryWidthAreNumbers) {
+  JsonWriter out;
+  out.beginArray().value(28.0).value(-0.0).value(1e21).value(std::uint8_t{200});
+  out.value(std::uint32_t{4'000'000'000}).value(short{-5}).value(std::size_t{21}).endArray();
+  const std::string text = out.take();
+  const nlohmann::json parsed = nlohmann::json::parse(text);
+  EXPECT_TRUE(parsed[0].is_number_float()) << text;
+  EXPECT_EQ(parsed[0].get<double>(), 28.0);
+  EXPECT_TRUE(parsed[1].is_number_float() && std::signbit(parsed[1].get<double>())) << text;
+  EXPECT_TRUE(parsed[2].is_number_float()) << text;
+  EXPECT_EQ(parsed[3], 200);
+  EXPECT_EQ(parsed[4].get<std::int64_t>(), 4'000'000'000);
+  EXPECT_EQ(parsed[5], -5);
+  EXPECT_TRUE(parsed[6].is_number_integer());
+}
+
 TEST(JsonWriter, KeysAreEscapedAndTakeLeavesTheWriterEmpty) {
   JsonWriter out;
   out.beginObject().key("quote\"back\\slash\n").value(1).endObject();

@@ -35,7 +35,7 @@ std::string RecordJson(const db::PincodeRecord& record) {
   JsonWriter out;
   out.beginObject();
   out.key("pincode").value(record.pincode.str());
-  out.key("key").value(int{record.key.value()});
+  out.key("key").value(record.key.value());
   out.key("status").value(db::ToString(record.status));
   const db::PostOffice* main = MainOffice(record);
   out.key("office");
@@ -63,14 +63,14 @@ std::string RecordJson(const db::PincodeRecord& record) {
 std::string SearchPageJson(const db::SearchPage& page) {
   JsonWriter out;
   out.beginObject();
-  out.key("total").value(std::int64_t{page.total});
+  out.key("total").value(page.total);
   out.key("limit").value(page.limit);
   out.key("offset").value(page.offset);
   out.key("results").beginArray();
   for (const db::OfficeHit& hit : page.hits) {
     out.beginObject();
     out.key("pincode").value(hit.pincode.str());
-    out.key("key").value(int{hit.key.value()});
+    out.key("key").value(hit.key.value());
     out.key("status").value(db::ToString(hit.status));
     out.key("office");
     WriteOffice(out, hit.office, hit.pincode);

@@ -88,7 +88,7 @@ JsonWriter& JsonWriter::value(std::string_view text) {
   return *this;
 }
 
-JsonWriter& JsonWriter::value(std::int64_t number) {
+JsonWriter& JsonWriter::integer(std::int64_t number) {
   beforeValue();
   char buffer[24];
   const auto end = std::to_chars(buffer, buffer + sizeof buffer, number).ptr;
@@ -102,6 +102,9 @@ JsonWriter& JsonWriter::value(double number) {
   char buffer[32];
   const auto end = std::to_chars(buffer, buffer + sizeof buffer, number).ptr;
   out_.append(buffer, end);
+  if (std::string_view(buffer, end - buffer).find_first_of(".e") == std::string_view::npos) {
+    out_ += ".0";
+  }
   return *this;
 }
 

@@ -116,7 +116,8 @@ class Connection {
 
   /// Runs one or more SQL statements without parameters (schema, pragmas). Never user input.
   void execute(std::string_view sql);
-  /// A statement for `sql`, compiled once per connection and then taken from its cache.
+  /// A statement for `sql`, compiled once per connection and then taken from its cache. SQL
+  /// holding no statement (empty, only a comment) is an error.
   Statement prepare(std::string_view sql);
   /// The single integer a query such as `SELECT count(*) ...` or `PRAGMA user_version` yields.
   std::int64_t queryInt64(std::string_view sql);

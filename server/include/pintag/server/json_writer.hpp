@@ -4,6 +4,7 @@
 // and free. Keys come out in the order they are written. Text is escaped per RFC 8259; a byte
 // sequence that is not UTF-8 is written as U+FFFD, so the output is always valid JSON.
 
+#include <concepts>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,10 +25,14 @@ class JsonWriter {
   JsonWriter& value(std::string_view text);
   JsonWriter& value(const char* text) { return value(std::string_view(text)); }
   JsonWriter& value(const std::string& text) { return value(std::string_view(text)); }
-  JsonWriter& value(std::int64_t number);
-  JsonWriter& value(int number) { return value(std::int64_t{number}); }
-  JsonWriter& value(std::size_t number) { return value(static_cast<std::int64_t>(number)); }
-  /// Shortest text that reads back as the same double; NaN and infinities as null.
+  /// Any integer type (bool has its own overload); unsigned values past INT64_MAX are not
+  /// representable and must not be passed.
+  template <std::integral T>
+  requires(!std::same_as<T, bool>) JsonWriter& value(T number) {
+    return integer(static_cast<std::int64_t>(number));
+  }
+  /// Shortest text that reads back as the same double, always with a fraction or exponent (28.0,
+  /// not 28), so a client reads a float back; NaN and infinities as null.
   JsonWriter& value(double number);
   JsonWriter& value(bool flag);
   JsonWriter& null();
@@ -40,6 +45,7 @@ class JsonWriter {
   std::string take();
 
  private:
+  JsonWriter& integer(std::int64_t number);
   void beforeValue();
   void writeString(std::string_view text);
 
