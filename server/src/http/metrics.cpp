@@ -23,6 +23,17 @@ std::string Escape(std::string_view value) {
   return out;
 }
 
+/// The method as a label value: one of RFC 9110's methods (and PATCH), else "other". cpp-httplib
+/// fills in the request's method before it refuses one it does not know, so without this every
+/// made-up method of a 400 answer became a series of its own.
+std::string_view MethodLabel(std::string_view method) {
+  for (std::string_view known :
+       {"GET", "HEAD", "POST", "PUT", "DELETE", "CONNECT", "OPTIONS", "TRACE", "PATCH"}) {
+    if (method == known) return known;
+  }
+  return "other";
+}
+
 std::string Number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.15g", value);
@@ -34,7 +45,7 @@ std::string Number(double value) {
 void Metrics::observeRequest(std::string_view route, std::string_view method, int status,
                              double seconds) {
   const std::lock_guard lock(mutex_);
-  Histogram& h = requests_[Key{std::string(route), std::string(method), status}];
+  Histogram& h = requests_[Key{std::string(route), std::string(MethodLabel(method)), status}];
   std::size_t bucket = 0;
   while (bucket < kBuckets.size() && seconds > kBuckets[bucket]) ++bucket;
   if (bucket < kBuckets.size()) ++h.buckets[bucket];

@@ -18,7 +18,8 @@ class Metrics {
                                                       0.25,  0.5,   1,    2.5,   5,    10};
 
   /// One finished request. `route` is the route's pattern (bounded cardinality), or "unmatched"
-  /// / "static" for requests outside the table.
+  /// / "static" for requests outside the table. A method outside HTTP's standard ones is counted
+  /// as "other": a client sending made-up methods must not add series without end.
   void observeRequest(std::string_view route, std::string_view method, int status, double seconds);
 
   /// Declares a counter so it is exported (as 0) before its first increment. `name` must be a
