@@ -52,7 +52,10 @@ long long IntegerQuery(const server::HttpRequest& request, std::string_view name
 
 // --- Values in a body, or anywhere text arrives --------------------------------------------------
 
-/// The body parsed as JSON; 400 "Malformed JSON" when it is not.
+/// How deeply a JSON body's arrays and objects may nest (PinTag's own bodies use at most 4).
+inline constexpr std::size_t kMaxJsonDepth = 32;
+/// The body parsed as JSON; 400 "Malformed JSON" when it is not, or nests deeper than
+/// kMaxJsonDepth.
 nlohmann::json JsonBody(const server::HttpRequest& request);
 /// A pincode given as a JSON string or number; `where` names it in the problem ("pincodes[3]").
 Pincode PincodeValue(const nlohmann::json& value, std::string_view where);
