@@ -15,10 +15,10 @@ namespace pintag::server {
 
 class JsonWriter {
  public:
-  JsonWriter& beginObject();
-  JsonWriter& endObject();
-  JsonWriter& beginArray();
-  JsonWriter& endArray();
+  JsonWriter& beginObject() { return open('{'); }
+  JsonWriter& endObject() { return close('}'); }
+  JsonWriter& beginArray() { return open('['); }
+  JsonWriter& endArray() { return close(']'); }
   /// The next member's name; the value written next belongs to it.
   JsonWriter& key(std::string_view name);
 
@@ -45,6 +45,8 @@ class JsonWriter {
   std::string take();
 
  private:
+  JsonWriter& open(char bracket);
+  JsonWriter& close(char bracket);
   JsonWriter& integer(std::int64_t number);
   void beforeValue();
   void writeString(std::string_view text);
