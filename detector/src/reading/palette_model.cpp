@@ -1,9 +1,9 @@
 #include "reading/palette_model.hpp"
 
 #include <algorithm>
-#include <opencv2/core.hpp>
-#include <utility>
-#include <vector>
+#include <cmath>
+#include <limits>
+#include <span>
 
 #include "reading/region_fit.hpp"
 
@@ -14,6 +14,17 @@ PaletteModel::PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma,
     : weights_(weights) {
   ata_[0] = luma.ata;
   ata_[1] = chroma.ata;
+  for (std::size_t system = 0; system < 2; ++system) {
+    for (int j = 0; j < kModelRegions; ++j) {
+      for (int k = 0; k < kModelRegions; ++k) {
+        const double value = ata(static_cast<int>(system), j, k);
+        if (value != 0) {
+          nonzero_[system].push_back(
+              {static_cast<std::uint8_t>(j), static_cast<std::uint8_t>(k), value});
+        }
+      }
+    }
+  }
   aty_[0] = luma.aty[0];
   aty_[1] = chroma.aty[0];
   aty_[2] = chroma.aty[1];
@@ -28,62 +39,123 @@ PaletteModel::PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma,
 
 namespace {
 
-using Six = cv::Matx<double, kLevels, kLevels>;
-using SixVector = cv::Matx<double, kLevels, 1>;
+// Fixed-size arrays throughout: a codeword search fits several hundred labellings, and heap
+// matrices cost more than the arithmetic at this size.
+using Six = std::array<std::array<double, kLevels>, kLevels>;
+using SixVector = std::array<double, kLevels>;
+
+// Solves m z = rhs for the leading n × n block by Cholesky, in place (z holds rhs on entry).
+// False, as OpenCV's solver, when a pivot falls below machine epsilon.
+bool SolveCholesky(Six& m, SixVector& z, int n) {
+  for (int i = 0; i < n; ++i) {
+    auto& row = m[static_cast<std::size_t>(i)];
+    for (int j = 0; j <= i; ++j) {
+      const auto& other = m[static_cast<std::size_t>(j)];
+      double s = row[static_cast<std::size_t>(j)];
+      for (int k = 0; k < j; ++k)
+        s -= row[static_cast<std::size_t>(k)] * other[static_cast<std::size_t>(k)];
+      if (i == j) {
+        if (s < std::numeric_limits<double>::epsilon()) return false;
+        row[static_cast<std::size_t>(i)] = std::sqrt(s);
+      } else {
+        row[static_cast<std::size_t>(j)] = s / other[static_cast<std::size_t>(j)];
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto& row = m[static_cast<std::size_t>(i)];
+    double s = z[static_cast<std::size_t>(i)];
+    for (int k = 0; k < i; ++k)
+      s -= row[static_cast<std::size_t>(k)] * z[static_cast<std::size_t>(k)];
+    z[static_cast<std::size_t>(i)] = s / row[static_cast<std::size_t>(i)];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    double s = z[static_cast<std::size_t>(i)];
+    for (int k = i + 1; k < n; ++k) {
+      s -= m[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)] *
+           z[static_cast<std::size_t>(k)];
+    }
+    z[static_cast<std::size_t>(i)] =
+        s / m[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)];
+  }
+  return true;
+}
 
 // One channel's least-squares colours over the six levels, with `ties`: level `one` held at level
-// `zero` plus `step` (x = T z + c for the free levels z). Returns the residual yᵀy − 2 xᵀb + xᵀBx.
+// `zero` plus `step` (x = T z + c for the free levels z; a tie's zero is never itself tied).
+// Returns the residual yᵀy − 2 xᵀb + xᵀBx.
 struct Tie {
   int zero, one;
   double step;
 };
-double SolveChannel(const Six& b, const SixVector& bty, double yty, const std::vector<Tie>& ties,
+double SolveChannel(const Six& b, const SixVector& bty, double yty, std::span<const Tie> ties,
                     SixVector* x) {
+  std::array<int, kLevels> tied_to{};  // the level whose free colour level l takes, or −1
+  tied_to.fill(-1);
+  SixVector c{};
+  for (const Tie& tie : ties) {
+    tied_to[static_cast<std::size_t>(tie.one)] = tie.zero;
+    c[static_cast<std::size_t>(tie.one)] = tie.step;
+  }
   std::array<int, kLevels> free_index{};
   int free = 0;
   for (int l = 0; l < kLevels; ++l) {
-    const bool tied =
-        std::any_of(ties.begin(), ties.end(), [&](const Tie& t) { return t.one == l; });
-    free_index[static_cast<std::size_t>(l)] = tied ? -1 : free++;
+    if (tied_to[static_cast<std::size_t>(l)] < 0) free_index[static_cast<std::size_t>(l)] = free++;
   }
-  cv::Mat t = cv::Mat::zeros(kLevels, free, CV_64F);
-  SixVector c = SixVector::zeros();
   for (int l = 0; l < kLevels; ++l) {
-    if (free_index[static_cast<std::size_t>(l)] >= 0)
-      t.at<double>(l, free_index[static_cast<std::size_t>(l)]) = 1;
+    const int to = tied_to[static_cast<std::size_t>(l)];
+    if (to >= 0) free_index[static_cast<std::size_t>(l)] = free_index[static_cast<std::size_t>(to)];
   }
-  for (const Tie& tie : ties) {
-    t.at<double>(tie.one, free_index[static_cast<std::size_t>(tie.zero)]) = 1;
-    c(tie.one) = tie.step;
+  // Tᵀ B T and Tᵀ (b − B c): T adds each tied level's row and column to its zero's.
+  Six reduced{};
+  SixVector z{};
+  for (int l = 0; l < kLevels; ++l) {
+    const auto fl = static_cast<std::size_t>(free_index[static_cast<std::size_t>(l)]);
+    double bc = 0;
+    for (int m = 0; m < kLevels; ++m) {
+      const double blm = b[static_cast<std::size_t>(l)][static_cast<std::size_t>(m)];
+      reduced[fl][static_cast<std::size_t>(free_index[static_cast<std::size_t>(m)])] += blm;
+      bc += blm * c[static_cast<std::size_t>(m)];
+    }
+    z[fl] += bty[static_cast<std::size_t>(l)] - bc;
   }
-  const cv::Mat bm(b), btym(bty), cm(c);
-  cv::Mat reduced = t.t() * bm * t;
   double trace = 0;
-  for (int i = 0; i < free; ++i) trace += reduced.at<double>(i, i);
-  for (int i = 0; i < free; ++i) reduced.at<double>(i, i) += 1e-9 * trace + 1e-12;  // unused levels
-  const cv::Mat rhs = t.t() * (btym - bm * cm);
-  cv::Mat z;
-  cv::solve(reduced, rhs, z, cv::DECOMP_CHOLESKY);
-  const cv::Mat xm = t * z + cm;
-  for (int l = 0; l < kLevels; ++l) (*x)(l) = xm.at<double>(l);
-  return yty + (x->t() * (b * *x - 2 * bty))(0);
+  for (int i = 0; i < free; ++i)
+    trace += reduced[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)];
+  for (int i = 0; i < free; ++i) {
+    reduced[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)] +=
+        1e-9 * trace + 1e-12;  // unused levels
+  }
+  if (!SolveCholesky(reduced, z, free)) z.fill(0);
+  for (int l = 0; l < kLevels; ++l) {
+    (*x)[static_cast<std::size_t>(l)] =
+        z[static_cast<std::size_t>(free_index[static_cast<std::size_t>(l)])] +
+        c[static_cast<std::size_t>(l)];
+  }
+  double quadratic = 0;
+  for (int l = 0; l < kLevels; ++l) {
+    double bx = 0;
+    for (int m = 0; m < kLevels; ++m) {
+      bx += b[static_cast<std::size_t>(l)][static_cast<std::size_t>(m)] *
+            (*x)[static_cast<std::size_t>(m)];
+    }
+    quadratic += (*x)[static_cast<std::size_t>(l)] * (bx - 2 * bty[static_cast<std::size_t>(l)]);
+  }
+  return yty + quadratic;
 }
 
 }  // namespace
 
 PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
   PaletteColours colours{};
-  std::array<Six, 2> btb{Six::zeros(), Six::zeros()};
+  std::array<Six, 2> btb{};
   std::array<bool, kLevels> used{};
   for (int j = 0; j < kModelRegions; ++j)
     used[static_cast<std::size_t>(labels[static_cast<std::size_t>(j)])] = true;
-  for (int system = 0; system < 2; ++system) {
-    for (int j = 0; j < kModelRegions; ++j) {
-      for (int k = 0; k < kModelRegions; ++k) {
-        btb[static_cast<std::size_t>(system)](labels[static_cast<std::size_t>(j)],
-                                              labels[static_cast<std::size_t>(k)]) +=
-            ata(system, j, k);
-      }
+  for (std::size_t system = 0; system < 2; ++system) {
+    Six& b = btb[system];
+    for (const Entry& e : nonzero_[system]) {
+      b[static_cast<std::size_t>(labels[e.j])][static_cast<std::size_t>(labels[e.k])] += e.value;
     }
   }
   // The palette's order, where the free fit breaks it (kMinLumaStep, kMinCbStep): a class's one
@@ -94,39 +166,43 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
   double range = 0;
   for (int ch = 0; ch < 3; ++ch) {
     const Six& b = btb[static_cast<std::size_t>(SystemOf(ch))];
-    SixVector bty = SixVector::zeros();
+    SixVector bty{};
     for (int j = 0; j < kModelRegions; ++j) {
-      bty(labels[static_cast<std::size_t>(j)]) +=
+      bty[static_cast<std::size_t>(labels[static_cast<std::size_t>(j)])] +=
           aty_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(j)];
     }
     const double yty = yty_[static_cast<std::size_t>(ch)];
-    SixVector x;
+    SixVector x{};
     double rss = SolveChannel(b, bty, yty, {}, &x);
-    if (ch == 0) range = std::max(0.0, x(kQuietLevel) - x(kBlackLevel));
+    if (ch == 0) range = std::max(0.0, x[kQuietLevel] - x[kBlackLevel]);
     if (ch < 2) {
       // Red has both levels in every codeword (the orientation cells); its step, as this photo
       // shows it (cast, exposure, saturation), sets the least step of green: the palette gives
       // green a larger luminance step than red (0.19 against 0.13) and the same step in Cb.
       const double least = ch == 0 ? kMinLumaStep * range : kMinCbStep;
       const auto step = [&](int zero, int one) {
-        return ch == 0 ? x(one) - x(zero) : x(zero) - x(one);
+        return ch == 0 ? x[static_cast<std::size_t>(one)] - x[static_cast<std::size_t>(zero)]
+                       : x[static_cast<std::size_t>(zero)] - x[static_cast<std::size_t>(one)];
       };
-      std::vector<Tie> ties;
+      std::array<Tie, 2> ties{};
+      std::size_t tie_count = 0;
       const double sign = ch == 0 ? 1 : -1;
       double red_step = step(kRed0, kRed1);
       if (red_step < least) {
-        ties.push_back({kRed0, kRed1, sign * least});
+        ties[tie_count++] = {kRed0, kRed1, sign * least};
         red_step = least;
       }
       const double green_least =
           std::max(least, (ch == 0 ? kGreenLumaStepOfRed : kGreenCbStepOfRed) * red_step);
       if (used[kGreen0] && used[kGreen1] && step(kGreen0, kGreen1) < green_least) {
-        ties.push_back({kGreen0, kGreen1, sign * green_least});
+        ties[tie_count++] = {kGreen0, kGreen1, sign * green_least};
       }
-      if (!ties.empty()) rss = SolveChannel(b, bty, yty, ties, &x);
+      if (tie_count > 0) rss = SolveChannel(b, bty, yty, std::span(ties.data(), tie_count), &x);
     }
-    for (int l = 0; l < kLevels; ++l)
-      colours[static_cast<std::size_t>(l)][static_cast<std::size_t>(ch)] = x(l);
+    for (int l = 0; l < kLevels; ++l) {
+      colours[static_cast<std::size_t>(l)][static_cast<std::size_t>(ch)] =
+          x[static_cast<std::size_t>(l)];
+    }
     total += weights_[static_cast<std::size_t>(ch)] * std::max(0.0, rss);
   }
   if (residual != nullptr) *residual = total;

@@ -5,6 +5,8 @@
 // does the residual, channel by channel, weighted by each channel's noise.
 
 #include <array>
+#include <cstdint>
+#include <vector>
 
 #include "reading/region_system.hpp"
 
@@ -50,12 +52,20 @@ class PaletteModel {
 
  private:
   double ata(int system, int j, int k) const {
-    return ata_[static_cast<std::size_t>(system)][static_cast<std::size_t>(j * kModelRegions + k)];
+    return ata_[static_cast<std::size_t>(system)]
+               [(static_cast<std::size_t>(j) * kModelRegions) + static_cast<std::size_t>(k)];
   }
   // Channel c's system: Y′ is the luma one, Cb and Cr share the chroma one.
   static int SystemOf(int channel) { return channel == 0 ? 0 : 1; }
 
-  std::array<std::array<double, kModelRegions * kModelRegions>, 2> ata_{};
+  // AᵀA's non-zero entries, row by row (both triangles): the labels' 6 × 6 sums take only these.
+  // A blur of a pixel or two reaches few regions, so most of AᵀA is zero.
+  struct Entry {
+    std::uint8_t j, k;
+    double value;
+  };
+  std::array<std::vector<Entry>, 2> nonzero_;
+  std::array<std::array<double, std::size_t{kModelRegions} * kModelRegions>, 2> ata_{};
   std::array<std::array<double, kModelRegions>, 3> aty_{};
   std::array<double, 3> yty_{};
   std::array<double, 3> weights_{};
