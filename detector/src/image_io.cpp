@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
@@ -324,6 +325,45 @@ const char* ProxyName(ImageFormat format) {
   return "image";
 }
 
+/// Rows of native pixels converted at a time when an image is not 8-bit.
+constexpr std::size_t kNativeChunkBytes = std::size_t{4} << 20;
+
+/// Reads every channel of subimage 0 as 8-bit values into `out` (width × height × channels).
+/// OpenImageIO 2.4 converts a scanline image through a scratch buffer sized for 64 MB of rows,
+/// whatever the image's height, whenever a type is asked for, even the file's own 8 bits. So an
+/// 8-bit image is read in its native type (straight into `out`), and any other (16-bit PNG, float
+/// or odd-depth TIFF) as native rows a few MB at a time, converted by the same
+/// `convert_pixel_values` OpenImageIO would use.
+bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, std::uint8_t* out) {
+  const int channels = spec.nchannels;
+  if (!spec.channelformats.empty() || spec.tile_width > 0) {
+    return input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, out);
+  }
+  if (spec.format == OIIO::TypeDesc::UINT8) {
+    return input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UNKNOWN, out);
+  }
+  const std::size_t native_row = spec.scanline_bytes(/*native=*/true);
+  if (native_row == 0) return false;
+  const std::size_t row_values = static_cast<std::size_t>(spec.width) * channels;
+  const int rows = static_cast<int>(std::clamp<std::size_t>(kNativeChunkBytes / native_row, 1,
+                                                            static_cast<std::size_t>(spec.height)));
+  std::vector<std::byte> native(static_cast<std::size_t>(rows) * native_row);
+  for (int y = 0; y < spec.height; y += rows) {
+    const int end = std::min(spec.height, y + rows);
+    if (!input.read_scanlines(0, 0, spec.y + y, spec.y + end, 0, 0, channels,
+                              OIIO::TypeDesc::UNKNOWN, native.data())) {
+      return false;
+    }
+    if (!OIIO::convert_pixel_values(
+            spec.format, native.data(), OIIO::TypeDesc::UINT8,
+            out + static_cast<std::size_t>(y) * row_values,
+            static_cast<int>(static_cast<std::size_t>(end - y) * row_values))) {
+      return false;
+    }
+  }
+  return true;
+}
+
 LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat format,
                                const LoadOptions& options) {
   OIIO::Filesystem::IOMemReader reader(bytes.data(), bytes.size());
@@ -342,7 +382,7 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   }
   const int channels = spec.nchannels;
   std::vector<std::uint8_t> data(static_cast<std::size_t>(spec.width) * spec.height * channels);
-  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, data.data())) {
+  if (!ReadAs8Bit(*input, spec, data.data())) {
     return Fail(ImageError::kCorrupt, "cannot decode image: " + input->geterror(), spec.width,
                 spec.height);
   }

@@ -63,6 +63,50 @@ TEST(ImageIo, ReadsPngJpegTiffAndWebp) {
   }
 }
 
+// PNG and TIFF are read in their native type (8-bit ones straight, deeper ones as rows a few MB at
+// a time), not through OpenImageIO's 64 MB conversion buffer: the pixels must be exactly what
+// OpenImageIO's own 8-bit read gives, across chunk boundaries and for strips that straddle them.
+TEST(ImageIo, PngAndTiffPixelsAreOpenImageIosOwn) {
+  struct Case {
+    const char* name;
+    OIIO::TypeDesc type;
+    int width, height;
+    int rows_per_strip;  // TIFF only; 0: the writer's choice
+  };
+  const Case cases[] = {{"plain8.png", OIIO::TypeDesc::UINT8, 300, 200, 0},
+                        {"plain8.tif", OIIO::TypeDesc::UINT8, 500, 300, 16},
+                        {"deep16.png", OIIO::TypeDesc::UINT16, 300, 200, 0},
+                        {"deep16.tif", OIIO::TypeDesc::UINT16, 1100, 900, 7},
+                        {"float.tif", OIIO::TypeDesc::FLOAT, 1200, 1000, 0},
+                        {"tall16.tif", OIIO::TypeDesc::UINT16, 700, 1500, 1000}};
+  for (const Case& c : cases) {
+    const std::string path = Write(c.name, c.width, c.height, [&](OIIO::ImageSpec& spec) {
+      spec.set_format(c.type);
+      if (c.rows_per_strip > 0) spec.attribute("tiff:RowsPerStrip", c.rows_per_strip);
+    });
+    auto reference_input = OIIO::ImageInput::open(path);
+    ASSERT_TRUE(reference_input) << c.name << ": " << OIIO::geterror();
+    ASSERT_EQ(reference_input->spec().format, c.type) << c.name;
+    std::vector<std::uint8_t> reference(static_cast<std::size_t>(c.width) * c.height * 3);
+    ASSERT_TRUE(reference_input->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, reference.data()));
+    const LoadResult r = LoadImageFile(path);
+    ASSERT_TRUE(r.image) << c.name << ": " << r.error;
+    ASSERT_EQ(r.image->bgr.size(), cv::Size(c.width, c.height)) << c.name;
+    int differing = 0;
+    for (int y = 0; y < c.height; ++y) {
+      for (int x = 0; x < c.width; ++x) {
+        const std::uint8_t* want = &reference[(static_cast<std::size_t>(y) * c.width + x) * 3];
+        const cv::Vec3b got = r.image->bgr.at<cv::Vec3b>(y, x);
+        differing += got[2] != want[0] || got[1] != want[1] || got[0] != want[2];
+      }
+    }
+    EXPECT_EQ(differing, 0) << c.name;
+    // Not a constant image: the writer's gradient survived (red = x mod 256, green = y mod 256).
+    EXPECT_EQ(r.image->bgr.at<cv::Vec3b>(c.height - 1, 77)[2], 77) << c.name;
+    EXPECT_EQ(r.image->bgr.at<cv::Vec3b>(c.height - 1, 77)[1], (c.height - 1) % 256) << c.name;
+  }
+}
+
 TEST(ImageIo, AppliesExifOrientationAndKeepsFocalLength) {
   const std::string path = Write("rotated.jpg", 40, 30, [](OIIO::ImageSpec& spec) {
     spec.attribute("Orientation", 6);  // stored rotated: display turns it 90° clockwise
