@@ -6,6 +6,9 @@
 #                                       seeds in fuzz/corpus/<target>; crashes are written to
 #                                       build-fuzz/crashes/<target>/ (keep one in
 #                                       fuzz/regressions/<target>/ once fixed)
+#                                       PINTAG_FUZZ_JOBS=N (default 1) fuzzes with N worker
+#                                       processes (libFuzzer -fork=N, one per core): one run,
+#                                       its executions the workers' sum
 #   scripts/fuzz.sh --smoke [target …]  the bounded run of the test suite: every seed and every
 #                                       regression input once, then PINTAG_FUZZ_SMOKE_RUNS
 #                                       (default 500) mutations from a fixed seed
@@ -66,14 +69,20 @@ for target in "${targets[@]}"; do
     args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-500}" -seed=1 -max_len=65536 -timeout=30)
   else
     args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30)
+    jobs="${PINTAG_FUZZ_JOBS:-1}"
+    if [[ "$jobs" -gt 1 ]]; then args+=(-fork="$jobs"); fi
   fi
   dirs=("$corpus")
   [[ -d "$seeds" ]] && dirs+=("$seeds")
   if "$exe" "${args[@]}" -artifact_prefix="$crashes/" -print_final_stats=1 "${dirs[@]}" \
     >>"$log" 2>&1; then
-    runs="$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$')"
+    runs="$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || true)"
+    # With -fork the parent prints no final stats; its last "#N: cov: …" line counts every worker.
+    [[ -n "$runs" ]] || runs="$(grep -o '^#[0-9]*: cov' "$log" | tail -1 | tr -dc '0-9' || true)"
     echo "fuzz.sh: $target: ${runs:-?} executions, no failure"
-    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}" \
+    workers=""
+    if [[ $smoke == 0 && "${jobs:-1}" -gt 1 ]]; then workers=" ($jobs workers)"; fi
+    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}$workers" \
       >>"$build/fuzz-runs.txt"
   else
     echo "fuzz.sh: $target FAILED; the input is in $crashes/:" >&2
