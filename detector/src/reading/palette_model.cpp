@@ -41,42 +41,32 @@ namespace {
 
 // Fixed-size arrays throughout: a codeword search fits several hundred labellings, and heap
 // matrices cost more than the arithmetic at this size.
-using Six = std::array<std::array<double, kLevels>, kLevels>;
-using SixVector = std::array<double, kLevels>;
+constexpr std::size_t kLevelCount = kLevels;
+using Six = std::array<std::array<double, kLevelCount>, kLevelCount>;
+using SixVector = std::array<double, kLevelCount>;
 
 // Solves m z = rhs for the leading n × n block by Cholesky, in place (z holds rhs on entry).
 // False, as OpenCV's solver, when a pivot falls below machine epsilon.
-bool SolveCholesky(Six& m, SixVector& z, int n) {
-  for (int i = 0; i < n; ++i) {
-    auto& row = m[static_cast<std::size_t>(i)];
-    for (int j = 0; j <= i; ++j) {
-      const auto& other = m[static_cast<std::size_t>(j)];
-      double s = row[static_cast<std::size_t>(j)];
-      for (int k = 0; k < j; ++k)
-        s -= row[static_cast<std::size_t>(k)] * other[static_cast<std::size_t>(k)];
+bool SolveCholesky(Six& m, SixVector& z, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j <= i; ++j) {
+      double s = m[i][j];
+      for (std::size_t k = 0; k < j; ++k) s -= m[i][k] * m[j][k];
       if (i == j) {
         if (s < std::numeric_limits<double>::epsilon()) return false;
-        row[static_cast<std::size_t>(i)] = std::sqrt(s);
+        m[i][i] = std::sqrt(s);
       } else {
-        row[static_cast<std::size_t>(j)] = s / other[static_cast<std::size_t>(j)];
+        m[i][j] = s / m[j][j];
       }
     }
   }
-  for (int i = 0; i < n; ++i) {
-    const auto& row = m[static_cast<std::size_t>(i)];
-    double s = z[static_cast<std::size_t>(i)];
-    for (int k = 0; k < i; ++k)
-      s -= row[static_cast<std::size_t>(k)] * z[static_cast<std::size_t>(k)];
-    z[static_cast<std::size_t>(i)] = s / row[static_cast<std::size_t>(i)];
+  for (std::size_t i = 0; i < n; ++i) {  // L y = rhs
+    for (std::size_t k = 0; k < i; ++k) z[i] -= m[i][k] * z[k];
+    z[i] /= m[i][i];
   }
-  for (int i = n - 1; i >= 0; --i) {
-    double s = z[static_cast<std::size_t>(i)];
-    for (int k = i + 1; k < n; ++k) {
-      s -= m[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)] *
-           z[static_cast<std::size_t>(k)];
-    }
-    z[static_cast<std::size_t>(i)] =
-        s / m[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)];
+  for (std::size_t i = n; i-- > 0;) {  // Lᵀ z = y
+    for (std::size_t k = i + 1; k < n; ++k) z[i] -= m[k][i] * z[k];
+    z[i] /= m[i][i];
   }
   return true;
 }
@@ -90,56 +80,42 @@ struct Tie {
 };
 double SolveChannel(const Six& b, const SixVector& bty, double yty, std::span<const Tie> ties,
                     SixVector* x) {
-  std::array<int, kLevels> tied_to{};  // the level whose free colour level l takes, or −1
-  tied_to.fill(-1);
+  // Which unknown each level's colour is: its own, or (tied) its zero's.
+  std::array<std::size_t, kLevelCount> unknown{};
+  std::array<bool, kLevelCount> tied{};
   SixVector c{};
   for (const Tie& tie : ties) {
-    tied_to[static_cast<std::size_t>(tie.one)] = tie.zero;
+    tied[static_cast<std::size_t>(tie.one)] = true;
     c[static_cast<std::size_t>(tie.one)] = tie.step;
   }
-  std::array<int, kLevels> free_index{};
-  int free = 0;
-  for (int l = 0; l < kLevels; ++l) {
-    if (tied_to[static_cast<std::size_t>(l)] < 0) free_index[static_cast<std::size_t>(l)] = free++;
+  std::size_t free = 0;
+  for (std::size_t l = 0; l < kLevelCount; ++l) {
+    if (!tied[l]) unknown[l] = free++;
   }
-  for (int l = 0; l < kLevels; ++l) {
-    const int to = tied_to[static_cast<std::size_t>(l)];
-    if (to >= 0) free_index[static_cast<std::size_t>(l)] = free_index[static_cast<std::size_t>(to)];
+  for (const Tie& tie : ties) {
+    unknown[static_cast<std::size_t>(tie.one)] = unknown[static_cast<std::size_t>(tie.zero)];
   }
   // Tᵀ B T and Tᵀ (b − B c): T adds each tied level's row and column to its zero's.
   Six reduced{};
   SixVector z{};
-  for (int l = 0; l < kLevels; ++l) {
-    const auto fl = static_cast<std::size_t>(free_index[static_cast<std::size_t>(l)]);
+  for (std::size_t l = 0; l < kLevelCount; ++l) {
     double bc = 0;
-    for (int m = 0; m < kLevels; ++m) {
-      const double blm = b[static_cast<std::size_t>(l)][static_cast<std::size_t>(m)];
-      reduced[fl][static_cast<std::size_t>(free_index[static_cast<std::size_t>(m)])] += blm;
-      bc += blm * c[static_cast<std::size_t>(m)];
+    for (std::size_t m = 0; m < kLevelCount; ++m) {
+      reduced[unknown[l]][unknown[m]] += b[l][m];
+      bc += b[l][m] * c[m];
     }
-    z[fl] += bty[static_cast<std::size_t>(l)] - bc;
+    z[unknown[l]] += bty[l] - bc;
   }
   double trace = 0;
-  for (int i = 0; i < free; ++i)
-    trace += reduced[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)];
-  for (int i = 0; i < free; ++i) {
-    reduced[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)] +=
-        1e-9 * trace + 1e-12;  // unused levels
-  }
+  for (std::size_t i = 0; i < free; ++i) trace += reduced[i][i];
+  for (std::size_t i = 0; i < free; ++i) reduced[i][i] += 1e-9 * trace + 1e-12;  // unused levels
   if (!SolveCholesky(reduced, z, free)) z.fill(0);
-  for (int l = 0; l < kLevels; ++l) {
-    (*x)[static_cast<std::size_t>(l)] =
-        z[static_cast<std::size_t>(free_index[static_cast<std::size_t>(l)])] +
-        c[static_cast<std::size_t>(l)];
-  }
+  for (std::size_t l = 0; l < kLevelCount; ++l) (*x)[l] = z[unknown[l]] + c[l];
   double quadratic = 0;
-  for (int l = 0; l < kLevels; ++l) {
+  for (std::size_t l = 0; l < kLevelCount; ++l) {
     double bx = 0;
-    for (int m = 0; m < kLevels; ++m) {
-      bx += b[static_cast<std::size_t>(l)][static_cast<std::size_t>(m)] *
-            (*x)[static_cast<std::size_t>(m)];
-    }
-    quadratic += (*x)[static_cast<std::size_t>(l)] * (bx - 2 * bty[static_cast<std::size_t>(l)]);
+    for (std::size_t m = 0; m < kLevelCount; ++m) bx += b[l][m] * (*x)[m];
+    quadratic += (*x)[l] * (bx - 2 * bty[l]);
   }
   return yty + quadratic;
 }
