@@ -17,6 +17,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -343,10 +344,13 @@ bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, std::uint8
     return input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UNKNOWN, out);
   }
   const std::size_t native_row = spec.scanline_bytes(/*native=*/true);
-  if (native_row == 0) return false;
   const std::size_t row_values = static_cast<std::size_t>(spec.width) * channels;
-  const int rows = static_cast<int>(std::clamp<std::size_t>(kNativeChunkBytes / native_row, 1,
-                                                            static_cast<std::size_t>(spec.height)));
+  constexpr auto kIntMax = static_cast<std::size_t>(std::numeric_limits<int>::max());
+  // convert_pixel_values counts values in an int.
+  if (native_row == 0 || row_values > kIntMax) return false;
+  const int rows = static_cast<int>(
+      std::clamp<std::size_t>(std::min(kNativeChunkBytes / native_row, kIntMax / row_values), 1,
+                              static_cast<std::size_t>(spec.height)));
   std::vector<std::byte> native(static_cast<std::size_t>(rows) * native_row);
   for (int y = 0; y < spec.height; y += rows) {
     const int end = std::min(spec.height, y + rows);
@@ -376,6 +380,12 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   if (spec.width < 1 || spec.height < 1 || spec.depth > 1 || spec.nchannels < 1) {
     return Fail(ImageError::kCorrupt, "image has no pixels");
   }
+  // Rows and columns are numbered from the image's origin (a PNG's oFFs chunk can put it near
+  // INT_MAX): its last row and column must still be an int.
+  constexpr int kIntMax = std::numeric_limits<int>::max();
+  if (spec.x > kIntMax - spec.width || spec.y > kIntMax - spec.height) {
+    return Fail(ImageError::kCorrupt, "the image's origin puts its pixels beyond the int range");
+  }
   if (OverLimit(spec.width, spec.height, options.max_pixels)) {
     return Fail(ImageError::kTooLarge, TooLargeMessage(spec.width, spec.height, options.max_pixels),
                 spec.width, spec.height);
@@ -383,8 +393,9 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   const int channels = spec.nchannels;
   std::vector<std::uint8_t> data(static_cast<std::size_t>(spec.width) * spec.height * channels);
   if (!ReadAs8Bit(*input, spec, data.data())) {
-    return Fail(ImageError::kCorrupt, "cannot decode image: " + input->geterror(), spec.width,
-                spec.height);
+    std::string why = input->geterror();
+    if (why.empty()) why = "its rows cannot be addressed or converted to 8 bits";
+    return Fail(ImageError::kCorrupt, "cannot decode image: " + why, spec.width, spec.height);
   }
   const std::string format_name = input->format_name();
   input->close();

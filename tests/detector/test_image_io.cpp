@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -104,6 +105,42 @@ TEST(ImageIo, PngAndTiffPixelsAreOpenImageIosOwn) {
     // Not a constant image: the writer's gradient survived (red = x mod 256, green = y mod 256).
     EXPECT_EQ(r.image->bgr.at<cv::Vec3b>(c.height - 1, 77)[2], 77) << c.name;
     EXPECT_EQ(r.image->bgr.at<cv::Vec3b>(c.height - 1, 77)[1], (c.height - 1) % 256) << c.name;
+  }
+}
+
+// PNG's chunk checksum (CRC-32, ISO 3309), for a hand-made chunk.
+std::uint32_t PngCrc(const std::uint8_t* data, std::size_t size) {
+  std::uint32_t crc = 0xFFFFFFFFU;
+  for (std::size_t i = 0; i < size; ++i) {
+    crc ^= data[i];
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320U & (0U - (crc & 1U)));
+  }
+  return crc ^ 0xFFFFFFFFU;
+}
+
+// A PNG's oFFs chunk sets where its rows start; near INT_MAX, the last row's number does not fit
+// an int. Such a file is refused as corrupt, never read as rows that wrap around.
+TEST(ImageIo, RowOffsetsNearIntMaxAreRefused) {
+  for (const OIIO::TypeDesc type : {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16}) {
+    std::vector<std::uint8_t> png =
+        ReadAll(Write("offset.png", 40, 30, [&](OIIO::ImageSpec& spec) { spec.set_format(type); }));
+    // oFFs after IHDR (8-byte signature + 25-byte IHDR chunk): x 0, y INT_MAX − 10, in pixels.
+    std::vector<std::uint8_t> chunk = {0, 0, 0, 9,    'o',  'F',  'F',  's', 0,
+                                       0, 0, 0, 0x7F, 0xFF, 0xFF, 0xF5, 0};
+    const std::uint32_t crc = PngCrc(chunk.data() + 4, chunk.size() - 4);
+    for (int shift = 24; shift >= 0; shift -= 8) {
+      chunk.push_back(static_cast<std::uint8_t>(crc >> shift));
+    }
+    png.insert(png.begin() + 33, chunk.begin(), chunk.end());
+    const std::string path = TempPath("offset.png");
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    auto probe = OIIO::ImageInput::open(path);
+    ASSERT_TRUE(probe) << OIIO::geterror();
+    ASSERT_EQ(probe->spec().y, std::numeric_limits<int>::max() - 10);  // the chunk is read
+    const LoadResult r = LoadImageFile(path);
+    EXPECT_FALSE(r.image) << type;
+    EXPECT_EQ(r.kind, ImageError::kCorrupt) << type << ": " << r.error;
   }
 }
 
