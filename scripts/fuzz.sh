@@ -70,7 +70,10 @@ for target in "${targets[@]}"; do
   else
     args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30)
     jobs="${PINTAG_FUZZ_JOBS:-1}"
-    if [[ "$jobs" -gt 1 ]]; then args+=(-fork="$jobs"); fi
+    [[ "$jobs" =~ ^[0-9]+$ ]] || { echo "fuzz.sh: PINTAG_FUZZ_JOBS must be a number" >&2; exit 2; }
+    # Fork mode would otherwise skip over timeouts and out-of-memory inputs; stop on them as one
+    # process does.
+    if [[ "$jobs" -gt 1 ]]; then args+=(-fork="$jobs" -ignore_timeouts=0 -ignore_ooms=0); fi
   fi
   dirs=("$corpus")
   [[ -d "$seeds" ]] && dirs+=("$seeds")

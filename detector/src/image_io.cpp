@@ -20,6 +20,7 @@
 #include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <string_view>
 #include <vector>
 
 namespace pintag {
@@ -337,7 +338,11 @@ constexpr std::size_t kNativeChunkBytes = std::size_t{4} << 20;
 /// `convert_pixel_values` OpenImageIO would use.
 bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, std::uint8_t* out) {
   const int channels = spec.nchannels;
-  if (!spec.channelformats.empty() || spec.tile_width > 0) {
+  // TIFF goes through OpenImageIO's own buffer: its native TIFF read can write past the rows it
+  // was asked for (a fuzzed TIFF with 9994 bits per sample overran, then freed, memory beyond our
+  // buffer; kept in fuzz/regressions/image_detect/).
+  if (!spec.channelformats.empty() || spec.tile_width > 0 ||
+      std::string_view(input.format_name()) == "tiff") {
     return input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, out);
   }
   if (spec.format == OIIO::TypeDesc::UINT8) {
