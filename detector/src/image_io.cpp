@@ -20,7 +20,6 @@
 #include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <string_view>
 #include <vector>
 
 namespace pintag {
@@ -333,16 +332,15 @@ constexpr std::size_t kNativeChunkBytes = std::size_t{4} << 20;
 /// Reads every channel of subimage 0 as 8-bit values into `out` (width × height × channels).
 /// OpenImageIO 2.4 converts a scanline image through a scratch buffer sized for 64 MB of rows,
 /// whatever the image's height, whenever a type is asked for, even the file's own 8 bits. So an
-/// 8-bit image is read in its native type (straight into `out`), and any other (16-bit PNG, float
-/// or odd-depth TIFF) as native rows a few MB at a time, converted by the same
-/// `convert_pixel_values` OpenImageIO would use.
-bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, std::uint8_t* out) {
+/// 8-bit PNG or WebP is read in its native type (straight into `out`), and a deeper one (16-bit
+/// PNG) as native rows a few MB at a time, converted by the same `convert_pixel_values`
+/// OpenImageIO would use. TIFF keeps OpenImageIO's buffer: its native TIFF read can write past
+/// the rows it was asked for (a fuzzed TIFF with 9994 bits per sample overran, then freed, memory
+/// beyond ours; kept in fuzz/regressions/image_detect/).
+bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, ImageFormat format,
+                std::uint8_t* out) {
   const int channels = spec.nchannels;
-  // TIFF goes through OpenImageIO's own buffer: its native TIFF read can write past the rows it
-  // was asked for (a fuzzed TIFF with 9994 bits per sample overran, then freed, memory beyond our
-  // buffer; kept in fuzz/regressions/image_detect/).
-  if (!spec.channelformats.empty() || spec.tile_width > 0 ||
-      std::string_view(input.format_name()) == "tiff") {
+  if (format == ImageFormat::kTiff || !spec.channelformats.empty() || spec.tile_width > 0) {
     return input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, out);
   }
   if (spec.format == OIIO::TypeDesc::UINT8) {
@@ -397,7 +395,7 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   }
   const int channels = spec.nchannels;
   std::vector<std::uint8_t> data(static_cast<std::size_t>(spec.width) * spec.height * channels);
-  if (!ReadAs8Bit(*input, spec, data.data())) {
+  if (!ReadAs8Bit(*input, spec, format, data.data())) {
     std::string why = input->geterror();
     if (why.empty()) why = "its rows cannot be addressed or converted to 8 bits";
     return Fail(ImageError::kCorrupt, "cannot decode image: " + why, spec.width, spec.height);

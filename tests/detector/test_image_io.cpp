@@ -64,9 +64,10 @@ TEST(ImageIo, ReadsPngJpegTiffAndWebp) {
   }
 }
 
-// PNG and TIFF are read in their native type (8-bit ones straight, deeper ones as rows a few MB at
-// a time), not through OpenImageIO's 64 MB conversion buffer: the pixels must be exactly what
-// OpenImageIO's own 8-bit read gives, across chunk boundaries and for strips that straddle them.
+// PNG is read in its native type (8-bit straight, deeper as rows a few MB at a time), not through
+// OpenImageIO's 64 MB conversion buffer; TIFF through that buffer. Either way the pixels must be
+// exactly what OpenImageIO's own 8-bit read gives, across chunk boundaries (tall16.png: two
+// chunks) and for TIFF strips.
 TEST(ImageIo, PngAndTiffPixelsAreOpenImageIosOwn) {
   struct Case {
     const char* name;
@@ -77,6 +78,7 @@ TEST(ImageIo, PngAndTiffPixelsAreOpenImageIosOwn) {
   const Case cases[] = {{"plain8.png", OIIO::TypeDesc::UINT8, 300, 200, 0},
                         {"plain8.tif", OIIO::TypeDesc::UINT8, 500, 300, 16},
                         {"deep16.png", OIIO::TypeDesc::UINT16, 300, 200, 0},
+                        {"tall16.png", OIIO::TypeDesc::UINT16, 700, 1500, 0},
                         {"deep16.tif", OIIO::TypeDesc::UINT16, 1100, 900, 7},
                         {"float.tif", OIIO::TypeDesc::FLOAT, 1200, 1000, 0},
                         {"tall16.tif", OIIO::TypeDesc::UINT16, 700, 1500, 1000}};
