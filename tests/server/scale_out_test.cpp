@@ -2,6 +2,11 @@
 // template in front of one primary and three following replicas, all on loopback. Mixed traffic
 // through nginx while one replica is killed with SIGKILL and started again: every request gets
 // its correct answer. Then a pincode written through nginx reaches every replica.
+//
+// One thing no proxy can hide: a response the killed replica had begun to send (nginx has passed
+// its headers on) is cut, and nginx can only close the client's connection. The clients here do
+// what a scanner does with a dropped connection: send the same request once more. At most one
+// request per client can be in flight on the killed replica, so at most that many are cut.
 
 #include <signal.h>
 
@@ -35,7 +40,8 @@ struct Tally {
   std::atomic<int> sent{0};
   std::atomic<int> right{0};
   std::atomic<int> wrong{0};
-  std::atomic<int> socket_errors{0};
+  std::atomic<int> socket_errors{0};  ///< no answer even when sent again
+  std::atomic<int> cut{0};            ///< first try cut, second answered
   std::atomic<int> detections{0};
   std::atomic<int> answered_while_down{0};
 };
@@ -55,9 +61,9 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
   Tally tally;
   std::atomic<bool> stop{false}, down{false};
   // Each request with the answer it must get; a 404 is right for a pincode that does not exist.
-  const auto one_request = [&](httplib::Client& client, int n) {
+  const auto send_once = [&](httplib::Client& client, int n, bool& right) {
     httplib::Result r{nullptr, httplib::Error::Unknown};
-    bool right = false;
+    right = false;
     switch (n % 5) {
       case 0: {
         r = client.Get("/api/v1/pincodes/110001");
@@ -88,6 +94,15 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
                 r->get_header_value("Content-Type") == "application/problem+json";
         break;
       }
+    }
+    return r;
+  };
+  const auto one_request = [&](httplib::Client& client, int n) {
+    bool right = false;
+    httplib::Result r = send_once(client, n, right);
+    if (!r) {
+      r = send_once(client, n, right);
+      if (r) ++tally.cut;
     }
     ++tally.sent;
     if (!r) {
@@ -130,6 +145,7 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
 
   EXPECT_EQ(tally.wrong.load(), 0);
   EXPECT_EQ(tally.socket_errors.load(), 0);
+  EXPECT_LE(tally.cut.load(), 6) << "more cut responses than requests in flight at the kill";
   EXPECT_EQ(tally.right.load(), tally.sent.load());
   EXPECT_GE(tally.sent.load(), 350);
   EXPECT_GE(tally.answered_while_down.load(), 100);
