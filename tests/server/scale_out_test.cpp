@@ -126,9 +126,11 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
       for (int n = t; !stop; ++n) one_request(client, n);
     });
   }
+  // One deadline for the whole load, and one below for replication, so that a stuck test ends in
+  // its own failure messages (and nginx's log) well inside ctest's timeout for test_serve.
+  const auto load_deadline = Clock::now() + std::chrono::seconds(150);
   const auto wait_for = [&](int count) {
-    const auto deadline = Clock::now() + std::chrono::seconds(120);
-    while (tally.sent < count && Clock::now() < deadline)
+    while (tally.sent < count && Clock::now() < load_deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
   };
   // Killed mid-load, left down while the load goes on, started again on its port.
@@ -161,9 +163,9 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
   httplib::Client front("127.0.0.1", nginx.port());
   addPincode(front, "999321");
   EXPECT_EQ(Body(front.Get("/api/v1/registry"))["role"], "replica");
+  const auto deadline = Clock::now() + std::chrono::seconds(60);
   for (std::size_t i = 0; i < 3; ++i) {
     httplib::Client client("127.0.0.1", replica(i).port());
-    const auto deadline = Clock::now() + std::chrono::seconds(60);
     int status = 0;
     while (status != 200 && Clock::now() < deadline) {
       const auto r = client.Get("/api/v1/pincodes/999321");

@@ -224,8 +224,15 @@ TEST(ServeHelp, NamesTheEnvironmentVariableOfEveryOption) {
         "PINTAG_SCAN_LOG", "PINTAG_SNAPSHOT"}) {
     EXPECT_NE(help.out.find(std::string(name) + ")"), std::string::npos) << name;
   }
-  const CommandResult bad = RunPintag("serve --log-format xml --port 1");
+  // Refused by the option's own check, before any database or port: the database's directory
+  // does not exist, so a server that let the value through could not start and hang the test.
+  TempDir dir;
+  const std::string db = dir.file("absent/x.db");
+  const CommandResult bad = RunPintag("serve --log-format xml --port 0 --db " + db);
   EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("--log-format"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("xml"), std::string::npos) << bad.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
 }
 
 }  // namespace
