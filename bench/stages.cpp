@@ -414,6 +414,23 @@ void BM_Baseline_AprilTag(benchmark::State& state) {
 }
 BENCHMARK(BM_Baseline_AprilTag)->Arg(1)->Arg(2)->ArgName("decimate")->Unit(benchmark::kMillisecond);
 
+// --- the test scenes themselves --------------------------------------------------------------
+
+// One 1080p scene of the fixture's four PinTags, a new seed each time: what the tests' and the
+// sweep's scenes cost to make (arg 0 moderate, 1 hard photometry).
+void BM_Scene_Render(benchmark::State& state) {
+  (void)Get();  // photographs loaded and OpenCV held to one thread, as for every stage
+  scene::SceneSpec spec = Spec(Marker::kPinTag, true);
+  const bool hard = state.range(0) == 1;
+  for (auto _ : state) {
+    ++spec.seed;
+    spec.photometry =
+        hard ? scene::Photometry::Hard(spec.seed) : scene::Photometry::Moderate(spec.seed);
+    benchmark::DoNotOptimize(scene::RenderScene(spec).bgr.data);
+  }
+}
+BENCHMARK(BM_Scene_Render)->Arg(0)->Arg(1)->ArgName("hard")->Unit(benchmark::kMillisecond);
+
 // NOLINTEND(readability-identifier-naming, clang-analyzer-deadcode.DeadStores)
 
 }  // namespace

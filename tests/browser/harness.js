@@ -98,8 +98,10 @@ export async function launchBrowser() {
 }
 
 /**
- * A new page in its own context; browser console errors and failed same-origin requests are
- * collected in page.problems so tests can assert there were none.
+ * A new page in its own context; page errors, console errors other than the browser's own note
+ * of a 4xx/5xx answer, and every server error (5xx) the page received are collected in
+ * page.problems so tests can assert there were none. 4xx answers are the pages' expected
+ * problems (an unknown pincode) and are asserted by the tests that cause them.
  */
 export async function newPage(browser, { viewport = { width: 1280, height: 900 }, ...options } = {}) {
   const context = await browser.newContext({ viewport, acceptDownloads: true, ...options });
@@ -109,6 +111,11 @@ export async function newPage(browser, { viewport = { width: 1280, height: 900 }
   page.on('console', (message) => {
     if (message.type() === 'error' && !/status of (4|5)\d\d/.test(message.text())) {
       page.problems.push(`console: ${message.text()}`);
+    }
+  });
+  page.on('response', (response) => {
+    if (response.status() >= 500) {
+      page.problems.push(`server error: ${response.status()} ${response.url()}`);
     }
   });
   page.setDefaultTimeout(15_000);

@@ -35,7 +35,11 @@ test('registry search finds offices by district and pages through them', async (
   assert.match(await page.locator('#page-info').textContent(), /Page 2 of/);
   await page.getByRole('button', { name: '← Previous' }).click();
   await caption.filter({ hasText: `Offices 1–20 of ${total}` }).waitFor();
-  await page.getByRole('button', { name: 'Details of 110001' }).first().click().catch(() => {});
+  // A row's pincode opens its record.
+  const firstPin = page.locator('#results-body button').first();
+  const shownPin = (await firstPin.textContent()).trim();
+  await firstPin.click();
+  await page.locator('#detail-pincode').filter({ hasText: shownPin }).waitFor();
   await screenshot(page, 'registry-search');
   assert.deepEqual(page.problems, []);
 });

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -13,6 +14,7 @@ namespace pintag {
 namespace {
 
 using testing::MakeScene;
+using testing::SyntheticCamera;
 using testing::SyntheticOptions;
 using testing::SyntheticTag;
 
@@ -27,8 +29,8 @@ double MaxCornerError(const Detection& d, const testing::SyntheticTruth& t) {
 
 DetectorOptions OptionsFor(const SyntheticOptions& s) {
   DetectorOptions o;
-  const cv::Matx33d k = s.camera.cameraMatrix();
-  o.intrinsics = CameraIntrinsics{k(0, 0), k(1, 1), k(0, 2), k(1, 2), {}};
+  const SyntheticCamera& c = s.camera;  // the numbers of c.cameraMatrix()
+  o.intrinsics = CameraIntrinsics{c.f, c.f, (c.width - 1) / 2.0, (c.height - 1) / 2.0, {}};
   // PINTAG_DEBUG_DIR=dir writes each stage's image and reports rejected candidates.
   if (const char* dir = std::getenv("PINTAG_DEBUG_DIR")) {
     o.debug_dir = dir;
@@ -161,6 +163,25 @@ TEST(Detector, ThreadsGiveTheSameAnswer) {
   const auto two = Detector(o).detect(scene.bgr);
   ASSERT_EQ(one.detections.size(), 2u);
   ASSERT_EQ(two.detections.size(), 2u);
+  // The same tags with the same corners and pose, in whatever order the threads finished.
+  const auto by_key = [](std::vector<Detection> d) {
+    std::sort(d.begin(), d.end(),
+              [](const Detection& a, const Detection& b) { return a.key < b.key; });
+    return d;
+  };
+  const std::vector<Detection> a = by_key(one.detections), b = by_key(two.detections);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_TRUE(a[i].key.has_value());
+    EXPECT_EQ(a[i].key, b[i].key);
+    for (std::size_t c = 0; c < 4; ++c) {
+      EXPECT_NEAR(a[i].corners[c].x, b[i].corners[c].x, 1e-9);
+      EXPECT_NEAR(a[i].corners[c].y, b[i].corners[c].y, 1e-9);
+    }
+    for (std::size_t t = 0; t < 3; ++t) {
+      EXPECT_NEAR(a[i].pose.translation[t], b[i].pose.translation[t], 1e-9);
+      EXPECT_NEAR(a[i].pose.rotation_vector[t], b[i].pose.rotation_vector[t], 1e-9);
+    }
+  }
 }
 
 }  // namespace

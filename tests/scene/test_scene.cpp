@@ -5,10 +5,8 @@
 #include <apriltag/tag36h10.h>
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <map>
 #include <memory>
 #include <opencv2/aruco.hpp>
@@ -497,53 +495,6 @@ TEST(RenderScene, AprilTagIsDetectedAtTheTruthCorners) {
   }
   std::printf("AprilTag: %zu/%zu found, worst corner error %.3f px, mean offset (%.3f, %.3f)\n",
               found.size(), scene.truth.size(), worst, mean_offset.x, mean_offset.y);
-}
-
-double ThreadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
-
-// Not a limit, a report: how long a 1080p scene takes on one core (OpenCV held to one thread, CPU
-// time of this thread, so that other work on the machine does not count).
-TEST(RenderScene, Timing) {
-  const Camera camera;
-  const int threads = cv::getNumThreads();
-  cv::setNumThreads(1);
-  for (const bool hard : {false, true}) {
-    SceneSpec spec;
-    spec.seed = 11;
-    spec.photometry = hard ? Photometry::Hard(11) : Photometry::Moderate(11);
-    for (int m = 0; m < 3; ++m) {
-      spec.markers.push_back(Place(PinTagTexture(m + 10), m + 10, camera, {400.0 + 500 * m, 500},
-                                   DistanceFor(camera, 48.0 + 70 * m), 20.0 * m, 30, 0));
-    }
-    SceneSpec warm_up;  // loads every photograph once, on a tiny frame
-    warm_up.camera = Camera{64, 64, 32, 24, 64, 48};
-    for (int i = 0; i < static_cast<int>(BackgroundPhotos().size()); ++i) {
-      warm_up.background_photo = i;
-      RenderScene(warm_up);
-    }
-    constexpr int kRuns = 8;
-    const double cpu_start = ThreadCpuMs();
-    const auto start = std::chrono::steady_clock::now();
-    for (int i = 0; i < kRuns; ++i) {
-      spec.seed = 11 + i;
-      RenderScene(spec);
-    }
-    const double wall =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count() /
-        kRuns;
-    const double cpu = (ThreadCpuMs() - cpu_start) / kRuns;
-    std::printf(
-        "1080p scene, 3 PinTags (48, 118, 188 px), %s photometry: %.1f ms CPU, %.1f ms "
-        "wall, one thread\n",
-        hard ? "hard" : "moderate", cpu, wall);
-    EXPECT_LT(cpu, 2000.0);
-  }
-  cv::setNumThreads(threads);
 }
 
 }  // namespace
