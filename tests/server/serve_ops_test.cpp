@@ -198,24 +198,32 @@ TEST_F(ServeTest, MetricsCountWhatTheTestDid) {
   ASSERT_EQ(detected["tags"].size(), 1U) << detected.dump();
   ExpectProblem(client().Post("/api/v1/detect", scanner(), "nope", "image/png"), 415);
 
-  // cpp-httplib's logger, which counts a request, runs after the response is sent: wait until the
-  // last request is counted (a deadline only keeps a broken server from hanging the test).
-  const std::string last_request =
-      "pintag_http_requests_total{route=\"/api/v1/detect\",method=\"POST\",status=\"415\"} 1";
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  // cpp-httplib's logger, which counts a request, runs after the response is sent, on whichever
+  // worker thread served it: wait until all 13 requests above are counted (the deadline only
+  // keeps a broken server from hanging the test), then check each series.
   std::string m;
+  const auto requests = [&](const std::string& route, const std::string& method, int status) {
+    return Metric(m, "pintag_http_requests_total{route=\"" + route + "\",method=\"" + method +
+                         "\",status=\"" + std::to_string(status) + "\"}");
+  };
+  const auto counted = [&] {
+    return requests("/api/v1/pincodes/{pin}", "GET", 200) +
+           requests("/api/v1/pincodes/{pin}", "GET", 404) +
+           requests("/api/v1/pincodes/{pin}", "GET", 400) +
+           requests("/api/v1/labels/{pin}.svg", "GET", 200) +
+           requests("/api/v1/labels", "POST", 200) +
+           requests("/api/v1/tags/{pin}.png", "GET", 200) +
+           requests("/api/v1/detect", "POST", 200) + requests("/api/v1/detect", "POST", 415);
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (std::chrono::steady_clock::now() < deadline) {
     r = client().Get("/metrics");
     ASSERT_TRUE(r);
     ASSERT_EQ(r->status, 200);
     m = r->body;
-    if (m.find(last_request) != std::string::npos) break;
+    if (counted() >= 13) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  const auto requests = [&](const std::string& route, const std::string& method, int status) {
-    return Metric(m, "pintag_http_requests_total{route=\"" + route + "\",method=\"" + method +
-                         "\",status=\"" + std::to_string(status) + "\"}");
-  };
   EXPECT_EQ(requests("/api/v1/pincodes/{pin}", "GET", 200), 3);
   EXPECT_EQ(requests("/api/v1/pincodes/{pin}", "GET", 404), 2);
   EXPECT_EQ(requests("/api/v1/pincodes/{pin}", "GET", 400), 1);
