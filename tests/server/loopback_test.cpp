@@ -69,13 +69,7 @@ class LoopbackTest : public ::testing::Test {
     const int fd = pintag::test::ConnectLoopback(server_->port());
     if (fd < 0) return {};
     pintag::test::SendAll(fd, request);
-    std::string answer = pintag::test::ReceiveUntil(fd, 30, [](const std::string& out) {
-      const std::size_t end = out.find("\r\n\r\n");
-      if (end == std::string::npos) return false;
-      const std::size_t length = out.find("Content-Length: ");
-      if (length == std::string::npos || length > end) return true;
-      return out.size() >= end + 4 + std::stoul(out.substr(length + 16));
-    });
+    std::string answer = pintag::test::ReceiveUntil(fd, 30, pintag::test::HasWholeResponse);
     answer += pintag::test::ReceiveUntil(fd, 1);
     ::close(fd);
     return answer;

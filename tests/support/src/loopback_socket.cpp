@@ -47,6 +47,14 @@ std::string ReceiveUntil(int fd, int quiet_s, const std::function<bool(const std
   return out;
 }
 
+bool HasWholeResponse(const std::string& received) {
+  const std::size_t end = received.find("\r\n\r\n");
+  if (end == std::string::npos) return false;
+  const std::size_t length = received.find("Content-Length: ");
+  if (length == std::string::npos || length > end) return true;
+  return received.size() >= end + 4 + std::stoul(received.substr(length + 16));
+}
+
 std::string SendRaw(int port, const std::string& request, int quiet_s,
                     const std::function<bool(const std::string&)>& done) {
   const int fd = ConnectLoopback(port);

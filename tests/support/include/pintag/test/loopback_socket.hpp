@@ -18,6 +18,10 @@ bool SendAll(int fd, const std::string& bytes);
 std::string ReceiveUntil(int fd, int quiet_s,
                          const std::function<bool(const std::string&)>& done = nullptr);
 
+/// True once `received` holds a whole HTTP response: its headers, and as many body bytes as its
+/// Content-Length says (none without one). A `done` for ReceiveUntil on a kept-alive connection.
+bool HasWholeResponse(const std::string& received);
+
 /// Connects, sends `request`, returns ReceiveUntil(…, quiet_s, done) and closes; "" when it
 /// cannot connect.
 std::string SendRaw(int port, const std::string& request, int quiet_s,
