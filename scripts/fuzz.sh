@@ -9,6 +9,9 @@
 #                                       PINTAG_FUZZ_JOBS=N (default 1) fuzzes with N worker
 #                                       processes (libFuzzer -fork=N, one per core): one run,
 #                                       its executions the workers' sum
+#                                       PINTAG_FUZZ_RUNS=N also stops it after N executions
+#                                       (all workers together), whichever limit comes first;
+#                                       Ctrl-C stops it too, and is recorded as stopped by hand
 #   scripts/fuzz.sh --smoke [target …]  the bounded run of the test suite: every seed and every
 #                                       regression input once, then PINTAG_FUZZ_SMOKE_RUNS
 #                                       (default 500) mutations from a fixed seed
@@ -69,6 +72,11 @@ for target in "${targets[@]}"; do
     args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-500}" -seed=1 -max_len=65536 -timeout=30)
   else
     args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30)
+    if [[ -n "${PINTAG_FUZZ_RUNS:-}" ]]; then
+      [[ "$PINTAG_FUZZ_RUNS" =~ ^[0-9]+$ ]] ||
+        { echo "fuzz.sh: PINTAG_FUZZ_RUNS must be a number" >&2; exit 2; }
+      args+=(-runs="$PINTAG_FUZZ_RUNS")
+    fi
     jobs="${PINTAG_FUZZ_JOBS:-1}"
     [[ "$jobs" =~ ^[0-9]+$ ]] || { echo "fuzz.sh: PINTAG_FUZZ_JOBS must be a number" >&2; exit 2; }
     # Fork mode would otherwise skip over timeouts and out-of-memory inputs; stop on them as one
@@ -77,15 +85,30 @@ for target in "${targets[@]}"; do
   fi
   dirs=("$corpus")
   [[ -d "$seeds" ]] && dirs+=("$seeds")
-  if "$exe" "${args[@]}" -artifact_prefix="$crashes/" -print_final_stats=1 "${dirs[@]}" \
-    >>"$log" 2>&1; then
-    runs="$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || true)"
-    # With -fork the parent prints no final stats; its last "#N: cov: …" line counts every worker.
-    [[ -n "$runs" ]] || runs="$(grep -o '^#[0-9]*: cov' "$log" | tail -1 | tr -dc '0-9' || true)"
-    echo "fuzz.sh: $target: ${runs:-?} executions, no failure"
+  artifacts_before="$(find "$crashes" -type f | wc -l)"
+  outcome=0
+  "$exe" "${args[@]}" -artifact_prefix="$crashes/" -print_final_stats=1 "${dirs[@]}" \
+    >>"$log" 2>&1 || outcome=$?
+  artifacts_after="$(find "$crashes" -type f | wc -l)"
+  how="no failure"
+  # Stopped with Ctrl-C (or SIGINT to the fuzzer): not a failure when it left no input behind.
+  if ((outcome != 0)) && ((artifacts_after == artifacts_before)) &&
+    tail -40 "$log" | grep -q 'libFuzzer: run interrupted'; then
+    outcome=0
+    how="stopped by hand, no failure"
+  fi
+  if ((outcome == 0)); then
     workers=""
-    if [[ $smoke == 0 && "${jobs:-1}" -gt 1 ]]; then workers=" ($jobs workers)"; fi
-    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}$workers" \
+    if [[ $smoke == 0 && "${jobs:-1}" -gt 1 ]]; then
+      # With -fork each worker prints its own final stats; the parent's last "#N: cov: …" line
+      # counts every worker's executions.
+      runs="$(grep -o '^#[0-9]*: cov' "$log" | tail -1 | tr -dc '0-9' || true)"
+      workers=" ($jobs workers)"
+    else
+      runs="$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || true)"
+    fi
+    echo "fuzz.sh: $target: ${runs:-?} executions, $how"
+    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}$workers, $how" \
       >>"$build/fuzz-runs.txt"
   else
     echo "fuzz.sh: $target FAILED; the input is in $crashes/:" >&2
