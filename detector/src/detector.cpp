@@ -1,8 +1,9 @@
-// The pipeline of DESIGN.md §3, top to bottom: one pass over the frame (both redness levels and a
-// half-resolution dark image), stages 2-6 at the main redness threshold, again at the faint one
-// for small tags the first missed, then candidates found by their dark square alone outside the
-// tags decoded so far. Whole-frame work is that one pass, a connected-components pass per level
-// and one contour pass at half resolution; the rest runs in small regions around candidates.
+// The pipeline of DESIGN.md §3, top to bottom: one pass over the frame (both redness levels, and
+// min(R, G, B) at full and half resolution), stages 2-6 at the main redness threshold, again at the
+// faint one for small tags the first missed, then candidates found by their dark square alone
+// outside the tags decoded so far. Whole-frame work is that one pass, a connected-components pass
+// per level and one contour pass at half resolution; the rest runs in small regions around
+// candidates.
 
 #include "pintag/detector/detector.hpp"
 
@@ -164,11 +165,12 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   return true;
 }
 
-void ProcessCluster(const cv::Mat& bgr, const std::vector<stage::RedBlob>& blobs,
-                    const stage::BlobCluster& cluster, const DetectorOptions& options,
-                    stage::ModelBudget* budget, ClusterOutput* out) {
+void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
+                    const std::vector<stage::RedBlob>& blobs, const stage::BlobCluster& cluster,
+                    const DetectorOptions& options, stage::ModelBudget* budget,
+                    ClusterOutput* out) {
   const auto t0 = Clock::now();
-  const cv::Mat dark = stage::MinChannel(bgr, cluster.roi);
+  const cv::Mat dark = min_channel(cluster.roi);
   const std::vector<stage::Quad> quads =
       stage::ClusterQuads(dark, cluster, blobs, options.min_square_px);
   out->candidates.found.insert(out->candidates.found.end(), quads.begin(), quads.end());
@@ -260,8 +262,8 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
 
 // Stages 2 to 6 on the red runs of one redness threshold: every candidate's detection (decoded, or
 // rejected when asked for) is appended to `result`, and the stage times are added to its timings.
-void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_area_px,
-                int min_cluster_blobs, const DetectorOptions& options,
+void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::RedRuns& red,
+                int max_element_area_px, int min_cluster_blobs, const DetectorOptions& options,
                 const stage::DebugImages* debug, stage::ModelBudget* budget, DetectResult* result,
                 Candidates* candidates) {
   const auto t_red = Clock::now();
@@ -292,7 +294,7 @@ void RunRedPass(const cv::Mat& bgr, const stage::RedRuns& red, int max_element_a
 
   std::vector<ClusterOutput> outputs(clusters.size());
   ForEach(clusters.size(), options.threads, [&](std::size_t i) {
-    ProcessCluster(bgr, blobs, clusters[i], options, budget, &outputs[i]);
+    ProcessCluster(bgr, min_channel, blobs, clusters[i], options, budget, &outputs[i]);
   });
   Collect(outputs, result, candidates);
 }
@@ -362,16 +364,18 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   scan_request.red = {options_.red_min_a, options_.red_min_b};
   const bool faint_pass = options_.faint_red_min_a < options_.red_min_a;
   if (faint_pass) scan_request.faint = {options_.faint_red_min_a, options_.red_min_b};
+  scan_request.min_channel = true;
   scan_request.dark_half = options_.dark_square_candidates;
   const stage::FrameScan scan = stage::ScanFrame(bgr, scan_request);
   result.timings.redness_ms += Ms(start, Clock::now());
 
   Candidates candidates;
   stage::ModelBudget budget(std::max(0, options_.max_model_reads));
-  RunRedPass(bgr, scan.red, static_cast<int>(options_.max_element_area_ratio * bgr.total()),
-             kMainMinClusterBlobs, options_, &debug, &budget, &result, &candidates);
+  RunRedPass(bgr, scan.min_channel, scan.red,
+             static_cast<int>(options_.max_element_area_ratio * bgr.total()), kMainMinClusterBlobs,
+             options_, &debug, &budget, &result, &candidates);
   if (faint_pass) {
-    RunRedPass(bgr, scan.faint, options_.faint_max_element_area_px,
+    RunRedPass(bgr, scan.min_channel, scan.faint, options_.faint_max_element_area_px,
                std::max(2, options_.faint_min_blobs), options_, nullptr, &budget, &result,
                &candidates);
   }

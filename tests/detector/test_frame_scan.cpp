@@ -67,6 +67,7 @@ TEST(FrameScan, EachOutputIsWhatItsOwnPassGives) {
   EXPECT_GT(scan.faint.runs.size(), scan.red.runs.size());
   EXPECT_TRUE(main_alone.faint.runs.empty());
   EXPECT_TRUE(main_alone.dark_half.empty());
+  EXPECT_TRUE(main_alone.min_channel.empty());
 
   // Red runs against a plain per-pixel mask of the same rule.
   cv::Mat mask = RunsToMask(scan.red);
@@ -78,6 +79,22 @@ TEST(FrameScan, EachOutputIsWhatItsOwnPassGives) {
     }
   }
   EXPECT_EQ(disagree, 0);
+
+  // min(R, G, B), kept for the half-resolution image and for the quad stage, against the plain
+  // per-pixel rule; asked for alone it is the same, without the half-resolution image.
+  FrameScanRequest only_min = only_main;
+  only_min.min_channel = true;
+  const FrameScan min_alone = ScanFrame(bgr, only_min);
+  EXPECT_TRUE(min_alone.dark_half.empty());
+  for (const cv::Mat& kept : {scan.min_channel, min_alone.min_channel}) {
+    ASSERT_EQ(kept.size(), bgr.size());
+    for (int y = 0; y < bgr.rows; ++y) {
+      for (int x = 0; x < bgr.cols; ++x) {
+        const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+        ASSERT_EQ(kept.at<std::uint8_t>(y, x), std::min({p[0], p[1], p[2]})) << x << ", " << y;
+      }
+    }
+  }
 
   const cv::Mat dark = MinChannel(bgr, cv::Rect(0, 0, bgr.cols, bgr.rows));
   ASSERT_EQ(scan.dark_half.rows, bgr.rows / 2);

@@ -76,20 +76,21 @@ void HalveRows(const std::uint8_t* upper, const std::uint8_t* lower, std::ptrdif
   }
 }
 
-template <bool kFaint, bool kNested, bool kDark>
+// kMin: min(R, G, B) into scan->min_channel, and halved into scan->dark_half when that is
+// allocated.
+template <bool kFaint, bool kNested, bool kMin>
 void ScanRows(const cv::Mat& bgr, const RedTable& red, const RedTable* faint, FrameScan* scan) {
   RunTracker red_runs(&scan->red.runs), faint_runs(&scan->faint.runs);
-  std::vector<std::uint8_t> previous_min(kDark ? bgr.cols : 0), row_min(kDark ? bgr.cols : 0);
   for (int y = 0; y < bgr.rows; ++y) {
     const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
     ScanRow<kFaint, kNested>(row, bgr.cols, y, red, faint, &red_runs, &faint_runs);
-    if constexpr (kDark) {
-      MinChannelRow(row, bgr.cols, row_min.data());
+    if constexpr (kMin) {
+      std::uint8_t* row_min = scan->min_channel.ptr<std::uint8_t>(y);
+      MinChannelRow(row, bgr.cols, row_min);
       if (y % 2 == 1 && y / 2 < scan->dark_half.rows) {
-        HalveRows(previous_min.data(), row_min.data(), scan->dark_half.cols,
+        HalveRows(scan->min_channel.ptr<std::uint8_t>(y - 1), row_min, scan->dark_half.cols,
                   scan->dark_half.ptr<std::uint8_t>(y / 2));
       }
-      std::swap(previous_min, row_min);
     }
   }
 }
@@ -106,10 +107,12 @@ FrameScan ScanFrame(const cv::Mat& bgr, const FrameScanRequest& request) {
     scan.faint.size = bgr.size();
     faint = &RedTable::For(*request.faint);
   }
+  // The half-resolution image is made from the full one's rows, so asking for it keeps that too.
+  const bool dark = request.min_channel || request.dark_half;
+  if (dark) scan.min_channel.create(bgr.size(), CV_8U);
   if (request.dark_half) scan.dark_half.create(bgr.rows / 2, bgr.cols / 2, CV_8U);
   const bool nested = request.faint && request.faint->min_a <= request.red.min_a &&
                       request.faint->min_b <= request.red.min_b;
-  const bool dark = request.dark_half;
   if (faint == nullptr) {
     dark ? ScanRows<false, false, true>(bgr, red, faint, &scan)
          : ScanRows<false, false, false>(bgr, red, faint, &scan);

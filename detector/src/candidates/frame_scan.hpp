@@ -1,9 +1,10 @@
 #pragma once
 // Stage 1, the one pass over the whole frame. Reading 6 MB of pixels costs more than the little
 // work done on each, so everything the later stages need from every pixel is taken in the same
-// pass: the red runs at the main threshold and at the faint pass's, and a half-resolution
-// image of min(R, G, B) in which a tag, its elements included, is one dark square inside its
-// white quiet zone (stage 3e's candidates without red).
+// pass: the red runs at the main threshold and at the faint pass's, the image of min(R, G, B) in
+// which a tag, its elements included, is one dark square inside its white quiet zone (stage 3a
+// looks for that square around each blob cluster), and the same at half resolution (stage 3e's
+// candidates without red).
 
 #include <opencv2/core.hpp>
 #include <optional>
@@ -15,12 +16,16 @@ namespace pintag::stage {
 struct FrameScanRequest {
   RednessThresholds red;                   ///< the main pass
   std::optional<RednessThresholds> faint;  ///< the faint pass; none: not scanned
+  bool min_channel = false;                ///< also keep FrameScan::min_channel
   bool dark_half = false;                  ///< also build FrameScan::dark_half
 };
 
 struct FrameScan {
   RedRuns red;    ///< exactly FindRedRuns(bgr, request.red)
   RedRuns faint;  ///< exactly FindRedRuns(bgr, *request.faint); empty when not asked for
+  /// CV_8U, frame-sized: min(R, G, B) of every pixel (MinChannel of the whole frame); empty when
+  /// not asked for.
+  cv::Mat min_channel;
   /// CV_8U, (cols / 2) × (rows / 2): pixel (x, y) is the mean of min(R, G, B) over the 2 × 2
   /// block at (2x, 2y), rounded down; empty when not asked for.
   cv::Mat dark_half;
