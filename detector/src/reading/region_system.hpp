@@ -18,7 +18,9 @@ struct RegionSystem {
   std::array<std::array<double, kModelRegions>, kChannels> aty{};
   std::array<double, kChannels> yty{};
   std::size_t samples = 0;
-  double at(int j, int k) const { return ata[static_cast<std::size_t>(j * kModelRegions + k)]; }
+  double at(int j, int k) const {
+    return ata[static_cast<std::size_t>(j) * kModelRegions + static_cast<std::size_t>(k)];
+  }
 };
 using LumaSystem = RegionSystem<1>;    ///< luminance
 using ChromaSystem = RegionSystem<2>;  ///< Cb, Cr: one blur, one AᵀA
