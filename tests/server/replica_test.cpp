@@ -2,6 +2,7 @@
 // serve and refuse, where their scans go, how they take a newer snapshot while requests are in
 // flight, and what they do with a file that is not one.
 
+#include <array>
 #include <atomic>
 #include <thread>
 
@@ -166,11 +167,13 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
   const Photo photo = PhotographLabel(primary, Auth(counter_token_), "110001", 20);
   ASSERT_FALSE(photo.jpeg.empty());
 
+  constexpr int kClients = 4;
   std::atomic<bool> stop{false};
-  std::atomic<int> answered{0}, failed{0}, went_back{0};
+  std::atomic<int> failed{0}, went_back{0};
+  std::array<std::atomic<int>, kClients> answered{};
   std::vector<std::thread> clients;
-  clients.reserve(4);
-  for (int t = 0; t < 4; ++t) {
+  clients.reserve(kClients);
+  for (int t = 0; t < kClients; ++t) {
     clients.emplace_back([&, t] {
       httplib::Client client("127.0.0.1", replica.port());
       client.set_read_timeout(30, 0);
@@ -183,7 +186,7 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
           ++failed;
           continue;
         }
-        ++answered;
+        ++answered[static_cast<std::size_t>(t)];
         const json body = Body(r);
         if (t == 0) {
           if (body["tags"].size() != 1 || body["tags"][0]["pincode"] != "110001") ++failed;
@@ -195,6 +198,26 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
       }
     });
   }
+  // Every client answered at least `more` requests after `since` (their counts then), or the
+  // minute ran out. Waiting on the counts, not on time, keeps the clients' requests on both
+  // sides of the swaps however fast the machine is.
+  const auto counts = [&] {
+    std::array<int, kClients> now{};
+    for (std::size_t t = 0; t < now.size(); ++t) now[t] = answered[t].load();
+    return now;
+  };
+  const auto each_answered = [&](const std::array<int, kClients>& since, int more) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (std::chrono::steady_clock::now() < deadline) {
+      const std::array<int, kClients> now = counts();
+      bool all = true;
+      for (std::size_t t = 0; t < now.size(); ++t) all = all && now[t] >= since[t] + more;
+      if (all) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+  };
+  const bool running_before = each_answered({}, 2);
   // Five newer registries, each published by rename while the clients keep asking. The clients
   // are stopped and joined before any assertion can end the test.
   std::int64_t published_version = 0;
@@ -209,12 +232,14 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
+  const bool running_after = each_answered(counts(), 2);
   stop = true;
   for (std::thread& c : clients) c.join();
   ASSERT_EQ(served_version, published_version);
+  EXPECT_TRUE(running_before) << "a client got no answers before the first swap";
+  EXPECT_TRUE(running_after) << "a client got no answers after the last swap";
   EXPECT_EQ(failed.load(), 0);
   EXPECT_EQ(went_back.load(), 0);
-  EXPECT_GT(answered.load(), 20);
   httplib::Client client("127.0.0.1", replica.port());
   EXPECT_EQ(client.Get("/api/v1/pincodes/999204")->status, 200);
   EXPECT_EQ(client.Get("/readyz")->status, 200);
