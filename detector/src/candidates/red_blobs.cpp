@@ -1,10 +1,12 @@
 #include "candidates/red_blobs.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "candidates/lab_approx.hpp"
 
@@ -65,6 +67,15 @@ bool ToBlob(const Moments& m, const BlobLimits& limits, RedBlob* blob) {
 }  // namespace
 
 bool HasRing(const cv::Mat& bgr, const RedBlob& blob) {
+  // The eight directions, every 45°, as (cos, sin).
+  static const std::array<std::pair<double, double>, 8> kDirections = [] {
+    std::array<std::pair<double, double>, 8> d;
+    for (std::size_t k = 0; k < d.size(); ++k) {
+      const double t = static_cast<double>(k) * std::numbers::pi / 4;
+      d[k] = {std::cos(t), std::sin(t)};
+    }
+    return d;
+  }();
   const LabApprox& lab = LabApprox::Get();
   const double ca = std::cos(blob.angle), sa = std::sin(blob.angle);
   // 1.5 × the semi-axes lands in the green ring when the blob is the whole red disk. A blurred
@@ -73,10 +84,11 @@ bool HasRing(const cv::Mat& bgr, const RedBlob& blob) {
   // radius.
   for (const double scale : {0.75, 1.25, 1.75}) {
     const double ra = scale * blob.major, rb = scale * blob.minor;
+    // Five of the eight points must be ring: stop as soon as that is reached or out of reach.
     int ring = 0;
-    for (int k = 0; k < 8; ++k) {
-      const double t = k * std::numbers::pi / 4;
-      const double u = ra * std::cos(t), v = rb * std::sin(t);
+    for (int k = 0; k < 8 && ring < 5 && ring + (8 - k) >= 5; ++k) {
+      const auto [cos_t, sin_t] = kDirections[static_cast<std::size_t>(k)];
+      const double u = ra * cos_t, v = rb * sin_t;
       const int x = static_cast<int>(std::lround(blob.centroid.x + u * ca - v * sa));
       const int y = static_cast<int>(std::lround(blob.centroid.y + u * sa + v * ca));
       if (x < 0 || y < 0 || x >= bgr.cols || y >= bgr.rows) continue;
