@@ -142,7 +142,8 @@ int Main(int argc, char** argv) {
         csv,
         "frame,size_px,tilt_deg,hard,draw,truth,key,winner,lead,excess,distance,"
         "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
-        "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused\n");
+        "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused,"
+        "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass\n");
   }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
@@ -169,6 +170,10 @@ int Main(int argc, char** argv) {
           }
           const auto& dec = m.decision;
           std::string refused = reading::RefuseCodeword(m);
+          // What the other checks say, the lead aside: what the lead rule is set from.
+          reading::ModelReading any_lead = m;
+          any_lead.decision.lead = 1e300;
+          const bool others_pass = reading::RefuseCodeword(any_lead).empty();
           std::replace(refused.begin(), refused.end(), ',', ';');
           if (!args.residuals.empty() && m.fit.ok) {
             char name[128];
@@ -185,7 +190,7 @@ int Main(int argc, char** argv) {
           if (csv != nullptr) {
             std::fprintf(csv,
                          "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
-                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s\n",
+                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d\n",
                          f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
                          d, truth.id, refused.empty() ? dec.winner->value() : -1,
                          dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
@@ -194,7 +199,10 @@ int Main(int argc, char** argv) {
                          m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
                          m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
                          m.fit.chroma_samples,
-                         refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str());
+                         refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
+                         m.fit.chroma_correlation.x, m.fit.chroma_correlation.y,
+                         dec.lead / reading::VarianceInflation(m.fit.chroma_correlation),
+                         others_pass ? 1 : 0);
           }
           Count& c = at(f);
           if (!dec.winner) {

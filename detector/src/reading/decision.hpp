@@ -11,14 +11,16 @@
 
 namespace pintag::reading {
 
-/// Least lead (noise units) of the winner over every other codeword. Set on the tuning world
-/// (pintag_reader_probe --world tuning --reader model, seeds 21-23, 48 frames per bin, corners
-/// jittered by 0.6 px: 20,160 readings): wrong winners that pass every other check led by up to
-/// 122, all in hard light (motion blur, where neighbouring residuals move together and noise
-/// units overstate the evidence); 150 keeps 1.23 times that away and refuses 8 % of the right
-/// winners in the target bins. Seed 24, checked afterwards, still has one wrong winner at 174:
-/// the lead's tail is not bounded by any threshold tried, see docs/DETECTOR.md.
-inline constexpr double kMinLead = 150;
+/// Least lead of the winner over every other codeword, in independent chroma samples: the lead
+/// (noise units) divided by VarianceInflation(fit.chroma_correlation). Set on the tuning world
+/// (pintag_reader_probe --world tuning --reader model, seeds 21-24, 48 frames per bin, corners
+/// jittered by 0.6 px: 26,880 readings): the 338 wrong winners that pass every other check
+/// reach 25.5 this way, and 32 keeps 1.25 times that away. The lead counted as independent had
+/// wrong winners up to 174 (seed 24, motion blur), past the 150 it was held to before.
+inline constexpr double kMinIndependentLead = 32;
+/// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
+/// kept as a floor where residuals look independent and readings are fewest.
+inline constexpr double kMinLead = 50;
 /// Most the winner may explain the samples worse than the best free labelling (noise units).
 inline constexpr double kMaxExcess = 20;
 /// Least side (px) of a square whose codeword is accepted: below it a cell is under two pixels

@@ -217,6 +217,27 @@ Corners RefineCorners(const TagSamples& samples, const Corners& start, const Lum
   return corners;
 }
 
+// The free chroma model's residuals at every chroma sample, for their correlation.
+std::vector<GridResidual> ChromaResiduals(const Placement& p, const ChromaBlur& blur,
+                                          const FreeFit<2>& free) {
+  const Kernel kernel = MakeKernel(blur);
+  std::vector<GridResidual> residuals;
+  residuals.reserve(p.samples.chroma.size());
+  SampleWeights w;
+  for (const ChromaSample& s : p.samples.chroma) {
+    p.coverage.blurred(kernel, s.x, s.y, w);
+    double cb = 0, cr = 0;
+    for (const int region : w.touched) {
+      const auto r = static_cast<std::size_t>(region);
+      cb += w.weight[r] * free.colour[0][r];
+      cr += w.weight[r] * free.colour[1][r];
+    }
+    w.clear();
+    residuals.push_back({s.x, s.y, {s.cb - cb, s.cr - cr}});
+  }
+  return residuals;
+}
+
 }  // namespace
 
 FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error) {
@@ -268,6 +289,9 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
   const double luma_variance = variance(free_luma.residual[0], model.luma.samples, 1);
   const double chroma_variance =
       variance(free_chroma.residual[0] + free_chroma.residual[1], model.chroma.samples, 2);
+  // Chroma blocks are 2 px apart (4:2:0).
+  fit.chroma_correlation = NeighbourCorrelation(
+      ChromaResiduals(placed, fit.chroma_blur, free_chroma), samples.bounds, 2, 2);
   fit.luma_noise = std::sqrt(luma_variance);
   fit.chroma_noise = std::sqrt(chroma_variance);
   fit.luma_samples = model.luma.samples;

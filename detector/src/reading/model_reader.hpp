@@ -15,6 +15,7 @@
 #include "reading/codeword_search.hpp"
 #include "reading/psf.hpp"
 #include "reading/region_system.hpp"
+#include "reading/residual_correlation.hpp"
 
 namespace pintag::reading {
 
@@ -32,6 +33,9 @@ struct ModelFit {
   std::size_t luma_samples = 0;
   std::size_t chroma_samples = 0;
   int evaluations = 0;  ///< models solved
+  /// How the free model's Cb and Cr residuals correlate between neighbouring chroma blocks: the
+  /// decision counts the codeword's lead in independent samples with it (reading/decision.hpp).
+  ResidualCorrelation chroma_correlation;
 };
 
 /// The fitted model's normal equations and channel weights (1 / noise variance): all the decision
@@ -63,7 +67,7 @@ inline constexpr double kRefineCornersMaxSidePx = 72;
 FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error);
 
 /// The codeword that explains a fitted model best, and by how much (codeword_search.hpp).
-CodewordDecision DecideCodeword(const FittedModel& model);
+CodewordDecision DecideCodeword(const FittedModel& fitted);
 
 /// FitModel, then DecideCodeword.
 ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners);
