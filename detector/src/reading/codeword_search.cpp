@@ -1,6 +1,7 @@
 #include "reading/codeword_search.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <limits>
 #include <vector>
@@ -140,22 +141,38 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
   const auto by_residual = [](const Scored& a, const Scored& b) { return a.residual < b.residual; };
   std::sort(scored.begin(), scored.end(), by_residual);
   // A lead over the runner-up among those scored says nothing about codewords the ranking left
-  // out: every codeword within 7 cells of the winner (in its orientation) is scored too.
+  // out: every codeword within 7 cells of the best scored one of each orientation is scored too,
+  // again around a new best until none changes. Around the winner's orientation alone was not
+  // enough: the ranking's cell costs add up from each orientation's free labelling, and where
+  // that labelling is many cells off, the true codeword in another orientation ranked 562nd of
+  // its orientation while explaining the pixels better than the winner (a held-out 18 px tag,
+  // read as another key; docs/DETECTOR.md).
   constexpr int kNeighbourCells = 7;
+  std::array<int, 4> centre_key{-1, -1, -1, -1};  // the codeword each orientation last centred on
   for (int round = 0; round < 4 && !scored.empty(); ++round) {
-    const Candidate winner = scored[0].candidate;
-    const std::uint64_t winner_code = book[static_cast<std::size_t>(winner.key)];
     const std::size_t before = scored.size();
-    for (int k = 0; k < kKeyCount; ++k) {
-      if (is_scored[slot(winner.turns, k)] ||
-          std::popcount(book[static_cast<std::size_t>(k)] ^ winner_code) > kNeighbourCells) {
+    bool moved = false;
+    for (int r = 0; r < 4; ++r) {
+      const auto best_r = std::find_if(scored.begin(), scored.end(),
+                                       [&](const Scored& s) { return s.candidate.turns == r; });
+      if (best_r == scored.end() ||
+          best_r->candidate.key == centre_key[static_cast<std::size_t>(r)]) {
         continue;
       }
-      score({0, k, winner.turns});
+      moved = true;
+      const int centre = best_r->candidate.key;
+      centre_key[static_cast<std::size_t>(r)] = centre;
+      const std::uint64_t centre_code = book[static_cast<std::size_t>(centre)];
+      for (int k = 0; k < kKeyCount; ++k) {
+        if (is_scored[slot(r, k)] ||
+            std::popcount(book[static_cast<std::size_t>(k)] ^ centre_code) > kNeighbourCells) {
+          continue;
+        }
+        score({0, k, r});
+      }
     }
-    if (scored.size() == before) break;
+    if (!moved || scored.size() == before) break;
     std::sort(scored.begin(), scored.end(), by_residual);
-    if (scored[0].candidate.key == winner.key && scored[0].candidate.turns == winner.turns) break;
   }
   decision.scored = static_cast<int>(scored.size());
   if (scored.size() < 2) return decision;

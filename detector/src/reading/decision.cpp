@@ -12,9 +12,10 @@ std::string RefuseCodeword(const ModelReading& reading) {
   if (!reading.fit.ok) return reading.error.empty() ? "no model fitted" : reading.error;
   if (!d.winner) return "no codeword candidates";
   const Corners& q = reading.fit.corners;
-  const double side = stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]}));
-  if (side < kMinSidePx) return "square too small to read its codeword";
-  if (d.lead < (side < kSmallSidePx ? kMinLeadSmall : kMinLead) ||
+  if (stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx) {
+    return "square too small to read its codeword";
+  }
+  if (d.lead < kMinLead ||
       d.lead / VarianceInflation(reading.fit.chroma_correlation) < kMinIndependentLead) {
     return "no codeword clearly nearest";
   }

@@ -21,12 +21,6 @@ inline constexpr double kMinIndependentLead = 32;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
 inline constexpr double kMinLead = 50;
-/// Below this side (px) a red quadrant is under one 4:2:0 chroma block, and the correlation of
-/// neighbouring blocks' residuals says little about the model's misfit: such squares also need
-/// the flat lead of before. The independent lead alone read an 18 px tag as another key in a
-/// held-out long run (seed 20, 1 of 5,096 views; docs/BENCHMARKS.md).
-inline constexpr double kSmallSidePx = 24;
-inline constexpr double kMinLeadSmall = 150;
 /// Most the winner may explain the samples worse than the best free labelling (noise units).
 inline constexpr double kMaxExcess = 20;
 /// Least side (px) of a square whose codeword is accepted: below it a cell is under two pixels
