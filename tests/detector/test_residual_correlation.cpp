@@ -38,8 +38,7 @@ std::vector<GridResidual> Grid(int x0, int y0, int cols, int rows, int step, boo
 
 TEST(ResidualCorrelation, IndependentResidualsAreUncorrelated) {
   const auto residuals = Grid(3, 5, 80, 60, 1, false, 1);
-  const ResidualCorrelation c =
-      NeighbourCorrelation(residuals, cv::Rect(3, 5, 80, 60), /*step=*/1, /*channels=*/1);
+  const ResidualCorrelation c = NeighbourCorrelation(residuals, cv::Rect(3, 5, 80, 60), /*step=*/1);
   EXPECT_NEAR(c.x, 0, 0.05);
   EXPECT_NEAR(c.y, 0, 0.05);
   EXPECT_NEAR(VarianceInflation(c), 1, 0.25);
@@ -49,7 +48,7 @@ TEST(ResidualCorrelation, NeighboursSharingNoiseCorrelateByHalfAlongTheirAxisOnl
   // Chroma-like: blocks 2 px apart, two channels pooled, the bounds starting on an odd pixel.
   const auto residuals = Grid(7, 4, 60, 50, 2, true, 2);
   const ResidualCorrelation c =
-      NeighbourCorrelation(residuals, cv::Rect(7, 4, 120, 100), /*step=*/2, /*channels=*/2);
+      NeighbourCorrelation(residuals, cv::Rect(7, 4, 120, 100), /*step=*/2);
   EXPECT_NEAR(c.x, 0.5, 0.05);
   EXPECT_NEAR(c.y, 0, 0.05);
   EXPECT_NEAR(VarianceInflation(c), 3, 0.4);  // (1 + 1/2) / (1 - 1/2)
@@ -61,10 +60,10 @@ TEST(ResidualCorrelation, MissingNeighboursAndEmptyInputCountNothing) {
   for (const GridResidual& g : Grid(0, 0, 40, 30, 1, true, 1)) {
     if (g.x % 2 == 0) sparse.push_back(g);
   }
-  const ResidualCorrelation c = NeighbourCorrelation(sparse, cv::Rect(0, 0, 40, 30), 1, 1);
+  const ResidualCorrelation c = NeighbourCorrelation(sparse, cv::Rect(0, 0, 40, 30), 1);
   EXPECT_EQ(c.x, 0);
   EXPECT_NEAR(c.y, 0, 0.1);
-  const ResidualCorrelation none = NeighbourCorrelation({}, cv::Rect(0, 0, 10, 10), 1, 1);
+  const ResidualCorrelation none = NeighbourCorrelation({}, cv::Rect(0, 0, 10, 10), 1);
   EXPECT_EQ(none.x, 0);
   EXPECT_EQ(none.y, 0);
 }

@@ -291,7 +291,7 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
       variance(free_chroma.residual[0] + free_chroma.residual[1], model.chroma.samples, 2);
   // Chroma blocks are 2 px apart (4:2:0).
   fit.chroma_correlation = NeighbourCorrelation(
-      ChromaResiduals(placed, fit.chroma_blur, free_chroma), samples.bounds, 2, 2);
+      ChromaResiduals(placed, fit.chroma_blur, free_chroma), samples.bounds, 2);
   fit.luma_noise = std::sqrt(luma_variance);
   fit.chroma_noise = std::sqrt(chroma_variance);
   fit.luma_samples = model.luma.samples;

@@ -3,7 +3,7 @@
 // units as if every sample's residual were independent; where blur (motion blur above all) or a
 // misfit makes neighbours' residuals alike, fewer independent samples stand behind the same lead,
 // and a wrong codeword can lead by a hundred units. Dividing the lead by the inflation below
-// counts it in independent samples instead (docs/DETECTOR.md, "How the lead was set").
+// counts it in independent samples instead (docs/DETECTOR.md, "The lead in independent samples").
 
 #include <array>
 #include <opencv2/core.hpp>
@@ -11,7 +11,8 @@
 
 namespace pintag::reading {
 
-/// One sample's residual, per channel (unused channels 0), at its grid position.
+/// One sample's residual, per channel (a single-channel fit leaves the second 0), at its grid
+/// position.
 struct GridResidual {
   int x = 0, y = 0;  ///< image pixel (the sample grid's step apart)
   std::array<double, 2> r{};
@@ -24,10 +25,10 @@ struct ResidualCorrelation {
   double y = 0;
 };
 
-/// `residuals` lie on a grid `step` px apart inside `bounds`; `channels` (1 or 2) of each are used.
-/// Samples with no neighbour in a direction add nothing to it; no pairs give 0.
+/// `residuals` lie on a grid `step` px apart inside `bounds`. Samples with no neighbour in a
+/// direction add nothing to it; no pairs give 0.
 ResidualCorrelation NeighbourCorrelation(std::span<const GridResidual> residuals,
-                                         const cv::Rect& bounds, int step, int channels);
+                                         const cv::Rect& bounds, int step);
 
 /// Least and most correlation counted (a negative one is taken as none; near 1 the factor grows
 /// without bound and one channel would decide alone).
