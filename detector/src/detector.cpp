@@ -263,9 +263,9 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
 // Stages 2 to 6 on the red runs of one redness threshold: every candidate's detection (decoded, or
 // rejected when asked for) is appended to `result`, and the stage times are added to its timings.
 void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::RedRuns& red,
-                int max_element_area_px, int min_cluster_blobs, const DetectorOptions& options,
-                const stage::DebugImages* debug, stage::ModelBudget* budget, DetectResult* result,
-                Candidates* candidates) {
+                int max_element_area_px, int min_cluster_blobs, int max_cluster_blobs,
+                const DetectorOptions& options, const stage::DebugImages* debug,
+                stage::ModelBudget* budget, DetectResult* result, Candidates* candidates) {
   const auto t_red = Clock::now();
   if (debug != nullptr && debug->enabled()) debug->redness(stage::RunsToMask(red));
 
@@ -283,6 +283,11 @@ void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::Red
   });
   std::vector<stage::BlobCluster> clusters =
       stage::ClusterBlobs(blobs, bgr.size(), min_cluster_blobs);
+  if (max_cluster_blobs > 0) {
+    std::erase_if(clusters, [&](const stage::BlobCluster& c) {
+      return static_cast<int>(c.blobs.size()) > max_cluster_blobs;
+    });
+  }
   // The model reads go first to the clusters most like a tag: those with the most blobs.
   std::stable_sort(clusters.begin(), clusters.end(),
                    [](const stage::BlobCluster& a, const stage::BlobCluster& b) {
@@ -373,11 +378,11 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
   stage::ModelBudget budget(std::max(0, options_.max_model_reads));
   RunRedPass(bgr, scan.min_channel, scan.red,
              static_cast<int>(options_.max_element_area_ratio * bgr.total()), kMainMinClusterBlobs,
-             options_, &debug, &budget, &result, &candidates);
+             /*max_cluster_blobs=*/0, options_, &debug, &budget, &result, &candidates);
   if (faint_pass) {
     RunRedPass(bgr, scan.min_channel, scan.faint, options_.faint_max_element_area_px,
-               std::max(2, options_.faint_min_blobs), options_, nullptr, &budget, &result,
-               &candidates);
+               std::max(2, options_.faint_min_blobs), std::max(0, options_.faint_max_cluster_blobs),
+               options_, nullptr, &budget, &result, &candidates);
   }
   if (options_.dark_square_candidates) {
     RunDarkSquarePass(bgr, scan.dark_half, options_, &budget, &result, &candidates);

@@ -45,6 +45,7 @@ void VisitOptions(Options& o, Visit&& visit) {
   visit("max_blobs", o.max_blobs);
   visit("faint_max_element_area_px", o.faint_max_element_area_px);
   visit("faint_min_blobs", o.faint_min_blobs);
+  visit("faint_max_cluster_blobs", o.faint_max_cluster_blobs);
   visit("dark_square_candidates", o.dark_square_candidates);
   visit("max_model_reads", o.max_model_reads);
   visit("threads", o.threads);

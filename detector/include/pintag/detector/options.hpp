@@ -64,6 +64,10 @@ struct DetectorOptions {
   /// Blobs a cluster of the faint pass needs: 2 also tries pairs (on a small tag under a colour
   /// cast often only two red disks show any red); 3 as the main pass. Values below 2 count as 2.
   int faint_min_blobs = 2;
+  /// Faint-pass clusters with more blobs than this are not searched: a tag gives 4, and ten or
+  /// more faint blobs linked together are warm photograph (a region the size of the frame to
+  /// threshold and trace, for no tag; see docs/DETECTOR.md). 0 = no limit.
+  int faint_max_cluster_blobs = 9;
   /// Also look for tags by their dark square alone (small tags whose red disks blur, JPEG and a
   /// colour cast have washed below both red thresholds), outside the tags the red passes decoded.
   bool dark_square_candidates = true;
