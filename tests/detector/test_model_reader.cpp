@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -11,6 +13,7 @@
 #include "pintag/codec/geometry.hpp"
 #include "reading/decision.hpp"
 #include "reading/model_reader.hpp"
+#include "reading/model_regions.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::reading {
@@ -64,6 +67,35 @@ TEST(ModelReader, RegionsAreTheFormatsCells) {
     }
   }
   EXPECT_EQ(checked, 441 * 441);
+}
+
+// The codeword search finds a codeword's neighbours as key offsets, which holds only while the
+// codec's code is affine: checked on every key against its bits' codewords, and the offsets'
+// neighbourhoods against a scan of the whole codebook.
+TEST(ModelReader, NeighbourOffsetsGiveEveryCodewordWithinSevenCells) {
+  const std::vector<std::uint64_t>& book = Codebook();
+  ASSERT_EQ(book.size(), static_cast<std::size_t>(kKeyCount));
+  for (int k = 0; k < kKeyCount; ++k) {
+    std::uint64_t sum = book[0];
+    for (int bit = 0; (1 << bit) < kKeyCount; ++bit) {
+      if ((k >> bit) & 1) sum ^= book[std::size_t{1} << bit] ^ book[0];
+    }
+    ASSERT_EQ(sum, book[static_cast<std::size_t>(k)]) << "key " << k;
+  }
+  const std::vector<int>& offsets = NeighbourKeyOffsets();
+  EXPECT_GT(offsets.size(), 16U);
+  for (const int centre : {0, 1, 4242, 12345, 29579, kKeyCount - 1}) {
+    std::vector<int> scanned;
+    for (int k = 0; k < kKeyCount; ++k) {
+      const int cells =
+          std::popcount(book[static_cast<std::size_t>(k)] ^ book[static_cast<std::size_t>(centre)]);
+      if (k != centre && cells <= kNeighbourCells) scanned.push_back(k);
+    }
+    std::vector<int> offset;
+    for (const int d : offsets) offset.push_back(centre ^ d);
+    std::sort(offset.begin(), offset.end());
+    EXPECT_EQ(offset, scanned) << "centre " << centre;
+  }
 }
 
 TEST(ModelReader, ExplainsASharpCleanTagClosely) {

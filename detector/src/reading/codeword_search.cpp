@@ -147,7 +147,8 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
   // that labelling is many cells off, the true codeword in another orientation ranked 562nd of
   // its orientation while explaining the pixels better than the winner (a held-out 18 px tag,
   // read as another key; docs/DETECTOR.md).
-  constexpr int kNeighbourCells = 7;
+  std::vector<int> neighbours;
+  neighbours.reserve(NeighbourKeyOffsets().size());
   std::array<int, 4> centre_key{-1, -1, -1, -1};  // the codeword each orientation last centred on
   for (int round = 0; round < 4 && !scored.empty(); ++round) {
     const std::size_t before = scored.size();
@@ -162,13 +163,11 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
       moved = true;
       const int centre = best_r->candidate.key;
       centre_key[static_cast<std::size_t>(r)] = centre;
-      const std::uint64_t centre_code = book[static_cast<std::size_t>(centre)];
-      for (int k = 0; k < kKeyCount; ++k) {
-        if (is_scored[slot(r, k)] ||
-            std::popcount(book[static_cast<std::size_t>(k)] ^ centre_code) > kNeighbourCells) {
-          continue;
-        }
-        score({0, k, r});
+      neighbours.clear();
+      for (const int d : NeighbourKeyOffsets()) neighbours.push_back(centre ^ d);
+      std::sort(neighbours.begin(), neighbours.end());  // scored in key order, as always
+      for (const int k : neighbours) {
+        if (!is_scored[slot(r, k)]) score({0, k, r});
       }
     }
     if (!moved || scored.size() == before) break;

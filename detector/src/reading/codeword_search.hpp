@@ -40,7 +40,8 @@ struct CodewordDecision {
 
 /// Ranks every (key, orientation) by the summed flip costs of the cells where it differs from that
 /// orientation's settled labelling, scores the best `exact` exactly (colours refitted), then every
-/// codeword within 7 cells of the winner, again around a new winner until it holds. Colours are
+/// codeword within kNeighbourCells (7) cells of each orientation's best scored one, again around a
+/// new best until none changes. Colours are
 /// fitted under the palette's order (PaletteModel::fit).
 CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabellings& settled,
                                  std::size_t exact = 128);

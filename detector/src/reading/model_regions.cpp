@@ -1,5 +1,7 @@
 #include "reading/model_regions.hpp"
 
+#include <bit>
+
 #include "pintag/codec/geometry.hpp"
 
 namespace pintag::reading {
@@ -53,6 +55,20 @@ const std::vector<std::uint64_t>& Codebook() {
     return b;
   }();
   return book;
+}
+
+const std::vector<int>& NeighbourKeyOffsets() {
+  static const std::vector<int> offsets = [] {
+    const std::vector<std::uint64_t>& book = Codebook();
+    std::vector<int> d;
+    for (int k = 1; k < kKeyCount; ++k) {
+      if (std::popcount(book[static_cast<std::size_t>(k)] ^ book[0]) <= kNeighbourCells) {
+        d.push_back(k);
+      }
+    }
+    return d;
+  }();
+  return offsets;
 }
 
 }  // namespace pintag::reading

@@ -49,4 +49,11 @@ int SampledRegion(int canonical, int quarter_turns);
 /// Every key's 48 cells as a bit mask in canonical order (bit c set: cell c is a one), built once.
 const std::vector<std::uint64_t>& Codebook();
 
+/// The keys d ≠ 0 whose codeword differs from key 0's in at most `kNeighbourCells` cells,
+/// ascending. The code is affine (both payload copies and the parity are sums of key bits, the
+/// orientation cells constant), so key c's and key c ⊕ d's codewords differ in exactly the cells
+/// key 0's and key d's do: the codewords within that many cells of key c's are those of c ⊕ d.
+inline constexpr int kNeighbourCells = 7;
+const std::vector<int>& NeighbourKeyOffsets();
+
 }  // namespace pintag::reading

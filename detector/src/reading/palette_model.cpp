@@ -16,14 +16,14 @@ PaletteModel::PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma,
   ata_[1] = chroma.ata;
   for (std::size_t system = 0; system < 2; ++system) {
     for (int j = 0; j < kModelRegions; ++j) {
+      row_start_[system][static_cast<std::size_t>(j)] =
+          static_cast<std::uint32_t>(nonzero_[system].size());
       for (int k = 0; k < kModelRegions; ++k) {
         const double value = ata(static_cast<int>(system), j, k);
-        if (value != 0) {
-          nonzero_[system].push_back(
-              {static_cast<std::uint8_t>(j), static_cast<std::uint8_t>(k), value});
-        }
+        if (value != 0) nonzero_[system].push_back({static_cast<std::uint8_t>(k), value});
       }
     }
+    row_start_[system][kModelRegions] = static_cast<std::uint32_t>(nonzero_[system].size());
   }
   aty_[0] = luma.aty[0];
   aty_[1] = chroma.aty[0];
@@ -128,10 +128,39 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
   std::array<bool, kLevels> used{};
   for (int j = 0; j < kModelRegions; ++j)
     used[static_cast<std::size_t>(labels[static_cast<std::size_t>(j)])] = true;
+  // Row j of AᵀA adds into row labels[j] of B, each entry into the column of its region's level.
+  // The row is summed in registers first, against a one-hot of the level (multiplying by 0 or 1
+  // is exact): adding straight into B made every entry wait for the last one written there,
+  // which was most of a codeword search's time.
+  static constexpr Six kOneHot = [] {
+    Six m{};
+    for (std::size_t l = 0; l < kLevelCount; ++l) m[l][l] = 1;
+    return m;
+  }();
   for (std::size_t system = 0; system < 2; ++system) {
     Six& b = btb[system];
-    for (const Entry& e : nonzero_[system]) {
-      b[static_cast<std::size_t>(labels[e.j])][static_cast<std::size_t>(labels[e.k])] += e.value;
+    const std::vector<Entry>& entries = nonzero_[system];
+    const auto& starts = row_start_[system];
+    for (std::size_t j = 0; j < kModelRegions; ++j) {
+      SixVector even{}, odd{};  // two chains of additions, to overlap their latency
+      std::uint32_t e = starts[j];
+      const std::uint32_t end = starts[j + 1];
+      for (; e + 1 < end; e += 2) {
+        const Entry& a = entries[e];
+        const Entry& c = entries[e + 1];
+        const SixVector& level_a = kOneHot[static_cast<std::size_t>(labels[a.k])];
+        const SixVector& level_c = kOneHot[static_cast<std::size_t>(labels[c.k])];
+        for (std::size_t m = 0; m < kLevelCount; ++m) {
+          even[m] += a.value * level_a[m];
+          odd[m] += c.value * level_c[m];
+        }
+      }
+      if (e < end) {
+        const SixVector& level = kOneHot[static_cast<std::size_t>(labels[entries[e].k])];
+        for (std::size_t m = 0; m < kLevelCount; ++m) even[m] += entries[e].value * level[m];
+      }
+      SixVector& row = b[static_cast<std::size_t>(labels[j])];
+      for (std::size_t m = 0; m < kLevelCount; ++m) row[m] += even[m] + odd[m];
     }
   }
   // The palette's order, where the free fit breaks it (kMinLumaStep, kMinCbStep): a class's one

@@ -59,12 +59,14 @@ class PaletteModel {
   static int SystemOf(int channel) { return channel == 0 ? 0 : 1; }
 
   // AᵀA's non-zero entries, row by row (both triangles): the labels' 6 × 6 sums take only these.
-  // A blur of a pixel or two reaches few regions, so most of AᵀA is zero.
+  // A blur of a pixel or two reaches few regions, so most of AᵀA is zero. Row j's entries are
+  // nonzero_[system][row_start_[system][j] … row_start_[system][j + 1]).
   struct Entry {
-    std::uint8_t j, k;
+    std::uint8_t k;
     double value;
   };
   std::array<std::vector<Entry>, 2> nonzero_;
+  std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> row_start_{};
   std::array<std::array<double, std::size_t{kModelRegions} * kModelRegions>, 2> ata_{};
   std::array<std::array<double, kModelRegions>, 3> aty_{};
   std::array<double, 3> yty_{};

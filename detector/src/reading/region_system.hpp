@@ -14,7 +14,7 @@ namespace pintag::reading {
 /// AᵀA, Aᵀy per channel, yᵀy per channel and the sample count of one system over the 50 regions.
 template <int kChannels>
 struct RegionSystem {
-  std::array<double, kModelRegions * kModelRegions> ata{};
+  std::array<double, std::size_t{kModelRegions} * kModelRegions> ata{};
   std::array<std::array<double, kModelRegions>, kChannels> aty{};
   std::array<double, kChannels> yty{};
   std::size_t samples = 0;
