@@ -282,12 +282,7 @@ void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::Red
            !stage::HasRing(bgr, b);
   });
   std::vector<stage::BlobCluster> clusters =
-      stage::ClusterBlobs(blobs, bgr.size(), min_cluster_blobs);
-  if (max_cluster_blobs > 0) {
-    std::erase_if(clusters, [&](const stage::BlobCluster& c) {
-      return static_cast<int>(c.blobs.size()) > max_cluster_blobs;
-    });
-  }
+      stage::ClusterBlobs(blobs, bgr.size(), min_cluster_blobs, max_cluster_blobs);
   // The model reads go first to the clusters most like a tag: those with the most blobs.
   std::stable_sort(clusters.begin(), clusters.end(),
                    [](const stage::BlobCluster& a, const stage::BlobCluster& b) {

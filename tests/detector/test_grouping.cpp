@@ -25,6 +25,16 @@ void AddTag(std::vector<RedBlob>* blobs, double x, double y, double s, int skip 
   }
 }
 
+TEST(Grouping, GroupsOfMoreThanMaxBlobsAreLeftOut) {
+  std::vector<RedBlob> blobs;
+  AddTag(&blobs, 100, 100, 100);
+  for (int i = 0; i < 12; ++i) blobs.push_back(Blob(400 + 15 * i, 300, 6));  // a chain of 12
+  EXPECT_EQ(ClusterBlobs(blobs, {800, 500}).size(), 2u);
+  const auto clusters = ClusterBlobs(blobs, {800, 500}, 3, 9);
+  ASSERT_EQ(clusters.size(), 1u);
+  EXPECT_EQ(clusters[0].blobs.size(), 4u);
+}
+
 TEST(Grouping, TwoTagsTwoClustersAndStrayBlobsNone) {
   std::vector<RedBlob> blobs;
   AddTag(&blobs, 100, 100, 100);

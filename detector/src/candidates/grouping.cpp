@@ -25,7 +25,7 @@ int Find(std::vector<int>& parent, int i) {
 }  // namespace
 
 std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Size image,
-                                      int min_blobs) {
+                                      int min_blobs, int max_blobs) {
   const int n = static_cast<int>(blobs.size());
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
@@ -54,7 +54,9 @@ std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Siz
   std::vector<BlobCluster> clusters;
   const cv::Rect frame(0, 0, image.width, image.height);
   for (auto& group : groups) {
-    if (static_cast<int>(group.size()) < min_blobs) continue;
+    const int size = static_cast<int>(group.size());
+    // Before the region: its nearest-neighbour passes take the square of the group's size.
+    if (size < min_blobs || (max_blobs > 0 && size > max_blobs)) continue;
     double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18, major = 0;
     const auto include = [&](cv::Point2d p) {
       x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),

@@ -17,9 +17,10 @@ struct BlobCluster {
 };
 
 /// Links blobs whose distance fits elements of one tag (neighbouring elements are 2.5 disk
-/// diameters apart) and returns the groups of at least `min_blobs` with their regions.
+/// diameters apart) and returns the groups of at least `min_blobs` and (when `max_blobs` > 0) at
+/// most `max_blobs` blobs, with their regions.
 std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Size image,
-                                      int min_blobs = 3);
+                                      int min_blobs = 3, int max_blobs = 0);
 
 struct ElementAssignment {
   std::array<int, 4> blob{-1, -1, -1, -1};  ///< blob index at element slot e, or −1
