@@ -38,6 +38,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr int kMainMinClusterBlobs = 3;
+// A refined square this close to one the readers have tried is that square again (another
+// outline of it, or a later pass finding the same cluster): reading it again gives the same
+// answer, and a model read costs milliseconds. (Load frames: 4 of 23 model reads were repeats.)
+constexpr double kSameSquarePx = 0.25;
 
 double Ms(Clock::time_point from, Clock::time_point to) {
   return std::chrono::duration<double, std::milli>(to - from).count();
@@ -115,7 +119,8 @@ Detection Rejected(const stage::Quad& quad, std::string reason,
 // One quad of a cluster through stages 4 to 6; true when it decoded.
 bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stage::RedBlob>& blobs,
                  const stage::BlobCluster& cluster, stage::Quad quad,
-                 const DetectorOptions& options, stage::ModelBudget* budget, ClusterOutput* out) {
+                 const std::vector<stage::Quad>& read_before, const DetectorOptions& options,
+                 stage::ModelBudget* budget, ClusterOutput* out) {
   auto t1 = Clock::now();
   const stage::ElementAssignment rough = stage::AssignElements(
       stage::HomographyFromQuad(quad), blobs, cluster.blobs, stage::kRoughElementTolerance);
@@ -132,6 +137,13 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   if (!refined) return reject("square edges not found");
   if (assignment.found < cluster.min_elements || assignment.conflict) {
     return reject("red blobs do not match the elements");
+  }
+  const auto read_already = [&](const stage::Quad& q) {
+    return stage::SameSquare(q, quad, kSameSquarePx);
+  };
+  if (std::any_of(read_before.begin(), read_before.end(), read_already) ||
+      std::any_of(out->candidates.read.begin(), out->candidates.read.end(), read_already)) {
+    return false;  // its rejection, if asked for, was reported the first time
   }
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
   out->candidates.read.push_back(quad);
@@ -167,8 +179,8 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
 
 void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
                     const std::vector<stage::RedBlob>& blobs, const stage::BlobCluster& cluster,
-                    const DetectorOptions& options, stage::ModelBudget* budget,
-                    ClusterOutput* out) {
+                    const std::vector<stage::Quad>& read_before, const DetectorOptions& options,
+                    stage::ModelBudget* budget, ClusterOutput* out) {
   const auto t0 = Clock::now();
   const cv::Mat dark = min_channel(cluster.roi);
   const std::vector<stage::Quad> quads =
@@ -178,7 +190,8 @@ void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
 
   bool decoded = false;
   for (const stage::Quad& quad : quads) {
-    decoded = ProcessQuad(bgr, dark, blobs, cluster, quad, options, budget, out) || decoded;
+    decoded =
+        ProcessQuad(bgr, dark, blobs, cluster, quad, read_before, options, budget, out) || decoded;
   }
   if (decoded) return;
   // The outline gave no tag (a dim quiet zone on dark ground merges with the ground, or leaves
@@ -187,7 +200,7 @@ void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
       stage::ClusterElementQuads(cluster, blobs, options.min_square_px);
   out->candidates.found.insert(out->candidates.found.end(), placed.begin(), placed.end());
   for (const stage::Quad& quad : placed) {
-    if (ProcessQuad(bgr, dark, blobs, cluster, quad, options, budget, out)) break;
+    if (ProcessQuad(bgr, dark, blobs, cluster, quad, read_before, options, budget, out)) break;
   }
 }
 
@@ -294,7 +307,9 @@ void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::Red
 
   std::vector<ClusterOutput> outputs(clusters.size());
   ForEach(clusters.size(), options.threads, [&](std::size_t i) {
-    ProcessCluster(bgr, min_channel, blobs, clusters[i], options, budget, &outputs[i]);
+    // Squares of earlier passes only: within a pass, clusters may run in parallel.
+    ProcessCluster(bgr, min_channel, blobs, clusters[i], candidates->read, options, budget,
+                   &outputs[i]);
   });
   Collect(outputs, result, candidates);
 }

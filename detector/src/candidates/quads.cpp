@@ -40,6 +40,19 @@ bool QuadContains(const Quad& quad, cv::Point2d p) {
   return cv::pointPolygonTest(corners, cv::Point2f(p), false) >= 0;
 }
 
+bool SameSquare(const Quad& a, const Quad& b, double tolerance_px) {
+  const double limit = tolerance_px * tolerance_px;
+  for (std::size_t turn = 0; turn < 4; ++turn) {
+    bool same = true;
+    for (std::size_t i = 0; i < 4 && same; ++i) {
+      const cv::Point2d d = a[i] - b[(i + turn) % 4];
+      same = d.dot(d) <= limit;
+    }
+    if (same) return true;
+  }
+  return false;
+}
+
 bool QuadFromHull(const std::vector<cv::Point>& hull, std::initializer_list<double> tolerances_px,
                   Quad* quad) {
   std::vector<cv::Point> polygon;

@@ -44,6 +44,10 @@ double MeanSidePx(const Quad& quad);
 /// Whether `p` lies inside `quad` or on its edge.
 bool QuadContains(const Quad& quad, cv::Point2d p);
 
+/// Whether `a` and `b` are one square: every corner within `tolerance_px` of the other's, whichever
+/// corner each starts from.
+bool SameSquare(const Quad& a, const Quad& b, double tolerance_px);
+
 /// A convex four-cornered polygon approximating `hull` (a convex hull, integer px), tried at each
 /// of `tolerances_px` in turn (the largest distance allowed between hull and polygon); corners
 /// clockwise on screen. False when no tolerance gives one.

@@ -135,8 +135,7 @@ Corners RefineCorners(const TagSamples& samples, const Corners& start, const Lum
     *owner = std::move(coverage);
     return fit.residual[0];
   };
-  const double side = stage::MeanSidePx(Homography(start));
-  const double max_total = std::clamp(0.08 * side, 1.0, 3.0);  // px, per corner
+  const double max_total = MaxCornerShiftPx(stage::MeanSidePx(Homography(start)));
   Corners corners = start;
   std::array<double, kModelRegions> colours{};
   const RegionCoverage* coverage = nullptr;
@@ -239,6 +238,10 @@ std::vector<GridResidual> ChromaResiduals(const Placement& p, const ChromaBlur& 
 }
 
 }  // namespace
+
+double MaxCornerShiftPx(double side_px) {
+  return side_px <= kRefineCornersMaxSidePx ? std::clamp(0.08 * side_px, 1.0, 3.0) : 0.0;
+}
 
 FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error) {
   FittedModel model;

@@ -61,6 +61,11 @@ inline constexpr double kModelMaxSidePx = 170;
 /// enough for cells of 7 px and more.
 inline constexpr double kRefineCornersMaxSidePx = 72;
 
+/// How far (px) the corner refinement may move each corner of a square of mean side `side_px`
+/// from where it started: 8 % of the side, at least 1 and at most 3 px; 0 above
+/// kRefineCornersMaxSidePx, where corners are not refined.
+double MaxCornerShiftPx(double side_px);
+
 /// Fits the model to the square starting at the corners `start` in `bgr` (8-bit BGR): blur search,
 /// corners refined (squares up to kRefineCornersMaxSidePx), final fit. fit.ok false and `error` set
 /// when it cannot.

@@ -68,7 +68,14 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
     return c;
   }
   // Small or blurred cells mix: read the tag through a model of its pixels.
-  if (MeanSidePx(HomographyFromQuad(quad)) > reading::kModelMaxSidePx) return c;
+  const double side = MeanSidePx(HomographyFromQuad(quad));
+  if (side > reading::kModelMaxSidePx) return c;
+  // Each side changes by at most twice a corner's shift: a square that cannot reach the least side
+  // the codeword is read at would be refused after the fit (RefuseCodeword).
+  if (side + 2 * reading::MaxCornerShiftPx(side) < reading::kMinSidePx) {
+    r.payload.error = "model: square too small to read its codeword";
+    return c;
+  }
   if (budget != nullptr && !budget->take()) {
     c.times.model_skipped = true;
     r.payload.error = "model: this frame's model reads are spent (max_model_reads)";
