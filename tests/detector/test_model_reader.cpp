@@ -14,6 +14,7 @@
 #include "reading/decision.hpp"
 #include "reading/model_reader.hpp"
 #include "reading/model_regions.hpp"
+#include "reading/read_tag.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::reading {
@@ -145,6 +146,33 @@ TEST(ModelReader, RefinesCornersAPixelOffAndReadsA24PxJpeg) {
   }
   ASSERT_EQ(RefuseCodeword(r), "");
   EXPECT_EQ(r.decision.winner->value(), 20301);
+}
+
+// The detector skips the model for squares the corner refinement could never bring to kMinSidePx;
+// that rests on the refinement moving no corner further than MaxCornerShiftPx. Started 3 px off,
+// past that bound, the corners stop at it; and a square below the reachable size is refused
+// without a model read or a turn of the frame's budget.
+TEST(ModelReader, CornersMoveNoFurtherThanTheBoundTheSizeCheckRestsOn) {
+  const auto scene = Tag(4242, 22, 20, 15, 0.8, 1, 3);
+  Corners start = TrueCorners(scene.truth[0]);
+  const cv::Point2d offsets[4] = {{3, -2}, {-3, -2}, {2.5, 3}, {-3, 2}};
+  for (std::size_t k = 0; k < 4; ++k) start[k] += offsets[k];
+  const double side =
+      stage::MeanSidePx(stage::HomographyFromQuad({start[0], start[1], start[2], start[3]}));
+  const ModelReading r = ReadThroughModel(scene.bgr, start);
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  EXPECT_GT(r.fit.corner_shift, 0.5);  // it did move them
+  EXPECT_LE(r.fit.corner_shift, MaxCornerShiftPx(side) + 1e-9);
+
+  const auto small = Tag(4242, 12, 0, 0, 0.8, 1, 3);
+  const Corners c = TrueCorners(small.truth[0]);
+  stage::ModelBudget budget(1);
+  const stage::CandidateReading read =
+      stage::ReadCandidate(small.bgr, {c[0], c[1], c[2], c[3]}, {}, {}, &budget);
+  EXPECT_FALSE(read.reading.payload.key);
+  EXPECT_FALSE(read.times.model_read);
+  EXPECT_EQ(read.reading.payload.error, "model: square too small to read its codeword");
+  EXPECT_TRUE(budget.take());  // still there
 }
 
 // A phone's unsharp mask on luma (over- and undershoot at every edge): still read.

@@ -32,6 +32,19 @@ TEST(Quads, FindsTheSquareOfAWarpedTagOnDarkAndLightGround) {
   }
 }
 
+TEST(Quads, SameSquareWhicheverCornerComesFirstAndOnlyWithinTheTolerance) {
+  const Quad q = {cv::Point2d(10, 10), {40, 12}, {38, 41}, {9, 39}};
+  for (int turn = 0; turn < 4; ++turn) {
+    Quad turned;
+    for (std::size_t i = 0; i < 4; ++i) turned[i] = q[(i + turn) % 4] + cv::Point2d(0.1, -0.1);
+    EXPECT_TRUE(SameSquare(q, turned, 0.25)) << turn;
+    turned[2].x += 0.3;  // one corner beyond the tolerance
+    EXPECT_FALSE(SameSquare(q, turned, 0.25)) << turn;
+  }
+  const Quad mirrored = {q[0], q[3], q[2], q[1]};  // the other winding is another outline
+  EXPECT_FALSE(SameSquare(q, mirrored, 0.25));
+}
+
 TEST(Quads, SignedAreaIsPositiveClockwise) {
   const Quad q = {cv::Point2d(0, 0), {1, 0}, {1, 1}, {0, 1}};
   EXPECT_GT(SignedArea2(q), 0);

@@ -41,8 +41,7 @@ struct CodewordDecision {
 /// Ranks every (key, orientation) by the summed flip costs of the cells where it differs from that
 /// orientation's settled labelling, scores the best `exact` exactly (colours refitted), then every
 /// codeword within kNeighbourCells (7) cells of each orientation's best scored one, again around a
-/// new best until none changes. Colours are
-/// fitted under the palette's order (PaletteModel::fit).
+/// new best until none changes. Colours are fitted under the palette's order (PaletteModel::fit).
 CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabellings& settled,
                                  std::size_t exact = 128);
 
