@@ -93,6 +93,7 @@ TEST(ModelReader, NeighbourOffsetsGiveEveryCodewordWithinSevenCells) {
       if (k != centre && cells <= kNeighbourCells) scanned.push_back(k);
     }
     std::vector<int> offset;
+    offset.reserve(offsets.size());
     for (const int d : offsets) offset.push_back(centre ^ d);
     std::sort(offset.begin(), offset.end());
     EXPECT_EQ(offset, scanned) << "centre " << centre;
