@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "candidates/borders.hpp"
 #include "homography.hpp"
 #include "pintag/codec/geometry.hpp"
 
@@ -171,8 +172,7 @@ std::vector<Quad> FindDarkSquares(const cv::Mat& bgr, const cv::Mat& dark_half,
   CV_Assert(dark_half.type() == CV_8UC1 && dark_half.cols == bgr.cols / 2 &&
             dark_half.rows == bgr.rows / 2);
   cv::Mat dark = LocalDark(dark_half);
-  std::vector<std::vector<cv::Point>> contours;
-  cv::findContours(dark, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
+  const std::vector<std::vector<cv::Point>> contours = TraceBorders(dark, BorderSet::kAll);
 
   const auto found_already = [&](cv::Point2d p) {
     return std::any_of(squares.begin(), squares.end(),

@@ -5,6 +5,8 @@
 #include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "candidates/borders.hpp"
+
 namespace pintag::stage {
 namespace {
 
@@ -103,18 +105,15 @@ std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_si
                      cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
   }
   // Outer boundaries of every dark component, including those inside holes of others (a tag on
-  // dark ground sits inside the hole its quiet zone makes).
-  std::vector<std::vector<cv::Point>> contours;
-  std::vector<cv::Vec4i> hierarchy;
-  // Only the ends of straight runs: the hull, area and perimeter of an outline are those of its
-  // every pixel (the dropped ones lie on the segments between), and hulls of long textured
-  // outlines cost a third of this function when every pixel was kept.
-  cv::findContours(binary, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_SIMPLE);
+  // dark ground sits inside the hole its quiet zone makes). Only the ends of straight runs: the
+  // hull, area and perimeter of an outline are those of its every pixel (the dropped ones lie on
+  // the segments between), and hulls of long textured outlines cost a third of this function
+  // when every pixel was kept.
+  const std::vector<std::vector<cv::Point>> contours = TraceBorders(binary, BorderSet::kOuter);
   std::vector<Quad> quads;
   const double min_area = min_side_px * min_side_px * 0.25;
-  for (std::size_t c = 0; c < contours.size(); ++c) {
-    const auto& contour = contours[c];
-    if (hierarchy[c][3] >= 0 || TracedPixels(contour) < 8) continue;
+  for (const std::vector<cv::Point>& contour : contours) {
+    if (TracedPixels(contour) < 8) continue;
     if (anchors) {
       const cv::Rect box = cv::boundingRect(contour) + origin;
       int inside = 0;
