@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+#include <random>
+
 #include "candidates/quads.hpp"
 #include "synthetic.hpp"
 
@@ -48,6 +51,37 @@ TEST(Quads, SameSquareWhicheverCornerComesFirstAndOnlyWithinTheTolerance) {
 TEST(Quads, SignedAreaIsPositiveClockwise) {
   const Quad q = {cv::Point2d(0, 0), {1, 0}, {1, 1}, {0, 1}};
   EXPECT_GT(SignedArea2(q), 0);
+}
+
+}  // namespace
+}  // namespace pintag::stage
+
+namespace pintag::stage {
+namespace {
+
+TEST(Quads, CloseGapsAsOpenCvClosesWithAThreeByThreeSquare) {
+  std::mt19937 rng(1127);
+  for (int i = 0; i < 500; ++i) {
+    const int width = 1 + static_cast<int>(rng() % 70), height = 1 + static_cast<int>(rng() % 40);
+    cv::Mat image(height + 2, width + 3, CV_8U);
+    for (int y = 0; y < image.rows; ++y) {
+      for (int x = 0; x < image.cols; ++x) image.at<std::uint8_t>(y, x) = rng() % 3 ? 255 : 0;
+    }
+    cv::Mat binary = image(cv::Rect(1, 1, width, height)).clone();
+    cv::Mat expected;
+    cv::morphologyEx(binary, expected, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_RECT, {3, 3}));
+    CloseGaps3x3(binary);
+    ASSERT_EQ(cv::countNonZero(binary != expected), 0) << width << " x " << height;
+  }
+  // Gaps of one and two pixels across a bar are bridged; one of three is not.
+  cv::Mat bars(5, 16, CV_8U, cv::Scalar(255));
+  bars.col(2).setTo(0);
+  bars.colRange(5, 7).setTo(0);
+  bars.colRange(10, 13).setTo(0);
+  CloseGaps3x3(bars);
+  EXPECT_EQ(cv::countNonZero(bars.colRange(0, 10)), 50);
+  EXPECT_EQ(cv::countNonZero(bars.col(11)), 0);
 }
 
 }  // namespace

@@ -19,6 +19,10 @@ void MinChannelRow(const std::uint8_t* bgr, std::ptrdiff_t pixels, std::uint8_t*
 /// min(R, G, B) of `bgr` inside `roi` (CV_8U, roi-sized).
 cv::Mat MinChannel(const cv::Mat& bgr, const cv::Rect& roi);
 
+/// A 3 × 3 closing of `binary` (CV_8U), in place: what cv::morphologyEx(MORPH_CLOSE) with a 3 × 3
+/// rectangle gives, pixels outside the image left out of both steps.
+void CloseGaps3x3(cv::Mat& binary);
+
 /// Quads in `dark` (MinChannel of the region at `origin`), returned in image coordinates.
 /// `min_side_px`: shorter quads are dropped. When `anchors` (image coordinates) is given, only
 /// contours whose bounding box holds at least `min_anchors_inside` of them are fitted (a tag
