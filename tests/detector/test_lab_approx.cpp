@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -167,18 +168,26 @@ TEST(Redness, TableAgreesWithLabApproxOnEveryColour) {
                                     RednessThresholds{defaults.faint_red_min_a, defaults.red_min_b},
                                     RednessThresholds{10, -30}, RednessThresholds{35, 0}}) {
     const RedTable& table = RedTable::For(t);
-    long long reds = 0, wrong = 0;
+    long long reds = 0, wrong = 0, below_least_lead = 0;
+    int least_lead = 1 << 20;
     for (int r = 0; r < 256; ++r) {
       for (int g = 0; g < 256; ++g) {
         for (int b = 0; b < 256; ++b) {
           const bool red = IsRedPixel(r, g, b, t);
           reds += red;
           wrong += red != table.isRed(r, g, b);
+          if (!red) continue;
+          // The frame scan skips pixels whose lead is below the table's least red lead.
+          const int lead = 4 * (r - g) + (b - g);
+          below_least_lead += lead < table.leastRedLead();
+          least_lead = std::min(least_lead, lead);
         }
       }
     }
     EXPECT_EQ(wrong, 0) << "a* >= " << t.min_a << ", b* >= " << t.min_b;
     EXPECT_GT(reds, 100000) << "a* >= " << t.min_a;  // the rule is not empty
+    EXPECT_EQ(below_least_lead, 0) << "a* >= " << t.min_a;
+    EXPECT_EQ(table.leastRedLead(), least_lead) << "a* >= " << t.min_a;  // and it is the least
   }
 }
 

@@ -53,6 +53,14 @@ RedTable::RedTable(const RednessThresholds& thresholds) : least_red_r_(std::size
       least_red_r_[static_cast<std::size_t>((g << 8) | b)] = static_cast<std::uint16_t>(lo);
     }
   }
+  // The lead grows with R, so each (G, B)'s least red R gives its least red lead.
+  least_red_lead_ = 1 << 20;
+  for (int g = 0; g < 256; ++g) {
+    for (int b = 0; b < 256; ++b) {
+      const int r = least_red_r_[static_cast<std::size_t>((g << 8) | b)];
+      if (r < 256) least_red_lead_ = std::min(least_red_lead_, 4 * (r - g) + (b - g));
+    }
+  }
 }
 
 const RedTable& RedTable::For(const RednessThresholds& thresholds) {

@@ -35,9 +35,14 @@ class RedTable {
 
   bool isRed(int r, int g, int b) const { return r >= least_red_r_[(g << 8) | b]; }
 
+  /// The least 4 (R − G) + (B − G) of any red colour (a large number when none is): a pixel below
+  /// it is not red, which a frame scan can test on many pixels at once before looking any up.
+  int leastRedLead() const { return least_red_lead_; }
+
  private:
   explicit RedTable(const RednessThresholds& thresholds);
   std::vector<std::uint16_t> least_red_r_;  // least red R (256: none), by (G << 8) | B
+  int least_red_lead_ = 0;
 };
 
 /// A horizontal run of red pixels [x0, x1] on row y.
