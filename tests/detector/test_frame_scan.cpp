@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <opencv2/core.hpp>
 
 #include "candidates/frame_scan.hpp"
@@ -106,6 +107,50 @@ TEST(FrameScan, EachOutputIsWhatItsOwnPassGives) {
           dark.at<std::uint8_t>(2 * y + 1, 2 * x) + dark.at<std::uint8_t>(2 * y + 1, 2 * x + 1);
       ASSERT_EQ(scan.dark_half.at<std::uint8_t>(y, x), sum / 4) << x << ", " << y;
     }
+  }
+}
+
+// The scan skips the red-table lookups of 16 pixels at a time where none can be red. On a flat
+// grey ground nearly every block is skipped; patches of red and of faint-only red start and end
+// inside blocks, on their edges, at the row's start and in its last partial block.
+TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
+  cv::Mat bgr(24, 203, CV_8UC3, cv::Scalar(120, 120, 120));
+  const cv::Scalar both_levels(40, 70, 150), faint_only(90, 95, 130);  // BGR
+  const std::array<std::array<int, 3>, 9> patches = {{{0, 0, 5},      // at the row's start
+                                                      {1, 15, 17},    // across a block edge
+                                                      {2, 16, 32},    // exactly one block
+                                                      {3, 31, 49},    // block edge to block edge
+                                                      {4, 5, 6},      // one pixel
+                                                      {5, 190, 203},  // into the partial block
+                                                      {6, 40, 41},
+                                                      {7, 63, 64},
+                                                      {8, 100, 180}}};
+  for (int band = 0; band < 2; ++band) {
+    for (const auto& [row, x0, x1] : patches) {
+      bgr(cv::Rect(x0, 2 * row + band, x1 - x0, 1)).setTo(band == 0 ? both_levels : faint_only);
+    }
+  }
+  const RednessThresholds main{20, -30};
+  for (const RednessThresholds faint : {RednessThresholds{12, -30}, RednessThresholds{12, 0}}) {
+    FrameScanRequest request;
+    request.red = main;
+    request.faint = faint;
+    const FrameScan scan = ScanFrame(bgr, request);
+    const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
+    int red_pixels = 0, faint_pixels = 0;
+    for (int y = 0; y < bgr.rows; ++y) {
+      for (int x = 0; x < bgr.cols; ++x) {
+        const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+        const bool is_red = IsRedPixel(p[2], p[1], p[0], main);
+        const bool is_faint = IsRedPixel(p[2], p[1], p[0], faint);
+        ASSERT_EQ(red.at<std::uint8_t>(y, x) != 0, is_red) << x << ", " << y;
+        ASSERT_EQ(faint_red.at<std::uint8_t>(y, x) != 0, is_faint) << x << ", " << y;
+        red_pixels += is_red;
+        faint_pixels += is_faint;
+      }
+    }
+    EXPECT_GT(red_pixels, 0);
+    EXPECT_GT(faint_pixels, red_pixels) << "faint b* >= " << faint.min_b;
   }
 }
 

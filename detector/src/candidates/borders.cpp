@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
+#include <iterator>
 #include <opencv2/core/hal/intrin.hpp>
 
 namespace pintag::stage {
@@ -106,7 +108,7 @@ int NextStart(const std::int8_t* row, int x, int last) {
     const cv::v_int8x16 starts =
         ((left == zero) & (cell == unseen)) | ((cell == zero) & (left > zero));
     const int mask = cv::v_signmask(starts);
-    if (mask != 0) return std::min(last + 1, x + __builtin_ctz(static_cast<unsigned>(mask)));
+    if (mask != 0) return std::min(last + 1, x + std::countr_zero(static_cast<unsigned>(mask)));
   }
   return last + 1;
 #else
@@ -124,7 +126,7 @@ std::vector<std::vector<cv::Point>> TraceBorders(const cv::Mat& binary, BorderSe
   CV_Assert(binary.type() == CV_8UC1);
   WorkImage w = Pad(binary);
   std::vector<std::vector<cv::Point>> found;
-  const int last = binary.cols + 1;  // the right padding column, where a hole can open
+  const int last = binary.cols + 1;  // the right padding column too (it holds only zeros)
   for (int y = 1; y <= binary.rows; ++y) {
     std::int8_t* row = w.cells.data() + static_cast<std::ptrdiff_t>(y) * w.stride;
     for (int x = NextStart(row, 1, last); x <= last; x = NextStart(row, x + 1, last)) {

@@ -1,7 +1,7 @@
 #pragma once
 // Stage 3b for one blob cluster: the quads its tag can be. Quads are searched in the thresholded
-// region with one-pixel gaps closed; when none of them places 3 of the cluster's blobs on its
-// elements (roughly, before corner refinement), again without the closing, around the blobs
+// region with gaps of one or two pixels closed; when none of them places 3 of the cluster's blobs
+// on its elements (roughly, before corner refinement), again without the closing, around the blobs
 // only: tilted steeply, a tag's quiet zone is about two pixels wide across the tilt, the closing
 // bridges it, and on dark ground the tag merges with the ground (48 px tags at 72° in the
 // benchmark). A region over 250,000 px (a cluster spread over red clutter) is searched at half or

@@ -27,8 +27,8 @@ void CloseGaps3x3(cv::Mat& binary);
 /// `min_side_px`: shorter quads are dropped. When `anchors` (image coordinates) is given, only
 /// contours whose bounding box holds at least `min_anchors_inside` of them are fitted (a tag
 /// holds its red blobs; 2 for a pair of the faint pass),
-/// which keeps textured photo regions cheap. `close_gaps` bridges one-pixel gaps in the dark
-/// shape first (a cover can leave a thin band of black at the square's edge); without it, a
+/// which keeps textured photo regions cheap. `close_gaps` bridges gaps of one or two pixels in the
+/// dark shape first (a cover can leave a thin band of black at the square's edge); without it, a
 /// quiet zone two pixels wide still separates the tag from dark ground (a steeply tilted tag).
 std::vector<Quad> FindQuads(const cv::Mat& dark, cv::Point origin, double min_side_px,
                             const std::vector<cv::Point2d>* anchors = nullptr,
