@@ -31,16 +31,24 @@ bool SameRuns(const RedRuns& a, const RedRuns& b) {
                                         });
 }
 
+// The main red level and the faint one in one scan. The faint levels tests use: nested (the
+// faint table is read first and the main one only where it passes), and not nested (the faint
+// level's b* bound is the stricter one).
+constexpr RednessThresholds kMainLevel{20, -30};
+constexpr std::array<RednessThresholds, 2> kFaintLevels = {{{12, -30}, {12, 0}}};
+
+FrameScan ScanBothLevels(const cv::Mat& bgr, const RednessThresholds& faint) {
+  FrameScanRequest both;
+  both.red = kMainLevel;
+  both.faint = faint;
+  return ScanFrame(bgr, both);
+}
+
 TEST(FrameScan, BothRedLevelsAreWhatTheirOwnPassesGive) {
   const cv::Mat bgr = NoisyFrame();
-  const RednessThresholds main{20, -30};
-  // Nested levels (the faint table is read first and the main one only where it passes), and
-  // levels that are not nested (the faint level's b* bound is the stricter one).
-  for (const RednessThresholds faint : {RednessThresholds{12, -30}, RednessThresholds{12, 0}}) {
-    FrameScanRequest both;
-    both.red = main;
-    both.faint = faint;
-    const FrameScan scan = ScanFrame(bgr, both);
+  const RednessThresholds main = kMainLevel;
+  for (const RednessThresholds& faint : kFaintLevels) {
+    const FrameScan scan = ScanBothLevels(bgr, faint);
     FrameScanRequest only_main, only_faint;
     only_main.red = main;
     only_faint.red = faint;
@@ -116,12 +124,12 @@ TEST(FrameScan, EachOutputIsWhatItsOwnPassGives) {
 TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
   cv::Mat bgr(24, 203, CV_8UC3, cv::Scalar(120, 120, 120));
   const cv::Scalar both_levels(40, 70, 150), faint_only(90, 95, 130);  // BGR
-  const std::array<std::array<int, 3>, 9> patches = {{{0, 0, 5},      // at the row's start
-                                                      {1, 15, 17},    // across a block edge
-                                                      {2, 16, 32},    // exactly one block
-                                                      {3, 31, 49},    // block edge to block edge
-                                                      {4, 5, 6},      // one pixel
-                                                      {5, 190, 203},  // into the partial block
+  const std::array<std::array<int, 3>, 9> patches = {{{0, 0, 5},       // at the row's start
+                                                      {1, 15, 17},     // across a block edge
+                                                      {2, 16, 32},     // exactly one block
+                                                      {3, 31, 49},     // block edge to block edge
+                                                      {4, 5, 6},       // one pixel
+                                                      {5, 190, 203},   // into the partial block
                                                       {6, 40, 41},
                                                       {7, 63, 64},
                                                       {8, 100, 180}}};
@@ -130,18 +138,14 @@ TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
       bgr(cv::Rect(x0, 2 * row + band, x1 - x0, 1)).setTo(band == 0 ? both_levels : faint_only);
     }
   }
-  const RednessThresholds main{20, -30};
-  for (const RednessThresholds faint : {RednessThresholds{12, -30}, RednessThresholds{12, 0}}) {
-    FrameScanRequest request;
-    request.red = main;
-    request.faint = faint;
-    const FrameScan scan = ScanFrame(bgr, request);
+  for (const RednessThresholds& faint : kFaintLevels) {
+    const FrameScan scan = ScanBothLevels(bgr, faint);
     const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
     int red_pixels = 0, faint_pixels = 0;
     for (int y = 0; y < bgr.rows; ++y) {
       for (int x = 0; x < bgr.cols; ++x) {
         const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
-        const bool is_red = IsRedPixel(p[2], p[1], p[0], main);
+        const bool is_red = IsRedPixel(p[2], p[1], p[0], kMainLevel);
         const bool is_faint = IsRedPixel(p[2], p[1], p[0], faint);
         ASSERT_EQ(red.at<std::uint8_t>(y, x) != 0, is_red) << x << ", " << y;
         ASSERT_EQ(faint_red.at<std::uint8_t>(y, x) != 0, is_faint) << x << ", " << y;
