@@ -29,6 +29,23 @@ std::size_t TracedPixels(const std::vector<cv::Point>& corners) {
   return steps;
 }
 
+// out[i] = the maximum (kMax) or minimum of a[i], b[i] and c[i], for i in [0, n).
+template <bool kMax>
+void Extreme3(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c, int n,
+              std::uint8_t* out) {
+  int i = 0;
+#if CV_SIMD128
+  for (; i + 16 <= n; i += 16) {
+    const cv::v_uint8x16 va = cv::v_load(a + i), vb = cv::v_load(b + i), vc = cv::v_load(c + i);
+    cv::v_store(out + i,
+                kMax ? cv::v_max(cv::v_max(va, vb), vc) : cv::v_min(cv::v_min(va, vb), vc));
+  }
+#endif
+  for (; i < n; ++i) {
+    out[i] = kMax ? std::max(std::max(a[i], b[i]), c[i]) : std::min(std::min(a[i], b[i]), c[i]);
+  }
+}
+
 // The 3 × 3 maximum (kMax) or minimum of `in` (CV_8U) into `out`, pixels outside the image left
 // out: repeating the edge row or column changes neither. cv::morphologyEx does the same with
 // a filter engine built for every call, and this stage calls it for every cluster.
@@ -36,38 +53,16 @@ template <bool kMax>
 void Extreme3x3(const cv::Mat& in, cv::Mat& out) {
   out.create(in.size(), CV_8U);
   const int cols = in.cols;
+  // column[1 + x]: the extreme of the three rows at x; column[0] and column[cols + 1] repeat the
+  // edge columns.
   std::vector<std::uint8_t> column(static_cast<std::size_t>(cols) + 2);
-  const auto pick = [](std::uint8_t a, std::uint8_t b) {
-    return kMax ? std::max(a, b) : std::min(a, b);
-  };
+  std::uint8_t* c = column.data() + 1;
   for (int y = 0; y < in.rows; ++y) {
-    const std::uint8_t* above = in.ptr<std::uint8_t>(std::max(y - 1, 0));
-    const std::uint8_t* here = in.ptr<std::uint8_t>(y);
-    const std::uint8_t* below = in.ptr<std::uint8_t>(std::min(y + 1, in.rows - 1));
-    // column[1 + x]: the extreme of the three rows at x; column[0] and column[cols + 1] repeat
-    // the edge columns.
-    std::uint8_t* c = column.data() + 1;
-    int x = 0;
-#if CV_SIMD128
-    for (; x + 16 <= cols; x += 16) {
-      const cv::v_uint8x16 a = cv::v_load(above + x), b = cv::v_load(here + x),
-                           d = cv::v_load(below + x);
-      cv::v_store(c + x, kMax ? cv::v_max(cv::v_max(a, b), d) : cv::v_min(cv::v_min(a, b), d));
-    }
-#endif
-    for (; x < cols; ++x) c[x] = pick(pick(above[x], here[x]), below[x]);
+    Extreme3<kMax>(in.ptr<std::uint8_t>(std::max(y - 1, 0)), in.ptr<std::uint8_t>(y),
+                   in.ptr<std::uint8_t>(std::min(y + 1, in.rows - 1)), cols, c);
     c[-1] = c[0];
     c[cols] = c[cols - 1];
-    std::uint8_t* o = out.ptr<std::uint8_t>(y);
-    x = 0;
-#if CV_SIMD128
-    for (; x + 16 <= cols; x += 16) {
-      const cv::v_uint8x16 l = cv::v_load(c + x - 1), m = cv::v_load(c + x),
-                           r = cv::v_load(c + x + 1);
-      cv::v_store(o + x, kMax ? cv::v_max(cv::v_max(l, m), r) : cv::v_min(cv::v_min(l, m), r));
-    }
-#endif
-    for (; x < cols; ++x) o[x] = pick(pick(c[x - 1], c[x]), c[x + 1]);
+    Extreme3<kMax>(c - 1, c, c + 1, cols, out.ptr<std::uint8_t>(y));
   }
 }
 
