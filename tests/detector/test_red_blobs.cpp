@@ -78,5 +78,26 @@ TEST(RedBlobs, ElementsHaveTheirRingRedMarksOnPaperDoNot) {
   for (const RedBlob& b : marks) EXPECT_FALSE(HasRing(paper, b)) << b.centroid;
 }
 
+TEST(RedBlobs, RingTableAgreesWithLabApproxOnEveryColour) {
+  // HasRing looks colours up in a table built on the assumption that "not ring" (a* >= 10 or
+  // L* >= 85) stays true as R grows; over all 2^24 colours the table must say what the rule says.
+  long long rings = 0, wrong = 0;
+  for (int r = 0; r < 256; ++r) {
+    for (int g = 0; g < 256; ++g) {
+      for (int b = 0; b < 256; ++b) {
+        const bool ring = IsRingColourLab(r, g, b);
+        rings += ring;
+        wrong += ring != IsRingColour(r, g, b);
+      }
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(rings, 1'000'000);                // greens, greys, blues and darks
+  EXPECT_LT(rings, 16'000'000);               // not everything
+  EXPECT_TRUE(IsRingColour(40, 160, 60));     // a tag's green
+  EXPECT_FALSE(IsRingColour(249, 80, 3));     // its red
+  EXPECT_FALSE(IsRingColour(245, 245, 245));  // white paper
+}
+
 }  // namespace
 }  // namespace pintag::stage

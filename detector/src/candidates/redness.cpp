@@ -9,6 +9,7 @@
 
 #include "candidates/frame_scan.hpp"
 #include "candidates/lab_approx.hpp"
+#include "candidates/least_r_table.hpp"
 
 namespace pintag::stage {
 namespace {
@@ -37,22 +38,9 @@ bool IsRedPixel(int r, int g, int b, const RednessThresholds& thresholds) {
   return a_star >= s.a && b_star >= s.b;
 }
 
-RedTable::RedTable(const RednessThresholds& thresholds) : least_red_r_(std::size_t{256} * 256) {
-  for (int g = 0; g < 256; ++g) {
-    for (int b = 0; b < 256; ++b) {
-      // Binary search for the least red R; exact because redness only grows with R (tested).
-      int lo = 0, hi = 256;
-      while (lo < hi) {
-        const int mid = (lo + hi) / 2;
-        if (IsRedPixel(mid, g, b, thresholds)) {
-          hi = mid;
-        } else {
-          lo = mid + 1;
-        }
-      }
-      least_red_r_[static_cast<std::size_t>((g << 8) | b)] = static_cast<std::uint16_t>(lo);
-    }
-  }
+RedTable::RedTable(const RednessThresholds& thresholds)
+    : least_red_r_(
+          LeastRTable([&](int r, int g, int b) { return IsRedPixel(r, g, b, thresholds); })) {
   // The lead grows with R, so each (G, B)'s least red R gives its least red lead.
   least_red_lead_ = 1 << 20;
   for (int g = 0; g < 256; ++g) {
