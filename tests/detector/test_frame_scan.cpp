@@ -37,11 +37,36 @@ bool SameRuns(const RedRuns& a, const RedRuns& b) {
 constexpr RednessThresholds kMainLevel{20, -30};
 constexpr std::array<RednessThresholds, 2> kFaintLevels = {{{12, -30}, {12, 0}}};
 
-FrameScan ScanBothLevels(const cv::Mat& bgr, const RednessThresholds& faint) {
+FrameScan ScanBothLevels(const cv::Mat& bgr, const RednessThresholds& faint,
+                         bool dark_images = false) {
   FrameScanRequest both;
   both.red = kMainLevel;
   both.faint = faint;
+  both.min_channel = both.dark_half = dark_images;
   return ScanFrame(bgr, both);
+}
+
+// The scan's min(R, G, B) and its half-resolution mean against the per-pixel rule.
+void ExpectDarkImagesOfTheRule(const cv::Mat& bgr, const FrameScan& scan) {
+  ASSERT_EQ(scan.min_channel.size(), bgr.size());
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+      ASSERT_EQ(scan.min_channel.at<std::uint8_t>(y, x), std::min({p[0], p[1], p[2]}))
+          << x << ", " << y << " of " << bgr.cols << " x " << bgr.rows;
+    }
+  }
+  ASSERT_EQ(scan.dark_half.size(), cv::Size(bgr.cols / 2, bgr.rows / 2));
+  for (int y = 0; y < scan.dark_half.rows; ++y) {
+    for (int x = 0; x < scan.dark_half.cols; ++x) {
+      int sum = 0;
+      for (int k = 0; k < 4; ++k) {
+        const cv::Vec3b& p = bgr.at<cv::Vec3b>(2 * y + k / 2, 2 * x + k % 2);
+        sum += std::min({p[0], p[1], p[2]});
+      }
+      ASSERT_EQ(scan.dark_half.at<std::uint8_t>(y, x), sum / 4) << x << ", " << y;
+    }
+  }
 }
 
 TEST(FrameScan, BothRedLevelsAreWhatTheirOwnPassesGive) {
@@ -118,11 +143,18 @@ TEST(FrameScan, EachOutputIsWhatItsOwnPassGives) {
   }
 }
 
-// The scan skips the red-table lookups of 16 pixels at a time where none can be red. On a flat
-// grey ground nearly every block is skipped; patches of red and of faint-only red start and end
-// inside blocks, on their edges, at the row's start and in its last partial block.
+// The scan skips the red-table lookups of 16 pixels at a time where none can be red. On a grey
+// ground (varying, so that the dark images of skipped blocks are checked too) nearly every block
+// is skipped; patches of red and of faint-only red start and end inside blocks, on their edges,
+// at the row's start and in its last partial block.
 TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
-  cv::Mat bgr(24, 203, CV_8UC3, cv::Scalar(120, 120, 120));
+  cv::Mat bgr(24, 203, CV_8UC3);
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const auto grey = static_cast<std::uint8_t>(60 + (7 * x + 13 * y) % 120);
+      bgr.at<cv::Vec3b>(y, x) = {grey, grey, grey};
+    }
+  }
   const cv::Scalar both_levels(40, 70, 150), faint_only(90, 95, 130);  // BGR
   const std::array<std::array<int, 3>, 9> patches = {{{0, 0, 5},       // at the row's start
                                                       {1, 15, 17},     // across a block edge
@@ -139,7 +171,8 @@ TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
     }
   }
   for (const RednessThresholds& faint : kFaintLevels) {
-    const FrameScan scan = ScanBothLevels(bgr, faint);
+    const FrameScan scan = ScanBothLevels(bgr, faint, /*dark_images=*/true);
+    ExpectDarkImagesOfTheRule(bgr, scan);
     const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
     int red_pixels = 0, faint_pixels = 0;
     for (int y = 0; y < bgr.rows; ++y) {
@@ -155,6 +188,19 @@ TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
     }
     EXPECT_GT(red_pixels, 0);
     EXPECT_GT(faint_pixels, red_pixels) << "faint b* >= " << faint.min_b;
+  }
+}
+
+// Rows shorter than one block, one block exactly and just over: no vector loop, or one and a
+// pixel or more left over for the scalar tail.
+TEST(FrameScan, NarrowFramesGiveTheDarkImagesOfTheRule) {
+  for (const int width : {1, 2, 7, 15, 16, 17, 31, 33}) {
+    cv::Mat bgr(6, width, CV_8UC3);
+    cv::RNG rng(static_cast<std::uint64_t>(width));
+    rng.fill(bgr, cv::RNG::UNIFORM, 0, 256);
+    for (const RednessThresholds& faint : kFaintLevels) {
+      ExpectDarkImagesOfTheRule(bgr, ScanBothLevels(bgr, faint, /*dark_images=*/true));
+    }
   }
 }
 

@@ -85,7 +85,7 @@ TEST(RedBlobs, RingTableAgreesWithLabApproxOnEveryColour) {
   for (int r = 0; r < 256; ++r) {
     for (int g = 0; g < 256; ++g) {
       for (int b = 0; b < 256; ++b) {
-        const bool ring = IsRingColourLab(r, g, b);
+        const bool ring = IsRingColourByLabApprox(r, g, b);
         rings += ring;
         wrong += ring != IsRingColour(r, g, b);
       }

@@ -50,10 +50,10 @@ void ScanPixel(const std::uint8_t* p, int x, int y, const RedTable& red, const R
 
 // One row. Sixteen pixels at a time are first tested against the least red lead of the tables
 // in use (4 (R − G) + (B − G), see RedTable): where none reaches it, none is red at any level,
-// and their lookups are skipped. On the load scenes that is half of all such blocks. kMin: also
-// min(R, G, B) into `row_min`, from the same loaded channels (a second pass over the row to
-// separate them again cost 0.4 ms a frame).
-template <bool kFaint, bool kNested, bool kMin>
+// and their lookups are skipped. On the load scenes that is half of all such blocks. kMinChannel:
+// also min(R, G, B) into `row_min`, from the channels loaded here (a second pass over the row to
+// separate them again cost up to 0.3 ms a frame).
+template <bool kFaint, bool kNested, bool kMinChannel>
 void ScanRow(const std::uint8_t* row, int cols, int y, const RedTable& red, const RedTable* faint,
              RunTracker* red_runs, RunTracker* faint_runs, std::uint8_t* row_min) {
   int x = 0;
@@ -66,7 +66,7 @@ void ScanRow(const std::uint8_t* row, int cols, int y, const RedTable& red, cons
     const std::uint8_t* p = row + 3 * static_cast<std::ptrdiff_t>(x);
     cv::v_uint8x16 b, g, r;
     cv::v_load_deinterleave(p, b, g, r);
-    if constexpr (kMin) cv::v_store(row_min + x, cv::v_min(cv::v_min(b, g), r));
+    if constexpr (kMinChannel) cv::v_store(row_min + x, cv::v_min(cv::v_min(b, g), r));
     cv::v_uint16x8 b0, b1, g0, g1, r0, r1;
     cv::v_expand(b, b0, b1);
     cv::v_expand(g, g0, g1);
@@ -87,7 +87,7 @@ void ScanRow(const std::uint8_t* row, int cols, int y, const RedTable& red, cons
     }
   }
 #endif
-  if constexpr (kMin) {
+  if constexpr (kMinChannel) {
     MinChannelRow(row + 3 * static_cast<std::ptrdiff_t>(x), cols - x, row_min + x);
   }
   for (; x < cols; ++x) {
@@ -121,16 +121,17 @@ void HalveRows(const std::uint8_t* upper, const std::uint8_t* lower, std::ptrdif
   }
 }
 
-// kMin: min(R, G, B) into scan->min_channel, and halved into scan->dark_half when that is
+// kMinChannel: min(R, G, B) into scan->min_channel, and halved into scan->dark_half when that is
 // allocated.
-template <bool kFaint, bool kNested, bool kMin>
+template <bool kFaint, bool kNested, bool kMinChannel>
 void ScanRows(const cv::Mat& bgr, const RedTable& red, const RedTable* faint, FrameScan* scan) {
   RunTracker red_runs(&scan->red.runs), faint_runs(&scan->faint.runs);
   for (int y = 0; y < bgr.rows; ++y) {
     const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
-    std::uint8_t* row_min = kMin ? scan->min_channel.ptr<std::uint8_t>(y) : nullptr;
-    ScanRow<kFaint, kNested, kMin>(row, bgr.cols, y, red, faint, &red_runs, &faint_runs, row_min);
-    if constexpr (kMin) {
+    std::uint8_t* row_min = kMinChannel ? scan->min_channel.ptr<std::uint8_t>(y) : nullptr;
+    ScanRow<kFaint, kNested, kMinChannel>(row, bgr.cols, y, red, faint, &red_runs, &faint_runs,
+                                          row_min);
+    if constexpr (kMinChannel) {
       if (y % 2 == 1 && y / 2 < scan->dark_half.rows) {
         HalveRows(scan->min_channel.ptr<std::uint8_t>(y - 1), row_min, scan->dark_half.cols,
                   scan->dark_half.ptr<std::uint8_t>(y / 2));

@@ -1,8 +1,9 @@
 #pragma once
 // A colour rule decided by one table lookup. When a rule, once it holds for some R, holds for every
 // larger R (G and B held), it is given by the least such R for each (G, B): 64 K entries instead of
-// 16 M. CIELAB a*, b* and L* all grow with R, so stage 1's redness and stage 2's green ring test
-// are such rules; each table is tested against its rule over the whole sRGB cube.
+// 16 M. LabApprox's a*, b* and L* all grow with R, so stage 1's redness is such a rule, and so is
+// the negation of stage 2's ring test (not ring: a* >= 10 or L* >= 85); each table is tested
+// against its rule over the whole sRGB cube, which is what shows that LabApprox keeps this.
 
 #include <cstdint>
 #include <functional>

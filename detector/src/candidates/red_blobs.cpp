@@ -68,7 +68,7 @@ bool ToBlob(const Moments& m, const BlobLimits& limits, RedBlob* blob) {
 
 }  // namespace
 
-bool IsRingColourLab(int r, int g, int b) {
+bool IsRingColourByLabApprox(int r, int g, int b) {
   const LabApprox& lab = LabApprox::Get();
   int a_star, b_star;
   lab.abStar(r, g, b, &a_star, &b_star);
@@ -79,8 +79,8 @@ bool IsRingColour(int r, int g, int b) {
   // Not ring = a* >= 10 or L* >= 85: both grow with R, so that is upward-closed in R and the
   // least such R for each (G, B) decides. A blob's ring test looks up about a dozen colours, and
   // a frame has hundreds of blobs: the lookup costs 0.13 ms a load scene where LabApprox cost 0.45.
-  static const std::vector<std::uint16_t> least_not_ring =
-      LeastRTable([](int red, int green, int blue) { return !IsRingColourLab(red, green, blue); });
+  static const std::vector<std::uint16_t> least_not_ring = LeastRTable(
+      [](int red, int green, int blue) { return !IsRingColourByLabApprox(red, green, blue); });
   return r < least_not_ring[static_cast<std::size_t>((g << 8) | b)];
 }
 

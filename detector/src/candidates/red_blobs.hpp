@@ -36,13 +36,14 @@ std::vector<RedBlob> FindRedBlobs(const RedRuns& red, const BlobLimits& limits);
 /// only the covered element.
 bool HasRing(const cv::Mat& bgr, const RedBlob& blob);
 
-/// Whether an sRGB colour passes as ring: a* < 10 and L* < 85 (LabApprox's, IsRingColourLab),
-/// decided by one table lookup that agrees with that on every colour (tested).
-bool IsRingColour(int r, int g, int b);
-/// The same rule evaluated through LabApprox: what the table is built from and tested against.
-bool IsRingColourLab(int r, int g, int b);
-
 /// Same from a mask (tests).
 std::vector<RedBlob> FindRedBlobs(const cv::Mat& mask, const BlobLimits& limits);
+
+/// Whether an sRGB colour (codes 0 … 255) passes HasRing's test: LabApprox's a* < 10 and
+/// L* < 85, decided by one table lookup that agrees with IsRingColourByLabApprox on every colour
+/// (tested).
+bool IsRingColour(int r, int g, int b);
+/// The same rule evaluated through LabApprox: what the table is built from and tested against.
+bool IsRingColourByLabApprox(int r, int g, int b);
 
 }  // namespace pintag::stage
