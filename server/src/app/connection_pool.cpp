@@ -26,27 +26,36 @@ void ConnectionPool::renew(const std::string& path) {
 }
 
 ConnectionPool::Lease ConnectionPool::acquire() {
-  std::uint64_t generation = 0;
-  std::string path;
-  {
-    const std::lock_guard lock(mutex_);
-    generation = generation_;
-    path = path_;
-    if (!idle_.empty()) {
-      std::unique_ptr<db::Connection> connection = std::move(idle_.back());
-      idle_.pop_back();
-      return Lease(this, std::move(connection), generation);
+  while (true) {
+    std::uint64_t generation = 0;
+    std::string path;
+    {
+      const std::lock_guard lock(mutex_);
+      generation = generation_;
+      path = path_;
+      if (!idle_.empty()) {
+        std::unique_ptr<db::Connection> connection = std::move(idle_.back());
+        idle_.pop_back();
+        return Lease(this, std::move(connection), generation);
+      }
     }
-  }
-  try {
-    db::ConnectionOptions options;
-    options.create = false;
-    options.read_only = read_only_;
-    options.busy_timeout_ms = busy_timeout_ms_;
-    return Lease(this, std::make_unique<db::Connection>(path, options), generation);
-  } catch (const std::exception& e) {
-    std::cerr << "pintag serve: cannot open database " << path << ": " << e.what() << "\n";
-    throw server::HttpError(503, "the database is not reachable", "Service Unavailable");
+    // Opened outside the lock (an open may wait on the database). A replica's snapshot can be
+    // swapped meanwhile and the file just read from path_ removed (SnapshotWatcher::check), so an
+    // open that fails after a renew() is tried again on the new file.
+    try {
+      db::ConnectionOptions options;
+      options.create = false;
+      options.read_only = read_only_;
+      options.busy_timeout_ms = busy_timeout_ms_;
+      return Lease(this, std::make_unique<db::Connection>(path, options), generation);
+    } catch (const std::exception& e) {
+      {
+        const std::lock_guard lock(mutex_);
+        if (generation_ != generation) continue;
+      }
+      std::cerr << "pintag serve: cannot open database " << path << ": " << e.what() << "\n";
+      throw server::HttpError(503, "the database is not reachable", "Service Unavailable");
+    }
   }
 }
 

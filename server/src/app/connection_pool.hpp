@@ -40,7 +40,8 @@ class ConnectionPool {
     std::uint64_t generation_;
   };
 
-  /// Throws server::HttpError 503 when the database cannot be opened.
+  /// Throws server::HttpError 503 when the database cannot be opened (an open that failed
+  /// because renew() changed the file meanwhile is tried again on the new one).
   Lease acquire();
 
   /// Closes the idle connections; later leases open `path` (a replica's newly loaded snapshot),

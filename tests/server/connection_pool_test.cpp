@@ -1,0 +1,68 @@
+// The connection pool of a read-only replica while its snapshot is swapped under it, the way
+// SnapshotWatcher does: the new file is handed to renew() and the previous file's name removed
+// at once. A lease taken at any moment of that must open a file that is there.
+
+#include "app/connection_pool.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "pintag/db/sqlite.hpp"
+#include "pintag/server/problem.hpp"
+#include "pintag/test/files.hpp"
+
+namespace pintag::app {
+namespace {
+
+TEST(ConnectionPool, LeasesTakenWhileTheFileIsSwappedAndUnlinkedAllOpen) {
+  const test::TempDir dir;
+  const std::string original = dir.file("registry.db");
+  {
+    db::Connection create(original);
+    create.execute("CREATE TABLE t (x INTEGER); INSERT INTO t VALUES (7);");
+    create.execute("PRAGMA journal_mode=DELETE");  // a snapshot is one file, no WAL beside it
+  }
+  const auto serving = [&](int n) { return dir.file("registry.db.serving-" + std::to_string(n)); };
+  ASSERT_EQ(::link(original.c_str(), serving(0).c_str()), 0);
+  ConnectionPool pool(serving(0), 5000, /*read_only=*/true);
+
+  constexpr int kThreads = 4;
+  constexpr int kSwaps = 400;
+  std::atomic<bool> stop{false};
+  std::atomic<int> refused{0}, wrong{0}, leases{0};
+  std::vector<std::thread> threads;
+  threads.reserve(kThreads);
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&] {
+      while (!stop) {
+        try {
+          const ConnectionPool::Lease lease = pool.acquire();
+          if (lease->queryInt64("SELECT x FROM t") != 7) ++wrong;
+          ++leases;
+        } catch (const server::HttpError&) {
+          ++refused;
+        }
+      }
+    });
+  }
+  // Each swap is what the watcher does: a new link to the file, renew, the old link removed.
+  for (int n = 1; n <= kSwaps; ++n) {
+    ASSERT_EQ(::link(original.c_str(), serving(n).c_str()), 0);
+    pool.renew(serving(n));
+    ::unlink(serving(n - 1).c_str());
+    std::this_thread::yield();
+  }
+  stop = true;
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(refused.load(), 0) << "of " << leases.load() << " leases";
+  EXPECT_EQ(wrong.load(), 0);
+  EXPECT_GT(leases.load(), kSwaps);
+}
+
+}  // namespace
+}  // namespace pintag::app
