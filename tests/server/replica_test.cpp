@@ -125,6 +125,27 @@ TEST_F(ReplicaSetTest, AFollowerServesAPincodeAddedOnThePrimary) {
   EXPECT_EQ(RegistryVersionAt(replica.port()), RegistryVersionAt(primary_->port()));
 }
 
+TEST_F(ReplicaSetTest, AFollowerWaitingForItsFirstSnapshotOutlivesSigHup) {
+  // No primary to follow: the follower waits for its first snapshot and never serves.
+  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+  ServerProcess follower({"--db", replicaDb(0), "--follow", primaryUrl(), "--follow-token-file",
+                          dir_.file("replica.token"), "--follow-interval-ms", "100"},
+                         dir_.file("replica-0.err"), /*timeout_s=*/1);
+  ASSERT_FALSE(follower.ok());
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (stderrOf("replica-0").find("waiting for a snapshot") == std::string::npos &&
+         follower.running() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_NE(stderrOf("replica-0").find("waiting for a snapshot"), std::string::npos);
+  // A reload asked for while it waits (logrotate, an operator) must not end it: with SIGHUP's
+  // default action it was gone at once. It goes on waiting, and SIGTERM still stops it.
+  follower.signal(SIGHUP);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_TRUE(follower.running());
+  EXPECT_EQ(follower.stop(SIGTERM, 30), 128 + SIGTERM);
+}
+
 TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem) {
   httplib::Client primary("127.0.0.1", primary_->port());
   primary.set_read_timeout(30, 0);

@@ -84,6 +84,15 @@ void ServerProcess::signal(int signal) const {
   if (pid_ > 0) ::kill(pid_, signal);
 }
 
+bool ServerProcess::running() const {
+  if (pid_ <= 0) return false;
+  siginfo_t info{};
+  if (::waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOHANG | WNOWAIT) != 0) {
+    return false;
+  }
+  return info.si_pid == 0;  // nothing to report yet
+}
+
 int ServerProcess::stop(int signal, int timeout_s) {
   if (pid_ <= 0) return -1;
   ::kill(pid_, signal);

@@ -43,6 +43,8 @@ class ServerProcess {
   int stop(int signal = SIGTERM, int timeout_s = 10);
   /// Sends `signal` without waiting.
   void signal(int signal) const;
+  /// True while the process has not exited (it is not reaped: stop() still gets its status).
+  bool running() const;
   pid_t pid() const { return pid_; }
 
  private:

@@ -66,6 +66,13 @@ void LimitMallocArenas() {
 }
 
 void Run(const ServeArgs& args) {
+  // SIGHUP asks a replica to reload; a follower may wait long for its first snapshot below, and
+  // SIGHUP's default action would end it there. Blocked now, a SIGHUP stays pending until the
+  // signal thread takes it as a reload. SIGINT and SIGTERM still stop the process while it waits.
+  sigset_t hangup;
+  sigemptyset(&hangup);
+  sigaddset(&hangup, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &hangup, nullptr);
   LimitMallocArenas();
   server::ConfigureLog(server::ParseLogFormat(args.log_format).value_or(server::LogFormat::kText));
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
