@@ -2,8 +2,12 @@
 // serve and refuse, where their scans go, how they take a newer snapshot while requests are in
 // flight, and what they do with a file that is not one.
 
+#include <unistd.h>
+
 #include <array>
 #include <atomic>
+#include <filesystem>
+#include <set>
 #include <thread>
 
 #include "label_photo.hpp"
@@ -27,6 +31,38 @@ json Body(const httplib::Result& r) {
 std::int64_t CountRows(const std::string& path, const std::string& table) {
   db::Connection connection(path, {.create = false, .read_only = true});
   return connection.queryInt64("SELECT count(*) FROM " + table);
+}
+
+// Lookups from 8 clients at once on `port`, so that its pool opens new connections: how many of
+// the 40 were answered 200.
+int LookupsFromManyClients(int port) {
+  std::vector<std::thread> clients;
+  std::atomic<int> good{0};
+  clients.reserve(8);
+  for (int t = 0; t < 8; ++t) {
+    clients.emplace_back([&] {
+      httplib::Client client("127.0.0.1", port);
+      client.set_read_timeout(30, 0);
+      for (int i = 0; i < 5; ++i) {
+        const auto r = client.Get("/api/v1/pincodes/560001");
+        if (r && r->status == 200) ++good;
+      }
+    });
+  }
+  for (std::thread& c : clients) c.join();
+  return good.load();
+}
+
+// The files beside `snapshot` whose names start with its name and ".serving-".
+std::set<std::string> ServingFiles(const std::string& snapshot) {
+  const std::filesystem::path path(snapshot);
+  const std::string prefix = path.filename().string() + ".serving-";
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(path.parent_path())) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) == 0) names.insert(name);
+  }
+  return names;
 }
 
 TEST_F(ReplicaSetTest, AFollowerServesReadsAndRefusesWritesNamingThePrimary) {
@@ -289,23 +325,54 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
   }
   ASSERT_NE(stderrOf("replica-0").find("ignoring the new file"), std::string::npos);
   // Many connections at once, so the pool opens new ones after the junk arrived.
-  std::vector<std::thread> clients;
-  std::atomic<int> good{0};
-  clients.reserve(8);
-  for (int t = 0; t < 8; ++t) {
-    clients.emplace_back([&] {
-      httplib::Client client("127.0.0.1", replica.port());
-      for (int i = 0; i < 5; ++i) {
-        const auto r = client.Get("/api/v1/pincodes/560001");
-        if (r && r->status == 200) ++good;
-      }
-    });
-  }
-  for (std::thread& c : clients) c.join();
-  EXPECT_EQ(good.load(), 40);
+  EXPECT_EQ(LookupsFromManyClients(replica.port()), 40);
   EXPECT_EQ(RegistryVersionAt(replica.port()), version);
   httplib::Client client("127.0.0.1", replica.port());
   EXPECT_EQ(client.Get("/readyz")->status, 200);
+}
+
+TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {
+  const std::string snapshot = publishTo("shared.db");
+  ServerProcess& first = startReadOnly(0, snapshot);
+  ASSERT_TRUE(first.ok());
+  // The first replica takes a newer snapshot, so it serves a link made after its start.
+  httplib::Client primary("127.0.0.1", primary_->port());
+  primary.set_read_timeout(30, 0);
+  addPincode(primary, "999301");
+  publishTo("shared.db");
+  const std::int64_t published = RegistryVersionAt(primary_->port());
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (RegistryVersionAt(first.port()) != published &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(RegistryVersionAt(first.port()), published);
+  const std::set<std::string> first_files = ServingFiles(snapshot);
+  ASSERT_FALSE(first_files.empty());
+
+  // What ended runs leave: a link and a lock file nobody holds, and a link named as before tags.
+  const std::string ended = snapshot + ".serving-00000000deadbeef";
+  WriteFile(ended + ".lock", "");
+  ASSERT_EQ(::link(snapshot.c_str(), (ended + "-3").c_str()), 0);
+  ASSERT_EQ(::link(snapshot.c_str(), (snapshot + ".serving-7").c_str()), 0);
+
+  ServerProcess& second = startReadOnly(1, snapshot);
+  ASSERT_TRUE(second.ok());
+  EXPECT_EQ(RegistryVersionAt(second.port()), published);
+  const std::set<std::string> both = ServingFiles(snapshot);
+  for (const std::string& name : first_files) EXPECT_EQ(both.count(name), 1U) << name;
+  for (const char* gone : {"shared.db.serving-00000000deadbeef.lock",
+                           "shared.db.serving-00000000deadbeef-3", "shared.db.serving-7"}) {
+    EXPECT_EQ(both.count(gone), 0U) << gone;
+  }
+  // The first replica opens new connections on the link it serves: still there.
+  EXPECT_EQ(LookupsFromManyClients(first.port()), 40);
+  EXPECT_EQ(LookupsFromManyClients(second.port()), 40);
+
+  // A replica that stops takes its own files away and leaves the other's.
+  EXPECT_EQ(second.stop(SIGTERM, 30), 0);
+  EXPECT_EQ(ServingFiles(snapshot), first_files);
+  EXPECT_EQ(LookupsFromManyClients(first.port()), 40);
 }
 
 }  // namespace

@@ -1,33 +1,141 @@
 #include "replica/snapshot_watcher.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
+#include <map>
+#include <random>
+#include <sstream>
 #include <stdexcept>
+#include <string_view>
+#include <vector>
 
 namespace pintag::replica {
 
+namespace {
+
+constexpr std::string_view kLockSuffix = ".lock";
+constexpr std::string_view kNewLockSuffix = ".lock.new";  // before it is renamed into place
+
+std::string RandomTag() {
+  std::random_device device;
+  std::ostringstream tag;
+  tag << std::hex << std::setfill('0') << std::setw(8) << device() << std::setw(8) << device();
+  return tag.str();
+}
+
+// Locks `path` exclusively without waiting; the descriptor holding the lock, or −1 when the file
+// is missing or someone holds it.
+int TryLock(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) return -1;
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+}  // namespace
+
 SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
     : path_(std::move(path)), on_loaded_(std::move(on_loaded)) {
-  // Serving links of an earlier run: their files are no longer open by anyone.
+  takeTag();
+  removeEndedRuns();
+  const std::lock_guard lock(mutex_);
+  std::optional<Identity> linked;
+  const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked);
+  seen_ = linked;
+  if (!loaded) throw std::runtime_error(loaded.error().message);
+  loaded_ = *loaded;
+}
+
+SnapshotWatcher::~SnapshotWatcher() {
+  thread_.stop();
+  // The server has stopped serving: nothing leases a connection on the link any more, and a
+  // connection still open keeps reading the unlinked file.
+  if (loaded_) ::unlink(loaded_->path.c_str());
+  ::unlink((path_ + ".serving-" + tag_ + std::string(kLockSuffix)).c_str());
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void SnapshotWatcher::takeTag() {
+  // The lock file is locked under a temporary name and then renamed, so a lock file another
+  // replica sees under its own name is always held by its maker while that lives.
+  std::string error;
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    const std::string tag = RandomTag();
+    const std::string base = path_ + ".serving-" + tag;
+    const std::string fresh = base + std::string(kNewLockSuffix);
+    const int fd = ::open(fresh.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) {
+      error = "cannot create " + fresh + ": " + std::strerror(errno);
+      if (errno == EEXIST) continue;
+      break;
+    }
+    // Another replica starting at this moment may take the fresh file for a crashed run's and
+    // remove it: then the lock or the rename fails, and another tag is tried.
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 &&
+        ::rename(fresh.c_str(), (base + std::string(kLockSuffix)).c_str()) == 0) {
+      tag_ = tag;
+      lock_fd_ = fd;
+      return;
+    }
+    error = "cannot lock " + fresh + ": " + std::strerror(errno);
+    ::close(fd);
+    ::unlink(fresh.c_str());
+  }
+  throw std::runtime_error(error);
+}
+
+void SnapshotWatcher::removeEndedRuns() const {
   const std::filesystem::path target(path_);
   const std::string prefix = target.filename().string() + ".serving-";
   const std::filesystem::path directory =
       target.parent_path().empty() ? std::filesystem::path(".") : target.parent_path();
+  // Each tag's files: links `<tag>-N`, its lock file; names of an older scheme (`serving-N`)
+  // fall under the tag "" and have no lock.
+  std::map<std::string, std::vector<std::filesystem::path>> files_of_tag;
   std::error_code ignored;
   for (const auto& entry : std::filesystem::directory_iterator(directory, ignored)) {
-    if (entry.path().filename().string().rfind(prefix, 0) == 0)
-      std::filesystem::remove(entry.path(), ignored);
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string rest = name.substr(prefix.size());
+    const std::size_t end = rest.find_first_of("-.");
+    const bool tagged = end != std::string::npos && rest.find('-') != 0;
+    files_of_tag[tagged ? rest.substr(0, end) : std::string()].push_back(entry.path());
   }
-  const std::lock_guard lock(mutex_);
-  seen_ = Stat(path_);
-  const db::Result<db::SnapshotInfo> loaded = linkAndVerify();
-  if (!loaded) throw std::runtime_error(loaded.error().message);
-  loaded_ = *loaded;
+  for (auto& [tag, files] : files_of_tag) {
+    if (tag == tag_) continue;
+    const std::string base = (directory / (prefix + tag)).string();
+    std::vector<int> held;  // the ended run's locks, held while its files go
+    bool running = false;
+    for (const std::string_view suffix : {kLockSuffix, kNewLockSuffix}) {
+      const std::string lock = base + std::string(suffix);
+      if (const int fd = TryLock(lock); fd >= 0) {
+        held.push_back(fd);
+      } else if (!tag.empty() && std::filesystem::exists(lock, ignored)) {
+        running = true;
+      }
+    }
+    if (!running) {
+      // Links first, lock files last: a lock file still marks its links as another run's.
+      std::stable_partition(files.begin(), files.end(), [](const std::filesystem::path& file) {
+        const std::string name = file.filename().string();
+        return !name.ends_with(kLockSuffix) && !name.ends_with(kNewLockSuffix);
+      });
+      for (const auto& file : files) std::filesystem::remove(file, ignored);
+    }
+    for (const int fd : held) ::close(fd);
+  }
 }
 
 std::optional<SnapshotWatcher::Identity> SnapshotWatcher::Stat(const std::string& path) {
@@ -37,13 +145,17 @@ std::optional<SnapshotWatcher::Identity> SnapshotWatcher::Stat(const std::string
                   std::int64_t{status.st_mtim.tv_sec} * 1'000'000'000 + status.st_mtim.tv_nsec};
 }
 
-db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify() {
-  const std::string link = path_ + ".serving-" + std::to_string(++links_made_);
+db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<Identity>* linked) {
+  const std::string link = path_ + ".serving-" + tag_ + "-" + std::to_string(++links_made_);
   ::unlink(link.c_str());
   if (::link(path_.c_str(), link.c_str()) != 0) {
+    *linked = Stat(path_);
     return db::Error{db::ErrorCode::kStorage,
                      "cannot link " + path_ + " to " + link + ": " + std::strerror(errno)};
   }
+  // What was linked, not what was at the path a moment before: a file renamed into place in
+  // between is looked at once, now, and not taken for a change again.
+  *linked = Stat(link);
   db::Result<db::SnapshotInfo> verified = db::VerifySnapshot(link);
   if (!verified) ::unlink(link.c_str());
   return verified;
@@ -53,8 +165,9 @@ bool SnapshotWatcher::check() {
   const std::lock_guard lock(mutex_);
   const std::optional<Identity> now = Stat(path_);
   if (!now || now == seen_) return false;  // gone (keep serving) or unchanged
-  seen_ = now;
-  const db::Result<db::SnapshotInfo> verified = linkAndVerify();
+  std::optional<Identity> linked;
+  const db::Result<db::SnapshotInfo> verified = linkAndVerify(&linked);
+  seen_ = linked ? linked : now;
   if (!verified) {
     std::cerr << "pintag serve: ignoring the new file at " << path_ << ": "
               << verified.error().message << "; still serving registry version "

@@ -2,8 +2,12 @@
 // A read-only replica's side of its snapshot file: notices when another file was put at the path
 // (renamed into place by `pintag snapshot --out`, or by the follower), checks it is a whole
 // snapshot, and hands it on. What is served is a hard link to the file that was checked
-// (`<path>.serving-N`), so a damaged file renamed into place later is never opened: it is
-// reported once and ignored, and the replica goes on serving what it has.
+// (`<path>.serving-<process tag>-N`), so a damaged file renamed into place later is never opened:
+// it is reported once and ignored, and the replica goes on serving what it has.
+//
+// Several replicas may serve one file. Each names its links by a tag of its own and holds an
+// exclusive lock on `<path>.serving-<tag>.lock` while it lives; a starting replica removes only
+// the links whose lock nobody holds (a run that ended or crashed).
 
 #include <sys/types.h>
 
@@ -24,10 +28,12 @@ class SnapshotWatcher {
   /// Called with each newly loaded snapshot; its `path` is the file to open from now on.
   using OnLoaded = std::function<void(const db::SnapshotInfo&)>;
 
-  /// Loads the snapshot at `path` (removing serving links a previous run left). Throws
-  /// std::runtime_error when it is missing or not a whole snapshot.
+  /// Loads the snapshot at `path` (removing the serving links of runs that ended). Throws
+  /// std::runtime_error when it is missing or not a whole snapshot, or its lock cannot be made.
   SnapshotWatcher(std::string path, OnLoaded on_loaded);
-  ~SnapshotWatcher() = default;  ///< stops the thread; the serving link stays until the next start
+  /// Stops the thread and releases the lock; the serving link stays (connections may still read
+  /// it) until a later start removes it.
+  ~SnapshotWatcher();
   SnapshotWatcher(const SnapshotWatcher&) = delete;
   SnapshotWatcher& operator=(const SnapshotWatcher&) = delete;
 
@@ -49,12 +55,19 @@ class SnapshotWatcher {
     bool operator==(const Identity&) const = default;
   };
   static std::optional<Identity> Stat(const std::string& path);
+  /// Makes this process's tag and holds its lock file.
+  void takeTag();
+  /// Removes the links and lock files of tags whose lock nobody holds.
+  void removeEndedRuns() const;
   /// Links the file now at path_ to a new serving name and checks it; the error when it is not
-  /// a whole snapshot. Requires mutex_.
-  db::Result<db::SnapshotInfo> linkAndVerify();
+  /// a whole snapshot. `linked` is the identity of the file linked, even when refused. Requires
+  /// mutex_.
+  db::Result<db::SnapshotInfo> linkAndVerify(std::optional<Identity>* linked);
 
   std::string path_;
   OnLoaded on_loaded_;
+  std::string tag_;           // this process's part of its link names
+  int lock_fd_ = -1;          // holds `<path>.serving-<tag>.lock` locked while this watcher lives
   mutable std::mutex mutex_;  // one check at a time; guards the fields below
   std::uint64_t links_made_ = 0;
   std::optional<db::SnapshotInfo> loaded_;
