@@ -342,6 +342,15 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
   httplib::Client client("127.0.0.1", replica.port());
   client.set_read_timeout(30, 0);
   EXPECT_EQ(StatusOf(client.Get("/readyz")), 200);
+
+  // A replica started on the junk refuses to, says why, and leaves no files of its own beside it.
+  const std::set<std::string> before = ServingFiles(snapshot);
+  const CommandResult refused =
+      RunPintag("serve --read-only --port 0 --bind 127.0.0.1 --db " + snapshot + " --scan-log " +
+                dir_.file("refused-scans.db"));
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.out.find("cannot serve " + snapshot + ":"), std::string::npos) << refused.out;
+  EXPECT_EQ(ServingFiles(snapshot), before);
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {

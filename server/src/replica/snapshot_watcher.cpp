@@ -54,7 +54,10 @@ SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
   std::optional<Identity> linked;
   const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked);
   seen_ = linked;
-  if (!loaded) throw std::runtime_error(loaded.error().message);
+  if (!loaded) {
+    releaseTag();  // no destructor runs for a constructor that throws
+    throw std::runtime_error("cannot serve " + path_ + ": " + loaded.error().message);
+  }
   loaded_ = *loaded;
 }
 
@@ -63,8 +66,13 @@ SnapshotWatcher::~SnapshotWatcher() {
   // The server has stopped serving: nothing leases a connection on the link any more, and a
   // connection still open keeps reading the unlinked file.
   if (loaded_) ::unlink(loaded_->path.c_str());
+  releaseTag();
+}
+
+void SnapshotWatcher::releaseTag() {
   ::unlink((path_ + ".serving-" + tag_ + std::string(kLockSuffix)).c_str());
   if (lock_fd_ >= 0) ::close(lock_fd_);
+  lock_fd_ = -1;
 }
 
 void SnapshotWatcher::takeTag() {

@@ -57,6 +57,8 @@ class SnapshotWatcher {
   static std::optional<Identity> Stat(const std::string& path);
   /// Makes this process's tag and holds its lock file.
   void takeTag();
+  /// Removes the lock file and lets the lock go.
+  void releaseTag();
   /// Removes the links and lock files of tags whose lock nobody holds.
   void removeEndedRuns() const;
   /// Links the file now at path_ to a new serving name and checks it; the error when it is not
