@@ -66,10 +66,19 @@ int FreeLoopbackPort() {
 NginxProcess::NginxProcess(const std::filesystem::path& prefix, int primary_port,
                            const std::vector<int>& replica_ports)
     : prefix_(prefix) {
+  // The port is free when picked and taken by nginx a moment later; another test's server may
+  // bind it in between. nginx then cannot listen, and a connection to the port reaches that other
+  // server: such an attempt is made again on another port.
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    if (start(primary_port, replica_ports) != Start::kPortTaken) return;
+  }
+}
+
+NginxProcess::Start NginxProcess::start(int primary_port, const std::vector<int>& replica_ports) {
   const std::string nginx = NginxExe();
   if (nginx.empty()) {
     error_ = "nginx is not installed (Debian's nginx-light, in scripts/debian-packages-test.txt)";
-    return;
+    return Start::kFailed;
   }
   port_ = FreeLoopbackPort();
   const std::string source = PINTAG_SOURCE_DIR;
@@ -82,7 +91,7 @@ NginxProcess::NginxProcess(const std::filesystem::path& prefix, int primary_port
   for (const int port : replica_ports) render.push_back(Address(port));
   if (Run(render) != 0) {
     error_ = "render-conf.sh failed";
-    return;
+    return Start::kFailed;
   }
   // As root, nginx's workers run as nobody: they must reach the prefix (in the test's own
   // directory) to write temporary files.
@@ -104,21 +113,34 @@ NginxProcess::NginxProcess(const std::filesystem::path& prefix, int primary_port
             "-g", "daemon off;", static_cast<char*>(nullptr));
     ::_exit(127);
   }
+  const auto port_taken = [&] {
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+    error_ =
+        "another server took " + Address(port_) + " before nginx: " + test::ReadFile(error_log);
+    return Start::kPortTaken;
+  };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (std::chrono::steady_clock::now() < deadline) {
     if (::waitpid(pid_, nullptr, WNOHANG) == pid_) {
       pid_ = -1;
-      error_ = "nginx exited: " + test::ReadFile(error_log);
-      return;
+      const std::string log = test::ReadFile(error_log);
+      if (log.find("Address already in use") != std::string::npos) return port_taken();
+      error_ = "nginx exited: " + log;
+      return Start::kFailed;
     }
-    const int fd = test::ConnectLoopback(port_);
-    if (fd >= 0) {
-      ::close(fd);
-      return;
+    // Whoever answers must be nginx (it names itself in every answer, proxied or its own).
+    const std::string answer = test::SendRaw(port_, "GET /livez HTTP/1.0\r\n\r\n", 10);
+    if (!answer.empty()) {
+      if (answer.find("\r\nServer: nginx") == std::string::npos) return port_taken();
+      error_.clear();
+      return Start::kStarted;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   error_ = "nginx did not listen on " + Address(port_) + ": " + test::ReadFile(error_log);
+  return Start::kFailed;
 }
 
 NginxProcess::~NginxProcess() {

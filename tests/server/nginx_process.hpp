@@ -14,8 +14,9 @@ namespace pintag::serve_test {
 class NginxProcess {
  public:
   /// Renders the configuration into `prefix` (a new directory inside a test's scratch directory,
-  /// both made readable to nginx's workers) and starts nginx; waits (at most 30 s) until its
-  /// port accepts connections. Check ok() afterwards; error() says why not.
+  /// both made readable to nginx's workers) and starts nginx; waits (at most 30 s) until nginx
+  /// answers on its port (on another port when a server took that one first). Check ok()
+  /// afterwards; error() says why not.
   NginxProcess(const std::filesystem::path& prefix, int primary_port,
                const std::vector<int>& replica_ports);
   ~NginxProcess();  ///< graceful stop (SIGQUIT), SIGKILL after 10 s
@@ -29,6 +30,10 @@ class NginxProcess {
   std::string logs() const;
 
  private:
+  enum class Start { kStarted, kPortTaken, kFailed };
+  /// One attempt on a freshly picked port.
+  Start start(int primary_port, const std::vector<int>& replica_ports);
+
   std::filesystem::path prefix_;
   pid_t pid_ = -1;
   int port_ = 0;
