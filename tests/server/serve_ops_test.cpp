@@ -6,11 +6,9 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <cstdio>
 #include <fstream>
 #include <regex>
 #include <set>
-#include <sstream>
 #include <thread>
 
 #include "pintag/db/database.hpp"
@@ -358,54 +356,6 @@ TEST_F(ServeTest, StaticFilesFromTheWebDirectoryOnly) {
     EXPECT_EQ(r->body.find("SECRET"), std::string::npos);
   }
   ExpectProblem(client().Get("/api/v1/nothing"), 404);
-}
-
-// The connections waiting in the listening socket's accept queue on 127.0.0.1:`port` (its
-// rx_queue in /proc/net/tcp); -1 when no such listening socket is found.
-int AcceptQueueLength(int port) {
-  std::ifstream tcp("/proc/net/tcp");
-  std::string line;
-  std::getline(tcp, line);  // the header
-  char wanted[16];
-  std::snprintf(wanted, sizeof wanted, "0100007F:%04X", port);
-  while (std::getline(tcp, line)) {
-    std::istringstream fields(line);
-    std::string slot, local, remote, state, queues;
-    fields >> slot >> local >> remote >> state >> queues;
-    if (local != wanted || state != "0A") continue;  // 0A: LISTEN
-    return static_cast<int>(std::stoul(queues.substr(queues.find(':') + 1), nullptr, 16));
-  }
-  return -1;
-}
-
-// SIGTERM answers a request whose connection was accepted but is still waiting for a worker,
-// and only then exits. One worker, held by a kept-alive connection; a second connection sends
-// its request and waits in the queue (the kernel's accept queue is empty, so the server has
-// accepted it). No sleeps.
-TEST_F(ServeTest, SigtermAnswersRequestsWaitingForAWorker) {
-  ServerProcess one_worker({"--db", db_path_, "--threads", "1"}, dir_.file("one-worker.log"));
-  ASSERT_TRUE(one_worker.ok());
-  const std::string request = "GET /livez HTTP/1.1\r\nHost: x\r\n\r\n";
-  const int kept = test::ConnectLoopback(one_worker.port());
-  ASSERT_GE(kept, 0);
-  test::SendAll(kept, request);
-  const std::string first = test::ReceiveUntil(kept, 30, test::HasWholeResponse);
-  ASSERT_EQ(first.rfind("HTTP/1.1 200", 0), 0U) << first;  // the worker now waits on `kept`
-  const int waiting = test::ConnectLoopback(one_worker.port());
-  ASSERT_GE(waiting, 0);
-  test::SendAll(waiting, request);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (AcceptQueueLength(one_worker.port()) != 0 && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ASSERT_EQ(AcceptQueueLength(one_worker.port()), 0);
-  one_worker.signal(SIGTERM);
-  ::close(kept);  // frees the worker
-  const std::string answer = test::ReceiveUntil(waiting, 30);
-  ::close(waiting);
-  EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << "answer: '" << answer.substr(0, 300) << "'";
-  EXPECT_NE(answer.find("Connection: close"), std::string::npos) << answer.substr(0, 300);
-  EXPECT_EQ(one_worker.stop(SIGTERM, 30), 0);
 }
 
 // A request whose body is still arriving when SIGTERM comes is read to the end and answered;

@@ -1,7 +1,7 @@
 // `pintag serve`: the HTTP API over one database. On first start with no database file it creates
 // and seeds one; when the token table is empty it creates one admin token and prints its secret
-// on stdout, the only place it ever appears. SIGINT or SIGTERM stops it gracefully: every
-// connection already accepted is answered (docs/API.md).
+// on stdout, the only place it ever appears. SIGINT or SIGTERM stops it gracefully (in-flight
+// requests finish).
 
 #include <malloc.h>
 #include <pthread.h>
@@ -143,7 +143,9 @@ void Run(const ServeArgs& args) {
     if (finished) return;
     server::LogEvent(std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
                      ", finishing requests in flight");
-    http.stop();  // also when serve() has not begun: its first accept then fails at once
+    // A signal right after start may come before serve() runs; cpp-httplib ignores stop() then.
+    while (!http.running() && !finished) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    http.stop();
   });
   const bool served = http.serve();
   // serve() returned: stop() ran from the waiter, or serving failed; then wake the waiter.

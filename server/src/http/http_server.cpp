@@ -109,7 +109,6 @@ struct HttpServer::Impl {
   ServerOptions options;
   Server server;
   std::atomic<int> listen_fd{-1};
-  std::atomic<bool> stopping{false};
   int port = 0;
   std::thread thread;
 
@@ -124,9 +123,6 @@ struct HttpServer::Impl {
                                            ? std::optional(req.get_header_value("X-Request-Id"))
                                            : std::nullopt);
     res.set_header("X-Request-Id", t_state.request_id);
-    // Stopping: this answer is the connection's last, so the client does not send another on a
-    // connection about to close.
-    if (stopping) res.set_header("Connection", "close");
     t_state.admission = api->admit(req.method, req.path, Headers(req));
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
@@ -324,10 +320,7 @@ bool HttpServer::bind(std::string* error) {
 }
 
 bool HttpServer::serve() {
-  const bool served = impl_->server.listen_after_bind();
-  impl_->listen_fd = -1;  // cpp-httplib has closed it: its number may be another file's now
-  // Ended by stop(), cpp-httplib reports a failed accept: that is the way out asked for.
-  return served || impl_->stopping;
+  return impl_->server.listen_after_bind();
 }
 
 bool HttpServer::start(std::string* error) {
@@ -345,13 +338,7 @@ bool HttpServer::start(std::string* error) {
 }
 
 void HttpServer::stop() {
-  // Not httplib::Server::stop(): it marks the listening socket invalid, and every connection
-  // accepted but still waiting for a worker then closes without an answer. Shutting the socket
-  // down instead ends the accept loop (cpp-httplib closes the socket), and the waiting
-  // connections are answered before serve() returns. Before serve() runs, the first accept fails
-  // at once.
-  impl_->stopping = true;
-  if (const int fd = impl_->listen_fd.exchange(-1); fd >= 0) ::shutdown(fd, SHUT_RDWR);
+  impl_->server.stop();
   if (impl_->thread.joinable()) impl_->thread.join();
 }
 

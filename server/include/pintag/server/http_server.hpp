@@ -37,9 +37,7 @@ class HttpServer {
   bool serve();
   /// bind() and serve() on a background thread; returns once the port accepts connections.
   bool start(std::string* error);
-  /// Stops accepting and answers every connection already accepted (the answers say
-  /// `Connection: close`), then joins the background thread. Kept-alive connections with nothing
-  /// pending end when their client closes them or at the keep-alive timeout. Safe before serve().
+  /// Stops accepting, finishes in-flight requests, joins the background thread.
   void stop();
 
   /// Whether serve() is accepting connections (stop() before that is a no-op in cpp-httplib, so a
