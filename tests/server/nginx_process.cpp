@@ -10,7 +10,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <thread>
 
 #include "pintag/test/files.hpp"
@@ -98,6 +100,12 @@ NginxProcess::Start NginxProcess::start(int primary_port, const std::vector<int>
   ::chmod(prefix_.parent_path().c_str(), 0755);
   ::chmod(prefix_.c_str(), 0755);
   const std::string error_log = (prefix_ / "stderr.log").string();
+  // The log is appended to by every attempt: this one's part starts here.
+  const std::size_t log_start = test::ReadFile(error_log).size();
+  const auto this_log = [&] {
+    const std::string log = test::ReadFile(error_log);
+    return log.size() > log_start ? log.substr(log_start) : std::string();
+  };
   const pid_t parent = ::getpid();
   pid_ = ::fork();
   if (pid_ == 0) {
@@ -113,19 +121,24 @@ NginxProcess::Start NginxProcess::start(int primary_port, const std::vector<int>
             "-g", "daemon off;", static_cast<char*>(nullptr));
     ::_exit(127);
   }
+  if (pid_ < 0) {
+    error_ = std::string("cannot fork nginx: ") + std::strerror(errno);
+    return Start::kFailed;
+  }
   const auto port_taken = [&] {
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, nullptr, 0);
-    pid_ = -1;
-    error_ =
-        "another server took " + Address(port_) + " before nginx: " + test::ReadFile(error_log);
+    if (pid_ > 0) {  // never kill(-1, …): that signals every process we may signal
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+      pid_ = -1;
+    }
+    error_ = "another server took " + Address(port_) + " before nginx: " + this_log();
     return Start::kPortTaken;
   };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (std::chrono::steady_clock::now() < deadline) {
     if (::waitpid(pid_, nullptr, WNOHANG) == pid_) {
-      pid_ = -1;
-      const std::string log = test::ReadFile(error_log);
+      pid_ = -1;  // reaped
+      const std::string log = this_log();
       if (log.find("Address already in use") != std::string::npos) return port_taken();
       error_ = "nginx exited: " + log;
       return Start::kFailed;
@@ -139,7 +152,7 @@ NginxProcess::Start NginxProcess::start(int primary_port, const std::vector<int>
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  error_ = "nginx did not listen on " + Address(port_) + ": " + test::ReadFile(error_log);
+  error_ = "nginx did not listen on " + Address(port_) + ": " + this_log();
   return Start::kFailed;
 }
 
