@@ -369,12 +369,20 @@ TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ASSERT_EQ(RegistryVersionAt(first.port()), published);
-  const std::set<std::string> first_files = ServingFiles(snapshot);
-  ASSERT_FALSE(first_files.empty());
+  // The new version is served a moment before the link of the old one is removed: its files are
+  // settled when they are one link and one lock file.
+  std::set<std::string> first_files = ServingFiles(snapshot);
+  while (first_files.size() != 2 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    first_files = ServingFiles(snapshot);
+  }
+  ASSERT_EQ(first_files.size(), 2U);
 
-  // What ended runs leave: a link and a lock file nobody holds, and a link named as before tags.
+  // What ended runs leave: a link and a lock file nobody holds, a lock file not yet renamed,
+  // and a link named as before tags.
   const std::string ended = snapshot + ".serving-00000000deadbeef";
   WriteFile(ended + ".lock", "");
+  WriteFile(snapshot + ".serving-00000000cafef00d.lock.new", "");  // a start that crashed early
   ASSERT_EQ(::link(snapshot.c_str(), (ended + "-3").c_str()), 0);
   ASSERT_EQ(::link(snapshot.c_str(), (snapshot + ".serving-7").c_str()), 0);
 
@@ -383,8 +391,9 @@ TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {
   EXPECT_EQ(RegistryVersionAt(second.port()), published);
   const std::set<std::string> both = ServingFiles(snapshot);
   for (const std::string& name : first_files) EXPECT_EQ(both.count(name), 1U) << name;
-  for (const char* gone : {"shared.db.serving-00000000deadbeef.lock",
-                           "shared.db.serving-00000000deadbeef-3", "shared.db.serving-7"}) {
+  for (const char* gone :
+       {"shared.db.serving-00000000deadbeef.lock", "shared.db.serving-00000000deadbeef-3",
+        "shared.db.serving-00000000cafef00d.lock.new", "shared.db.serving-7"}) {
     EXPECT_EQ(both.count(gone), 0U) << gone;
   }
   // The first replica opens new connections on the link it serves: still there.

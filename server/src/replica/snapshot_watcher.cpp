@@ -35,7 +35,7 @@ std::string RandomTag() {
 // Locks `path` exclusively without waiting; the descriptor holding the lock, or −1 when the file
 // is missing or someone holds it.
 int TryLock(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);  // enough for flock
   if (fd < 0) return -1;
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     ::close(fd);
@@ -49,16 +49,22 @@ int TryLock(const std::string& path) {
 SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
     : path_(std::move(path)), on_loaded_(std::move(on_loaded)) {
   takeTag();
-  removeEndedRuns();
-  const std::lock_guard lock(mutex_);
-  std::optional<Identity> linked;
-  const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked);
-  seen_ = linked;
-  if (!loaded) {
+  try {
+    removeEndedRuns();
+    const std::lock_guard lock(mutex_);
+    std::optional<Identity> linked;
+    const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked);
+    seen_ = linked;
+    if (!loaded) throw std::runtime_error("cannot serve " + path_ + ": " + loaded.error().message);
+    loaded_ = *loaded;
+  } catch (...) {
     releaseTag();  // no destructor runs for a constructor that throws
-    throw std::runtime_error("cannot serve " + path_ + ": " + loaded.error().message);
+    throw;
   }
-  loaded_ = *loaded;
+}
+
+std::string SnapshotWatcher::servingName(const std::string& tag, std::string_view suffix) const {
+  return path_ + ".serving-" + tag + std::string(suffix);
 }
 
 SnapshotWatcher::~SnapshotWatcher() {
@@ -70,7 +76,7 @@ SnapshotWatcher::~SnapshotWatcher() {
 }
 
 void SnapshotWatcher::releaseTag() {
-  ::unlink((path_ + ".serving-" + tag_ + std::string(kLockSuffix)).c_str());
+  ::unlink(servingName(tag_, kLockSuffix).c_str());
   if (lock_fd_ >= 0) ::close(lock_fd_);
   lock_fd_ = -1;
 }
@@ -81,8 +87,7 @@ void SnapshotWatcher::takeTag() {
   std::string error;
   for (int attempt = 0; attempt < 8; ++attempt) {
     const std::string tag = RandomTag();
-    const std::string base = path_ + ".serving-" + tag;
-    const std::string fresh = base + std::string(kNewLockSuffix);
+    const std::string fresh = servingName(tag, kNewLockSuffix);
     const int fd = ::open(fresh.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) {
       error = "cannot create " + fresh + ": " + std::strerror(errno);
@@ -92,7 +97,7 @@ void SnapshotWatcher::takeTag() {
     // Another replica starting at this moment may take the fresh file for a crashed run's and
     // remove it: then the lock or the rename fails, and another tag is tried.
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0 &&
-        ::rename(fresh.c_str(), (base + std::string(kLockSuffix)).c_str()) == 0) {
+        ::rename(fresh.c_str(), servingName(tag, kLockSuffix).c_str()) == 0) {
       tag_ = tag;
       lock_fd_ = fd;
       return;
@@ -123,11 +128,10 @@ void SnapshotWatcher::removeEndedRuns() const {
   }
   for (auto& [tag, files] : files_of_tag) {
     if (tag == tag_) continue;
-    const std::string base = (directory / (prefix + tag)).string();
     std::vector<int> held;  // the ended run's locks, held while its files go
     bool running = false;
     for (const std::string_view suffix : {kLockSuffix, kNewLockSuffix}) {
-      const std::string lock = base + std::string(suffix);
+      const std::string lock = servingName(tag, suffix);
       if (const int fd = TryLock(lock); fd >= 0) {
         held.push_back(fd);
       } else if (!tag.empty() && std::filesystem::exists(lock, ignored)) {
@@ -154,7 +158,9 @@ std::optional<SnapshotWatcher::Identity> SnapshotWatcher::Stat(const std::string
 }
 
 db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<Identity>* linked) {
-  const std::string link = path_ + ".serving-" + tag_ + "-" + std::to_string(++links_made_);
+  std::string number = "-";
+  number += std::to_string(++links_made_);
+  const std::string link = servingName(tag_, number);
   ::unlink(link.c_str());
   if (::link(path_.c_str(), link.c_str()) != 0) {
     *linked = Stat(path_);

@@ -17,6 +17,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "pintag/db/snapshot.hpp"
 #include "replica/periodic_thread.hpp"
@@ -31,8 +32,8 @@ class SnapshotWatcher {
   /// Loads the snapshot at `path` (removing the serving links of runs that ended). Throws
   /// std::runtime_error when it is missing or not a whole snapshot, or its lock cannot be made.
   SnapshotWatcher(std::string path, OnLoaded on_loaded);
-  /// Stops the thread and releases the lock; the serving link stays (connections may still read
-  /// it) until a later start removes it.
+  /// Stops the thread, removes the serving link (connections still open keep reading the
+  /// unlinked file) and the lock file, and releases the lock.
   ~SnapshotWatcher();
   SnapshotWatcher(const SnapshotWatcher&) = delete;
   SnapshotWatcher& operator=(const SnapshotWatcher&) = delete;
@@ -55,6 +56,8 @@ class SnapshotWatcher {
     bool operator==(const Identity&) const = default;
   };
   static std::optional<Identity> Stat(const std::string& path);
+  /// `<path>.serving-<tag><suffix>`: every name of a tag's files (links "-N", ".lock").
+  std::string servingName(const std::string& tag, std::string_view suffix) const;
   /// Makes this process's tag and holds its lock file.
   void takeTag();
   /// Removes the lock file and lets the lock go.
