@@ -143,7 +143,7 @@ int Main(int argc, char** argv) {
         "frame,size_px,tilt_deg,hard,draw,truth,key,winner,lead,excess,distance,"
         "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
         "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused,"
-        "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass\n");
+        "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass,other_refusal\n");
   }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
@@ -173,7 +173,9 @@ int Main(int argc, char** argv) {
           // What the other checks say, the lead aside: what the lead rule is set from.
           reading::ModelReading any_lead = m;
           any_lead.decision.lead = 1e300;
-          const bool others_pass = reading::RefuseCodeword(any_lead).empty();
+          std::string other_refusal = reading::RefuseCodeword(any_lead);
+          const bool others_pass = other_refusal.empty();
+          std::replace(other_refusal.begin(), other_refusal.end(), ',', ';');
           std::replace(refused.begin(), refused.end(), ',', ';');
           if (!args.residuals.empty() && m.fit.ok) {
             char name[128];
@@ -190,7 +192,7 @@ int Main(int argc, char** argv) {
           if (csv != nullptr) {
             std::fprintf(csv,
                          "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
-                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d\n",
+                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s\n",
                          f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
                          d, truth.id, refused.empty() ? dec.winner->value() : -1,
                          dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
@@ -202,7 +204,7 @@ int Main(int argc, char** argv) {
                          refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
                          m.fit.chroma_correlation.x, m.fit.chroma_correlation.y,
                          dec.lead / reading::VarianceInflation(m.fit.chroma_correlation),
-                         others_pass ? 1 : 0);
+                         others_pass ? 1 : 0, other_refusal.c_str());
           }
           Count& c = at(f);
           if (!dec.winner) {
