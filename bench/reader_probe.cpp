@@ -120,7 +120,7 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--threads N] "
-                   "[--verbose]\n");
+                   "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
   }
@@ -130,10 +130,14 @@ int Main(int argc, char** argv) {
     return f.tagless() || kSizesPx[f.size_index] > args.max_size_px;
   });
   // [hard][size][tilt]
-  std::vector<Count> counts(2 * kSizeCount * kTiltCount);
+  const auto slot = [](int hard, int size_index, int tilt_index) {
+    return (static_cast<std::size_t>(hard) * kSizeCount + static_cast<std::size_t>(size_index)) *
+               kTiltCount +
+           static_cast<std::size_t>(tilt_index);
+  };
+  std::vector<Count> counts(slot(2, 0, 0));
   const auto at = [&](const FrameSpec& f) -> Count& {
-    return counts[static_cast<std::size_t>((f.hard * kSizeCount + f.size_index) * kTiltCount +
-                                           f.tilt_index)];
+    return counts[slot(f.hard ? 1 : 0, f.size_index, f.tilt_index)];
   };
   std::mutex mutex;
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
@@ -258,7 +262,7 @@ int Main(int argc, char** argv) {
       std::printf("  %3dpx ", kSizesPx[s]);
       int right = 0, all = 0, wrong = 0;
       for (int t = 0; t < kTiltCount; ++t) {
-        const Count& c = counts[static_cast<std::size_t>((hard * kSizeCount + s) * kTiltCount + t)];
+        const Count& c = counts[slot(hard, s, t)];
         std::printf(" %3d/%-2d/%-2d", c.right, c.wrong, c.unread);
         if (kTiltsDeg[t] <= 72) {
           right += c.right, all += c.right + c.wrong + c.unread, wrong += c.wrong;
