@@ -89,5 +89,31 @@ TEST(Grouping, AssignsBlobsToElementSlots) {
   EXPECT_TRUE(AssignElements(HomographyFromQuad(quad), blobs, {0, 1, 2, 3}).conflict);
 }
 
+TEST(Grouping, SmallRedSpecksAlongTheSquaresEdgeAreFringesNotConflicts) {
+  // Side 60 px: element blobs of diameter 12 px (area 113). Demosaicing leaves specks of false red
+  // on the square's black-to-white edge.
+  std::vector<RedBlob> blobs;
+  AddTag(&blobs, 100, 100, 60);
+  const Quad quad = {cv::Point2d(100, 100), {160, 100}, {160, 160}, {100, 160}};
+  const cv::Matx33d h = HomographyFromQuad(quad);
+  const auto with = [&](RedBlob extra) {
+    std::vector<RedBlob> all = blobs;
+    all.push_back(extra);
+    return AssignElements(h, all, {0, 1, 2, 3, 4});
+  };
+  const RedBlob speck_on_edge = Blob(100 + 0.47 * 60, 100 + 0.96 * 60, 3);  // area 7
+  const ElementAssignment fringe = with(speck_on_edge);
+  EXPECT_FALSE(fringe.conflict);
+  EXPECT_EQ(fringe.found, 4);
+  // The same speck in the middle of the square, far from its edge: red the format does not have.
+  EXPECT_TRUE(with(Blob(130, 130, 3)).conflict);
+  // On the edge but larger than a quarter of an element blob: not a speck.
+  EXPECT_TRUE(with(Blob(100 + 0.47 * 60, 100 + 0.96 * 60, 7)).conflict);
+  // Near the edge but inside an element's green ring (0.2 from its centre): not a fringe.
+  EXPECT_TRUE(with(Blob(100 + 0.25 * 60, 100 + 0.07 * 60, 3)).conflict);
+  // A speck at an element slot that already has its blob is two blobs in one slot.
+  EXPECT_TRUE(with(Blob(100 + 0.27 * 60, 100 + 0.27 * 60, 3)).conflict);
+}
+
 }  // namespace
 }  // namespace pintag::stage

@@ -28,8 +28,16 @@ struct ElementAssignment {
   bool conflict = false;  ///< two blobs at one slot, or a red blob elsewhere inside the square
 };
 
+/// A red blob inside the square is taken for a colour fringe of its edge rather than a conflict
+/// (AssignElements) when it lies within kFringeBand (tag units) of the edge and its area is at
+/// most kFringeAreaRatio of the smallest element blob's.
+inline constexpr double kFringeBand = 0.1;
+inline constexpr double kFringeAreaRatio = 0.25;
+
 /// Maps blobs through `tag_to_image` (unit square -> px) and assigns each to the element whose
-/// nominal centre it lies near (within `tolerance` tag units in u and in v).
+/// nominal centre it lies near (within `tolerance` tag units in u and in v). A blob inside the
+/// square on no element is a conflict, unless it is a colour fringe of the square's edge: within
+/// kFringeBand of it, outside every element's green ring, and small (kFringeAreaRatio).
 inline constexpr double kElementTolerance = 0.08;
 /// For a quad before corner refinement: a blurred square's thresholded outline can be several
 /// pixels off along a steeply tilted side (slots are 0.5 apart, so still unambiguous).
