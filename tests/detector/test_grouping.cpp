@@ -95,6 +95,12 @@ TEST(Grouping, SmallRedSpecksAlongTheSquaresEdgeAreFringesNotConflicts) {
   std::vector<RedBlob> blobs;
   AddTag(&blobs, 100, 100, 60);
   const Quad quad = {cv::Point2d(100, 100), {160, 100}, {160, 160}, {100, 160}};
+  // Around a 24 px square (element blobs of area 18) a 7 px speck is more than a quarter.
+  std::vector<RedBlob> small;
+  AddTag(&small, 300, 100, 24);
+  small.push_back(Blob(300 + 0.47 * 24, 100 + 0.96 * 24, 3));
+  const Quad small_quad = {cv::Point2d(300, 100), {324, 100}, {324, 124}, {300, 124}};
+  EXPECT_TRUE(AssignElements(HomographyFromQuad(small_quad), small, {0, 1, 2, 3, 4}).conflict);
   const cv::Matx33d h = HomographyFromQuad(quad);
   const auto with = [&](RedBlob extra) {
     std::vector<RedBlob> all = blobs;
@@ -105,10 +111,12 @@ TEST(Grouping, SmallRedSpecksAlongTheSquaresEdgeAreFringesNotConflicts) {
   const ElementAssignment fringe = with(speck_on_edge);
   EXPECT_FALSE(fringe.conflict);
   EXPECT_EQ(fringe.found, 4);
-  // The same speck in the middle of the square, far from its edge: red the format does not have.
+  EXPECT_FALSE(with(Blob(100 + 0.5 * 60, 100 + 0.92 * 60, 4.3)).conflict);  // area 14
+  // The same speck in the middle of the square, or 0.15 from its edge: red the format lacks.
   EXPECT_TRUE(with(Blob(130, 130, 3)).conflict);
-  // On the edge but larger than a quarter of an element blob: not a speck.
-  EXPECT_TRUE(with(Blob(100 + 0.47 * 60, 100 + 0.96 * 60, 7)).conflict);
+  EXPECT_TRUE(with(Blob(100 + 0.5 * 60, 100 + 0.85 * 60, 3)).conflict);
+  // On the edge but of more than 16 px (a sixth of an element blob here): not a speck.
+  EXPECT_TRUE(with(Blob(100 + 0.5 * 60, 100 + 0.92 * 60, 5)).conflict);  // area 19
   // Near the edge but inside an element's green ring (0.2 from its centre): not a fringe.
   EXPECT_TRUE(with(Blob(100 + 0.25 * 60, 100 + 0.07 * 60, 3)).conflict);
   // A speck at an element slot that already has its blob is two blobs in one slot.

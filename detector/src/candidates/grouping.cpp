@@ -137,11 +137,10 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
     }
     if (!placed) elsewhere.emplace_back(i, cv::Point2d(u, v));
   }
-  // Red where the format has none refuses the square, except a fringe: a blob within kFringeBand
-  // of the square's edge, outside every element's green ring, and at most kFringeAreaRatio of the
-  // smallest element blob. Demosaicing and lateral colour put specks of false red along the
-  // square's black-to-white edge; on tags of 60-80 px at 65-72 deg they were the only reason tags
-  // read at their true corners were refused.
+  // Red where the format has none refuses the square, except a fringe (grouping.hpp,
+  // kFringeBand): demosaicing and lateral colour put specks of false red along the square's
+  // black-to-white edge, often several; on tags of 60-80 px at 65-72 deg they were the only reason
+  // tags read at their true corners were refused.
   int least_element_area = 0;
   for (const int b : result.blob) {
     if (b < 0) continue;
@@ -154,9 +153,9 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
       on_element |= std::hypot(uv.x - c.x, uv.y - c.y) <= geometry::kGreenOuterRadius;
     }
     const double to_edge = std::min({uv.x, 1 - uv.x, uv.y, 1 - uv.y});
-    const bool fringe =
-        !on_element && to_edge <= kFringeBand &&
-        blobs[static_cast<std::size_t>(i)].area <= kFringeAreaRatio * least_element_area;
+    const int area = blobs[static_cast<std::size_t>(i)].area;
+    const bool fringe = !on_element && to_edge <= kFringeBand && area <= kFringeMaxAreaPx &&
+                        area <= kFringeAreaRatio * least_element_area;
     if (!fringe) result.conflict = true;
   }
   return result;

@@ -25,19 +25,22 @@ std::vector<BlobCluster> ClusterBlobs(const std::vector<RedBlob>& blobs, cv::Siz
 struct ElementAssignment {
   std::array<int, 4> blob{-1, -1, -1, -1};  ///< blob index at element slot e, or −1
   int found = 0;
-  bool conflict = false;  ///< two blobs at one slot, or a red blob elsewhere inside the square
+  /// Two blobs at one slot, or a red blob elsewhere inside the square (not a fringe of its edge).
+  bool conflict = false;
 };
 
 /// A red blob inside the square is taken for a colour fringe of its edge rather than a conflict
-/// (AssignElements) when it lies within kFringeBand (tag units) of the edge and its area is at
-/// most kFringeAreaRatio of the smallest element blob's.
+/// (AssignElements) when it lies within kFringeBand (tag units) of the edge, outside every
+/// element's green ring, and its area is at most kFringeAreaRatio of the smallest element blob's
+/// and at most kFringeMaxAreaPx: fringes are a few pixels whatever the tag's size.
 inline constexpr double kFringeBand = 0.1;
 inline constexpr double kFringeAreaRatio = 0.25;
+inline constexpr int kFringeMaxAreaPx = 16;
 
 /// Maps blobs through `tag_to_image` (unit square -> px) and assigns each to the element whose
 /// nominal centre it lies near (within `tolerance` tag units in u and in v). A blob inside the
-/// square on no element is a conflict, unless it is a colour fringe of the square's edge: within
-/// kFringeBand of it, outside every element's green ring, and small (kFringeAreaRatio).
+/// square on no element is a conflict, unless it is a colour fringe of the square's edge (see
+/// kFringeBand).
 inline constexpr double kElementTolerance = 0.08;
 /// For a quad before corner refinement: a blurred square's thresholded outline can be several
 /// pixels off along a steeply tilted side (slots are 0.5 apart, so still unambiguous).
