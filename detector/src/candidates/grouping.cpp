@@ -148,13 +148,10 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
     least_element_area = least_element_area == 0 ? area : std::min(least_element_area, area);
   }
   for (const auto& [i, uv] : elsewhere) {
-    bool on_element = false;
-    for (const geometry::Point c : geometry::kElementCentres) {
-      on_element |= std::hypot(uv.x - c.x, uv.y - c.y) <= geometry::kGreenOuterRadius;
-    }
+    const bool on_black = geometry::LocateCell(uv.x, uv.y).region == geometry::Region::kBlack;
     const double to_edge = std::min({uv.x, 1 - uv.x, uv.y, 1 - uv.y});
     const int area = blobs[static_cast<std::size_t>(i)].area;
-    const bool fringe = !on_element && to_edge <= kFringeBand && area <= kFringeMaxAreaPx &&
+    const bool fringe = on_black && to_edge <= kFringeBand && area <= kFringeMaxAreaPx &&
                         area <= kFringeAreaRatio * least_element_area;
     if (!fringe) result.conflict = true;
   }
