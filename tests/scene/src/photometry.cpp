@@ -143,19 +143,25 @@ void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
   }
 }
 
-/// Keeps one colour per pixel in an RGGB pattern (R at even rows and columns), then demosaics.
-void ApplyBayer(cv::Mat& frame) {
+/// Keeps one colour per pixel in the phase's Bayer pattern (0 RGGB, 1 GRBG, 2 GBRG, 3 BGGR: where
+/// R sits in each 2 × 2 cell), then demosaics bilinearly.
+void ApplyBayer(cv::Mat& frame, int phase) {
+  const int rx = phase == 1 || phase == 3 ? 1 : 0;
+  const int ry = phase >= 2 ? 1 : 0;
   cv::Mat mosaic(frame.size(), CV_8UC1);
   for (int y = 0; y < frame.rows; ++y) {
     const auto* src = frame.ptr<std::uint8_t>(y);
     auto* dst = mosaic.ptr<std::uint8_t>(y);
     for (int x = 0; x < frame.cols; ++x) {
-      const int channel = (y & 1) == 0 ? ((x & 1) == 0 ? 2 : 1) : ((x & 1) == 0 ? 1 : 0);  // BGR
+      const bool r_row = ((y ^ ry) & 1) == 0, r_col = ((x ^ rx) & 1) == 0;
+      const int channel = r_row ? (r_col ? 2 : 1) : (r_col ? 1 : 0);  // BGR index
       dst[x] = src[3 * x + channel];
     }
   }
-  // OpenCV names Bayer patterns by the second row's first two pixels: RGGB is "BayerBG".
-  cv::demosaicing(mosaic, frame, cv::COLOR_BayerBG2BGR);
+  // OpenCV names a pattern by the second row's second and third pixels: RGGB is "BayerBG".
+  constexpr std::array<int, 4> kCodes = {cv::COLOR_BayerBG2BGR, cv::COLOR_BayerGB2BGR,
+                                         cv::COLOR_BayerGR2BGR, cv::COLOR_BayerRG2BGR};
+  cv::demosaicing(mosaic, frame, kCodes[static_cast<std::size_t>(phase & 3)]);
 }
 
 /// A phone's processing in 8-bit sRGB: tone power, saturation and colour denoising on the
@@ -209,6 +215,11 @@ Photometry Photometry::Moderate(std::uint64_t seed) {
   p.chroma_denoise_px = rng.chance(0.5) ? rng.uniform(0.5, 1.5) : 0;
   p.sharpen = rng.uniform(0, 1.0);
   p.sharpen_sigma_px = rng.uniform(0.6, 1.2);
+  // Drawn last, so that every setting above is what it was before moderate light had a colour
+  // filter array (a phone always has one; the held-out phone demosaics edge-aware, this one
+  // bilinearly).
+  p.bayer = rng.chance(0.75);
+  p.bayer_phase = rng.below(4);
   return p;
 }
 
@@ -252,7 +263,7 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
     frame = ApplyLight<std::uint8_t>(frame, p);
   }
   if (p.noise_sigma > 0) ApplyNoise(frame, p.noise_sigma, rng);
-  if (p.bayer) ApplyBayer(frame);
+  if (p.bayer) ApplyBayer(frame, p.bayer_phase);
   ApplyProcessing(frame, p);
   if (p.jpeg_quality > 0) {
     std::vector<std::uint8_t> bytes;

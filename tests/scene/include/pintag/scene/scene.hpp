@@ -87,9 +87,10 @@ struct Photometry {
   double exposure = 1.0;          ///< overall gain
   double gradient_angle_deg = 0;  ///< direction in which the light falls off (image, clockwise)
   double motion_angle_deg = 0;    ///< direction of the motion blur (image, clockwise)
-  /// Sample through an RGGB colour filter array and demosaic bilinearly, as a cheap camera does:
+  /// Sample through a Bayer colour filter array and demosaic bilinearly, as a cheap camera does:
   /// colour fringes along sharp edges, colour noise.
   bool bayer = false;
+  int bayer_phase = 0;  ///< 0 … 3: RGGB, GRBG, GBRG, BGGR
   // A phone's processing after the sensor, in 8-bit sRGB before the JPEG (the tuning world's own;
   // the held-out world's phone is PhoneCapture, made differently):
   double tone_gamma = 1.0;        ///< power on code values / 255 (below 1 brightens)
@@ -100,10 +101,10 @@ struct Photometry {
   /// Random mild settings: gradient 0 … 0.3, any cast or none, defocus σ 0 … 1 px, motion blur
   /// 0 … 2 px half the time, noise σ 1 … 4, JPEG quality 75 … 95, exposure 0.8 … 1.15; tone gamma
   /// 0.85 … 1.15, saturation 0.95 … 1.3, colour denoising σ 0.5 … 1.5 px half the time, sharpening
-  /// 0 … 1 (σ 0.6 … 1.2 px).
+  /// 0 … 1 (σ 0.6 … 1.2 px); Bayer three times in four, in any of the four phases.
   static Photometry Moderate(std::uint64_t seed);
   /// Random harsh settings: gradient 0.3 … 0.6, a cast, defocus σ 0.8 … 2 px, motion blur
-  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer half the time;
+  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer (RGGB) half the time;
   /// tone gamma 0.75 … 1.25, saturation 0.85 … 1.4, colour denoising σ 0.5 … 2 px, sharpening
   /// 0.3 … 1.6 (σ 0.7 … 1.5 px).
   static Photometry Hard(std::uint64_t seed);
