@@ -104,9 +104,9 @@ struct Photometry {
   /// 0 … 1 (σ 0.6 … 1.2 px); Bayer three times in four, in any of the four phases.
   static Photometry Moderate(std::uint64_t seed);
   /// Random harsh settings: gradient 0.3 … 0.6, a cast, defocus σ 0.8 … 2 px, motion blur
-  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer (RGGB) half the time;
-  /// tone gamma 0.75 … 1.25, saturation 0.85 … 1.4, colour denoising σ 0.5 … 2 px, sharpening
-  /// 0.3 … 1.6 (σ 0.7 … 1.5 px).
+  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer (RGGB) half the
+  /// time; tone gamma 0.75 … 1.25, saturation 0.85 … 1.4, colour denoising σ 0.5 … 2 px,
+  /// sharpening 0.3 … 1.6 (σ 0.7 … 1.5 px).
   static Photometry Hard(std::uint64_t seed);
 };
 
