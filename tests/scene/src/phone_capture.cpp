@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "bayer.hpp"
 #include "srgb.hpp"
 
 namespace pintag::scene {
@@ -113,9 +114,6 @@ const std::vector<float>& NormalTable() {
 /// One colour per pixel in the phase's Bayer pattern, with shot and read noise, as 12-bit values;
 /// then OpenCV's edge-aware demosaic (12-bit BGR codes, 0 … 4095).
 cv::Mat Sense(const cv::Mat& linear, const PhoneCapture& p, Rng& rng) {
-  // Phase 0 RGGB, 1 GRBG, 2 GBRG, 3 BGGR: where R sits in the 2 × 2 cell (x, y).
-  const int rx = p.bayer_phase == 1 || p.bayer_phase == 3 ? 1 : 0;
-  const int ry = p.bayer_phase >= 2 ? 1 : 0;
   const std::vector<float>& normal = NormalTable();
   const auto read_variance = static_cast<float>(p.read_noise * p.read_noise);
   const auto shot = static_cast<float>(p.shot_noise);
@@ -125,20 +123,15 @@ cv::Mat Sense(const cv::Mat& linear, const PhoneCapture& p, Rng& rng) {
     auto* dst = raw.ptr<std::uint16_t>(y);
     std::uint64_t bits = 0;
     for (int x = 0; x < linear.cols; ++x) {
-      const bool r_row = ((y ^ ry) & 1) == 0, r_col = ((x ^ rx) & 1) == 0;
-      const int channel = r_row ? (r_col ? 2 : 1) : (r_col ? 1 : 0);  // BGR index
-      const float v = src[3 * x + channel];
+      const float v = src[3 * x + detail::BayerChannel(x, y, p.bayer_phase)];
       const float sigma = std::sqrt(read_variance + shot * std::max(0.0f, v));
       if (x % 4 == 0) bits = rng.next();  // four 16-bit draws per 64 bits
       const float noisy = v + sigma * normal[(bits >> (16 * (x % 4))) & 0xFFFFU];
       dst[x] = static_cast<std::uint16_t>(std::clamp(noisy * 4095.0f + 0.5f, 0.0f, 4095.0f));
     }
   }
-  // OpenCV names a pattern by the second row's second and third pixels.
-  constexpr std::array<int, 4> kCodes = {cv::COLOR_BayerBG2BGR_EA, cv::COLOR_BayerGB2BGR_EA,
-                                         cv::COLOR_BayerGR2BGR_EA, cv::COLOR_BayerRG2BGR_EA};
   cv::Mat demosaiced;
-  cv::demosaicing(raw, demosaiced, kCodes[static_cast<std::size_t>(p.bayer_phase & 3)]);
+  cv::demosaicing(raw, demosaiced, detail::BayerDemosaicCode(p.bayer_phase, /*edge_aware=*/true));
   return demosaiced;
 }
 

@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "bayer.hpp"
 #include "srgb.hpp"
 
 namespace pintag::scene {
@@ -143,25 +144,15 @@ void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
   }
 }
 
-/// Keeps one colour per pixel in the phase's Bayer pattern (0 RGGB, 1 GRBG, 2 GBRG, 3 BGGR: where
-/// R sits in each 2 × 2 cell), then demosaics bilinearly.
+/// Keeps one colour per pixel in the phase's Bayer pattern (bayer.hpp), then demosaics bilinearly.
 void ApplyBayer(cv::Mat& frame, int phase) {
-  const int rx = phase == 1 || phase == 3 ? 1 : 0;
-  const int ry = phase >= 2 ? 1 : 0;
   cv::Mat mosaic(frame.size(), CV_8UC1);
   for (int y = 0; y < frame.rows; ++y) {
     const auto* src = frame.ptr<std::uint8_t>(y);
     auto* dst = mosaic.ptr<std::uint8_t>(y);
-    for (int x = 0; x < frame.cols; ++x) {
-      const bool r_row = ((y ^ ry) & 1) == 0, r_col = ((x ^ rx) & 1) == 0;
-      const int channel = r_row ? (r_col ? 2 : 1) : (r_col ? 1 : 0);  // BGR index
-      dst[x] = src[3 * x + channel];
-    }
+    for (int x = 0; x < frame.cols; ++x) dst[x] = src[3 * x + detail::BayerChannel(x, y, phase)];
   }
-  // OpenCV names a pattern by the second row's second and third pixels: RGGB is "BayerBG".
-  constexpr std::array<int, 4> kCodes = {cv::COLOR_BayerBG2BGR, cv::COLOR_BayerGB2BGR,
-                                         cv::COLOR_BayerGR2BGR, cv::COLOR_BayerRG2BGR};
-  cv::demosaicing(mosaic, frame, kCodes[static_cast<std::size_t>(phase & 3)]);
+  cv::demosaicing(mosaic, frame, detail::BayerDemosaicCode(phase, /*edge_aware=*/false));
 }
 
 /// A phone's processing in 8-bit sRGB: tone power, saturation and colour denoising on the
