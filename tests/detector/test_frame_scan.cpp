@@ -204,5 +204,80 @@ TEST(FrameScan, NarrowFramesGiveTheDarkImagesOfTheRule) {
   }
 }
 
+// Every (G, B) at the edge of each level: R one below the least red R of the main level, at it,
+// and the same for the faint level (clamped to 0 … 255), so every table entry decides a pixel. On
+// an AVX2 machine the gathered lookups and the one-by-one lookups must both give the rule; on
+// others both requests take the one-by-one path.
+TEST(FrameScan, EveryTableEntryGivesTheRuleWithEitherLookup) {
+  const RedTable& main_table = RedTable::For(kMainLevel);
+  for (const RednessThresholds& faint : kFaintLevels) {
+    const RedTable& faint_table = RedTable::For(faint);
+    cv::Mat bgr(1024, 256, CV_8UC3);  // row 4 G + k: B along x, k picks which R
+    for (int g = 0; g < 256; ++g) {
+      for (int k = 0; k < 4; ++k) {
+        for (int b = 0; b < 256; ++b) {
+          const int index = (g << 8) | b;
+          const int least = (k < 2 ? main_table : faint_table).leastRedR()[index];
+          const int r = std::clamp(least - 1 + k % 2, 0, 255);
+          bgr.at<cv::Vec3b>(4 * g + k, b) = {static_cast<std::uint8_t>(b),
+                                             static_cast<std::uint8_t>(g),
+                                             static_cast<std::uint8_t>(r)};
+        }
+      }
+    }
+    for (const RedLookups lookups : {RedLookups::kFastest, RedLookups::kOneByOne}) {
+      FrameScanRequest request;
+      request.red = kMainLevel;
+      request.faint = faint;
+      request.lookups = lookups;
+      const FrameScan scan = ScanFrame(bgr, request);
+      const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
+      int red_pixels = 0, faint_pixels = 0;
+      for (int y = 0; y < bgr.rows; ++y) {
+        for (int x = 0; x < bgr.cols; ++x) {
+          const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+          const bool is_red = IsRedPixel(p[2], p[1], p[0], kMainLevel);
+          const bool is_faint = IsRedPixel(p[2], p[1], p[0], faint);
+          ASSERT_EQ(red.at<std::uint8_t>(y, x) != 0, is_red)
+              << x << ", " << y << (lookups == RedLookups::kFastest ? " fastest" : " one by one");
+          ASSERT_EQ(faint_red.at<std::uint8_t>(y, x) != 0, is_faint)
+              << x << ", " << y << (lookups == RedLookups::kFastest ? " fastest" : " one by one");
+          red_pixels += is_red;
+          faint_pixels += is_faint;
+        }
+      }
+      // Half of the rows sit at a least R: tens of thousands of pixels of each level.
+      EXPECT_GT(red_pixels, 10000);
+      EXPECT_GT(faint_pixels, 10000);
+    }
+  }
+  RecordProperty("gathers_red_lookups", GathersRedLookups() ? "yes" : "no");
+}
+
+// Random frames of many widths, with every output asked for: the two lookups give the same runs
+// and dark images.
+TEST(FrameScan, BothLookupsGiveTheSameScan) {
+  for (const int width : {15, 16, 17, 47, 48, 300, 1021}) {
+    cv::Mat bgr(9, width, CV_8UC3);
+    cv::RNG rng(static_cast<std::uint64_t>(width) + 100);
+    rng.fill(bgr, cv::RNG::UNIFORM, 0, 256);
+    bgr(cv::Rect(0, 2, width, 3)).setTo(cv::Scalar(40, 70, 150));  // red rows, end to end
+    for (const RednessThresholds& faint : kFaintLevels) {
+      FrameScanRequest request;
+      request.red = kMainLevel;
+      request.faint = faint;
+      request.dark_half = true;
+      const FrameScan fastest = ScanFrame(bgr, request);
+      request.lookups = RedLookups::kOneByOne;
+      const FrameScan one_by_one = ScanFrame(bgr, request);
+      EXPECT_TRUE(SameRuns(fastest.red, one_by_one.red)) << width;
+      EXPECT_TRUE(SameRuns(fastest.faint, one_by_one.faint)) << width;
+      EXPECT_EQ(cv::norm(fastest.min_channel, one_by_one.min_channel, cv::NORM_INF), 0) << width;
+      EXPECT_EQ(cv::norm(fastest.dark_half, one_by_one.dark_half, cv::NORM_INF), 0) << width;
+      ExpectDarkImagesOfTheRule(bgr, one_by_one);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pintag::stage

@@ -13,11 +13,22 @@
 
 namespace pintag::stage {
 
+/// How the red tables are read. The results are the same; kFastest gathers 16 entries at a time
+/// with AVX2 where the CPU has it (checked at run time: the build targets plain x86-64).
+enum class RedLookups {
+  kFastest,
+  kOneByOne,  ///< one table read per pixel, on every CPU (tests compare the two)
+};
+
+/// Whether kFastest gathers on this CPU.
+bool GathersRedLookups();
+
 struct FrameScanRequest {
   RednessThresholds red;                   ///< the main pass
   std::optional<RednessThresholds> faint;  ///< the faint pass; none: not scanned
   bool min_channel = false;                ///< also keep FrameScan::min_channel
   bool dark_half = false;                  ///< also build FrameScan::dark_half
+  RedLookups lookups = RedLookups::kFastest;
 };
 
 struct FrameScan {

@@ -39,6 +39,9 @@ class RedTable {
   /// it is not red, which a frame scan can test on many pixels at once before looking any up.
   int leastRedLead() const { return least_red_lead_; }
 
+  /// The table itself, 65,536 entries: the least red R (256: none) at index (G << 8) | B.
+  const std::uint16_t* leastRedR() const { return least_red_r_.data(); }
+
  private:
   explicit RedTable(const RednessThresholds& thresholds);
   std::vector<std::uint16_t> least_red_r_;  // least red R (256: none), by (G << 8) | B
