@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "candidates/frame_scan.hpp"
 #include "candidates/quads.hpp"
@@ -252,6 +253,47 @@ TEST(FrameScan, EveryTableEntryGivesTheRuleWithEitherLookup) {
     }
   }
   RecordProperty("gathers_red_lookups", GathersRedLookups() ? "yes" : "no");
+}
+
+// The prefilter's boundary: a red pixel whose lead 4 (R − G) + (B − G) is exactly the least of its
+// level, alone in a block of grey (lead 0), at each of the 16 places of a block, must be found by
+// both lookups, at the main level alone and as the faint level of a scan.
+TEST(FrameScan, APixelAtTheLeastLeadAloneInItsBlockIsRed) {
+  std::vector<RednessThresholds> levels = {kMainLevel, kFaintLevels[0], kFaintLevels[1]};
+  for (const RednessThresholds& level : levels) {
+    const RedTable& table = RedTable::For(level);
+    cv::Vec3b at_least{};  // BGR
+    bool found = false;
+    for (int index = 0; index < (1 << 16) && !found; ++index) {
+      const int r = table.leastRedR()[index], g = index >> 8, b = index & 0xFF;
+      if (r < 256 && 4 * (r - g) + (b - g) == table.leastRedLead()) {
+        at_least = {static_cast<std::uint8_t>(b), static_cast<std::uint8_t>(g),
+                    static_cast<std::uint8_t>(r)};
+        found = true;
+      }
+    }
+    ASSERT_TRUE(found) << level.min_a << ", " << level.min_b;
+    ASSERT_TRUE(IsRedPixel(at_least[2], at_least[1], at_least[0], level));
+    cv::Mat bgr(16, 64, CV_8UC3, cv::Scalar(128, 128, 128));
+    for (int k = 0; k < 16; ++k) bgr.at<cv::Vec3b>(k, 16 + k) = at_least;  // row k: place k
+    for (const RedLookups lookups : {RedLookups::kFastest, RedLookups::kOneByOne}) {
+      FrameScanRequest alone;
+      alone.red = level;
+      alone.lookups = lookups;
+      FrameScanRequest as_faint = alone;
+      as_faint.red = kMainLevel;
+      as_faint.faint = level;
+      for (const RedRuns& runs : {ScanFrame(bgr, alone).red, ScanFrame(bgr, as_faint).faint}) {
+        ASSERT_EQ(runs.runs.size(), 16U) << level.min_a << ", " << level.min_b;
+        for (int k = 0; k < 16; ++k) {
+          const RedRun& run = runs.runs[static_cast<std::size_t>(k)];
+          EXPECT_EQ(run.y, k);
+          EXPECT_EQ(run.x0, 16 + k);
+          EXPECT_EQ(run.x1, 16 + k);
+        }
+      }
+    }
+  }
 }
 
 // Random frames of many widths, with every output asked for: the two lookups give the same runs
