@@ -70,6 +70,28 @@ void ExpectDarkImagesOfTheRule(const cv::Mat& bgr, const FrameScan& scan) {
   }
 }
 
+// The scan's runs of both levels against the per-pixel rule, pixel by pixel; `counts` gets how many
+// pixels are red at each level. `path` names the lookups in a failure.
+struct LevelCounts {
+  int red = 0;
+  int faint = 0;
+};
+void ExpectRunsOfTheRule(const cv::Mat& bgr, const FrameScan& scan, const RednessThresholds& faint,
+                         const char* path, LevelCounts* counts) {
+  const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
+      const bool is_red = IsRedPixel(p[2], p[1], p[0], kMainLevel);
+      const bool is_faint = IsRedPixel(p[2], p[1], p[0], faint);
+      ASSERT_EQ(red.at<std::uint8_t>(y, x) != 0, is_red) << x << ", " << y << " " << path;
+      ASSERT_EQ(faint_red.at<std::uint8_t>(y, x) != 0, is_faint) << x << ", " << y << " " << path;
+      counts->red += is_red;
+      counts->faint += is_faint;
+    }
+  }
+}
+
 TEST(FrameScan, BothRedLevelsAreWhatTheirOwnPassesGive) {
   const cv::Mat bgr = NoisyFrame();
   const RednessThresholds main = kMainLevel;
@@ -174,21 +196,10 @@ TEST(FrameScan, RunsAroundSkippedBlocksAreThoseOfTheRule) {
   for (const RednessThresholds& faint : kFaintLevels) {
     const FrameScan scan = ScanBothLevels(bgr, faint, /*dark_images=*/true);
     ExpectDarkImagesOfTheRule(bgr, scan);
-    const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
-    int red_pixels = 0, faint_pixels = 0;
-    for (int y = 0; y < bgr.rows; ++y) {
-      for (int x = 0; x < bgr.cols; ++x) {
-        const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
-        const bool is_red = IsRedPixel(p[2], p[1], p[0], kMainLevel);
-        const bool is_faint = IsRedPixel(p[2], p[1], p[0], faint);
-        ASSERT_EQ(red.at<std::uint8_t>(y, x) != 0, is_red) << x << ", " << y;
-        ASSERT_EQ(faint_red.at<std::uint8_t>(y, x) != 0, is_faint) << x << ", " << y;
-        red_pixels += is_red;
-        faint_pixels += is_faint;
-      }
-    }
-    EXPECT_GT(red_pixels, 0);
-    EXPECT_GT(faint_pixels, red_pixels) << "faint b* >= " << faint.min_b;
+    LevelCounts counts;
+    ASSERT_NO_FATAL_FAILURE(ExpectRunsOfTheRule(bgr, scan, faint, "", &counts));
+    EXPECT_GT(counts.red, 0);
+    EXPECT_GT(counts.faint, counts.red) << "faint b* >= " << faint.min_b;
   }
 }
 
@@ -231,25 +242,13 @@ TEST(FrameScan, EveryTableEntryGivesTheRuleWithEitherLookup) {
       request.red = kMainLevel;
       request.faint = faint;
       request.lookups = lookups;
-      const FrameScan scan = ScanFrame(bgr, request);
-      const cv::Mat red = RunsToMask(scan.red), faint_red = RunsToMask(scan.faint);
-      int red_pixels = 0, faint_pixels = 0;
-      for (int y = 0; y < bgr.rows; ++y) {
-        for (int x = 0; x < bgr.cols; ++x) {
-          const cv::Vec3b& p = bgr.at<cv::Vec3b>(y, x);
-          const bool is_red = IsRedPixel(p[2], p[1], p[0], kMainLevel);
-          const bool is_faint = IsRedPixel(p[2], p[1], p[0], faint);
-          ASSERT_EQ(red.at<std::uint8_t>(y, x) != 0, is_red)
-              << x << ", " << y << (lookups == RedLookups::kFastest ? " fastest" : " one by one");
-          ASSERT_EQ(faint_red.at<std::uint8_t>(y, x) != 0, is_faint)
-              << x << ", " << y << (lookups == RedLookups::kFastest ? " fastest" : " one by one");
-          red_pixels += is_red;
-          faint_pixels += is_faint;
-        }
-      }
+      LevelCounts counts;
+      ASSERT_NO_FATAL_FAILURE(
+          ExpectRunsOfTheRule(bgr, ScanFrame(bgr, request), faint,
+                              lookups == RedLookups::kFastest ? "fastest" : "one by one", &counts));
       // Half of the rows sit at a least R: tens of thousands of pixels of each level.
-      EXPECT_GT(red_pixels, 10000);
-      EXPECT_GT(faint_pixels, 10000);
+      EXPECT_GT(counts.red, 10000);
+      EXPECT_GT(counts.faint, 10000);
     }
   }
   RecordProperty("gathers_red_lookups", GathersRedLookups() ? "yes" : "no");
