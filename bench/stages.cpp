@@ -199,7 +199,7 @@ BENCHMARK(BM_Stage1_FindRedRuns_Tagless)->Unit(benchmark::kMillisecond);
 // dark image), against two FindRedRuns above. The red tables read 16 entries at a time where the
 // CPU has AVX2 (label "gathered"); _OneByOne is the same pass reading one entry per pixel, as on
 // CPUs without it.
-void ScanFrame(benchmark::State& state, stage::RedLookups lookups) {
+void TimeScanFrame(benchmark::State& state, stage::RedLookups lookups) {
   const Fixture& f = Get();
   stage::FrameScanRequest request;
   request.red = {f.options.red_min_a, f.options.red_min_b};
@@ -211,11 +211,11 @@ void ScanFrame(benchmark::State& state, stage::RedLookups lookups) {
   state.SetLabel(gathered ? "gathered" : "one by one");
 }
 void BM_Stage1_ScanFrame(benchmark::State& state) {
-  ScanFrame(state, stage::RedLookups::kFastest);
+  TimeScanFrame(state, stage::RedLookups::kFastest);
 }
 BENCHMARK(BM_Stage1_ScanFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 void BM_Stage1_ScanFrame_OneByOne(benchmark::State& state) {
-  ScanFrame(state, stage::RedLookups::kOneByOne);
+  TimeScanFrame(state, stage::RedLookups::kOneByOne);
 }
 BENCHMARK(BM_Stage1_ScanFrame_OneByOne)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 

@@ -161,7 +161,9 @@ __attribute__((target("avx2"))) inline unsigned BelowBits(__m256i r, __m256i lo,
       _mm_packs_epi16(_mm256_castsi256_si128(below), _mm256_extracti128_si256(below, 1))));
 }
 
-// The same masks with the 16 pixels' table entries gathered at once.
+// The same masks with the 16 pixels' table entries gathered at once. It repeats the block loop of
+// MaskBlocksOneByOne rather than sharing it: a target("avx2") function cannot be inlined into one
+// built for plain x86-64, and a call per block would cost more than the loop.
 template <bool kFaint, bool kMinChannel>
 __attribute__((target("avx2"))) void MaskBlocksGathered(const std::uint8_t* row, int blocks,
                                                         const RowMasks& m) {
@@ -198,14 +200,6 @@ __attribute__((target("avx2"))) void MaskBlocksGathered(const std::uint8_t* row,
   }
 }
 
-bool CpuGathers() {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  return avx2;
-}
-#else
-bool CpuGathers() {
-  return false;
-}
 #endif
 
 // One row: its full blocks by masks, then the pixels left over one at a time.
@@ -294,7 +288,12 @@ void ScanRows(const cv::Mat& bgr, const RedTable& red, const RedTable* faint, bo
 }  // namespace
 
 bool GathersRedLookups() {
-  return CpuGathers();
+#if PINTAG_GATHER_RED_LOOKUPS
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  return avx2;
+#else
+  return false;
+#endif
 }
 
 FrameScan ScanFrame(const cv::Mat& bgr, const FrameScanRequest& request) {
@@ -313,7 +312,7 @@ FrameScan ScanFrame(const cv::Mat& bgr, const FrameScanRequest& request) {
   if (request.dark_half) scan.dark_half.create(bgr.rows / 2, bgr.cols / 2, CV_8U);
   const bool nested = request.faint && request.faint->min_a <= request.red.min_a &&
                       request.faint->min_b <= request.red.min_b;
-  const bool gather = request.lookups == RedLookups::kFastest && CpuGathers();
+  const bool gather = request.lookups == RedLookups::kFastest && GathersRedLookups();
   if (faint == nullptr) {
     dark ? ScanRows<false, false, true>(bgr, red, faint, gather, &scan)
          : ScanRows<false, false, false>(bgr, red, faint, gather, &scan);
