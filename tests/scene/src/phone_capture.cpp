@@ -261,7 +261,8 @@ void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& p, Rng& rng) {
     cv::filter2D(linear, linear, -1, MotionKernel(p.motion_px, p.motion_angle_deg),
                  cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
   }
-  frame = JpegRoundTrip(Process(Sense(linear, p, rng), p), p.jpeg_quality);
+  frame = Process(Sense(linear, p, rng), p);
+  if (p.jpeg_quality > 0) frame = JpegRoundTrip(frame, p.jpeg_quality);
 }
 
 }  // namespace detail

@@ -130,7 +130,7 @@ struct PhoneCapture {
   double saturation = 1.0;                ///< chroma gain in YCbCr
   double sharpen_amount = 0;              ///< unsharp mask on luma, 0 = none
   double sharpen_sigma_px = 1.0;          ///< its Gaussian
-  int jpeg_quality = 90;                  ///< 1 … 100, always 4:2:0
+  int jpeg_quality = 90;                  ///< 1 … 100, always 4:2:0; 0: no JPEG (analysis only)
   /// Mild: exposure 0.8 … 1.15, falloff ≤ 0.25, a mild cast or none, defocus σ 0.2 … 0.8 px, a
   /// little motion blur now and then, noise about 1 … 3 code values at mid-grey, quality 75 … 95,
   /// light sharpening.
