@@ -1,13 +1,14 @@
 // pintag_genie_probe: how many small tags any reader could read. For each tagged frame of the
 // sweep (tags up to --max-size px) it asks an ideal reader — one told the pose, the print, the
 // light, the optics and the phone's processing, everything but the key — which key the photo
-// holds. That reader renders the frame without sensor noise once for the true key and once for
-// every key that differs from it in one or two of the 15 data bits (the codewords nearest the
-// truth), and picks the rendering nearest the photo in the colour samples the JPEG kept (luma per
-// pixel, Cb and Cr per 2 x 2 block), each channel in units of its own noise. Where even it cannot
-// tell the truth from a neighbour, the photo does not hold the key; where it can and PinTag does
-// not, the loss is the detector's. Beside it, per frame: the full detector, the model reader on
-// the true corners, and ArUco on the same pose.
+// holds. That reader renders the frame without sensor noise and without the JPEG (whose
+// quantisation no reader knows beforehand, so it meets it as noise), once for the true key and
+// once for every key that differs from it in one or two of the 15 data bits (the codewords
+// nearest the truth), and picks the rendering nearest the photo in the colour samples the JPEG kept
+// (luma per pixel, Cb and Cr per 2 x 2 block), each channel in units of its own noise. Where even
+// it cannot tell the truth from a neighbour, the photo does not hold the key; where it can and
+// PinTag does not, the loss is the detector's. Beside it, per frame: the full detector, the model
+// reader on the true corners, and ArUco on the same pose.
 //
 // With --mismatch (tuning world only) it asks instead what the model reader fails to explain when
 // there is nothing to explain but the scene: it reads each tag as photographed, on a rendering
@@ -21,7 +22,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
-#include <mutex>
 #include <span>
 #include <string>
 #include <thread>
@@ -103,11 +103,12 @@ double NoiseUnits(const Samples& photo, const Samples& rendering, const NoiseVar
              v.chroma;
 }
 
-/// Keys whose 15 data bits differ from `key`'s in one or two places.
+/// Keys whose 15 data bits differ from `key`'s in one place (first) or two.
 std::vector<int> NearestKeys(int key) {
   std::vector<int> keys;
+  keys.reserve(120);
+  for (int i = 0; i < 15; ++i) keys.push_back(key ^ (1 << i));
   for (int i = 0; i < 15; ++i) {
-    keys.push_back(key ^ (1 << i));
     for (int j = i + 1; j < 15; ++j) keys.push_back(key ^ (1 << i) ^ (1 << j));
   }
   return keys;
