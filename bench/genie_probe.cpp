@@ -213,7 +213,7 @@ struct TagResult {
   bool detector_wrong = false;  ///< … or a wrong one where the tag is
   int reader = 0;               ///< model reader on the true corners: 1 right, -1 wrong, 0 none
   double reader_lead = 0;
-  double reader_luma_sigma = 0, reader_chroma_sigma = 0;  ///< its noise units, 8-bit code values
+  double reader_luma_sigma = 0, reader_chroma_sigma = 0;  ///< its noise units × 255 (luma linear)
   bool aruco = false;                                     ///< ArUco found the same pose's marker
   double genie_margin = 0;  ///< least (neighbour − truth) in noise units; < 0: a neighbour won
   int genie_rival = -1;     ///< that neighbour
@@ -254,7 +254,8 @@ void Judge(const FrameSpec& f, const scene::Camera& camera, int rivals, MarkerDe
   r.luma_sigma = std::sqrt(noise.luma);
   r.chroma_sigma = std::sqrt(noise.chroma);
   const double truth_units = NoiseUnits(observed, clean_truth, noise);
-  r.genie_margin = std::numeric_limits<double>::infinity();
+  // No rival rendered (--rivals 0): no margin, and the genie counts nothing.
+  r.genie_margin = rivals > 0 ? std::numeric_limits<double>::infinity() : std::nan("");
   const std::vector<int> keys = NearestKeys(truth.id);
   for (const int key : std::span(keys).first(static_cast<std::size_t>(rivals))) {
     FrameSpec rival_frame = f;
@@ -280,6 +281,10 @@ int RunGenie(const Args& args, const std::vector<FrameSpec>& frames, const scene
 
   if (!args.csv.empty()) {
     FILE* csv = std::fopen(args.csv.c_str(), "w");
+    if (csv == nullptr) {
+      std::fprintf(stderr, "pintag_genie_probe: cannot write %s\n", args.csv.c_str());
+      return 1;
+    }
     std::fprintf(csv,
                  "frame,size_px,tilt_deg,hard,truth,detected,detector_wrong,reader,reader_lead,"
                  "reader_luma_sigma,reader_chroma_sigma,aruco,genie_margin,genie_rival,luma_sigma,"
@@ -356,6 +361,10 @@ int RunMismatch(const Args& args, const std::vector<FrameSpec>& frames,
   });
   if (!args.csv.empty()) {
     FILE* csv = std::fopen(args.csv.c_str(), "w");
+    if (csv == nullptr) {
+      std::fprintf(stderr, "pintag_genie_probe: cannot write %s\n", args.csv.c_str());
+      return 1;
+    }
     std::fprintf(csv, "frame,size_px,tilt_deg,hard,bayer");
     for (int stage = 0; stage < kStages; ++stage)
       std::fprintf(csv, ",luma%d,chroma%d", stage, stage);
