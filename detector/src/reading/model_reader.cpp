@@ -281,10 +281,17 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
   const Placement placed(samples, fit.corners);
   fit.luma_blur = SearchLumaBlur(placed, /*shape=*/true, fit.luma_blur, &fit.evaluations);
   fit.chroma_blur = SearchChromaBlur(placed, &fit.evaluations);
-  model.luma = AccumulateLuma(placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
-                              StrideFor(samples.luma.size(), kFinalSamples));
+  const LumaRows luma_rows =
+      GatherLumaRows(placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
+                     StrideFor(samples.luma.size(), kFinalSamples));
+  FreeFit<1> free_luma = SolveFree(AccumulateLuma(luma_rows));
+  if (free_luma.ok) {
+    const std::vector<double> contrast = SampleContrast(luma_rows, free_luma.colour[0]);
+    fit.luma_edge_noise = FitEdgeNoise(luma_rows, contrast, free_luma.colour[0]);
+    model.luma = AccumulateLuma(luma_rows, EdgeNoiseWeights(fit.luma_edge_noise, contrast));
+    free_luma = SolveFree(model.luma);
+  }
   model.chroma = AccumulateChroma(placed.coverage, samples.chroma, MakeKernel(fit.chroma_blur));
-  const FreeFit<1> free_luma = SolveFree(model.luma);
   const FreeFit<2> free_chroma = SolveFree(model.chroma);
   if (!free_luma.ok || !free_chroma.ok) {
     *error = "model fit failed";

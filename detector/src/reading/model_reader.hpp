@@ -13,6 +13,7 @@
 #include <string>
 
 #include "reading/codeword_search.hpp"
+#include "reading/edge_noise.hpp"
 #include "reading/psf.hpp"
 #include "reading/region_system.hpp"
 #include "reading/residual_correlation.hpp"
@@ -28,7 +29,11 @@ struct ModelFit {
   double corner_shift = 0;  ///< largest corner movement of the refinement, px
   LumaBlur luma_blur;
   ChromaBlur chroma_blur;
-  double luma_noise = 0;    ///< residual standard deviation of the free model, luminance (0 … 1)
+  /// How the luminance residual grows across edges; the luma samples are weighted by it
+  /// (reading/edge_noise.hpp).
+  EdgeNoise luma_edge_noise;
+  double luma_noise = 0;    ///< residual standard deviation of the free model, luminance (0 … 1),
+                            ///< of a sample inside one region
   double chroma_noise = 0;  ///< … Cb and Cr together
   std::size_t luma_samples = 0;
   std::size_t chroma_samples = 0;

@@ -1,6 +1,7 @@
 #include "reading/region_system.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace pintag::reading {
@@ -25,7 +26,7 @@ void AddSample(RegionSystem<kChannels>& system, const SampleWeights& w,
     const double wa = w.weight[static_cast<std::size_t>(ra)];
     for (std::size_t b = a; b < touched.size(); ++b) {
       const int rb = touched[b];
-      system.ata[static_cast<std::size_t>(std::min(ra, rb) * kModelRegions + std::max(ra, rb))] +=
+      system.ata[AtaIndex(std::min(ra, rb), std::max(ra, rb))] +=
           wa * w.weight[static_cast<std::size_t>(rb)];
     }
     for (int ch = 0; ch < kChannels; ++ch) {
@@ -44,8 +45,7 @@ template <int kChannels>
 void Symmetrise(RegionSystem<kChannels>& system) {
   for (int a = 0; a < kModelRegions; ++a) {
     for (int b = 0; b < a; ++b) {
-      system.ata[static_cast<std::size_t>(a * kModelRegions + b)] =
-          system.ata[static_cast<std::size_t>(b * kModelRegions + a)];
+      system.ata[AtaIndex(a, b)] = system.ata[AtaIndex(b, a)];
     }
   }
 }
@@ -68,6 +68,44 @@ LumaSystem AccumulateLuma(const RegionCoverage& coverage, const std::vector<Luma
     if (by_position && PositionHash(s.x, s.y) % stride != 0) continue;
     coverage.blurred(kernel, s.x, s.y, w);
     AddSample<1>(system, w, {s.value});
+    w.clear();
+  }
+  Symmetrise(system);
+  return system;
+}
+
+void LumaRows::add(double value, const SampleWeights& weights) {
+  values_.push_back(value);
+  for (const int region : weights.touched) {
+    terms_.push_back({region, weights.weight[static_cast<std::size_t>(region)]});
+  }
+  first_.push_back(terms_.size());
+}
+
+LumaRows GatherLumaRows(const RegionCoverage& coverage, const std::vector<LumaSample>& samples,
+                        const Kernel& kernel, std::size_t stride) {
+  LumaRows rows;
+  SampleWeights w;
+  stride = std::max<std::size_t>(1, stride);
+  for (std::size_t i = 0; i < samples.size(); i += stride) {
+    coverage.blurred(kernel, samples[i].x, samples[i].y, w);
+    rows.add(samples[i].value, w);
+    w.clear();
+  }
+  return rows;
+}
+
+LumaSystem AccumulateLuma(const LumaRows& rows, std::span<const double> weights) {
+  LumaSystem system;
+  SampleWeights w;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    // Weighting a row by g is scaling its coverage and its value by √g.
+    const double scale = weights.empty() ? 1.0 : std::sqrt(weights[i]);
+    for (const LumaRows::Term& t : rows.terms(i)) {
+      w.weight[static_cast<std::size_t>(t.region)] = t.weight * scale;
+      w.touched.push_back(t.region);
+    }
+    AddSample<1>(system, w, {rows.value(i) * scale});
     w.clear();
   }
   Symmetrise(system);

@@ -4,12 +4,18 @@
 // (free colours, the six-colour palette, each codeword) is then solved from them alone.
 
 #include <array>
+#include <span>
 #include <vector>
 
 #include "reading/region_coverage.hpp"
 #include "reading/tag_samples.hpp"
 
 namespace pintag::reading {
+
+/// Where AᵀA's entry (j, k) is kept.
+inline std::size_t AtaIndex(int j, int k) {
+  return (static_cast<std::size_t>(j) * kModelRegions) + static_cast<std::size_t>(k);
+}
 
 /// AᵀA, Aᵀy per channel, yᵀy per channel and the sample count of one system over the 50 regions.
 template <int kChannels>
@@ -18,9 +24,7 @@ struct RegionSystem {
   std::array<std::array<double, kModelRegions>, kChannels> aty{};
   std::array<double, kChannels> yty{};
   std::size_t samples = 0;
-  double at(int j, int k) const {
-    return ata[static_cast<std::size_t>(j) * kModelRegions + static_cast<std::size_t>(k)];
-  }
+  double at(int j, int k) const { return ata[AtaIndex(j, k)]; }
 };
 using LumaSystem = RegionSystem<1>;    ///< luminance
 using ChromaSystem = RegionSystem<2>;  ///< Cb, Cr: one blur, one AᵀA
@@ -32,6 +36,36 @@ cv::Rect CoverageBox(const cv::Rect& bounds);
 /// hashes to a multiple of `stride`, the same pixels whatever homography made the coverage).
 LumaSystem AccumulateLuma(const RegionCoverage& coverage, const std::vector<LumaSample>& samples,
                           const Kernel& kernel, std::size_t stride = 1, bool by_position = false);
+
+/// Luma samples' rows of the system (each sample's value and blurred coverage by the regions it
+/// touches), kept so that the system can be summed again under other sample weights without
+/// blurring the coverage again.
+class LumaRows {
+ public:
+  struct Term {
+    int region = 0;
+    double weight = 0;
+  };
+  std::size_t size() const { return values_.size(); }
+  double value(std::size_t i) const { return values_[i]; }
+  std::span<const Term> terms(std::size_t i) const {
+    return {terms_.data() + first_[i], first_[i + 1] - first_[i]};
+  }
+  void add(double value, const SampleWeights& weights);
+
+ private:
+  std::vector<double> values_;
+  std::vector<std::size_t> first_{0};
+  std::vector<Term> terms_;
+};
+
+/// The rows of every `stride`-th sample.
+LumaRows GatherLumaRows(const RegionCoverage& coverage, const std::vector<LumaSample>& samples,
+                        const Kernel& kernel, std::size_t stride = 1);
+
+/// The luma system of `rows`, row i weighted by `weights[i]` (every row by 1 when empty).
+LumaSystem AccumulateLuma(const LumaRows& rows, std::span<const double> weights = {});
+
 ChromaSystem AccumulateChroma(const RegionCoverage& coverage,
                               const std::vector<ChromaSample>& samples, const Kernel& kernel,
                               std::size_t stride = 1);
