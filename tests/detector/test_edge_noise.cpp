@@ -4,8 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <random>
+#include <vector>
 
 #include "reading/edge_noise.hpp"
 #include "reading/region_fit.hpp"
@@ -127,6 +130,23 @@ TEST(EdgeNoise, SamplesThatFitExactlyAreLeftUnweighted) {
   const FreeFit<1> fit = SolveFree(AccumulateLuma(rows));
   ASSERT_TRUE(fit.ok);
   EXPECT_LT(scene.elementError(fit.colour[0]), 0.01);
+}
+
+TEST(EdgeNoise, TheSameWeightOnEverySampleLeavesTheFreeColours) {
+  // The free fit's ridge pulls towards the samples' mean, which must be their weighted mean.
+  std::mt19937 rng(10);
+  const Scene scene(rng);
+  std::normal_distribution<double> unit(0, 0.02);
+  const LumaRows rows = scene.observe([&](double) { return unit(rng); });
+  const FreeFit<1> plain = SolveFree(AccumulateLuma(rows));
+  const FreeFit<1> quarter =
+      SolveFree(AccumulateLuma(rows, std::vector<double>(rows.size(), 0.25)));
+  ASSERT_TRUE(plain.ok && quarter.ok);
+  for (int r = 0; r < kModelRegions; ++r) {
+    EXPECT_NEAR(quarter.colour[0][static_cast<std::size_t>(r)],
+                plain.colour[0][static_cast<std::size_t>(r)], 1e-9)
+        << "region " << r;
+  }
 }
 
 TEST(EdgeNoise, AWeightOfOneChangesNothing) {

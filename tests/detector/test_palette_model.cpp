@@ -74,6 +74,7 @@ RegionSystem<kChannels> NormalEquations(const Samples& s) {
       system.yty[static_cast<std::size_t>(ch)] += v * v;
     }
     ++system.samples;
+    system.weight += 1;
   }
   return system;
 }

@@ -1,6 +1,7 @@
 #include "reading/edge_noise.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 namespace pintag::reading {
@@ -29,6 +30,7 @@ std::vector<double> SampleContrast(const LumaRows& rows,
 
 EdgeNoise FitEdgeNoise(const LumaRows& rows, std::span<const double> contrast,
                        const std::array<double, kModelRegions>& colours) {
+  assert(contrast.size() == rows.size());
   std::vector<double> squared;
   squared.reserve(rows.size());
   double mean_squared = 0;
@@ -41,30 +43,33 @@ EdgeNoise FitEdgeNoise(const LumaRows& rows, std::span<const double> contrast,
     squared.push_back(r * r);
     mean_squared += r * r / static_cast<double>(rows.size());
   }
-  if (rows.size() < 2 || mean_squared <= 0) return {};
+  if (rows.size() < 2 || !(mean_squared > 0) || !std::isfinite(mean_squared)) return {};
   // A squared residual varies as its expected value squared, so a plain fit would let the few
-  // samples on strong edges set the floor. Least squares reweighted by the last fit's expected
-  // value instead (the first pass unweighted).
-  EdgeNoise noise;
+  // samples on strong edges set the floor: least squares reweighted by the last fit's expected
+  // value instead (the first pass unweighted). In units of the mean square, so that no scale of
+  // the residuals overflows the weights.
+  EdgeNoise unit;
   for (int pass = 0; pass < 4; ++pass) {
     double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
     for (std::size_t i = 0; i < squared.size(); ++i) {
-      const double x = contrast[i], y = squared[i];
-      const double expected = noise.floor + noise.per_contrast * x;
+      const double x = std::max(0.0, contrast[i]), y = squared[i] / mean_squared;
+      const double expected = unit.floor + unit.per_contrast * x;
       const double w = pass == 0 ? 1.0 : 1 / (expected * expected);
       n += w, sx += w * x, sy += w * y, sxx += w * x * x, sxy += w * x * y;
     }
     const double det = n * sxx - sx * sx;
-    const double slope = det > 0 ? std::max(0.0, (n * sxy - sx * sy) / det) : 0.0;
-    noise.per_contrast = slope;
-    noise.floor = std::max((sy - slope * sx) / n, 0.05 * mean_squared);
+    const double slope = det > 1e-12 * n * sxx ? std::max(0.0, (n * sxy - sx * sy) / det) : 0.0;
+    unit.per_contrast = slope;
+    unit.floor = std::max((sy - slope * sx) / n, 0.05);
   }
+  const EdgeNoise noise{unit.floor * mean_squared, unit.per_contrast * mean_squared};
+  if (!std::isfinite(noise.floor) || !std::isfinite(noise.per_contrast)) return {};
   return noise;
 }
 
 std::vector<double> EdgeNoiseWeights(const EdgeNoise& noise, std::span<const double> contrast) {
   std::vector<double> weights;
-  if (noise.floor <= 0) return weights;
+  if (!(noise.floor > 0)) return weights;
   weights.reserve(contrast.size());
   for (const double x : contrast)
     weights.push_back(noise.floor / (noise.floor + noise.per_contrast * x));

@@ -284,12 +284,18 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
   const LumaRows luma_rows =
       GatherLumaRows(placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
                      StrideFor(samples.luma.size(), kFinalSamples));
-  FreeFit<1> free_luma = SolveFree(AccumulateLuma(luma_rows));
+  model.luma = AccumulateLuma(luma_rows);
+  FreeFit<1> free_luma = SolveFree(model.luma);
   if (free_luma.ok) {
     const std::vector<double> contrast = SampleContrast(luma_rows, free_luma.colour[0]);
-    fit.luma_edge_noise = FitEdgeNoise(luma_rows, contrast, free_luma.colour[0]);
-    model.luma = AccumulateLuma(luma_rows, EdgeNoiseWeights(fit.luma_edge_noise, contrast));
-    free_luma = SolveFree(model.luma);
+    const EdgeNoise edge_noise = FitEdgeNoise(luma_rows, contrast, free_luma.colour[0]);
+    LumaSystem weighted = AccumulateLuma(luma_rows, EdgeNoiseWeights(edge_noise, contrast));
+    const FreeFit<1> free_weighted = SolveFree(weighted);
+    if (free_weighted.ok) {
+      model.luma = weighted;
+      free_luma = free_weighted;
+      fit.luma_edge_noise = edge_noise;
+    }
   }
   model.chroma = AccumulateChroma(placed.coverage, samples.chroma, MakeKernel(fit.chroma_blur));
   const FreeFit<2> free_chroma = SolveFree(model.chroma);

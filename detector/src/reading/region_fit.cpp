@@ -7,7 +7,7 @@ namespace pintag::reading {
 template <int kChannels>
 FreeFit<kChannels> SolveFree(const RegionSystem<kChannels>& system) {
   FreeFit<kChannels> fit;
-  if (system.samples == 0) return fit;
+  if (system.samples == 0 || !(system.weight > 0)) return fit;
   using Square = cv::Matx<double, kModelRegions, kModelRegions>;
   Square m;
   double trace = 0;
@@ -20,12 +20,13 @@ FreeFit<kChannels> SolveFree(const RegionSystem<kChannels>& system) {
   const double ridge = 0.01 * trace / kModelRegions;
   Square ridged = m;
   for (int a = 0; a < kModelRegions; ++a) ridged(a, a) += ridge;
-  const auto n = static_cast<double>(system.samples);
+  // The samples' total weight: Σ Aᵀy over regions is Σ weight · y (coverage sums to one per
+  // sample, kernels to one), so this gives the weighted mean whatever scale the weights have.
+  const double n = system.weight;
   for (int ch = 0; ch < kChannels; ++ch) {
     cv::Matx<double, kModelRegions, 1> rhs, x;
     double mean = 0;
     for (int a = 0; a < kModelRegions; ++a) mean += system.aty[ch][static_cast<std::size_t>(a)];
-    // Σ Aᵀy over regions is Σ y (coverage sums to one per sample, kernels to one): the mean.
     mean /= n;
     for (int a = 0; a < kModelRegions; ++a) {
       rhs(a) = system.aty[ch][static_cast<std::size_t>(a)] + ridge * mean;

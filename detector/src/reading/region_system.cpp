@@ -1,6 +1,7 @@
 #include "reading/region_system.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 
@@ -19,7 +20,7 @@ std::uint32_t PositionHash(int x, int y) {
 
 template <int kChannels>
 void AddSample(RegionSystem<kChannels>& system, const SampleWeights& w,
-               const std::array<double, kChannels>& values) {
+               const std::array<double, kChannels>& values, double weight = 1) {
   const std::vector<int>& touched = w.touched;
   for (std::size_t a = 0; a < touched.size(); ++a) {
     const int ra = touched[a];
@@ -39,6 +40,7 @@ void AddSample(RegionSystem<kChannels>& system, const SampleWeights& w,
         values[static_cast<std::size_t>(ch)] * values[static_cast<std::size_t>(ch)];
   }
   ++system.samples;
+  system.weight += weight;
 }
 
 template <int kChannels>
@@ -87,6 +89,7 @@ LumaRows GatherLumaRows(const RegionCoverage& coverage, const std::vector<LumaSa
   LumaRows rows;
   SampleWeights w;
   stride = std::max<std::size_t>(1, stride);
+  rows.reserve((samples.size() + stride - 1) / stride);
   for (std::size_t i = 0; i < samples.size(); i += stride) {
     coverage.blurred(kernel, samples[i].x, samples[i].y, w);
     rows.add(samples[i].value, w);
@@ -96,6 +99,7 @@ LumaRows GatherLumaRows(const RegionCoverage& coverage, const std::vector<LumaSa
 }
 
 LumaSystem AccumulateLuma(const LumaRows& rows, std::span<const double> weights) {
+  assert(weights.empty() || weights.size() == rows.size());
   LumaSystem system;
   SampleWeights w;
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -105,7 +109,7 @@ LumaSystem AccumulateLuma(const LumaRows& rows, std::span<const double> weights)
       w.weight[static_cast<std::size_t>(t.region)] = t.weight * scale;
       w.touched.push_back(t.region);
     }
-    AddSample<1>(system, w, {rows.value(i) * scale});
+    AddSample<1>(system, w, {rows.value(i) * scale}, weights.empty() ? 1.0 : weights[i]);
     w.clear();
   }
   Symmetrise(system);

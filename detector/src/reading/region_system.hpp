@@ -24,6 +24,7 @@ struct RegionSystem {
   std::array<std::array<double, kModelRegions>, kChannels> aty{};
   std::array<double, kChannels> yty{};
   std::size_t samples = 0;
+  double weight = 0;  ///< the samples' total weight (their count when unweighted)
   double at(int j, int k) const { return ata[AtaIndex(j, k)]; }
 };
 using LumaSystem = RegionSystem<1>;    ///< luminance
@@ -52,6 +53,11 @@ class LumaRows {
     return {terms_.data() + first_[i], first_[i + 1] - first_[i]};
   }
   void add(double value, const SampleWeights& weights);
+  void reserve(std::size_t samples) {
+    values_.reserve(samples);
+    first_.reserve(samples + 1);
+    terms_.reserve(samples * 4);
+  }
 
  private:
   std::vector<double> values_;
@@ -63,7 +69,8 @@ class LumaRows {
 LumaRows GatherLumaRows(const RegionCoverage& coverage, const std::vector<LumaSample>& samples,
                         const Kernel& kernel, std::size_t stride = 1);
 
-/// The luma system of `rows`, row i weighted by `weights[i]` (every row by 1 when empty).
+/// The luma system of `rows`, row i weighted by `weights[i]` (every row by 1 when empty;
+/// otherwise one non-negative weight per row).
 LumaSystem AccumulateLuma(const LumaRows& rows, std::span<const double> weights = {});
 
 ChromaSystem AccumulateChroma(const RegionCoverage& coverage,
