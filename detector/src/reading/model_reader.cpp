@@ -284,6 +284,9 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
   const LumaRows luma_rows =
       GatherLumaRows(placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
                      StrideFor(samples.luma.size(), kFinalSamples));
+  // The samples are weighted by the contrast under them (reading/edge_noise.hpp) only here: the
+  // weights need the final placement's free colours, so the blur and corners above are searched
+  // on the unweighted residual.
   model.luma = AccumulateLuma(luma_rows);
   FreeFit<1> free_luma = SolveFree(model.luma);
   if (free_luma.ok) {
