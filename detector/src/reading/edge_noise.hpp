@@ -28,9 +28,9 @@ std::vector<double> SampleContrast(const LumaRows& rows,
                                    const std::array<double, kModelRegions>& colours);
 
 /// The edge noise fitted by least squares to the samples' squared residuals under `colours`
-/// (`contrast`: SampleContrast of the same rows and colours, one per row). The
-/// floor is kept at least 5 % of the mean squared residual, and per_contrast at least 0, so that no
-/// sample weighs more than a sample inside one region. All zero when the samples fit exactly.
+/// (`contrast`: SampleContrast of the same rows and colours, one per row). The floor is kept at
+/// least 5 % of the mean squared residual, and per_contrast at least 0, so that no sample weighs
+/// more than a sample inside one region. All zero when the samples fit exactly.
 EdgeNoise FitEdgeNoise(const LumaRows& rows, std::span<const double> contrast,
                        const std::array<double, kModelRegions>& colours);
 

@@ -17,7 +17,8 @@ inline std::size_t AtaIndex(int j, int k) {
   return (static_cast<std::size_t>(j) * kModelRegions) + static_cast<std::size_t>(k);
 }
 
-/// AᵀA, Aᵀy per channel, yᵀy per channel and the sample count of one system over the 50 regions.
+/// AᵀA, Aᵀy per channel, yᵀy per channel, the sample count and the samples' total weight of one
+/// system over the 50 regions.
 template <int kChannels>
 struct RegionSystem {
   std::array<double, std::size_t{kModelRegions} * kModelRegions> ata{};
