@@ -13,7 +13,7 @@
 #
 #   scripts/load.sh [route ...]     default: all of the above
 #   PINTAG_LOAD_SECONDS=N           seconds per route (default 10)
-#   PINTAG_LOAD_CONNECTIONS=N       wrk connections (default 4; wrk uses 2 threads)
+#   PINTAG_LOAD_CONNECTIONS=N       wrk connections (default 4; wrk uses 2 threads, 1 for 1 connection)
 #   PINTAG_LOAD_SERVER_THREADS=N    pintag serve --threads (default 4)
 #   PINTAG_LOAD_FRAMES=DIR          the JPEG scenes (default build/load-frames, made on first use
 #                                   by the benchmark's scene generator, pintag_bench --save-frames)
@@ -25,6 +25,7 @@ build="${PINTAG_BUILD_DIR:-$root/build}"
 seconds="${PINTAG_LOAD_SECONDS:-10}"
 connections="${PINTAG_LOAD_CONNECTIONS:-4}"
 server_threads="${PINTAG_LOAD_SERVER_THREADS:-4}"
+wrk_threads=$((connections < 2 ? connections : 2))  # wrk needs a connection per thread
 frames="${PINTAG_LOAD_FRAMES:-$build/load-frames}"
 pintag="$build/server/pintag"
 routes=("$@")
@@ -78,7 +79,7 @@ ls "$frames"/*.jpg >"$scratch/frames.txt" 2>/dev/null || true
 
 echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores," \
   "load average $(cut -d' ' -f1-3 /proc/loadavg) before the run;" \
-  "wrk -t2 -c$connections, ${seconds}s a route, keep-alive; pintag serve --threads $server_threads"
+  "wrk -t$wrk_threads -c$connections, ${seconds}s a route, keep-alive; pintag serve --threads $server_threads"
 server_cpu_ticks() {  # user + system clock ticks the server has used so far
   awk '{print $14 + $15}' "/proc/$server_pid/stat"
 }
@@ -86,7 +87,7 @@ run() {  # name method path token bodies
   local before after line requests
   before="$(server_cpu_ticks)"
   line="$(PINTAG_NAME="$1" PINTAG_METHOD="$2" PINTAG_PATH="$3" PINTAG_TOKEN="$4" \
-    PINTAG_BODIES="$5" wrk -t2 -c"$connections" -d"${seconds}s" --timeout 10s \
+    PINTAG_BODIES="$5" wrk -t"$wrk_threads" -c"$connections" -d"${seconds}s" --timeout 10s \
     -s "$root/scripts/load/request.lua" "http://127.0.0.1:$port" | grep '^pintag-load')"
   after="$(server_cpu_ticks)"
   requests="$(sed -n 's/.* requests=\([0-9]*\) .*/\1/p' <<<"$line" | head -1)"
