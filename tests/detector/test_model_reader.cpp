@@ -197,6 +197,30 @@ TEST(ModelReader, ReadsASharpenedTag) {
   EXPECT_EQ(r.decision.winner->value(), 777);
 }
 
+// The excess (how much worse the winner explains the samples than the best free labelling) is
+// judged as the lead is: in noise units, or else counted in independent chroma samples. A real
+// reading's excess is set by hand to reach each side of the rule.
+TEST(ModelReader, AnExcessIsCountedInIndependentSamplesAsTheLeadIs) {
+  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
+  ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  ASSERT_EQ(RefuseCodeword(r), "");
+  const std::string refused_for_excess =
+      "codeword explains the pixels worse than its cells read freely";
+  r.fit.chroma_correlation = {0, 0};  // independent residuals: the noise-unit rule alone
+  r.decision.excess = kMaxExcess * 1.5;
+  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  r.fit.chroma_correlation = {0.6, 0.6};  // 16 times the variance
+  const double inflation = VarianceInflation(r.fit.chroma_correlation);
+  ASSERT_NEAR(inflation, 16, 1e-9);
+  ASSERT_GE(r.decision.lead / inflation, kMinIndependentLead);
+  EXPECT_EQ(RefuseCodeword(r), "");
+  r.decision.excess = kMaxIndependentExcess * inflation * 1.1;
+  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  r.decision.excess = kMaxExcess * 0.9;  // within the noise-unit rule, whatever the correlation
+  EXPECT_EQ(RefuseCodeword(r), "");
+}
+
 TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {
   cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
   cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);

@@ -15,11 +15,13 @@ std::string RefuseCodeword(const ModelReading& reading) {
   if (stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx) {
     return "square too small to read its codeword";
   }
-  if (d.lead < kMinLead ||
-      d.lead / VarianceInflation(reading.fit.chroma_correlation) < kMinIndependentLead) {
+  const double inflation = VarianceInflation(reading.fit.chroma_correlation);
+  if (d.lead < kMinLead || d.lead / inflation < kMinIndependentLead) {
     return "no codeword clearly nearest";
   }
-  if (d.excess > kMaxExcess) return "codeword explains the pixels worse than its cells read freely";
+  if (d.excess > kMaxExcess && d.excess / inflation > kMaxIndependentExcess) {
+    return "codeword explains the pixels worse than its cells read freely";
+  }
   // The colours must be a tag's: every cell level between the black and the quiet zone in
   // luminance, and red redder (higher Cr) than green by a clear step (the palette's reds sit at
   // Cr +0.34, its greens at −0.07 and −0.30; casts move all four together).

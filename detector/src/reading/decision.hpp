@@ -21,8 +21,11 @@ inline constexpr double kMinIndependentLead = 32;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
 inline constexpr double kMinLead = 50;
-/// Most the winner may explain the samples worse than the best free labelling (noise units).
+/// Most the winner may explain the samples worse than the best free labelling (noise units)…
 inline constexpr double kMaxExcess = 20;
+/// … unless the excess, counted in independent chroma samples as the lead is, is at most this:
+/// under correlated residuals the free labelling fits the noise better by the same inflation.
+inline constexpr double kMaxIndependentExcess = 8;
 /// Least side (px) of a square whose codeword is accepted: below it a cell is under two pixels
 /// across and colour (4:2:0) barely one sample.
 inline constexpr double kMinSidePx = 16;
