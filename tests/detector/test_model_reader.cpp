@@ -221,6 +221,29 @@ TEST(ModelReader, AnExcessIsCountedInIndependentSamplesAsTheLeadIs) {
   EXPECT_EQ(RefuseCodeword(r), "");
 }
 
+TEST(ModelReader, AWinnerThatFitsAsWellAsTheFreeLabellingNeedsASmallerLead) {
+  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
+  ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  ASSERT_EQ(RefuseCodeword(r), "");
+  const std::string refused_for_lead = "no codeword clearly nearest";
+  r.fit.chroma_correlation = {0.6, 0.6};  // 16 times the variance
+  const double inflation = VarianceInflation(r.fit.chroma_correlation);
+  ASSERT_NEAR(inflation, 16, 1e-9);
+  ASSERT_LT(kMinIndependentLeadOfAFit, kMinIndependentLead);
+  // Between the two least independent leads, and past kMinLead in noise units.
+  r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLead) / 2;
+  ASSERT_GE(r.decision.lead, kMinLead);
+  r.decision.excess = kMaxExcess * 0.5;  // the winner fits
+  EXPECT_EQ(RefuseCodeword(r), "");
+  r.decision.excess = kMaxExcess * 1.5;  // it does not, though the excess rule lets it pass
+  ASSERT_LE(r.decision.excess / inflation, kMaxIndependentExcess);
+  EXPECT_EQ(RefuseCodeword(r), refused_for_lead);
+  r.decision.excess = kMaxExcess * 0.5;
+  r.decision.lead = inflation * kMinIndependentLeadOfAFit * 0.9;  // fits, but leads too little
+  EXPECT_EQ(RefuseCodeword(r), refused_for_lead);
+}
+
 TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {
   cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
   cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);

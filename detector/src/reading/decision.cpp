@@ -16,10 +16,12 @@ std::string RefuseCodeword(const ModelReading& reading) {
     return "square too small to read its codeword";
   }
   const double inflation = VarianceInflation(reading.fit.chroma_correlation);
-  if (d.lead < kMinLead || d.lead / inflation < kMinIndependentLead) {
+  const bool fits = d.excess <= kMaxExcess;
+  const double least_independent_lead = fits ? kMinIndependentLeadOfAFit : kMinIndependentLead;
+  if (d.lead < kMinLead || d.lead / inflation < least_independent_lead) {
     return "no codeword clearly nearest";
   }
-  if (d.excess > kMaxExcess && d.excess / inflation > kMaxIndependentExcess) {
+  if (!fits && d.excess / inflation > kMaxIndependentExcess) {
     return "codeword explains the pixels worse than its cells read freely";
   }
   // The colours must be a tag's: every cell level between the black and the quiet zone in

@@ -18,6 +18,14 @@ namespace pintag::reading {
 /// reach 25.5 this way, and 32 keeps 1.25 times that away. The lead counted as independent had
 /// wrong winners up to 174 (seed 24, motion blur), past the 150 it was held to before.
 inline constexpr double kMinIndependentLead = 32;
+/// Least independent lead of a winner that explains the samples as well as the best free
+/// labelling does (excess at most kMaxExcess). The lead is a likelihood ratio only where the model
+/// fits, and there wrong winners lead by less. Set on the tuning probe (seeds 21-24, 8 frames
+/// per bin, corners jittered by 0.6 px, 3 draws: 6,720 readings): the wrong winners that fit and
+/// lead by kMinLead reach 20.9 (the colour check below refuses those too), and 26 keeps 1.25 times
+/// that away; it accepts 42 more of the 1,728 hard-light target readings there, and 12 more
+/// moderate, none wrong.
+inline constexpr double kMinIndependentLeadOfAFit = 26;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
 inline constexpr double kMinLead = 50;
