@@ -31,6 +31,9 @@ constexpr double kMinBoxFill = 0.35;
 // rough quad (3 × 3 means, the square's centre only), then on the refined one.
 constexpr int kRoughPatternMargin = 10;
 constexpr int kPatternMargin = 15;
+// Least distance (px) from the square's edge of a margin point the refined test reads as black:
+// nearer, blur brings in the quiet zone's white (small and steep squares).
+constexpr double kMinMarginInsetPx = 3;
 
 int MaxChannelAt(const cv::Mat& bgr, cv::Point2d p, int radius) {
   // A degenerate quad's homography can put a point anywhere: nothing there counts as bright.
@@ -64,12 +67,17 @@ int PatternContrast(const cv::Mat& bgr, const Quad& quad, bool rough) {
   for (const geometry::Point& c : geometry::kElementCentres) {
     elements = std::min(elements, MaxChannelAt(bgr, at(c), radius));
   }
-  // The centre, and (once refined) the middle of each margin between the elements and the edge.
+  // The centre, and (once refined) the middle of each margin between the elements and the edge
+  // that lies far enough inside the edge to stay black under blur.
   static constexpr std::array<geometry::Point, 5> kBlack = {
       {{0.5, 0.5}, {0.5, 0.08}, {0.92, 0.5}, {0.5, 0.92}, {0.08, 0.5}}};
+  static constexpr std::array<geometry::Point, 5> kEdgeBeside = {
+      {{0.5, 0.5}, {0.5, 0.0}, {1.0, 0.5}, {0.5, 1.0}, {0.0, 0.5}}};
   int black = 0;
   for (std::size_t i = 0; i < (rough ? 1 : kBlack.size()); ++i) {
-    black = std::max(black, MaxChannelAt(bgr, at(kBlack[i]), radius));
+    const cv::Point2d p = at(kBlack[i]);
+    if (i > 0 && cv::norm(p - at(kEdgeBeside[i])) < kMinMarginInsetPx) continue;
+    black = std::max(black, MaxChannelAt(bgr, p, radius));
   }
   return elements - black;
 }
