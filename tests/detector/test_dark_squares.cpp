@@ -29,6 +29,14 @@ double CornerError(const Quad& quad, const std::array<cv::Point2d, 4>& truth) {
   return best;
 }
 
+// The corner error of the square nearest the truth among `squares`.
+double NearestCornerError(const std::vector<Quad>& squares,
+                          const std::array<cv::Point2d, 4>& truth) {
+  double best = 1e9;
+  for (const Quad& q : squares) best = std::min(best, CornerError(q, truth));
+  return best;
+}
+
 TEST(DarkSquares, FindsSmallTagsWithTheirCorners) {
   testing::SyntheticOptions options;
   options.blur_sigma = 0.8;
@@ -46,9 +54,7 @@ TEST(DarkSquares, FindsSmallTagsWithTheirCorners) {
   const std::vector<Quad> squares = FindDarkSquares(scene.bgr, DarkHalf(scene.bgr), {}, {});
   ASSERT_EQ(squares.size(), 3U);
   for (const testing::SyntheticTruth& truth : scene.truth) {
-    double best = 1e9;
-    for (const Quad& q : squares) best = std::min(best, CornerError(q, truth.corners));
-    EXPECT_LT(best, 0.8) << "key " << truth.key;
+    EXPECT_LT(NearestCornerError(squares, truth.corners), 0.8) << "key " << truth.key;
   }
   // What a decoded tag covers is skipped, and only that: with the first tag decoded, the other
   // two are still found, and no square is returned in the first one's place.
@@ -80,11 +86,9 @@ TEST(DarkSquares, FindsSteepSmallTagsWhoseMarginsTheBlurFills) {
       options);
   const std::vector<Quad> squares = FindDarkSquares(scene.bgr, DarkHalf(scene.bgr), {}, {});
   ASSERT_EQ(squares.size(), 2U);
+  // Within the reach of the reader's own corner fit (reading/model_reader.hpp).
   for (const testing::SyntheticTruth& truth : scene.truth) {
-    double best = 1e9;
-    for (const Quad& q : squares) best = std::min(best, CornerError(q, truth.corners));
-    // Within the reach of the reader's own corner fit (reading/model_reader.hpp).
-    EXPECT_LT(best, 1.5) << "key " << truth.key;
+    EXPECT_LT(NearestCornerError(squares, truth.corners), 1.5) << "key " << truth.key;
   }
 }
 
