@@ -7,6 +7,7 @@
 
 #include "candidates/dark_squares.hpp"
 #include "candidates/frame_scan.hpp"
+#include "pintag/codec/geometry.hpp"
 #include "synthetic.hpp"
 
 namespace pintag::stage {
@@ -105,6 +106,33 @@ TEST(DarkSquares, DarkShapesWithoutBrightElementsAreNot) {
   cv::rectangle(bgr, {origins[3] + cv::Point(6, 6), origins[3] + cv::Point(34, 34)}, {30, 160, 150},
                 cv::FILLED);
   EXPECT_TRUE(FindDarkSquares(bgr, DarkHalf(bgr), {}, {}).empty());
+}
+
+// Where the margins lie far enough inside the edge (0.08 of a 52 px side: 4.2 px), they are still
+// read: a square with the four bright elements and bright margins is refused, the same square
+// with black margins is found.
+TEST(DarkSquares, SquaresWhoseMarginsAreBrightAreNot) {
+  constexpr int kSide = 52;
+  cv::Mat bgr(300, 600, CV_8UC3, cv::Scalar(235, 235, 235));
+  const std::array<cv::Point, 2> origins = {{{100, 100}, {400, 100}}};
+  const cv::Scalar bright = {40, 200, 120};
+  for (const cv::Point& o : origins) {
+    cv::rectangle(bgr, {o, o + cv::Point(kSide, kSide)}, {20, 20, 20}, cv::FILLED);
+    for (const geometry::Point& c : geometry::kElementCentres) {
+      cv::circle(bgr, o + cv::Point(static_cast<int>(c.x * kSide), static_cast<int>(c.y * kSide)),
+                 6, bright, cv::FILLED);
+    }
+  }
+  // The second square's margin middles, each a bright dot 4 px inside its edge.
+  const cv::Point second = origins[1];
+  for (const cv::Point& m : {cv::Point(kSide / 2, 4), cv::Point(kSide - 4, kSide / 2),
+                             cv::Point(kSide / 2, kSide - 4), cv::Point(4, kSide / 2)}) {
+    cv::circle(bgr, second + m, 1, bright, cv::FILLED);
+  }
+  const std::vector<Quad> squares = FindDarkSquares(bgr, DarkHalf(bgr), {}, {});
+  ASSERT_EQ(squares.size(), 1U);
+  const cv::Point2d centre = (squares[0][0] + squares[0][1] + squares[0][2] + squares[0][3]) / 4;
+  EXPECT_LT(cv::norm(centre - cv::Point2d(origins[0]) - cv::Point2d(kSide / 2., kSide / 2.)), 2);
 }
 
 }  // namespace

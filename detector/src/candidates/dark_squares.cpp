@@ -31,8 +31,10 @@ constexpr double kMinBoxFill = 0.35;
 // rough quad (3 × 3 means, the square's centre only), then on the refined one.
 constexpr int kRoughPatternMargin = 10;
 constexpr int kPatternMargin = 15;
-// Least distance (px) from the square's edge of a margin point the refined test reads as black:
-// nearer, blur brings in the quiet zone's white (small and steep squares).
+// Least distance (px) of a margin point the refined test reads as black from the middle of the
+// edge beside it: nearer, blur brings in the quiet zone's white. The points lie 0.08 of a side
+// inside, so on squares under about 37 px a side no margin is read even face-on (and fewer on
+// steep ones); there the elements are held against the centre alone, and the readers decide.
 constexpr double kMinMarginInsetPx = 3;
 
 int MaxChannelAt(const cv::Mat& bgr, cv::Point2d p, int radius) {
@@ -68,7 +70,8 @@ int PatternContrast(const cv::Mat& bgr, const Quad& quad, bool rough) {
     elements = std::min(elements, MaxChannelAt(bgr, at(c), radius));
   }
   // The centre, and (once refined) the middle of each margin between the elements and the edge
-  // that lies far enough inside the edge to stay black under blur.
+  // that lies far enough inside the edge to stay black under blur (measured along the square's
+  // centre line, the point's image from the edge middle's).
   static constexpr std::array<geometry::Point, 5> kBlack = {
       {{0.5, 0.5}, {0.5, 0.08}, {0.92, 0.5}, {0.5, 0.92}, {0.08, 0.5}}};
   static constexpr std::array<geometry::Point, 5> kEdgeBeside = {
