@@ -71,15 +71,16 @@ int PatternContrast(const cv::Mat& bgr, const Quad& quad, bool rough) {
   }
   // The centre, and (once refined) the middle of each margin between the elements and the edge
   // that lies far enough inside the edge to stay black under blur (measured along the square's
-  // centre line, the point's image from the edge middle's).
-  static constexpr std::array<geometry::Point, 5> kBlack = {
-      {{0.5, 0.5}, {0.5, 0.08}, {0.92, 0.5}, {0.5, 0.92}, {0.08, 0.5}}};
-  static constexpr std::array<geometry::Point, 5> kEdgeBeside = {
-      {{0.5, 0.5}, {0.5, 0.0}, {1.0, 0.5}, {0.5, 1.0}, {0.0, 0.5}}};
-  int black = 0;
-  for (std::size_t i = 0; i < (rough ? 1 : kBlack.size()); ++i) {
-    const cv::Point2d p = at(kBlack[i]);
-    if (i > 0 && cv::norm(p - at(kEdgeBeside[i])) < kMinMarginInsetPx) continue;
+  // centre line, from the middle of the edge beside it: the margin point moved onto the edge).
+  int black = MaxChannelAt(bgr, at({0.5, 0.5}), radius);
+  if (rough) return elements - black;
+  static constexpr std::array<geometry::Point, 4> kMargins = {
+      {{0.5, 0.08}, {0.92, 0.5}, {0.5, 0.92}, {0.08, 0.5}}};
+  for (const geometry::Point& m : kMargins) {
+    const geometry::Point edge = {m.x == 0.5 ? 0.5 : std::round(m.x),
+                                  m.y == 0.5 ? 0.5 : std::round(m.y)};
+    const cv::Point2d p = at(m);
+    if (cv::norm(p - at(edge)) < kMinMarginInsetPx) continue;
     black = std::max(black, MaxChannelAt(bgr, p, radius));
   }
   return elements - black;

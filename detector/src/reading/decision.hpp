@@ -22,9 +22,10 @@ inline constexpr double kMinIndependentLead = 32;
 /// labelling does (excess at most kMaxExcess). The lead is a likelihood ratio only where the model
 /// fits. First set to 26 on a small probe (seeds 21-24, 8 frames per bin, corners jittered by
 /// 0.6 px, 3 draws), where such wrong winners reached 20.9; on the probe of kMinIndependentLead's
-/// size (48 frames per bin, 2 draws), seeds 21 and 24 so far, they reach 23.65 (seed 24, frame
-/// 3307: 32 px at 55° in hard light, past every other check), and 30 keeps 1.25 times that away.
-/// There it accepts 12 and 13 more of the 1,728 hard-light target readings than 32, none wrong.
+/// size (48 frames per bin, 2 draws), seeds 21 and 24 whole and 22 and 23 in part, they reach
+/// 23.65 (seed 24, frame 3307: 32 px at 55° in hard light, past every other check), and 30 keeps
+/// 1.25 times that away. On seeds 21 and 24 it accepts 12 and 13 more of the 1,728 hard-light
+/// target readings than 32, none wrong (docs/DETECTOR.md, "Raised: that smaller lead").
 inline constexpr double kMinIndependentLeadOfAFit = 30;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
