@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -20,6 +21,7 @@
 
 #include "homography.hpp"
 #include "pintag/scene/rng.hpp"
+#include "reading/codeword_search.hpp"
 #include "reading/decision.hpp"
 #include "reading/model_reader.hpp"
 #include "reading/read_tag.hpp"
@@ -147,7 +149,8 @@ int Main(int argc, char** argv) {
         "frame,size_px,tilt_deg,hard,draw,truth,key,winner,lead,excess,distance,"
         "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
         "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused,"
-        "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass,other_refusal\n");
+        "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass,other_refusal,"
+        "truth_over_winner\n");
   }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
@@ -166,8 +169,24 @@ int Main(int argc, char** argv) {
         std::optional<TagKey> key;
         if (args.model) {
           const double t0 = ThreadCpuMs();
-          const reading::ModelReading m = reading::ReadThroughModel(s.bgr, quad);
+          reading::ModelReading m;
+          const reading::FittedModel fitted = reading::FitModel(s.bgr, quad, &m.error);
+          m.fit = fitted.fit;
+          if (fitted.fit.ok) m.decision = reading::DecideCodeword(fitted);
           const double ms = ThreadCpuMs() - t0;
+          // The truth's own residual over the winner's: below 0 the search missed a codeword that
+          // explains the samples better; above, the model prefers a wrong one.
+          double truth_over_winner = std::numeric_limits<double>::quiet_NaN();
+          if (fitted.fit.ok && m.decision.winner) {
+            const reading::PaletteModel palette(fitted.luma, fitted.chroma, fitted.weights);
+            double best = std::numeric_limits<double>::infinity();
+            for (int turns = 0; turns < 4; ++turns) {
+              double residual = 0;
+              palette.fit(reading::CodewordLabels(truth.id, turns), &residual);
+              best = std::min(best, residual);
+            }
+            truth_over_winner = best - m.decision.residual;
+          }
           double corner_error = 0;
           for (std::size_t k = 0; k < 4; ++k) {
             corner_error += cv::norm(m.fit.corners[k] - truth.corners_px[k]) / 4;
@@ -196,7 +215,7 @@ int Main(int argc, char** argv) {
           if (csv != nullptr) {
             std::fprintf(csv,
                          "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
-                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s\n",
+                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s,%.2f\n",
                          f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
                          d, truth.id, refused.empty() ? dec.winner->value() : -1,
                          dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
@@ -208,7 +227,7 @@ int Main(int argc, char** argv) {
                          refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
                          m.fit.chroma_correlation.x, m.fit.chroma_correlation.y,
                          dec.lead / reading::VarianceInflation(m.fit.chroma_correlation),
-                         others_pass ? 1 : 0, other_refusal.c_str());
+                         others_pass ? 1 : 0, other_refusal.c_str(), truth_over_winner);
           }
           Count& c = at(f);
           if (!dec.winner) {

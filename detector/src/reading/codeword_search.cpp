@@ -64,6 +64,19 @@ SettledLabellings SettleOrientations(const PaletteModel& model) {
   return settled;
 }
 
+Labels CodewordLabels(int key, int quarter_turns) {
+  Labels labels{};
+  labels[kQuietRegion] = kQuietLevel;
+  labels[kBlackRegion] = kBlackLevel;
+  const std::uint64_t code = Codebook()[static_cast<std::size_t>(key)];
+  for (int cell = 0; cell < kCanonicalCells; ++cell) {
+    const bool one = ((code >> cell) & 1U) != 0;
+    labels[static_cast<std::size_t>(SampledRegion(cell, quarter_turns))] =
+        cell < 32 ? (one ? kGreen1 : kGreen0) : (one ? kRed1 : kRed0);
+  }
+  return labels;
+}
+
 CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabellings& settled,
                                  std::size_t exact) {
   CodewordDecision decision;
@@ -124,17 +137,8 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
   };
   const auto score = [&](const Candidate& c) {
     is_scored[slot(c.turns, c.key)] = true;
-    Labels labels{};
-    labels[kQuietRegion] = kQuietLevel;
-    labels[kBlackRegion] = kBlackLevel;
-    const std::uint64_t code = book[static_cast<std::size_t>(c.key)];
-    for (int cell = 0; cell < kCanonicalCells; ++cell) {
-      const bool one = ((code >> cell) & 1U) != 0;
-      labels[static_cast<std::size_t>(SampledRegion(cell, c.turns))] =
-          cell < 32 ? (one ? kGreen1 : kGreen0) : (one ? kRed1 : kRed0);
-    }
     double residual = 0;
-    const PaletteColours colours = model.fit(labels, &residual);
+    const PaletteColours colours = model.fit(CodewordLabels(c.key, c.turns), &residual);
     scored.push_back({residual, c, colours});
   };
   for (const Candidate& c : ranked) score(c);

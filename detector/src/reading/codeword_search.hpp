@@ -38,6 +38,10 @@ struct CodewordDecision {
   int scored = 0;              ///< codewords whose exact residual was computed
 };
 
+/// The labelling codeword `key` gives the regions with element `quarter_turns` of the sampled
+/// frame as C0.
+Labels CodewordLabels(int key, int quarter_turns);
+
 /// Ranks every (key, orientation) by the summed flip costs of the cells where it differs from that
 /// orientation's settled labelling, scores the best `exact` exactly (colours refitted), then every
 /// codeword within kNeighbourCells (7) cells of each orientation's best scored one, again around a
