@@ -2,29 +2,7 @@
 
 #include <bit>
 
-#include "pintag/codec/geometry.hpp"
-
 namespace pintag::reading {
-
-// Sector boundaries are the diagonals and axes, so comparisons of the offsets decide them.
-int ModelRegionAt(double x, double y) {
-  if (x < 0 || y < 0 || x >= 1 || y >= 1) return kQuietRegion;
-  const int column = x < 0.5 ? 0 : 1, row = y < 0.5 ? 0 : 1;
-  const int element = row == 0 ? column : 3 - column;
-  const geometry::Point c = geometry::kElementCentres[element];
-  const double right = x - c.x, up = c.y - y;  // clockwise angles from up
-  const double r2 = right * right + up * up;
-  constexpr double kOuter2 = geometry::kGreenOuterRadius * geometry::kGreenOuterRadius;
-  constexpr double kRed2 = geometry::kRedRadius * geometry::kRedRadius;
-  if (r2 >= kOuter2) return kBlackRegion;
-  int sector;
-  if (right >= 0) {
-    sector = up > 0 ? (right < up ? 0 : 1) : (right > -up ? 2 : 3);
-  } else {
-    sector = up < 0 ? (-right < -up ? 4 : 5) : (-right > up ? 6 : 7);
-  }
-  return r2 < kRed2 ? RedRegion(element, sector / 2) : GreenRegion(element, sector);
-}
 
 int SampledRegion(int canonical, int quarter_turns) {
   const int r = quarter_turns;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pintag/codec/cells.hpp"
+#include "pintag/codec/geometry.hpp"
 
 namespace pintag::reading {
 
@@ -24,8 +25,27 @@ inline constexpr int GreenRegion(int element, int sector) {
 
 /// The model region of a point in tag units: 0 outside the square, 1 black, then element e's red
 /// quadrant q at RedRegion(e, q) and green sector s at GreenRegion(e, s) (geometry::LocateCell's
-/// cells, found by comparisons instead of atan2: this runs for every sub-sample of a tag's pixels).
-int ModelRegionAt(double x, double y);
+/// cells, found by comparisons instead of atan2: this runs for every sub-sample of a tag's pixels,
+/// so it is inline).
+inline int ModelRegionAt(double x, double y) {
+  if (x < 0 || y < 0 || x >= 1 || y >= 1) return kQuietRegion;
+  const int column = x < 0.5 ? 0 : 1, row = y < 0.5 ? 0 : 1;
+  const int element = row == 0 ? column : 3 - column;
+  const geometry::Point c = geometry::kElementCentres[element];
+  const double right = x - c.x, up = c.y - y;  // clockwise angles from up
+  const double r2 = right * right + up * up;
+  constexpr double kOuter2 = geometry::kGreenOuterRadius * geometry::kGreenOuterRadius;
+  constexpr double kRed2 = geometry::kRedRadius * geometry::kRedRadius;
+  if (r2 >= kOuter2) return kBlackRegion;
+  // Sector boundaries are the diagonals and axes, so comparisons of the offsets decide them.
+  int sector;
+  if (right >= 0) {
+    sector = up > 0 ? (right < up ? 0 : 1) : (right > -up ? 2 : 3);
+  } else {
+    sector = up < 0 ? (-right < -up ? 4 : 5) : (-right > up ? 6 : 7);
+  }
+  return r2 < kRed2 ? RedRegion(element, sector / 2) : GreenRegion(element, sector);
+}
 
 /// The six colours of a printed tag, the levels a region can take.
 enum Level : std::uint8_t { kQuietLevel, kBlackLevel, kRed0, kRed1, kGreen0, kGreen1, kLevels };
