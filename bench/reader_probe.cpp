@@ -38,6 +38,7 @@ struct Args {
   int draws = 1;         ///< readings per tag (1 without jitter)
   int threads = 0;       ///< 0: all cores
   int max_size_px = 48;
+  int frame = -1;         ///< only this frame of the sweep (its index in the CSV); -1: all
   bool verbose = false;   ///< also a line per tag left unread
   bool model = false;     ///< the model reader (reading/model_reader.hpp) instead of ReadCandidate
   std::string csv;        ///< a row per reading
@@ -118,10 +119,13 @@ int Main(int argc, char** argv) {
       args.verbose = true;
     } else if (a == "--max-size") {
       args.max_size_px = std::atoi(next());
+    } else if (a == "--frame") {
+      args.frame = std::atoi(next());
     } else {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
-                   "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--threads N] "
+                   "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
+                   "[--threads N] "
                    "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
@@ -129,7 +133,8 @@ int Main(int argc, char** argv) {
   const scene::Camera camera = CameraFor(args.sweep.world);
   std::vector<FrameSpec> frames = MakeSweep(args.sweep, camera);
   std::erase_if(frames, [&](const FrameSpec& f) {
-    return f.tagless() || kSizesPx[f.size_index] > args.max_size_px;
+    return f.tagless() || kSizesPx[f.size_index] > args.max_size_px ||
+           (args.frame >= 0 && f.index != args.frame);
   });
   // [hard][size][tilt]
   const auto slot = [](int hard, int size_index, int tilt_index) {
