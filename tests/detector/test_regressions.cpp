@@ -6,6 +6,8 @@
 //   misread-detect/  frames on which the detector once reported a wrong key: never again
 //   misread-square/  tags the readers once turned into a wrong key on a square placed by the
 //                    truth (plus recorded corner offsets): never again
+//   search/          squares (truth plus recorded offsets) on which the model's codeword search
+//                    once missed the codeword that explains the samples best: find it
 // Each PNG has a JSON beside it: key, corners (C0 … C3, crop pixels), square offsets, source.
 
 #include <gtest/gtest.h>
@@ -19,6 +21,7 @@
 #include <vector>
 
 #include "pintag/detector/detector.hpp"
+#include "reading/model_reader.hpp"
 #include "reading/read_tag.hpp"
 
 namespace pintag {
@@ -142,6 +145,26 @@ TEST(Regressions, NoWrongKeyReadOnSquaresPlacedByTheTruth) {
     if (read.reading.payload.key) {
       EXPECT_EQ(read.reading.payload.key->value(), c.key) << c.name;
     }
+  }
+}
+
+// The winner is whichever scored codeword explains the samples best, so a codeword never scored
+// cannot win however well it explains them. These squares once had the truth left out (eight cells
+// from the winner, past the neighbourhood's seven) while it explained the samples better than the
+// winner, which then stood one rule away from being accepted.
+TEST(Regressions, TheCodewordSearchFindsTheCodewordThatExplainsTheSamplesBest) {
+  const std::vector<RegressionCase> cases = LoadFolder("search");
+  ASSERT_GE(cases.size(), 1U);
+  for (const RegressionCase& c : cases) {
+    ASSERT_FALSE(c.bgr.empty()) << c.name;
+    reading::Corners corners;
+    for (std::size_t i = 0; i < 4; ++i) corners[i] = c.corners[i] + c.offsets[i];
+    std::string error;
+    const reading::FittedModel fitted = reading::FitModel(c.bgr, corners, &error);
+    ASSERT_TRUE(fitted.fit.ok) << c.name << ": " << error;
+    const reading::CodewordDecision decision = reading::DecideCodeword(fitted);
+    ASSERT_TRUE(decision.winner) << c.name;
+    EXPECT_EQ(decision.winner->value(), c.key) << c.name;
   }
 }
 

@@ -88,17 +88,18 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
     int key;
     int turns;
   };
-  std::vector<Candidate> ranked;
-  ranked.reserve(exact + 1);
   const std::vector<std::uint64_t>& book = Codebook();
-  for (int r = 0; r < 4; ++r) {
-    const SettledLabelling& h = settled[static_cast<std::size_t>(r)];
+  // Keeps in `ranked` (ascending, at most `count`) the codewords of orientation r whose cells
+  // cost least to flip from `labels` with `colours` held, among those `skip` lets through.
+  const auto rank = [&](const Labels& labels, const PaletteColours& colours, int r,
+                        std::size_t count, const auto& skip, std::vector<Candidate>* ranked) {
+    if (count == 0) return;
     std::array<double, kCanonicalCells> cost{};
     std::uint64_t read = 0;
     for (int c = 0; c < kCanonicalCells; ++c) {
       const int j = SampledRegion(c, r);
-      cost[static_cast<std::size_t>(c)] = model.flipCost(h.labels, h.colours, j);
-      if (IsOneLevel(h.labels[static_cast<std::size_t>(j)])) read |= std::uint64_t{1} << c;
+      cost[static_cast<std::size_t>(c)] = model.flipCost(labels, colours, j);
+      if (IsOneLevel(labels[static_cast<std::size_t>(j)])) read |= std::uint64_t{1} << c;
     }
     // The summed cost of any set of differing cells, a byte of the mask at a time.
     std::array<std::array<double, 256>, kCanonicalCells / 8> by_byte{};
@@ -114,15 +115,22 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
       for (std::size_t byte = 0; byte < by_byte.size(); ++byte) {
         total += by_byte[byte][(differ >> (8 * byte)) & 0xFFU];
       }
-      if (ranked.size() < exact || total < ranked.back().cost) {
-        if (ranked.size() == exact) ranked.pop_back();
+      if ((ranked->size() < count || total < ranked->back().cost) && !skip(k)) {
+        if (ranked->size() == count) ranked->pop_back();
         const Candidate candidate{total, k, r};
-        ranked.insert(std::upper_bound(
-                          ranked.begin(), ranked.end(), candidate,
-                          [](const Candidate& x, const Candidate& y) { return x.cost < y.cost; }),
-                      candidate);
+        ranked->insert(std::upper_bound(
+                           ranked->begin(), ranked->end(), candidate,
+                           [](const Candidate& x, const Candidate& y) { return x.cost < y.cost; }),
+                       candidate);
       }
     }
+  };
+  std::vector<Candidate> ranked;
+  ranked.reserve(exact + 1);
+  for (int r = 0; r < 4; ++r) {
+    const SettledLabelling& h = settled[static_cast<std::size_t>(r)];
+    rank(
+        h.labels, h.colours, r, exact, [](int) { return false; }, &ranked);
   }
 
   struct Scored {
@@ -154,28 +162,52 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
   std::vector<int> neighbours;
   neighbours.reserve(NeighbourKeyOffsets().size());
   std::array<int, 4> centre_key{-1, -1, -1, -1};  // the codeword each orientation last centred on
-  for (int round = 0; round < 4 && !scored.empty(); ++round) {
-    const std::size_t before = scored.size();
-    bool moved = false;
-    for (int r = 0; r < 4; ++r) {
-      const auto best_r = std::find_if(scored.begin(), scored.end(),
-                                       [&](const Scored& s) { return s.candidate.turns == r; });
-      if (best_r == scored.end() ||
-          best_r->candidate.key == centre_key[static_cast<std::size_t>(r)]) {
-        continue;
+  const auto score_neighbourhoods = [&] {
+    for (int round = 0; round < 4 && !scored.empty(); ++round) {
+      const std::size_t before = scored.size();
+      bool moved = false;
+      for (int r = 0; r < 4; ++r) {
+        const auto best_r = std::find_if(scored.begin(), scored.end(),
+                                         [&](const Scored& s) { return s.candidate.turns == r; });
+        if (best_r == scored.end() ||
+            best_r->candidate.key == centre_key[static_cast<std::size_t>(r)]) {
+          continue;
+        }
+        moved = true;
+        const int centre = best_r->candidate.key;
+        centre_key[static_cast<std::size_t>(r)] = centre;
+        neighbours.clear();
+        for (const int d : NeighbourKeyOffsets()) neighbours.push_back(centre ^ d);
+        std::sort(neighbours.begin(), neighbours.end());  // scored in key order, as always
+        for (const int k : neighbours) {
+          if (!is_scored[slot(r, k)]) score({0, k, r});
+        }
       }
-      moved = true;
-      const int centre = best_r->candidate.key;
-      centre_key[static_cast<std::size_t>(r)] = centre;
-      neighbours.clear();
-      for (const int d : NeighbourKeyOffsets()) neighbours.push_back(centre ^ d);
-      std::sort(neighbours.begin(), neighbours.end());  // scored in key order, as always
-      for (const int k : neighbours) {
-        if (!is_scored[slot(r, k)]) score({0, k, r});
-      }
+      if (!moved || scored.size() == before) break;
+      std::sort(scored.begin(), scored.end(), by_residual);
     }
-    if (!moved || scored.size() == before) break;
+  };
+  score_neighbourhoods();
+  // Seven cells is a radius, not a guarantee: a codeword eight cells from the winner can explain
+  // the samples better, and the ranking from the free labelling may have put it far down (tuning
+  // seed 22, frame 2285: the truth, 8 cells from the winner in the same orientation, better by
+  // 122 noise units, never scored). So the winner's orientation is ranked again by the cost of
+  // flipping cells from the winner itself, its colours held, and the best of those not yet scored
+  // are scored; around a new winner the neighbourhoods are searched again.
+  std::vector<Candidate> around;
+  for (int pass = 0; pass < 2 && !scored.empty(); ++pass) {
+    const Candidate winner = scored.front().candidate;
+    around.clear();
+    rank(
+        CodewordLabels(winner.key, winner.turns), scored.front().colours, winner.turns,
+        kAroundWinner, [&](int k) { return is_scored[slot(winner.turns, k)]; }, &around);
+    for (const Candidate& c : around) score(c);
     std::sort(scored.begin(), scored.end(), by_residual);
+    if (scored.front().candidate.key == winner.key &&
+        scored.front().candidate.turns == winner.turns) {
+      break;
+    }
+    score_neighbourhoods();
   }
   decision.scored = static_cast<int>(scored.size());
   if (scored.size() < 2) return decision;

@@ -38,6 +38,10 @@ struct CodewordDecision {
   int scored = 0;              ///< codewords whose exact residual was computed
 };
 
+/// Codewords of the winner's orientation scored again after the neighbourhood search, ranked by
+/// the cost of flipping cells from the winner (SearchCodewords).
+inline constexpr std::size_t kAroundWinner = 32;
+
 /// The labelling codeword `key` gives the regions with element `quarter_turns` of the sampled
 /// frame as C0.
 Labels CodewordLabels(int key, int quarter_turns);
@@ -45,7 +49,9 @@ Labels CodewordLabels(int key, int quarter_turns);
 /// Ranks every (key, orientation) by the summed flip costs of the cells where it differs from that
 /// orientation's settled labelling, scores the best `exact` exactly (colours refitted), then every
 /// codeword within kNeighbourCells (7) cells of each orientation's best scored one, again around a
-/// new best until none changes. Colours are fitted under the palette's order (PaletteModel::fit).
+/// new best until none changes; then the best kAroundWinner of the winner's orientation ranked from
+/// the winner itself, and the neighbourhoods again around a new winner. Colours are fitted under
+/// the palette's order (PaletteModel::fit).
 CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabellings& settled,
                                  std::size_t exact = 128);
 
