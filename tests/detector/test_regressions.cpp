@@ -69,7 +69,7 @@ std::vector<int> Keys(const DetectResult& result) {
 
 // The tags of read/ came from rules of the earlier readers (faint red pass, pairs of red blobs,
 // dark squares, nearest codeword beyond the best-ranked few). The model reader accepts a codeword
-// only with a lead of 32 counted in independent chroma samples (reading/decision.hpp; counted as
+// only with a lead of 35 counted in independent chroma samples (reading/decision.hpp; counted as
 // if every sample were independent, leads of 50 and even 150 let wrong codewords through). It
 // refuses five tags whose right codeword leads by less: seed 1 frames 73 (32 px, 55°: 25.0),
 // 469 and 470 (24 px, 0° and 20°, hard light: 31.5 and 31.8, motion blur correlating their
