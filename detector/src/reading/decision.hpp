@@ -28,7 +28,9 @@ inline constexpr double kMinIndependentLead = 35;
 /// size (48 frames per bin, 2 draws), seeds 21 and 24 whole and 22 and 23 in part, they reach
 /// 23.65 (seed 24, frame 3307: 32 px at 55° in hard light, past every other check), and 30 keeps
 /// 1.25 times that away. On seeds 21 and 24 it accepts 12 and 13 more of the 1,728 hard-light
-/// target readings than 32, none wrong (docs/DETECTOR.md, "Raised: that smaller lead").
+/// target readings than 32, none wrong (docs/DETECTOR.md, "Raised: that smaller lead"). Seeds 22
+/// and 23 run whole with the codeword search of 2026-11-29 (re-ranked around the winner): 17.0
+/// and 22.3; seed 22's 27.9 with the search before it was a codeword the search never scored.
 inline constexpr double kMinIndependentLeadOfAFit = 30;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
