@@ -174,10 +174,8 @@ int Main(int argc, char** argv) {
         std::optional<TagKey> key;
         if (args.model) {
           const double t0 = ThreadCpuMs();
-          reading::ModelReading m;
-          const reading::FittedModel fitted = reading::FitModel(s.bgr, quad, &m.error);
-          m.fit = fitted.fit;
-          if (fitted.fit.ok) m.decision = reading::DecideCodeword(fitted);
+          reading::FittedModel fitted;
+          const reading::ModelReading m = reading::ReadThroughModel(s.bgr, quad, &fitted);
           const double ms = ThreadCpuMs() - t0;
           // The truth's own residual over the winner's: below 0 the search missed a codeword that
           // explains the samples better; above, the model prefers a wrong one.

@@ -59,6 +59,13 @@ std::vector<RegressionCase> LoadFolder(const std::string& folder) {
   return cases;
 }
 
+// The square a case is read on: its true corners moved by its recorded offsets.
+std::array<cv::Point2d, 4> PlacedSquare(const RegressionCase& c) {
+  std::array<cv::Point2d, 4> square;
+  for (std::size_t i = 0; i < 4; ++i) square[i] = c.corners[i] + c.offsets[i];
+  return square;
+}
+
 std::vector<int> Keys(const DetectResult& result) {
   std::vector<int> keys;
   for (const Detection& d : result.detections) {
@@ -139,9 +146,7 @@ TEST(Regressions, NoWrongKeyReadOnSquaresPlacedByTheTruth) {
   ASSERT_GE(cases.size(), 7U);
   for (const RegressionCase& c : cases) {
     ASSERT_FALSE(c.bgr.empty()) << c.name;
-    stage::Quad quad;
-    for (std::size_t i = 0; i < 4; ++i) quad[i] = c.corners[i] + c.offsets[i];
-    const stage::CandidateReading read = stage::ReadCandidate(c.bgr, quad, {});
+    const stage::CandidateReading read = stage::ReadCandidate(c.bgr, PlacedSquare(c), {});
     if (read.reading.payload.key) {
       EXPECT_EQ(read.reading.payload.key->value(), c.key) << c.name;
     }
@@ -157,14 +162,10 @@ TEST(Regressions, TheCodewordSearchFindsTheCodewordThatExplainsTheSamplesBest) {
   ASSERT_GE(cases.size(), 1U);
   for (const RegressionCase& c : cases) {
     ASSERT_FALSE(c.bgr.empty()) << c.name;
-    reading::Corners corners;
-    for (std::size_t i = 0; i < 4; ++i) corners[i] = c.corners[i] + c.offsets[i];
-    std::string error;
-    const reading::FittedModel fitted = reading::FitModel(c.bgr, corners, &error);
-    ASSERT_TRUE(fitted.fit.ok) << c.name << ": " << error;
-    const reading::CodewordDecision decision = reading::DecideCodeword(fitted);
-    ASSERT_TRUE(decision.winner) << c.name;
-    EXPECT_EQ(decision.winner->value(), c.key) << c.name;
+    const reading::ModelReading read = reading::ReadThroughModel(c.bgr, PlacedSquare(c));
+    ASSERT_TRUE(read.fit.ok) << c.name << ": " << read.error;
+    ASSERT_TRUE(read.decision.winner) << c.name;
+    EXPECT_EQ(read.decision.winner->value(), c.key) << c.name;
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <utility>
 
 #include "homography.hpp"
 #include "reading/region_fit.hpp"
@@ -341,11 +342,12 @@ CodewordDecision DecideCodeword(const FittedModel& fitted) {
   return decision;
 }
 
-ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners) {
+ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners, FittedModel* fitted) {
   ModelReading reading;
-  const FittedModel fitted = FitModel(bgr, corners, &reading.error);
-  reading.fit = fitted.fit;
-  if (fitted.fit.ok) reading.decision = DecideCodeword(fitted);
+  FittedModel model = FitModel(bgr, corners, &reading.error);
+  reading.fit = model.fit;
+  if (model.fit.ok) reading.decision = DecideCodeword(model);
+  if (fitted != nullptr) *fitted = std::move(model);
   return reading;
 }
 

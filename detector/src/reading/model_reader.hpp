@@ -79,7 +79,9 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
 /// The codeword that explains a fitted model best, and by how much (codeword_search.hpp).
 CodewordDecision DecideCodeword(const FittedModel& fitted);
 
-/// FitModel, then DecideCodeword.
-ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners);
+/// FitModel, then DecideCodeword; the fitted model into `fitted` when given (for probes that score
+/// other codewords on it).
+ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners,
+                              FittedModel* fitted = nullptr);
 
 }  // namespace pintag::reading
