@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <utility>
 
 #include "homography.hpp"
 #include "reading/region_fit.hpp"
@@ -344,10 +343,10 @@ CodewordDecision DecideCodeword(const FittedModel& fitted) {
 
 ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners, FittedModel* fitted) {
   ModelReading reading;
-  FittedModel model = FitModel(bgr, corners, &reading.error);
+  const FittedModel model = FitModel(bgr, corners, &reading.error);
   reading.fit = model.fit;
   if (model.fit.ok) reading.decision = DecideCodeword(model);
-  if (fitted != nullptr) *fitted = std::move(model);
+  if (fitted != nullptr) *fitted = model;
   return reading;
 }
 
