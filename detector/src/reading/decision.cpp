@@ -10,11 +10,12 @@ namespace pintag::reading {
 std::string RefuseCodeword(const ModelReading& reading) {
   const CodewordDecision& d = reading.decision;
   if (!reading.fit.ok) return reading.error.empty() ? "no model fitted" : reading.error;
-  if (!d.winner) return "no codeword candidates";
+  // Before the winner: ReadCandidate does not search a codeword for a square this small.
   const Corners& q = reading.fit.corners;
   if (stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx) {
     return "square too small to read its codeword";
   }
+  if (!d.winner) return "no codeword candidates";
   const double inflation = VarianceInflation(reading.fit.chroma_correlation);
   const bool fits = d.excess <= kMaxExcess;
   const double least_independent_lead = fits ? kMinIndependentLeadOfAFit : kMinIndependentLead;

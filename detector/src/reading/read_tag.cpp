@@ -87,7 +87,13 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   r.model.fit = model.fit;
   const auto t2 = Clock::now();
   c.times.model_fit_ms = Ms(t1, t2);
-  if (model.fit.ok) r.model.decision = reading::DecideCodeword(model);
+  // A fitted square under the least side is refused whatever its codeword (RefuseCodeword), so
+  // its codeword is not searched for (a few milliseconds on 14-18 px squares).
+  const reading::Corners& fitted = r.model.fit.corners;
+  const bool readable_size =
+      stage::MeanSidePx(HomographyFromQuad({fitted[0], fitted[1], fitted[2], fitted[3]})) >=
+      reading::kMinSidePx;
+  if (model.fit.ok && readable_size) r.model.decision = reading::DecideCodeword(model);
   c.times.codeword_ms = Ms(t2, Clock::now());
   const std::string refused = reading::RefuseCodeword(r.model);
   if (!refused.empty()) {
@@ -95,7 +101,6 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
     r.payload.error = "model: " + refused;
     return c;
   }
-  const reading::Corners& fitted = r.model.fit.corners;
   const Quad moved{fitted[0], fitted[1], fitted[2], fitted[3]};
   if (accept_fitted && !accept_fitted(moved)) {
     r.payload.error = "model: the fitted square does not hold the candidate's elements";
