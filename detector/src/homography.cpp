@@ -103,30 +103,37 @@ bool Intersect(const cv::Vec4f& l1, const cv::Vec4f& l2, cv::Point2d* out) {
 
 namespace {
 
-// Line fits with the search reaching `wide_passes` times up to 8 px from the current edge, then
-// once 2.5 px. Corners may move at most `max_move` px in all.
-bool Refine(const cv::Mat& dark, int wide_passes, double max_move, Quad* local) {
-  Quad q = *local;
-  for (int pass = 0; pass <= wide_passes; ++pass) {
-    std::array<cv::Vec4f, 4> lines;
-    for (int i = 0; i < 4; ++i) {
-      const cv::Point2d a = q[i], b = q[(i + 1) % 4];
-      const double length = cv::norm(b - a);
-      const double reach = pass < wide_passes ? std::clamp(0.08 * length, 2.5, 8.0) : 2.5;
-      const std::vector<cv::Point2f> points = EdgePoints(dark, a, b, reach);
-      if (points.size() < 4) return false;
-      cv::fitLine(points, lines[i], cv::DIST_HUBER, 0, 0.01, 0.01);
-    }
-    for (int i = 0; i < 4; ++i) {
-      // Corner i is where the edge into it (i−1 → i) meets the edge out of it (i → i+1).
-      if (!Intersect(lines[(i + 3) % 4], lines[i], &q[i])) return false;
-    }
+// One line fit per side, the edge points searched up to `wide` ? 8 px (8 % of the side, at least
+// 2.5) : 2.5 px from the current side; `q` becomes the lines' corners. False when a side has too
+// few edge points or two lines do not meet.
+bool FitSides(const cv::Mat& dark, bool wide, Quad* q) {
+  std::array<cv::Vec4f, 4> lines;
+  for (int i = 0; i < 4; ++i) {
+    const cv::Point2d a = (*q)[i], b = (*q)[(i + 1) % 4];
+    const double length = cv::norm(b - a);
+    const double reach = wide ? std::clamp(0.08 * length, 2.5, 8.0) : 2.5;
+    const std::vector<cv::Point2f> points = EdgePoints(dark, a, b, reach);
+    if (points.size() < 4) return false;
+    cv::fitLine(points, lines[i], cv::DIST_HUBER, 0, 0.01, 0.01);
   }
   for (int i = 0; i < 4; ++i) {
-    if (cv::norm(q[i] - (*local)[i]) > max_move) return false;  // the fit went astray
+    // Corner i is where the edge into it (i−1 → i) meets the edge out of it (i → i+1).
+    if (!Intersect(lines[(i + 3) % 4], lines[i], &(*q)[i])) return false;
   }
-  if (SignedArea2(q) <= 0) return false;
-  *local = q;
+  return true;
+}
+
+// From `fitted` (the start after one wide fit), `more_wide` more wide fits and a narrow one; the
+// result replaces `*start` when no corner moved more than `max_move` px from it in all.
+bool Refine(const cv::Mat& dark, Quad fitted, int more_wide, double max_move, Quad* start) {
+  for (int pass = 0; pass <= more_wide; ++pass) {
+    if (!FitSides(dark, pass < more_wide, &fitted)) return false;
+  }
+  for (int i = 0; i < 4; ++i) {
+    if (cv::norm(fitted[i] - (*start)[i]) > max_move) return false;  // the fit went astray
+  }
+  if (SignedArea2(fitted) <= 0) return false;
+  *start = fitted;
   return true;
 }
 
@@ -139,8 +146,13 @@ bool RefineCorners(const cv::Mat& dark, cv::Point origin, Quad* quad) {
   for (int i = 0; i < 4; ++i) mean_side += cv::norm(local[(i + 1) % 4] - local[i]) / 4;
   // Usually the rough quad is within a pixel or two: one wide pass and one narrow. Where
   // something covers part of the outline it can be further off: then two wide passes (each fit
-  // Huber-weighted over the edge points found near the previous line) and a narrow one.
-  if (!Refine(dark, 1, 8, &local) && !Refine(dark, 2, 0.2 * mean_side, &local)) return false;
+  // Huber-weighted over the edge points found near the previous line) and a narrow one. Both
+  // begin with the same wide pass, fitted once (most candidates that are not tags fail there).
+  Quad fitted = local;
+  if (!FitSides(dark, /*wide=*/true, &fitted)) return false;
+  if (!Refine(dark, fitted, 0, 8, &local) && !Refine(dark, fitted, 1, 0.2 * mean_side, &local)) {
+    return false;
+  }
   for (int i = 0; i < 4; ++i) (*quad)[i] = local[i] + cv::Point2d(origin);
   return true;
 }
