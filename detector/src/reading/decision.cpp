@@ -7,14 +7,15 @@
 
 namespace pintag::reading {
 
+bool TooSmallToRead(const Corners& q) {
+  return stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx;
+}
+
 std::string RefuseCodeword(const ModelReading& reading) {
   const CodewordDecision& d = reading.decision;
   if (!reading.fit.ok) return reading.error.empty() ? "no model fitted" : reading.error;
   // Before the winner: ReadCandidate does not search a codeword for a square this small.
-  const Corners& q = reading.fit.corners;
-  if (stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx) {
-    return "square too small to read its codeword";
-  }
+  if (TooSmallToRead(reading.fit.corners)) return "square too small to read its codeword";
   if (!d.winner) return "no codeword candidates";
   const double inflation = VarianceInflation(reading.fit.chroma_correlation);
   const bool fits = d.excess <= kMaxExcess;

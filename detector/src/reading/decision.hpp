@@ -46,6 +46,10 @@ inline constexpr double kMinSidePx = 16;
 /// Least Cr by which both red levels exceed both green ones (the palette's: 0.41).
 inline constexpr double kMinRedOverGreenCr = 0.1;
 
+/// True when a square with these (fitted) corners is under kMinSidePx: its codeword is refused
+/// whatever it is, so ReadCandidate does not search for one.
+bool TooSmallToRead(const Corners& corners);
+
 /// Empty when `reading`'s winner is accepted, else why not.
 std::string RefuseCodeword(const ModelReading& reading);
 

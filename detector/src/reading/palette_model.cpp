@@ -18,7 +18,6 @@ PaletteModel::PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma,
     for (int j = 0; j < kModelRegions; ++j) {
       row_start_[system][static_cast<std::size_t>(j)] =
           static_cast<std::uint32_t>(nonzero_[system].size());
-      diagonal_[system][static_cast<std::size_t>(j)] = ata(static_cast<int>(system), j, j);
       for (int k = j + 1; k < kModelRegions; ++k) {
         const double value = ata(static_cast<int>(system), j, k);
         if (value != 0) nonzero_[system].push_back({static_cast<std::uint8_t>(k), value});
@@ -154,7 +153,8 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
       }
       SixVector& row = upper[static_cast<std::size_t>(labels[j])];
       for (std::size_t m = 0; m < kLevelCount; ++m) row[m] += sum[m];
-      diagonal[static_cast<std::size_t>(labels[j])] += diagonal_[system][j];
+      diagonal[static_cast<std::size_t>(labels[j])] +=
+          ata(static_cast<int>(system), static_cast<int>(j), static_cast<int>(j));
     }
     for (std::size_t l = 0; l < kLevelCount; ++l) {
       for (std::size_t m = 0; m < kLevelCount; ++m) b[l][m] = upper[l][m] + upper[m][l];

@@ -58,7 +58,7 @@ class PaletteModel {
   // Channel c's system: Y′ is the luma one, Cb and Cr share the chroma one.
   static int SystemOf(int channel) { return channel == 0 ? 0 : 1; }
 
-  // AᵀA's non-zero entries right of the diagonal, row by row, and its diagonal: the labels' 6 × 6
+  // AᵀA's non-zero entries right of the diagonal, row by row: with the diagonal, the labels' 6 × 6
   // sums take only these (AᵀA is symmetric). A blur of a pixel or two reaches few regions, so most
   // of AᵀA is zero. Row j's entries are nonzero_[system][row_start_[system][j] … row_start_[system]
   // [j + 1]).
@@ -68,7 +68,6 @@ class PaletteModel {
   };
   std::array<std::vector<Entry>, 2> nonzero_;
   std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> row_start_{};
-  std::array<std::array<double, kModelRegions>, 2> diagonal_{};
   std::array<std::array<double, std::size_t{kModelRegions} * kModelRegions>, 2> ata_{};
   std::array<std::array<double, kModelRegions>, 3> aty_{};
   std::array<double, 3> yty_{};

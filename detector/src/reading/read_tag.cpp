@@ -90,10 +90,9 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   // A fitted square under the least side is refused whatever its codeword (RefuseCodeword), so
   // its codeword is not searched for (a few milliseconds on 14-18 px squares).
   const reading::Corners& fitted = r.model.fit.corners;
-  const bool readable_size =
-      stage::MeanSidePx(HomographyFromQuad({fitted[0], fitted[1], fitted[2], fitted[3]})) >=
-      reading::kMinSidePx;
-  if (model.fit.ok && readable_size) r.model.decision = reading::DecideCodeword(model);
+  if (model.fit.ok && !reading::TooSmallToRead(fitted)) {
+    r.model.decision = reading::DecideCodeword(model);
+  }
   c.times.codeword_ms = Ms(t2, Clock::now());
   const std::string refused = reading::RefuseCodeword(r.model);
   if (!refused.empty()) {

@@ -12,7 +12,7 @@ constexpr int kN = kModelRegions;
 using Square = std::array<double, std::size_t{kN} * kN>;
 
 // Cholesky factorisation m = L Lᵀ in place (the lower triangle, each diagonal entry stored as its
-// reciprocal), then L Lᵀ x = b for each of `channels` right-hand sides b[·][ch], in place. The
+// reciprocal), then L Lᵀ x = b for each of the kChannels right-hand sides b[·][ch], in place. The
 // same operations in the same order as cv::solve(…, DECOMP_CHOLESKY), so the same bits, without
 // its matrix copies and with one factorisation for both chroma channels. False, as there, when a
 // pivot falls below machine epsilon.
