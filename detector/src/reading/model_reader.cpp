@@ -25,18 +25,23 @@ std::size_t StrideFor(std::size_t samples, std::size_t wanted) {
   return std::max<std::size_t>(1, samples / wanted);
 }
 
-// The observations and the grid they are modelled on, for one placement of the square.
+// The observations and the grid they are modelled on, for one placement of the square. The grid
+// is handed on from step to step (round blur, corners, shape and colours) rather than laid again
+// for the same corners: laying it is a twentieth of a model read.
 struct Placement {
   const TagSamples& samples;
-  RegionCoverage coverage;
-  Placement(const TagSamples& s, const Corners& corners)
-      : samples(s), coverage(Homography(corners), CoverageBox(s.bounds)) {}
+  Corners corners;
+  std::unique_ptr<const RegionCoverage> coverage;
+  Placement(const TagSamples& s, const Corners& c)
+      : Placement(s, c, std::make_unique<RegionCoverage>(Homography(c), CoverageBox(s.bounds))) {}
+  Placement(const TagSamples& s, const Corners& c, std::unique_ptr<const RegionCoverage> grid)
+      : samples(s), corners(c), coverage(std::move(grid)) {}
 };
 
 double LumaResidual(const Placement& p, const LumaBlur& blur, std::size_t stride,
                     bool by_position = false) {
   const FreeFit<1> fit =
-      SolveFree(AccumulateLuma(p.coverage, p.samples.luma, MakeKernel(blur), stride, by_position));
+      SolveFree(AccumulateLuma(*p.coverage, p.samples.luma, MakeKernel(blur), stride, by_position));
   return fit.ok ? fit.residual[0] : 1e300;
 }
 
@@ -90,15 +95,32 @@ LumaBlur SearchLumaBlur(const Placement& p, bool shape, const LumaBlur& from, in
   return best;
 }
 
-ChromaBlur SearchChromaBlur(const Placement& p, int* evaluations) {
-  ChromaBlur best;
+// The chroma blur with the system it was chosen on and that system's free fit (the model's own).
+struct ChromaSearch {
+  ChromaBlur blur;
+  ChromaSystem system;
+  FreeFit<2> free;
+};
+
+ChromaSearch SearchChromaBlur(const Placement& p, int* evaluations) {
+  ChromaSearch best;
   double best_residual = 1e300;
+  bool found = false;
   for (const double sigma : {0.3, 0.6, 0.9, 1.3, 1.8, 2.4}) {
     ++*evaluations;
-    const FreeFit<2> fit =
-        SolveFree(AccumulateChroma(p.coverage, p.samples.chroma, MakeKernel(ChromaBlur{sigma})));
+    ChromaSystem system =
+        AccumulateChroma(*p.coverage, p.samples.chroma, MakeKernel(ChromaBlur{sigma}));
+    const FreeFit<2> fit = SolveFree(system);
     const double r = fit.ok ? fit.residual[0] + fit.residual[1] : 1e300;
-    if (r < best_residual) best_residual = r, best = {sigma};
+    if (r < best_residual) {
+      best_residual = r;
+      best = {{sigma}, std::move(system), fit};
+      found = true;
+    }
+  }
+  if (!found) {  // no blur gave a fit: the default one's system, and its failure
+    best.system = AccumulateChroma(*p.coverage, p.samples.chroma, MakeKernel(best.blur));
+    best.free = SolveFree(best.system);
   }
   return best;
 }
@@ -108,9 +130,11 @@ ChromaBlur SearchChromaBlur(const Placement& p, int* evaluations) {
 // steep tag the elements and the quiet zone pull that crossing a pixel or more, and cells 3 px
 // across do not survive that. The Jacobian is the Lucas–Kanade one: moving a corner moves each
 // tag point by the homography's change, and the predicted luminance there changes by its
-// gradient along that motion (colours held).
-Corners RefineCorners(const TagSamples& samples, const Corners& start, const LumaBlur& blur,
-                      int* evaluations) {
+// gradient along that motion (colours held). Returns the best placement seen (`start` when no
+// step lowered the residual).
+Placement RefineCorners(Placement start, const LumaBlur& blur, int* evaluations) {
+  const TagSamples& samples = start.samples;
+  const Corners origin = start.corners;
   const Kernel kernel = MakeKernel(blur);
   std::vector<LumaSample> used;
   const std::size_t stride = StrideFor(samples.luma.size(), kCornerSamples);
@@ -135,24 +159,20 @@ Corners RefineCorners(const TagSamples& samples, const Corners& start, const Lum
       needed.push_back({s.x + d.x, s.y + d.y, 0});
     }
   }
-  const auto solve = [&](const Corners& c, std::array<double, kModelRegions>* colours,
-                         const RegionCoverage** keep, std::unique_ptr<RegionCoverage>* owner) {
-    auto coverage = std::make_unique<RegionCoverage>(Homography(c), box);
-    const FreeFit<1> fit = SolveFree(AccumulateLuma(*coverage, used, kernel));
+  const auto solve = [&](const RegionCoverage& coverage,
+                         std::array<double, kModelRegions>* colours) {
+    const FreeFit<1> fit = SolveFree(AccumulateLuma(coverage, used, kernel));
     ++*evaluations;
     if (!fit.ok) return 1e300;
     *colours = fit.colour[0];
-    *keep = coverage.get();
-    *owner = std::move(coverage);
     return fit.residual[0];
   };
-  const double max_total = MaxCornerShiftPx(stage::MeanSidePx(Homography(start)));
-  Corners corners = start;
+  const double max_total = MaxCornerShiftPx(stage::MeanSidePx(Homography(origin)));
   std::array<double, kModelRegions> colours{};
-  const RegionCoverage* coverage = nullptr;
-  std::unique_ptr<RegionCoverage> owned;
-  double residual = solve(corners, &colours, &coverage, &owned);
-  if (coverage == nullptr) return start;
+  double residual = solve(*start.coverage, &colours);
+  if (residual >= 1e300) return start;  // no free fit at the start
+  Corners corners = origin;
+  std::unique_ptr<const RegionCoverage> coverage = std::move(start.coverage);
   double lambda = 1e-3;
   constexpr double kStep = 0.05;  // px, the homography's change per coordinate
   for (int iteration = 0; iteration < 4; ++iteration) {
@@ -205,17 +225,17 @@ Corners RefineCorners(const TagSamples& samples, const Corners& start, const Lum
         const double n = cv::norm(d);
         if (n > 1.0) d *= 1.0 / n;  // at most a pixel per step
         next[k] += d;
-        const cv::Point2d total = next[k] - start[k];
-        if (cv::norm(total) > max_total) next[k] = start[k] + total * (max_total / cv::norm(total));
+        const cv::Point2d total = next[k] - origin[k];
+        if (cv::norm(total) > max_total)
+          next[k] = origin[k] + total * (max_total / cv::norm(total));
         largest = std::max(largest, cv::norm(next[k] - corners[k]));
       }
       std::array<double, kModelRegions> next_colours{};
-      const RegionCoverage* next_coverage = nullptr;
-      std::unique_ptr<RegionCoverage> next_owned;
-      const double next_residual = solve(next, &next_colours, &next_coverage, &next_owned);
+      auto next_coverage = std::make_unique<const RegionCoverage>(Homography(next), box);
+      const double next_residual = solve(*next_coverage, &next_colours);
       if (next_residual < residual) {
         corners = next, colours = next_colours, residual = next_residual;
-        coverage = next_coverage, owned = std::move(next_owned);
+        coverage = std::move(next_coverage);
         lambda = std::max(1e-4, lambda / 4);
         improved = true;
       } else {
@@ -224,7 +244,7 @@ Corners RefineCorners(const TagSamples& samples, const Corners& start, const Lum
     }
     if (!improved || largest < 0.02) break;
   }
-  return corners;
+  return {samples, corners, std::move(coverage)};
 }
 
 // The free chroma model's residuals at every chroma sample, for their correlation.
@@ -235,7 +255,7 @@ std::vector<GridResidual> ChromaResiduals(const Placement& p, const ChromaBlur& 
   residuals.reserve(p.samples.chroma.size());
   SampleWeights w;
   for (const ChromaSample& s : p.samples.chroma) {
-    p.coverage.blurred(kernel, s.x, s.y, w);
+    p.coverage->blurred(kernel, s.x, s.y, w);
     double cb = 0, cr = 0;
     for (const int region : w.touched) {
       const auto r = static_cast<std::size_t>(region);
@@ -268,21 +288,20 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
     *error = "too few samples for the model";
     return model;
   }
-  {
-    const Placement placed(samples, start);
-    fit.luma_blur = SearchLumaBlur(placed, /*shape=*/false, {}, &fit.evaluations);
+  Placement round(samples, start);
+  fit.luma_blur = SearchLumaBlur(round, /*shape=*/false, {}, &fit.evaluations);
+  const Placement placed = side <= kRefineCornersMaxSidePx
+                               ? RefineCorners(std::move(round), fit.luma_blur, &fit.evaluations)
+                               : std::move(round);
+  fit.corners = placed.corners;
+  for (std::size_t k = 0; k < 4; ++k) {
+    fit.corner_shift = std::max(fit.corner_shift, cv::norm(fit.corners[k] - start[k]));
   }
-  if (side <= kRefineCornersMaxSidePx) {
-    fit.corners = RefineCorners(samples, start, fit.luma_blur, &fit.evaluations);
-    for (std::size_t k = 0; k < 4; ++k) {
-      fit.corner_shift = std::max(fit.corner_shift, cv::norm(fit.corners[k] - start[k]));
-    }
-  }
-  const Placement placed(samples, fit.corners);
   fit.luma_blur = SearchLumaBlur(placed, /*shape=*/true, fit.luma_blur, &fit.evaluations);
-  fit.chroma_blur = SearchChromaBlur(placed, &fit.evaluations);
+  ChromaSearch chroma = SearchChromaBlur(placed, &fit.evaluations);
+  fit.chroma_blur = chroma.blur;
   const LumaRows luma_rows =
-      GatherLumaRows(placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
+      GatherLumaRows(*placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
                      StrideFor(samples.luma.size(), kFinalSamples));
   // The samples are weighted by the contrast under them (reading/edge_noise.hpp) only here: the
   // weights need the final placement's free colours, so the blur and corners above are searched
@@ -300,8 +319,8 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
       fit.luma_edge_noise = edge_noise;
     }
   }
-  model.chroma = AccumulateChroma(placed.coverage, samples.chroma, MakeKernel(fit.chroma_blur));
-  const FreeFit<2> free_chroma = SolveFree(model.chroma);
+  model.chroma = std::move(chroma.system);
+  const FreeFit<2>& free_chroma = chroma.free;
   if (!free_luma.ok || !free_chroma.ok) {
     *error = "model fit failed";
     return model;
