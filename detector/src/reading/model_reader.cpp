@@ -114,7 +114,7 @@ ChromaSearch SearchChromaBlur(const Placement& p, int* evaluations) {
     const double r = fit.ok ? fit.residual[0] + fit.residual[1] : 1e300;
     if (r < best_residual) {
       best_residual = r;
-      best = {{sigma}, std::move(system), fit};
+      best = {{sigma}, system, fit};
       found = true;
     }
   }
@@ -319,7 +319,7 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
       fit.luma_edge_noise = edge_noise;
     }
   }
-  model.chroma = std::move(chroma.system);
+  model.chroma = chroma.system;
   const FreeFit<2>& free_chroma = chroma.free;
   if (!free_luma.ok || !free_chroma.ok) {
     *error = "model fit failed";
