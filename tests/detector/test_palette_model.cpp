@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <opencv2/core.hpp>
 #include <random>
+#include <string>
 
 #include "reading/palette_model.hpp"
 
@@ -257,6 +258,64 @@ TEST(PaletteModel, FlipCostIsTheResidualChangeOfOneRegionTakingItsOtherLevel) {
     // The true labelling explains the samples best: every single flip costs.
     EXPECT_GT(change, 0) << "region " << j;
   }
+}
+
+TEST(PaletteModel, RelabelledGivesTheSumsAndFitOfTheLabellingItMovesTo) {
+  std::mt19937 rng(9);
+  const Labels truth = RandomLabels(rng);
+  const Problem p = MakeProblem(truth, PrintedPalette(), 10);
+  const LevelSystem from_truth = p.model.levelSystem(truth);
+  const auto expect_same = [&](const Labels& to, const std::string& what) {
+    const LevelSystem direct = p.model.levelSystem(to);
+    const LevelSystem moved = p.model.relabelled(from_truth, truth, to);
+    EXPECT_EQ(moved.regions, direct.regions) << what;
+    for (std::size_t s = 0; s < 2; ++s) {
+      for (std::size_t l = 0; l < kLevels; ++l) {
+        for (std::size_t m = 0; m < kLevels; ++m) {
+          EXPECT_NEAR(moved.btb[s][l][m], direct.btb[s][l][m], 1e-9 * (1 + direct.btb[s][l][l]))
+              << what << " system " << s << " B[" << l << "][" << m << "]";
+          // An empty level is zero exactly, as levelSystem leaves it.
+          if (direct.regions[l] == 0) {
+            EXPECT_EQ(moved.btb[s][l][m], 0) << what;
+          }
+        }
+      }
+    }
+    for (std::size_t ch = 0; ch < 3; ++ch) {
+      for (std::size_t l = 0; l < kLevels; ++l) {
+        EXPECT_NEAR(moved.bty[ch][l], direct.bty[ch][l], 1e-9 * (1 + std::abs(direct.bty[ch][l])))
+            << what;
+        if (direct.regions[l] == 0) {
+          EXPECT_EQ(moved.bty[ch][l], 0) << what;
+        }
+      }
+    }
+    double direct_residual = 0, moved_residual = 0;
+    const PaletteColours direct_colours = p.model.fit(direct, &direct_residual);
+    const PaletteColours moved_colours = p.model.fit(moved, &moved_residual);
+    EXPECT_NEAR(moved_residual, direct_residual, 1e-9 * direct_residual) << what;
+    for (std::size_t l = 0; l < kLevels; ++l) {
+      for (std::size_t ch = 0; ch < 3; ++ch) {
+        EXPECT_NEAR(moved_colours[l][ch], direct_colours[l][ch], 1e-9) << what;
+      }
+    }
+  };
+  // A few cells off, as a codeword's neighbours are; many cells off; every green a zero (key 0's
+  // greens: green 1 left empty); and the labelling itself.
+  for (int trial = 0; trial < 20; ++trial) {
+    Labels to = truth;
+    std::uniform_int_distribution<int> region(2, kModelRegions - 1);
+    const int flips = trial < 10 ? 1 + trial % 7 : 20 + trial;
+    for (int f = 0; f < flips; ++f) {
+      const auto j = static_cast<std::size_t>(region(rng));
+      to[j] = Flipped(to[j]);
+    }
+    expect_same(to, "trial " + std::to_string(trial));
+  }
+  Labels greens_zero = truth;
+  for (int& level : greens_zero) level = level == kGreen1 ? kGreen0 : level;
+  expect_same(greens_zero, "every green a zero");
+  expect_same(truth, "no change");
 }
 
 }  // namespace

@@ -24,6 +24,18 @@ PaletteModel::PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma,
       }
     }
     row_start_[system][kModelRegions] = static_cast<std::uint32_t>(nonzero_[system].size());
+    for (int j = 0; j < kModelRegions; ++j) {
+      off_diagonal_start_[system][static_cast<std::size_t>(j)] =
+          static_cast<std::uint32_t>(off_diagonal_[system].size());
+      for (int k = 0; k < kModelRegions; ++k) {
+        const double value = ata(static_cast<int>(system), j, k);
+        if (k != j && value != 0) {
+          off_diagonal_[system].push_back({static_cast<std::uint8_t>(k), value});
+        }
+      }
+    }
+    off_diagonal_start_[system][kModelRegions] =
+        static_cast<std::uint32_t>(off_diagonal_[system].size());
   }
   aty_[0] = luma.aty[0];
   aty_[1] = chroma.aty[0];
@@ -122,12 +134,11 @@ double SolveChannel(const Six& b, const SixVector& bty, double yty, std::span<co
 
 }  // namespace
 
-PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
-  PaletteColours colours{};
-  std::array<Six, 2> btb{};
-  std::array<bool, kLevels> used{};
-  for (int j = 0; j < kModelRegions; ++j)
-    used[static_cast<std::size_t>(labels[static_cast<std::size_t>(j)])] = true;
+LevelSystem PaletteModel::levelSystem(const Labels& labels) const {
+  LevelSystem level_system;
+  for (std::size_t j = 0; j < kModelRegions; ++j) {
+    ++level_system.regions[static_cast<std::size_t>(labels[j])];
+  }
   // B[l][m] sums AᵀA[j][k] over the regions j at level l and k at level m. AᵀA is symmetric, so
   // each pair j < k is taken once: the part of row j right of the diagonal is summed by its
   // regions' levels into row labels[j] of `upper`, and B is `upper` plus its transpose and the
@@ -140,7 +151,7 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
     return m;
   }();
   for (std::size_t system = 0; system < 2; ++system) {
-    Six& b = btb[system];
+    Six& b = level_system.btb[system];
     Six upper{};  // the pairs j < k, by (level of j, level of k)
     SixVector diagonal{};
     const std::vector<Entry>& entries = nonzero_[system];
@@ -161,6 +172,60 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
       b[l][l] += diagonal[l];
     }
   }
+  for (std::size_t ch = 0; ch < 3; ++ch) {
+    for (std::size_t j = 0; j < kModelRegions; ++j) {
+      level_system.bty[ch][static_cast<std::size_t>(labels[j])] += aty_[ch][j];
+    }
+  }
+  return level_system;
+}
+
+LevelSystem PaletteModel::relabelled(LevelSystem system, const Labels& from,
+                                     const Labels& to) const {
+  Labels now = from;
+  for (std::size_t j = 0; j < kModelRegions; ++j) {
+    const auto old_level = static_cast<std::size_t>(now[j]);
+    const auto new_level = static_cast<std::size_t>(to[j]);
+    if (old_level == new_level) continue;
+    // Region j leaves row and column old_level of B for new_level's, against every other
+    // region's level as it stands (regions moved before j at their new level).
+    for (std::size_t s = 0; s < 2; ++s) {
+      Six& b = system.btb[s];
+      for (std::uint32_t e = off_diagonal_start_[s][j]; e < off_diagonal_start_[s][j + 1]; ++e) {
+        const Entry& entry = off_diagonal_[s][e];
+        const auto other = static_cast<std::size_t>(now[entry.k]);
+        b[old_level][other] -= entry.value;
+        b[other][old_level] -= entry.value;
+        b[new_level][other] += entry.value;
+        b[other][new_level] += entry.value;
+      }
+      const double self = ata(static_cast<int>(s), static_cast<int>(j), static_cast<int>(j));
+      b[old_level][old_level] -= self;
+      b[new_level][new_level] += self;
+    }
+    for (std::size_t ch = 0; ch < 3; ++ch) {
+      system.bty[ch][old_level] -= aty_[ch][j];
+      system.bty[ch][new_level] += aty_[ch][j];
+    }
+    --system.regions[old_level];
+    ++system.regions[new_level];
+    now[j] = to[j];
+  }
+  // A level no region holds any more is zero, not what rounding left of it: the solve's
+  // regularisation then gives it the colour levelSystem's zeros would.
+  for (std::size_t l = 0; l < kLevelCount; ++l) {
+    if (system.regions[l] != 0) continue;
+    for (std::size_t s = 0; s < 2; ++s) {
+      for (std::size_t m = 0; m < kLevelCount; ++m) system.btb[s][l][m] = system.btb[s][m][l] = 0;
+    }
+    for (std::size_t ch = 0; ch < 3; ++ch) system.bty[ch][l] = 0;
+  }
+  return system;
+}
+
+PaletteColours PaletteModel::fit(const LevelSystem& system, double* residual) const {
+  PaletteColours colours{};
+  const auto used = [&](int level) { return system.regions[static_cast<std::size_t>(level)] > 0; };
   // The palette's order, where the free fit breaks it (kMinLumaStep, kMinCbStep): a class's one
   // is held that much brighter (luminance) or yellower (lower Cb) than its zero, so that a
   // codeword asking for a colour the tag does not have pays for it in its residual instead of
@@ -168,12 +233,8 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
   double total = 0;
   double range = 0;
   for (int ch = 0; ch < 3; ++ch) {
-    const Six& b = btb[static_cast<std::size_t>(SystemOf(ch))];
-    SixVector bty{};
-    for (int j = 0; j < kModelRegions; ++j) {
-      bty[static_cast<std::size_t>(labels[static_cast<std::size_t>(j)])] +=
-          aty_[static_cast<std::size_t>(ch)][static_cast<std::size_t>(j)];
-    }
+    const Six& b = system.btb[static_cast<std::size_t>(SystemOf(ch))];
+    const SixVector& bty = system.bty[static_cast<std::size_t>(ch)];
     const double yty = yty_[static_cast<std::size_t>(ch)];
     SixVector x{};
     double rss = SolveChannel(b, bty, yty, {}, &x);
@@ -197,7 +258,7 @@ PaletteColours PaletteModel::fit(const Labels& labels, double* residual) const {
       }
       const double green_least =
           std::max(least, (ch == 0 ? kGreenLumaStepOfRed : kGreenCbStepOfRed) * red_step);
-      if (used[kGreen0] && used[kGreen1] && step(kGreen0, kGreen1) < green_least) {
+      if (used(kGreen0) && used(kGreen1) && step(kGreen0, kGreen1) < green_least) {
         ties[tie_count++] = {kGreen0, kGreen1, sign * green_least};
       }
       if (tie_count > 0) rss = SolveChannel(b, bty, yty, std::span(ties.data(), tie_count), &x);

@@ -26,6 +26,15 @@ inline constexpr double kGreenCbStepOfRed = 0.5;
 /// Per level, Y′, Cb, Cr.
 using PaletteColours = std::array<std::array<double, 3>, kLevels>;
 
+/// A labelling's equations over the six levels: B = Σ AᵀA[j][k] by the levels of j and k (one per
+/// system: luma, chroma) and Bᵀy = Σ Aᵀy[j] by the level of j (one per channel), and how many
+/// regions each level holds. What PaletteModel::fit solves.
+struct LevelSystem {
+  std::array<std::array<std::array<double, kLevels>, kLevels>, 2> btb{};
+  std::array<std::array<double, kLevels>, 3> bty{};
+  std::array<int, kLevels> regions{};
+};
+
 class PaletteModel {
  public:
   /// `weights`: each channel's (Y′, Cb, Cr) residual is multiplied by its weight (1 / its noise
@@ -35,7 +44,19 @@ class PaletteModel {
   /// The colours that explain the samples best under `labels`, each class's one held at least the
   /// least steps above its zero, and with `residual` the weighted residual they leave (yᵀy − 2 xᵀb
   /// + xᵀBx per channel, from the labels' 6 × 6 equations).
-  PaletteColours fit(const Labels& labels, double* residual = nullptr) const;
+  PaletteColours fit(const Labels& labels, double* residual = nullptr) const {
+    return fit(levelSystem(labels), residual);
+  }
+  PaletteColours fit(const LevelSystem& system, double* residual = nullptr) const;
+
+  /// The labels' level system, summed over every region.
+  LevelSystem levelSystem(const Labels& labels) const;
+
+  /// The level system of `to`, from `system` (that of `from`) by moving the regions whose level
+  /// differs between the two: a codeword search scores hundreds of codewords a few cells from one
+  /// it has scored, and summing only those cells' rows costs a fraction of summing all 50. The
+  /// sums differ from levelSystem(to)'s only by rounding; a level left empty is exactly zero.
+  LevelSystem relabelled(LevelSystem system, const Labels& from, const Labels& to) const;
 
   /// Change of the weighted residual if region `j` took the other level of its class, colours held.
   double flipCost(const Labels& labels, const PaletteColours& colours, int j) const;
@@ -68,6 +89,9 @@ class PaletteModel {
   };
   std::array<std::vector<Entry>, 2> nonzero_;
   std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> row_start_{};
+  // AᵀA's non-zero entries off the diagonal, whole rows (for relabelled).
+  std::array<std::vector<Entry>, 2> off_diagonal_;
+  std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> off_diagonal_start_{};
   std::array<std::array<double, std::size_t{kModelRegions} * kModelRegions>, 2> ata_{};
   std::array<std::array<double, kModelRegions>, 3> aty_{};
   std::array<double, 3> yty_{};
