@@ -143,9 +143,11 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
   const auto slot = [](int turns, int key) {
     return static_cast<std::size_t>(turns) * kKeyCount + static_cast<std::size_t>(key);
   };
-  // Each codeword is fitted from the level system of a labelling a few cells from it: the one its
-  // orientation was ranked from, the codeword a neighbourhood is centred on, the winner (the
-  // search's instructions on the load scenes 0.96 -> 0.59 G; callgrind).
+  // Each codeword is fitted from the level system of a labelling near it, moving only the cells
+  // where the two differ: the labelling its orientation was ranked from (the ranking puts first
+  // the codewords that differ from it least, though that can still be many cells), the codeword a
+  // neighbourhood is centred on (at most 7 cells), or the winner (the search's instructions on
+  // the load scenes 0.96 -> 0.59 G; callgrind).
   struct Base {
     Labels labels{};
     LevelSystem system;

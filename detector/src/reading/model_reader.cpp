@@ -114,11 +114,13 @@ ChromaSearch SearchChromaBlur(const Placement& p, int* evaluations) {
     const double r = fit.ok ? fit.residual[0] + fit.residual[1] : 1e300;
     if (r < best_residual) {
       best_residual = r;
-      best = {{sigma}, system, fit};
+      best.blur = {sigma};
+      best.system = system;
+      best.free = fit;
       found = true;
     }
   }
-  if (!found) {  // no blur gave a fit: the default one's system, and its failure
+  if (!found) {  // no blur gave a fit: the default blur's system and fit, as the model took before
     best.system = AccumulateChroma(*p.coverage, p.samples.chroma, MakeKernel(best.blur));
     best.free = SolveFree(best.system);
   }
@@ -298,7 +300,7 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
     fit.corner_shift = std::max(fit.corner_shift, cv::norm(fit.corners[k] - start[k]));
   }
   fit.luma_blur = SearchLumaBlur(placed, /*shape=*/true, fit.luma_blur, &fit.evaluations);
-  ChromaSearch chroma = SearchChromaBlur(placed, &fit.evaluations);
+  const ChromaSearch chroma = SearchChromaBlur(placed, &fit.evaluations);
   fit.chroma_blur = chroma.blur;
   const LumaRows luma_rows =
       GatherLumaRows(*placed.coverage, samples.luma, MakeKernel(fit.luma_blur),
