@@ -15,27 +15,20 @@ PaletteModel::PaletteModel(const LumaSystem& luma, const ChromaSystem& chroma,
   ata_[0] = luma.ata;
   ata_[1] = chroma.ata;
   for (std::size_t system = 0; system < 2; ++system) {
+    std::vector<Entry>& entries = off_diagonal_[system];
     for (int j = 0; j < kModelRegions; ++j) {
-      row_start_[system][static_cast<std::size_t>(j)] =
-          static_cast<std::uint32_t>(nonzero_[system].size());
-      for (int k = j + 1; k < kModelRegions; ++k) {
-        const double value = ata(static_cast<int>(system), j, k);
-        if (value != 0) nonzero_[system].push_back({static_cast<std::uint8_t>(k), value});
-      }
-    }
-    row_start_[system][kModelRegions] = static_cast<std::uint32_t>(nonzero_[system].size());
-    for (int j = 0; j < kModelRegions; ++j) {
-      off_diagonal_start_[system][static_cast<std::size_t>(j)] =
-          static_cast<std::uint32_t>(off_diagonal_[system].size());
+      const auto row = static_cast<std::size_t>(j);
+      row_start_[system][row] = static_cast<std::uint32_t>(entries.size());
       for (int k = 0; k < kModelRegions; ++k) {
         const double value = ata(static_cast<int>(system), j, k);
-        if (k != j && value != 0) {
-          off_diagonal_[system].push_back({static_cast<std::uint8_t>(k), value});
+        if (k == j) {  // the diagonal is kept in ata_; what follows is right of it
+          upper_start_[system][row] = static_cast<std::uint32_t>(entries.size());
+        } else if (value != 0) {
+          entries.push_back({static_cast<std::uint8_t>(k), value});
         }
       }
     }
-    off_diagonal_start_[system][kModelRegions] =
-        static_cast<std::uint32_t>(off_diagonal_[system].size());
+    row_start_[system][kModelRegions] = static_cast<std::uint32_t>(entries.size());
   }
   aty_[0] = luma.aty[0];
   aty_[1] = chroma.aty[0];
@@ -154,11 +147,11 @@ LevelSystem PaletteModel::levelSystem(const Labels& labels) const {
     Six& b = level_system.btb[system];
     Six upper{};  // the pairs j < k, by (level of j, level of k)
     SixVector diagonal{};
-    const std::vector<Entry>& entries = nonzero_[system];
+    const std::vector<Entry>& entries = off_diagonal_[system];
     const auto& starts = row_start_[system];
     for (std::size_t j = 0; j < kModelRegions; ++j) {
       SixVector sum{};
-      for (std::uint32_t e = starts[j]; e < starts[j + 1]; ++e) {
+      for (std::uint32_t e = upper_start_[system][j]; e < starts[j + 1]; ++e) {
         const SixVector& level = kOneHot[static_cast<std::size_t>(labels[entries[e].k])];
         for (std::size_t m = 0; m < kLevelCount; ++m) sum[m] += entries[e].value * level[m];
       }
@@ -191,7 +184,7 @@ LevelSystem PaletteModel::relabelled(LevelSystem system, const Labels& from,
     // region's level as it stands (regions moved before j at their new level).
     for (std::size_t s = 0; s < 2; ++s) {
       Six& b = system.btb[s];
-      for (std::uint32_t e = off_diagonal_start_[s][j]; e < off_diagonal_start_[s][j + 1]; ++e) {
+      for (std::uint32_t e = row_start_[s][j]; e < row_start_[s][j + 1]; ++e) {
         const Entry& entry = off_diagonal_[s][e];
         const auto other = static_cast<std::size_t>(now[entry.k]);
         b[old_level][other] -= entry.value;

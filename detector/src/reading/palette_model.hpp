@@ -79,19 +79,18 @@ class PaletteModel {
   // Channel c's system: Y′ is the luma one, Cb and Cr share the chroma one.
   static int SystemOf(int channel) { return channel == 0 ? 0 : 1; }
 
-  // AᵀA's non-zero entries right of the diagonal, row by row: with the diagonal, the labels' 6 × 6
-  // sums take only these (AᵀA is symmetric). A blur of a pixel or two reaches few regions, so most
-  // of AᵀA is zero. Row j's entries are nonzero_[system][row_start_[system][j] … row_start_[system]
-  // [j + 1]).
+  // AᵀA's non-zero entries off the diagonal, row by row, each row's in column order: a blur of a
+  // pixel or two reaches few regions, so most of AᵀA is zero. Row j's entries are
+  // off_diagonal_[system][row_start_[system][j] … row_start_[system][j + 1]); those right of the
+  // diagonal begin at upper_start_[system][j]. With the diagonal, the labels' 6 × 6 sums take only
+  // the entries right of it (AᵀA is symmetric); relabelled takes whole rows.
   struct Entry {
     std::uint8_t k;
     double value;
   };
-  std::array<std::vector<Entry>, 2> nonzero_;
-  std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> row_start_{};
-  // AᵀA's non-zero entries off the diagonal, whole rows (for relabelled).
   std::array<std::vector<Entry>, 2> off_diagonal_;
-  std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> off_diagonal_start_{};
+  std::array<std::array<std::uint32_t, kModelRegions + 1>, 2> row_start_{};
+  std::array<std::array<std::uint32_t, kModelRegions>, 2> upper_start_{};
   std::array<std::array<double, std::size_t{kModelRegions} * kModelRegions>, 2> ata_{};
   std::array<std::array<double, kModelRegions>, 3> aty_{};
   std::array<double, 3> yty_{};
