@@ -4,7 +4,6 @@
 #include <array>
 #include <bit>
 #include <cstdint>
-#include <iterator>
 #include <memory>
 #include <opencv2/core/hal/intrin.hpp>
 
@@ -134,6 +133,9 @@ std::vector<std::vector<cv::Point>> TraceBorders(const cv::Mat& binary, BorderSe
   CV_Assert(binary.type() == CV_8UC1);
   WorkImage w = Pad(binary);
   std::vector<std::vector<cv::Point>> found;
+  // Each border is followed into one reused buffer and then copied out at its size: most borders
+  // are a few points, and growing a vector for each was half of this function's allocations.
+  std::vector<cv::Point> points;
   const int last = binary.cols + 1;  // the right padding column too (it holds only zeros)
   for (int y = 1; y <= binary.rows; ++y) {
     std::int8_t* row = w.cells.get() + static_cast<std::ptrdiff_t>(y) * w.stride;
@@ -141,13 +143,14 @@ std::vector<std::vector<cv::Point>> TraceBorders(const cv::Mat& binary, BorderSe
       const bool hole = row[x] == kZero;
       const int sx = hole ? x - 1 : x;
       const bool listed = which == BorderSet::kAll || !hole;
-      std::vector<cv::Point> points;
+      points.clear();
       Follow(w, row + sx, {sx - 1, y - 1}, hole, listed ? &points : nullptr);
-      if (listed) found.push_back(std::move(points));
+      if (listed) found.emplace_back(points.begin(), points.end());
     }
   }
   // OpenCV lists the borders last found first.
-  return {std::make_move_iterator(found.rbegin()), std::make_move_iterator(found.rend())};
+  std::reverse(found.begin(), found.end());
+  return found;
 }
 
 }  // namespace pintag::stage
