@@ -45,32 +45,58 @@ double LumaResidual(const Placement& p, const LumaBlur& blur, std::size_t stride
   return fit.ok ? fit.residual[0] : 1e300;
 }
 
+bool SameBlur(const LumaBlur& a, const LumaBlur& b) {
+  return a.major == b.major && a.minor == b.minor && a.angle_deg == b.angle_deg &&
+         a.sharpen == b.sharpen && a.sharpen_sigma == b.sharpen_sigma;
+}
+
+// A blur the search chose, and its residual on the placement it was searched on.
+struct BlurChoice {
+  LumaBlur blur;
+  double residual = 1e300;
+};
+
 // The luminance blur, by a small search on the free model's residual. Round blurs first (what
-// the corners are refined with), then, with `shape`, elongated ones around the best, steps of each
-// axis and the angle, and sharpening.
-LumaBlur SearchLumaBlur(const Placement& p, bool shape, const LumaBlur& from, int* evaluations) {
+// the corners are refined with), then, with `shape`, elongated ones around `from`, steps of each
+// axis and the angle, and sharpening. `from` is the round search's choice; when the placement is
+// still the one it was chosen on, its residual is known and not solved again. A step the clamps
+// bring back onto a blur already tried (the minor axis of a round blur lengthened, the largest
+// blur enlarged) is not solved again either: it could not win.
+BlurChoice SearchLumaBlur(const Placement& p, bool shape, const BlurChoice& from,
+                          bool from_placement_same, int* evaluations) {
   const std::size_t stride = StrideFor(p.samples.luma.size(), kSearchSamples);
-  LumaBlur best = from;
-  double best_residual = 1e300;
+  BlurChoice best{from.blur};
+  std::vector<LumaBlur> tried;
+  tried.reserve(16);
   const auto consider = [&](LumaBlur blur) {
     blur.major = std::clamp(blur.major, 0.25, kMaxSigmaPx);
     blur.minor = std::clamp(blur.minor, 0.25, blur.major);
+    if (std::any_of(tried.begin(), tried.end(),
+                    [&](const LumaBlur& t) { return SameBlur(t, blur); })) {
+      return;
+    }
+    tried.push_back(blur);
     ++*evaluations;
     const double r = LumaResidual(p, blur, stride);
-    if (r < best_residual) best_residual = r, best = blur;
+    if (r < best.residual) best = {blur, r};
   };
   if (!shape) {
     for (const double sigma : {0.35, 0.6, 0.9, 1.3, 1.9, 2.7}) consider({sigma, sigma, 0, 0, 1});
-    const double sigma = best.major;
+    const double sigma = best.blur.major;
     for (const double f : {0.8, 1.2}) consider({sigma * f, sigma * f, 0, 0, 1});
     return best;
   }
-  consider(from);
-  const LumaBlur round = best;
+  if (from_placement_same && from.residual < 1e300) {
+    tried.push_back(from.blur);
+    best = from;
+  } else {
+    consider(from.blur);
+  }
+  const LumaBlur round = best.blur;
   for (const double angle : {0.0, 45.0, 90.0, 135.0}) {
     consider({round.major * 1.6, round.minor / 1.25, angle, 0, 1});
   }
-  const LumaBlur centre = best;
+  const LumaBlur centre = best.blur;
   for (const double f : {1.25, 0.8}) {
     LumaBlur b = centre;
     b.major *= f;
@@ -86,7 +112,7 @@ LumaBlur SearchLumaBlur(const Placement& p, bool shape, const LumaBlur& from, in
       consider(b);
     }
   }
-  const LumaBlur unsharpened = best;
+  const LumaBlur unsharpened = best.blur;
   for (const double amount : {0.5, 1.0}) {
     LumaBlur b = unsharpened;
     b.sharpen = amount;
@@ -291,15 +317,19 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
     return model;
   }
   Placement round(samples, start);
-  fit.luma_blur = SearchLumaBlur(round, /*shape=*/false, {}, &fit.evaluations);
+  const BlurChoice round_blur =
+      SearchLumaBlur(round, /*shape=*/false, {}, /*from_placement_same=*/false, &fit.evaluations);
   const Placement placed = side <= kRefineCornersMaxSidePx
-                               ? RefineCorners(std::move(round), fit.luma_blur, &fit.evaluations)
+                               ? RefineCorners(std::move(round), round_blur.blur, &fit.evaluations)
                                : std::move(round);
   fit.corners = placed.corners;
   for (std::size_t k = 0; k < 4; ++k) {
     fit.corner_shift = std::max(fit.corner_shift, cv::norm(fit.corners[k] - start[k]));
   }
-  fit.luma_blur = SearchLumaBlur(placed, /*shape=*/true, fit.luma_blur, &fit.evaluations);
+  // RefineCorners hands back the starting grid unless a step lowered the residual.
+  const bool unmoved = placed.corners == start;
+  fit.luma_blur =
+      SearchLumaBlur(placed, /*shape=*/true, round_blur, unmoved, &fit.evaluations).blur;
   const ChromaSearch chroma = SearchChromaBlur(placed, &fit.evaluations);
   fit.chroma_blur = chroma.blur;
   const LumaRows luma_rows =
