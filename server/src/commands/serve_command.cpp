@@ -4,7 +4,6 @@
 // requests finish).
 
 #include <malloc.h>
-#include <pthread.h>
 #include <signal.h>
 
 #include <atomic>
@@ -19,6 +18,7 @@
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
 #include "commands/serve_replication.hpp"
+#include "commands/serve_signals.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/server/http_server.hpp"
@@ -75,12 +75,9 @@ void OneOpenCvThreadPerRequest() {
 
 void Run(const ServeArgs& args) {
   // SIGHUP asks a replica to reload; a follower may wait long for its first snapshot below, and
-  // SIGHUP's default action would end it there. Blocked now, a SIGHUP stays pending until the
-  // signal thread takes it as a reload. SIGINT and SIGTERM still stop the process while it waits.
-  sigset_t hangup;
-  sigemptyset(&hangup);
-  sigaddset(&hangup, SIGHUP);
-  pthread_sigmask(SIG_BLOCK, &hangup, nullptr);
+  // SIGHUP's default action would end it there. Handled now, a SIGHUP waits until the signal
+  // thread takes it as a reload. SIGINT and SIGTERM still stop the process while it waits.
+  ServeSignals signals;
   LimitMallocArenas();
   OneOpenCvThreadPerRequest();
   server::ConfigureLog(server::ParseLogFormat(args.log_format).value_or(server::LogFormat::kText));
@@ -105,14 +102,9 @@ void Run(const ServeArgs& args) {
   options.read_timeout = std::chrono::seconds(args.read_timeout_s);
   options.write_timeout = std::chrono::seconds(args.write_timeout_s);
 
-  // Signals are taken by one thread with sigwait, never by an asynchronous handler: block them
-  // here, before any thread starts, so every worker thread inherits the mask.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGHUP);  // a replica reloads its snapshot
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  // From here SIGINT and SIGTERM stop the server gracefully; blocked before any thread starts, so
+  // that every worker thread inherits the mask and only the waiter below is interrupted.
+  signals.takeStopSignals();
 
   server::HttpServer http(app::BuildApi(config), options);
   std::string error;
@@ -142,14 +134,13 @@ void Run(const ServeArgs& args) {
   std::cout << "Stop with Ctrl-C.\n" << std::flush;
 
   std::atomic<bool> finished{false};
-  std::thread waiter([&http, &finished, &replication, signals] {
-    int signal = 0;
-    sigwait(&signals, &signal);
+  std::thread waiter([&http, &finished, &replication, &signals] {
+    int signal = signals.wait();
     while (signal == SIGHUP && !finished) {
       replication.reload();
-      sigwait(&signals, &signal);
+      signal = signals.wait();
     }
-    if (finished) return;
+    if (finished || signal == 0) return;
     server::LogEvent(std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
                      ", finishing requests in flight");
     // A signal right after start may come before serve() runs; cpp-httplib ignores stop() then.
@@ -159,8 +150,7 @@ void Run(const ServeArgs& args) {
   const bool served = http.serve();
   // serve() returned: stop() ran from the waiter, or serving failed; then wake the waiter.
   finished = true;
-  // Every thread blocks SIGTERM; the waiter takes it from sigwait, so this wakes it, not kills it.
-  pthread_kill(waiter.native_handle(), SIGTERM);  // NOLINT(bugprone-bad-signal-to-kill-thread)
+  signals.wake();
   waiter.join();
   http.stop();
   server::LogEvent("stopped");

@@ -1,0 +1,83 @@
+#include "commands/serve_signals.hpp"
+
+#include <fcntl.h>
+#include <pthread.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <initializer_list>
+#include <stdexcept>
+#include <string>
+
+namespace pintag::cli {
+namespace {
+
+// Read end, write end. Written only by the handler and wake(); read only by the waiter.
+int g_pipe[2] = {-1, -1};
+
+// Runs in whichever thread the kernel chose: write(2) alone, which is async-signal-safe; the
+// write end does not block, so a flood of signals cannot stall the thread it lands on.
+extern "C" void PassToWaiter(int signal) {
+  const int saved = errno;
+  const auto byte = static_cast<unsigned char>(signal);
+  [[maybe_unused]] const ssize_t written = ::write(g_pipe[1], &byte, 1);
+  errno = saved;
+}
+
+sigset_t Only(std::initializer_list<int> signals) {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int s : signals) sigaddset(&set, s);
+  return set;
+}
+
+void Handle(int signal) {
+  struct sigaction action {};
+  action.sa_handler = PassToWaiter;
+  action.sa_mask = Only({SIGINT, SIGTERM, SIGHUP});
+  action.sa_flags = SA_RESTART;  // a library thread's sleep resumes where the signal found it
+  if (sigaction(signal, &action, nullptr) != 0) {
+    throw std::runtime_error("pintag serve: cannot handle signal " + std::to_string(signal));
+  }
+}
+
+}  // namespace
+
+ServeSignals::ServeSignals() {
+  if (g_pipe[0] < 0) {
+    if (::pipe2(g_pipe, O_CLOEXEC) != 0 ||
+        ::fcntl(g_pipe[1], F_SETFL, ::fcntl(g_pipe[1], F_GETFL) | O_NONBLOCK) != 0) {
+      throw std::runtime_error("pintag serve: cannot make the signal pipe");
+    }
+  }
+  const sigset_t hangup = Only({SIGHUP});
+  pthread_sigmask(SIG_BLOCK, &hangup, nullptr);
+  Handle(SIGHUP);
+}
+
+void ServeSignals::takeStopSignals() {
+  // Handled before blocked: a signal between the two reaches the pipe either way.
+  Handle(SIGINT);
+  Handle(SIGTERM);
+  const sigset_t stop = Only({SIGINT, SIGTERM, SIGHUP});
+  pthread_sigmask(SIG_BLOCK, &stop, nullptr);
+}
+
+int ServeSignals::wait() {
+  // Where no library thread takes a signal, it waits, pending, for a thread that lets it through.
+  const sigset_t all = Only({SIGINT, SIGTERM, SIGHUP});
+  pthread_sigmask(SIG_UNBLOCK, &all, nullptr);
+  for (;;) {
+    unsigned char byte = 0;
+    const ssize_t n = ::read(g_pipe[0], &byte, 1);
+    if (n == 1) return byte;
+    if (n < 0 && errno == EINTR) continue;  // the handler ran in this thread; its byte is next
+    return 0;  // the pipe failed (it is never closed): nothing more will arrive
+  }
+}
+
+void ServeSignals::wake() {
+  PassToWaiter(0);
+}
+
+}  // namespace pintag::cli
