@@ -45,11 +45,6 @@ double LumaResidual(const Placement& p, const LumaBlur& blur, std::size_t stride
   return fit.ok ? fit.residual[0] : 1e300;
 }
 
-bool SameBlur(const LumaBlur& a, const LumaBlur& b) {
-  return a.major == b.major && a.minor == b.minor && a.angle_deg == b.angle_deg &&
-         a.sharpen == b.sharpen && a.sharpen_sigma == b.sharpen_sigma;
-}
-
 // A blur the search chose, and its residual on the placement it was searched on.
 struct BlurChoice {
   LumaBlur blur;
@@ -71,10 +66,7 @@ BlurChoice SearchLumaBlur(const Placement& p, bool shape, const BlurChoice& from
   const auto consider = [&](LumaBlur blur) {
     blur.major = std::clamp(blur.major, 0.25, kMaxSigmaPx);
     blur.minor = std::clamp(blur.minor, 0.25, blur.major);
-    if (std::any_of(tried.begin(), tried.end(),
-                    [&](const LumaBlur& t) { return SameBlur(t, blur); })) {
-      return;
-    }
+    if (std::find(tried.begin(), tried.end(), blur) != tried.end()) return;
     tried.push_back(blur);
     ++*evaluations;
     const double r = LumaResidual(p, blur, stride);

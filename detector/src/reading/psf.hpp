@@ -20,6 +20,8 @@ struct LumaBlur {
   double angle_deg = 0;  ///< direction of the long axis, image x towards y
   double sharpen = 0;    ///< unsharp-mask amount, 0 = none
   double sharpen_sigma = 1.0;
+
+  bool operator==(const LumaBlur&) const = default;
 };
 
 /// The blur of a chroma sample: the 2 × 2 pixels JPEG averages into one sample (4:2:0), each the

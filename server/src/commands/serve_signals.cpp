@@ -31,10 +31,15 @@ sigset_t Only(std::initializer_list<int> signals) {
   return set;
 }
 
+// The three signals the server answers.
+sigset_t Served() {
+  return Only({SIGINT, SIGTERM, SIGHUP});
+}
+
 void Handle(int signal) {
   struct sigaction action {};
   action.sa_handler = PassToWaiter;
-  action.sa_mask = Only({SIGINT, SIGTERM, SIGHUP});
+  action.sa_mask = Served();
   action.sa_flags = SA_RESTART;  // a library thread's sleep resumes where the signal found it
   if (sigaction(signal, &action, nullptr) != 0) {
     throw std::runtime_error("pintag serve: cannot handle signal " + std::to_string(signal));
@@ -59,14 +64,14 @@ void ServeSignals::takeStopSignals() {
   // Handled before blocked: a signal between the two reaches the pipe either way.
   Handle(SIGINT);
   Handle(SIGTERM);
-  const sigset_t stop = Only({SIGINT, SIGTERM, SIGHUP});
-  pthread_sigmask(SIG_BLOCK, &stop, nullptr);
+  const sigset_t served = Served();
+  pthread_sigmask(SIG_BLOCK, &served, nullptr);
 }
 
 int ServeSignals::wait() {
   // Where no library thread takes a signal, it waits, pending, for a thread that lets it through.
-  const sigset_t all = Only({SIGINT, SIGTERM, SIGHUP});
-  pthread_sigmask(SIG_UNBLOCK, &all, nullptr);
+  const sigset_t served = Served();
+  pthread_sigmask(SIG_UNBLOCK, &served, nullptr);
   for (;;) {
     unsigned char byte = 0;
     const ssize_t n = ::read(g_pipe[0], &byte, 1);
