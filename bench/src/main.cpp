@@ -72,6 +72,8 @@ void Usage(FILE* to) {
       "  --tagless N           tagless photograph frames (default 64)\n"
       "  --seed N              base seed of the sweep (default 1)\n"
       "  --world W             held-out (default) or tuning: which world's scenes\n"
+      "  --jpeg-quality N      save every frame at JPEG quality N (1-100) instead of the "
+      "quality its light draws\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
       "  --csv FILE            also write one row per frame and detector\n"
@@ -124,6 +126,16 @@ bool ParseArgs(int argc, char** argv, Args* args) {
         return false;
       }
       args->sweep.world = w == "tuning" ? scene::World::kTuning : scene::World::kHeldOut;
+    } else if (a == "--jpeg-quality") {
+      const char* v = value("--jpeg-quality");
+      if (v == nullptr) return false;
+      char* end = nullptr;
+      const long quality = std::strtol(v, &end, 10);
+      if (end == v || *end != '\0' || quality < 1 || quality > 100) {
+        std::fprintf(stderr, "pintag_bench: --jpeg-quality is 1 to 100\n");
+        return false;
+      }
+      args->sweep.jpeg_quality = static_cast<int>(quality);
     } else if (a == "--out") {
       const char* v = value("--out");
       if (v == nullptr) return false;

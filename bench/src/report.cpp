@@ -84,6 +84,10 @@ std::string ReportMarkdown(const BenchResult& r) {
              ? " (backgrounds, seeds and rendering path no tuning run has seen; see above)"
              : " (the side the detector is tuned on: not evidence)")
      << " |\n";
+  if (r.sweep.jpeg_quality > 0) {
+    md << "| JPEG quality | **every frame at " << r.sweep.jpeg_quality
+       << "** (`--jpeg-quality`), not the quality its light draws |\n";
+  }
   md << "| date | " << m.date_utc << " |\n";
   md << "| commit | " << m.commit << " |\n";
   md << "| CPU | " << m.cpu_model << ", " << m.cores << " logical cores |\n";
@@ -212,7 +216,8 @@ std::string ReportMarkdown(const BenchResult& r) {
           ++target_bins;
           if (p.found * std::max(1, a.tags) < a.found * std::max(1, p.tags)) {
             ++behind;
-            cell = "**" + cell + "**";
+            cell.insert(0, "**");
+            cell += "**";
           }
         }
         row.push_back(cell);

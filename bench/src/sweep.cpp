@@ -116,6 +116,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     frames[i].index = static_cast<int>(i);
     frames[i].world = options.world;
   }
+  for (FrameSpec& f : frames) f.jpeg_quality = options.jpeg_quality;
   return frames;
 }
 
@@ -144,6 +145,10 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
       frame.hard ? scene::Photometry::Hard(frame.seed) : scene::Photometry::Moderate(frame.seed);
   spec.capture = frame.hard ? scene::PhoneCapture::Hard(frame.seed)
                             : scene::PhoneCapture::Moderate(frame.seed);
+  if (frame.jpeg_quality > 0) {
+    spec.photometry.jpeg_quality = frame.jpeg_quality;
+    spec.capture.jpeg_quality = frame.jpeg_quality;
+  }
   const bool held_out = frame.world == scene::World::kHeldOut;
   if (frame.tagless() && frame.blank_label_px == 0) return spec;
   scene::PlacedMarker placed;

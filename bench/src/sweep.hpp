@@ -40,6 +40,10 @@ struct SweepOptions {
   /// Base seed of the whole sweep. The held-out world mixes it with a salt of its own, so the two
   /// worlds never share a frame's seed.
   std::uint64_t seed = 1;
+  /// 0: every frame saved at the JPEG quality its light draws (the worlds' ranges); 1 … 100: every
+  /// frame saved at this quality instead, the rest of its light unchanged (what a scanner app's
+  /// upload quality costs).
+  int jpeg_quality = 0;
 };
 
 struct FrameSpec {
@@ -60,6 +64,7 @@ struct FrameSpec {
   /// none) at this tilt (placed at `centre`, turned by the two angles above).
   int blank_label_px = 0;
   double blank_label_tilt_deg = 0;
+  int jpeg_quality = 0;  ///< SweepOptions::jpeg_quality
 
   bool tagless() const { return size_index < 0; }
 };
