@@ -115,8 +115,8 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
   for (std::size_t i = 0; i < frames.size(); ++i) {
     frames[i].index = static_cast<int>(i);
     frames[i].world = options.world;
+    frames[i].jpeg_quality = options.jpeg_quality;
   }
-  for (FrameSpec& f : frames) f.jpeg_quality = options.jpeg_quality;
   return frames;
 }
 
