@@ -39,12 +39,16 @@ OrientationResult AsOrientation(const reading::CodewordDecision& d) {
 
 }  // namespace
 
+bool NeededRecovery(const PayloadResult& payload) {
+  return payload.bit_from_parity || payload.bits_from_second_copy > 0;
+}
+
 PayloadResult DecodeReading(const OrientationResult& orientation) {
   // A 24 px tag read with 9 unknown bits, 4 from one copy, 1 from parity and a weakest bit at
   // 0.31 decoded to another key in the benchmark.
   PayloadResult payload = DecodePayload(orientation.reading);
-  const bool recovered = payload.bit_from_parity || payload.bits_from_second_copy > 0;
-  if (payload.key && recovered && orientation.min_known_margin < kRecoveredReadingMinMargin) {
+  if (payload.key && NeededRecovery(payload) &&
+      orientation.min_known_margin < kRecoveredReadingMinMargin) {
     payload.key.reset();
     payload.error = "bits recovered, but another bit is read too weakly to trust the rest";
   }
@@ -63,12 +67,18 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   if (r.orientation.ok) r.payload = DecodeReading(r.orientation);
   const auto t1 = Clock::now();
   c.times.sample_ms = Ms(t0, t1);
-  if (r.payload.key) {
+  const double side = MeanSidePx(HomographyFromQuad(quad));
+  if (r.payload.key && (!NeededRecovery(r.payload) || side > reading::kModelMaxSidePx)) {
     r.reader = Reader::kDirect;
     return c;
   }
-  // Small or blurred cells mix: read the tag through a model of its pixels.
-  const double side = MeanSidePx(HomographyFromQuad(quad));
+  // A direct reading that needed recovery spent the redundancy that would have shown a misread
+  // bit, so the model decides it too (docs/DETECTOR.md, "Recovered direct readings"); small or
+  // blurred cells mix, and the model reads what direct samples could not.
+  if (r.payload.key) {
+    r.payload.key.reset();
+    r.payload.error = "bits recovered, and the model did not confirm the key";
+  }
   if (side > reading::kModelMaxSidePx) return c;
   // Each side changes by at most twice a corner's shift: a square that cannot reach the least side
   // the codeword is read at would be refused after the fit (RefuseCodeword).

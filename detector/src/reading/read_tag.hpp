@@ -15,9 +15,14 @@
 
 namespace pintag::stage {
 
+/// Whether the codec needed recovery for this key: a bit from the other payload copy, or one from
+/// the parity. Such a key has no redundancy left to show a wrongly read bit.
+bool NeededRecovery(const PayloadResult& payload);
+
 /// The codec's verdict on an oriented reading, with one rule of the detector's own: a reading that
-/// needed recovery (a bit from the other payload copy, or one from the parity) is refused unless
-/// every bit it did read has a margin of at least kRecoveredReadingMinMargin.
+/// needed recovery is refused unless every bit it did read has a margin of at least
+/// kRecoveredReadingMinMargin. (ReadCandidate asks more of it: below kModelMaxSidePx the model
+/// reader must decide the key too.)
 inline constexpr double kRecoveredReadingMinMargin = 0.5;
 PayloadResult DecodeReading(const OrientationResult& orientation);
 
