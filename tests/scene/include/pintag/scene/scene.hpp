@@ -80,9 +80,14 @@ enum class Cast { kNone, kTungsten, kFluorescent, kShade };
 struct Photometry {
   double gradient = 0;  ///< brightness falloff across the frame, 0 … 0.6
   Cast cast = Cast::kNone;
-  double defocus_sigma_px = 0;    ///< Gaussian blur sigma
-  double motion_px = 0;           ///< motion blur length
-  double noise_sigma = 0;         ///< sensor noise, 8-bit code values
+  double defocus_sigma_px = 0;  ///< Gaussian blur sigma
+  double motion_px = 0;         ///< motion blur length
+  double noise_sigma = 0;       ///< sensor noise at mid-grey (linear 0.2), 8-bit code values
+  /// Share of the noise variance at mid-grey that is the same at every light level (read noise);
+  /// the rest grows with linear light (shot noise). Either is seen through the sRGB curve, whose
+  /// slope near black is several times its slope at mid-grey, so below 1 the dark parts of a tag
+  /// move by more code values than its bright parts. 1: noise even in code values.
+  double read_noise_share = 1.0;
   int jpeg_quality = 0;           ///< 0 = no JPEG round trip, else 1 … 100
   double exposure = 1.0;          ///< overall gain
   double gradient_angle_deg = 0;  ///< direction in which the light falls off (image, clockwise)
@@ -101,12 +106,14 @@ struct Photometry {
   /// Random mild settings: gradient 0 … 0.3, any cast or none, defocus σ 0 … 1 px, motion blur
   /// 0 … 2 px half the time, noise σ 1 … 4, JPEG quality 75 … 95, exposure 0.8 … 1.15; tone gamma
   /// 0.85 … 1.15, saturation 0.95 … 1.3, colour denoising σ 0.5 … 1.5 px half the time, sharpening
-  /// 0 … 1 (σ 0.6 … 1.2 px); Bayer three times in four, in any of the four phases.
+  /// 0 … 1 (σ 0.6 … 1.2 px); Bayer three times in four, in any of the four phases; half the time
+  /// a sensor's noise (read share 0.1 … 0.5), otherwise even.
   static Photometry Moderate(std::uint64_t seed);
   /// Random harsh settings: gradient 0.3 … 0.6, a cast, defocus σ 0.8 … 2 px, motion blur
-  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 70, exposure 0.55 … 1.3, Bayer (RGGB) half the
-  /// time; tone gamma 0.75 … 1.25, saturation 0.85 … 1.4, colour denoising σ 0.5 … 2 px,
-  /// sharpening 0.3 … 1.6 (σ 0.7 … 1.5 px).
+  /// 1.5 … 5 px, noise σ 4 … 9, JPEG quality 40 … 95, exposure 0.55 … 1.3, Bayer (RGGB) half the
+  /// time; tone gamma 0.75 … 1.25, saturation 0.85 … 1.4, colour denoising σ 0.5 … 2 px seven
+  /// times in ten, sharpening 0.3 … 1.6 (σ 0.7 … 1.5 px); half the time a sensor's noise (read
+  /// share 0.1 … 0.5), otherwise even.
   static Photometry Hard(std::uint64_t seed);
 };
 
