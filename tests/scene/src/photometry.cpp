@@ -124,6 +124,22 @@ void ApplyMotionBlur(cv::Mat& frame, double length_px, double angle_deg) {
   cv::filter2D(frame, frame, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
 }
 
+/// Replaces each 8-bit sample v of `frame` by noisy(v, d), d a 16-bit draw that indexes
+/// NormalTable (four draws from each 64 random bits).
+template <typename Noisy>
+void AddNoise(cv::Mat& frame, Rng& rng, Noisy noisy) {
+  for (int y = 0; y < frame.rows; ++y) {
+    auto* row = frame.ptr<std::uint8_t>(y);
+    const int n = frame.cols * frame.channels();
+    std::uint64_t bits = 0;
+    for (int i = 0; i < n; ++i) {
+      if ((i & 3) == 0) bits = rng.next();
+      row[i] = noisy(row[i], static_cast<std::uint16_t>(bits & 0xFFFF));
+      bits >>= 16;
+    }
+  }
+}
+
 /// Noise whose spread depends on the code value it lands on: read noise plus shot noise in linear
 /// light, through the sRGB curve's slope, `sigma` code values at mid-grey (linear 0.2).
 void ApplySensorNoise(cv::Mat& frame, double sigma, double read_share, Rng& rng) {
@@ -139,17 +155,10 @@ void ApplySensorNoise(cv::Mat& frame, double sigma, double read_share, Rng& rng)
     spread[v] = static_cast<float>(sigma * relative_sd * srgb_slope(linear) / srgb_slope(kMidGrey));
   }
   const auto& normal = NormalTable();
-  for (int y = 0; y < frame.rows; ++y) {
-    auto* row = frame.ptr<std::uint8_t>(y);
-    const int n = frame.cols * frame.channels();
-    std::uint64_t bits = 0;
-    for (int i = 0; i < n; ++i) {
-      if ((i & 3) == 0) bits = rng.next();
-      const float noisy = row[i] + spread[row[i]] * normal[bits & 0xFFFF] + 0.5f;
-      bits >>= 16;
-      row[i] = static_cast<std::uint8_t>(std::clamp(noisy, 0.0f, 255.0f));
-    }
-  }
+  AddNoise(frame, rng, [&](std::uint8_t v, std::uint16_t draw) {
+    const float noisy = static_cast<float>(v) + spread[v] * normal[draw] + 0.5f;
+    return static_cast<std::uint8_t>(std::clamp(noisy, 0.0f, 255.0f));
+  });
 }
 
 void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
@@ -159,17 +168,10 @@ void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
   for (std::size_t i = 0; i < table.size(); ++i) {
     table[i] = static_cast<std::int16_t>(std::clamp(std::lround(sigma * normal[i]), -255L, 255L));
   }
-  for (int y = 0; y < frame.rows; ++y) {
-    auto* row = frame.ptr<std::uint8_t>(y);
-    const int n = frame.cols * frame.channels();
-    std::uint64_t bits = 0;
-    for (int i = 0; i < n; ++i) {
-      if ((i & 3) == 0) bits = rng.next();
-      const int noisy = row[i] + table[bits & 0xFFFF];
-      bits >>= 16;
-      row[i] = static_cast<std::uint8_t>(noisy < 0 ? 0 : noisy > 255 ? 255 : noisy);
-    }
-  }
+  AddNoise(frame, rng, [&](std::uint8_t v, std::uint16_t draw) {
+    const int noisy = v + table[draw];
+    return static_cast<std::uint8_t>(noisy < 0 ? 0 : noisy > 255 ? 255 : noisy);
+  });
 }
 
 /// Keeps one colour per pixel in the phase's Bayer pattern (bayer.hpp), then demosaics bilinearly.
