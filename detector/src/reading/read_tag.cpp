@@ -43,6 +43,19 @@ bool NeededRecovery(const PayloadResult& payload) {
   return payload.bit_from_parity || payload.bits_from_second_copy > 0;
 }
 
+int ElementsWithUnknownCells(const OrientationResult& orientation) {
+  const CellReading& cells = orientation.reading;
+  int elements = 0;
+  for (int e = 0; e < kElements; ++e) {
+    const auto unknown = [](Bit b) { return b == Bit::kUnknown; };
+    if (std::any_of(cells.green[e].begin(), cells.green[e].end(), unknown) ||
+        std::any_of(cells.red[e].begin(), cells.red[e].end(), unknown)) {
+      ++elements;
+    }
+  }
+  return elements;
+}
+
 PayloadResult DecodeReading(const OrientationResult& orientation) {
   // A 24 px tag read with 9 unknown bits, 4 from one copy, 1 from parity and a weakest bit at
   // 0.31 decoded to another key in the benchmark.
@@ -68,13 +81,16 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   const auto t1 = Clock::now();
   c.times.sample_ms = Ms(t0, t1);
   const double side = MeanSidePx(HomographyFromQuad(quad));
-  if (r.payload.key && (!NeededRecovery(r.payload) || side > reading::kModelMaxSidePx)) {
+  const bool guessed = NeededRecovery(r.payload) && ElementsWithUnknownCells(r.orientation) > 1;
+  if (r.payload.key && (!guessed || side > reading::kModelMaxSidePx)) {
     r.reader = Reader::kDirect;
     return c;
   }
-  // A direct reading that needed recovery spent the redundancy that would have shown a misread
-  // bit, so the model decides it too (docs/DETECTOR.md, "Recovered direct readings"); small or
-  // blurred cells mix, and the model reads what direct samples could not.
+  // The code's redundancy is laid out for one lost element (a covered one). A reading recovered
+  // from unknown cells in several elements was read poorly throughout, and recovery spent the
+  // redundancy that would have shown a misread bit, so the model decides it (docs/DETECTOR.md,
+  // "Recovered direct readings"). Small or blurred cells mix: the model reads what direct
+  // samples could not.
   if (r.payload.key) {
     r.payload.key.reset();
     r.payload.error = "bits recovered, and the model did not confirm the key";

@@ -19,10 +19,13 @@ namespace pintag::stage {
 /// the parity. Such a key has no redundancy left to show a wrongly read bit.
 bool NeededRecovery(const PayloadResult& payload);
 
+/// How many of the four elements hold a cell read as unknown.
+int ElementsWithUnknownCells(const OrientationResult& orientation);
+
 /// The codec's verdict on an oriented reading, with one rule of the detector's own: a reading that
 /// needed recovery is refused unless every bit it did read has a margin of at least
-/// kRecoveredReadingMinMargin. (ReadCandidate asks more of it: below kModelMaxSidePx the model
-/// reader must decide the key too.)
+/// kRecoveredReadingMinMargin. (ReadCandidate asks more of it: when its unknown cells lie in more
+/// than one element, the model reader decides the key instead, for squares up to kModelMaxSidePx.)
 inline constexpr double kRecoveredReadingMinMargin = 0.5;
 PayloadResult DecodeReading(const OrientationResult& orientation);
 
