@@ -91,10 +91,7 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   // redundancy that would have shown a misread bit, so the model decides it (docs/DETECTOR.md,
   // "Recovered direct readings"). Small or blurred cells mix: the model reads what direct
   // samples could not.
-  if (r.payload.key) {
-    r.payload.key.reset();
-    r.payload.error = "bits recovered, and the model did not confirm the key";
-  }
+  r.payload.key.reset();  // every path below gives the model's key or says why there is none
   if (side > reading::kModelMaxSidePx) return c;
   // Each side changes by at most twice a corner's shift: a square that cannot reach the least side
   // the codeword is read at would be refused after the fit (RefuseCodeword).
