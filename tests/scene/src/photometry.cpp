@@ -289,10 +289,12 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
   } else if (p.gradient > 0 || p.exposure != 1.0 || p.cast != Cast::kNone) {
     frame = ApplyLight<std::uint8_t>(frame, p);
   }
-  if (p.noise_sigma > 0 && p.read_noise_share < 1) {
-    ApplySensorNoise(frame, p.noise_sigma, p.read_noise_share, rng);
-  } else if (p.noise_sigma > 0) {
-    ApplyNoise(frame, p.noise_sigma, rng);
+  if (p.noise_sigma > 0) {
+    if (p.read_noise_share < 1) {
+      ApplySensorNoise(frame, p.noise_sigma, p.read_noise_share, rng);
+    } else {
+      ApplyNoise(frame, p.noise_sigma, rng);
+    }
   }
   if (p.bayer) ApplyBayer(frame, p.bayer_phase);
   ApplyProcessing(frame, p);
