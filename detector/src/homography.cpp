@@ -183,4 +183,18 @@ double MeanSidePx(const cv::Matx33d& tag_to_image) {
                          Apply(tag_to_image, 1, 1), Apply(tag_to_image, 0, 1)});
 }
 
+double ShortExtentPx(const cv::Matx33d& tag_to_image) {
+  const cv::Matx33d& h = tag_to_image;
+  constexpr double kCentre = 0.5;
+  const double w = h(2, 0) * kCentre + h(2, 1) * kCentre + h(2, 2);
+  const cv::Point2d c = Apply(h, kCentre, kCentre);
+  // d(x, y)/d(u, v) of x = (h00 u + h01 v + h02) / w, and the same for y.
+  const double a = (h(0, 0) - c.x * h(2, 0)) / w, b = (h(0, 1) - c.x * h(2, 1)) / w;
+  const double d = (h(1, 0) - c.y * h(2, 0)) / w, e = (h(1, 1) - c.y * h(2, 1)) / w;
+  // Singular values of [[a, b], [d, e]]: σ² = (S ∓ √(S² − 4 det²)) / 2, S the squared entries.
+  const double sum = a * a + b * b + d * d + e * e, det = a * e - b * d;
+  const double root = std::sqrt(std::max(0.0, sum * sum - 4 * det * det));
+  return std::sqrt(std::max(0.0, (sum - root) / 2));
+}
+
 }  // namespace pintag::stage

@@ -26,4 +26,9 @@ cv::Point2d Apply(const cv::Matx33d& h, double u, double v);
 /// The mean side (px) of the square that `tag_to_image` maps the unit square to.
 double MeanSidePx(const cv::Matx33d& tag_to_image);
 
+/// The square's extent (px) across its most foreshortened direction at its centre: the smaller
+/// singular value of the map's derivative there. A frontal square of side s gives s; tilted by θ,
+/// s cos θ, whatever the direction of the tilt.
+double ShortExtentPx(const cv::Matx33d& tag_to_image);
+
 }  // namespace pintag::stage

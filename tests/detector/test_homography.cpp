@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <utility>
 #include <vector>
@@ -21,6 +22,46 @@ TEST(Homography, MapsTheUnitSquareToTheQuad) {
   const Quad r = RotateQuad(q, 1);
   EXPECT_EQ(r[0], q[1]);
   EXPECT_EQ(r[3], q[0]);
+}
+
+TEST(Homography, ShortExtentIsTheNarrowWidthOfARectangleWhateverItsTurn) {
+  for (const double turn_deg : {0.0, 30.0, 45.0, 100.0}) {
+    const double t = turn_deg * CV_PI / 180;
+    const cv::Point2d along(std::cos(t), std::sin(t)), across(-std::sin(t), std::cos(t));
+    const cv::Point2d o(200, 150);
+    const Quad q = {o, o + 40 * along, o + 40 * along + 16 * across, o + 16 * across};
+    EXPECT_NEAR(ShortExtentPx(HomographyFromQuad(q)), 16, 1e-4) << turn_deg;
+    EXPECT_NEAR(MeanSidePx(HomographyFromQuad(q)), 28, 1e-4) << turn_deg;
+  }
+}
+
+TEST(Homography, ShortExtentOfATiltedSquareIsItsSideTimesTheTiltsCosine) {
+  // A 50 mm square 1.5 m from a 1500 px camera (50 px frontal), tilted about axes of several
+  // directions in its plane; far enough that perspective changes the extent by under 1 %.
+  constexpr double kFocalPx = 1500, kSideM = 0.05, kDistanceM = 1.5;
+  for (const double tilt_deg : {0.0, 40.0, 65.0}) {
+    for (const double axis_deg : {0.0, 45.0, 80.0}) {
+      const double tilt = tilt_deg * CV_PI / 180, axis = axis_deg * CV_PI / 180;
+      const cv::Vec3d a(std::cos(axis), std::sin(axis), 0);  // the tilt axis, in the square's plane
+      const cv::Matx33d turn = [&] {
+        cv::Matx33d r;
+        cv::Rodrigues(cv::Vec3d(a * tilt), r);
+        return r;
+      }();
+      Quad q;
+      const double uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      for (int i = 0; i < 4; ++i) {
+        const cv::Vec3d p =
+            turn * cv::Vec3d((uv[i][0] - 0.5) * kSideM, (uv[i][1] - 0.5) * kSideM, 0) +
+            cv::Vec3d(0, 0, kDistanceM);
+        q[static_cast<std::size_t>(i)] = {960 + kFocalPx * p[0] / p[2],
+                                          540 + kFocalPx * p[1] / p[2]};
+      }
+      const double frontal = kFocalPx * kSideM / kDistanceM;
+      EXPECT_NEAR(ShortExtentPx(HomographyFromQuad(q)), frontal * std::cos(tilt), 0.01 * frontal)
+          << tilt_deg << "° about " << axis_deg << "°";
+    }
+  }
 }
 
 TEST(Homography, RefinesRoughCornersToASmallFractionOfAPixel) {

@@ -244,6 +244,46 @@ TEST(ModelReader, AWinnerThatFitsAsWellAsTheFreeLabellingNeedsASmallerLead) {
   EXPECT_EQ(RefuseCodeword(r), refused_for_lead);
 }
 
+// Where wrong winners lead most, on squares narrow one way (small, or steeply tilted), a winner
+// that fits needs the larger lead. A real reading's corners are squeezed by hand across
+// kNarrowExtentPx.
+TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
+  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
+  ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  ASSERT_EQ(RefuseCodeword(r), "");
+  ASSERT_FALSE(IsNarrow(r.fit.corners));
+  r.fit.chroma_correlation = {0.6, 0.6};  // 16 times the variance: kMinLead is passed below
+  const double inflation = VarianceInflation(r.fit.chroma_correlation);
+  r.decision.excess = kMaxExcess * 0.5;  // the winner fits
+  ASSERT_LT(kMinIndependentLeadOfAFit, kMinIndependentLeadOfANarrowFit);
+  r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
+  ASSERT_GE(r.decision.lead, kMinLead);
+  EXPECT_EQ(RefuseCodeword(r), "");
+  // The same corners squeezed towards their centre line, across one pair of sides, to a little
+  // under kNarrowExtentPx and a little over.
+  const Corners as_read = r.fit.corners;
+  const auto squeezed = [&](double extent_px) {
+    const cv::Point2d mid01 = (as_read[0] + as_read[1]) / 2, mid32 = (as_read[3] + as_read[2]) / 2;
+    const double across = cv::norm(mid32 - mid01);
+    const double k = extent_px / across;
+    Corners q = as_read;
+    const cv::Point2d centre = (mid01 + mid32) / 2;
+    const cv::Point2d unit = (mid32 - mid01) / across;
+    for (cv::Point2d& p : q) p -= (1 - k) * unit * (p - centre).dot(unit);
+    return q;
+  };
+  r.fit.corners = squeezed(kNarrowExtentPx * 0.9);
+  ASSERT_TRUE(IsNarrow(r.fit.corners));
+  EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
+  r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 1.05;
+  EXPECT_EQ(RefuseCodeword(r), "");
+  r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
+  r.fit.corners = squeezed(kNarrowExtentPx * 1.1);
+  ASSERT_FALSE(IsNarrow(r.fit.corners));
+  EXPECT_EQ(RefuseCodeword(r), "");
+}
+
 TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {
   cv::Mat bgr(120, 120, CV_8UC3, cv::Scalar(235, 235, 235));
   cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);

@@ -7,8 +7,20 @@
 
 namespace pintag::reading {
 
-bool TooSmallToRead(const Corners& q) {
-  return stage::MeanSidePx(stage::HomographyFromQuad({q[0], q[1], q[2], q[3]})) < kMinSidePx;
+namespace {
+
+cv::Matx33d SquareHomography(const Corners& corners) {
+  return stage::HomographyFromQuad({corners[0], corners[1], corners[2], corners[3]});
+}
+
+}  // namespace
+
+bool TooSmallToRead(const Corners& corners) {
+  return stage::MeanSidePx(SquareHomography(corners)) < kMinSidePx;
+}
+
+bool IsNarrow(const Corners& corners) {
+  return stage::ShortExtentPx(SquareHomography(corners)) < kNarrowExtentPx;
 }
 
 std::string RefuseCodeword(const ModelReading& reading) {
@@ -19,7 +31,10 @@ std::string RefuseCodeword(const ModelReading& reading) {
   if (!d.winner) return "no codeword candidates";
   const double inflation = VarianceInflation(reading.fit.chroma_correlation);
   const bool fits = d.excess <= kMaxExcess;
-  const double least_independent_lead = fits ? kMinIndependentLeadOfAFit : kMinIndependentLead;
+  const double least_independent_lead = !fits ? kMinIndependentLead
+                                        : IsNarrow(reading.fit.corners)
+                                            ? kMinIndependentLeadOfANarrowFit
+                                            : kMinIndependentLeadOfAFit;
   if (d.lead < kMinLead || d.lead / inflation < least_independent_lead) {
     return "no codeword clearly nearest";
   }

@@ -32,6 +32,22 @@ inline constexpr double kMinIndependentLead = 35;
 /// and 23 run whole with the codeword search of 2026-11-29 (re-ranked around the winner): 17.0
 /// and 22.3; seed 22's 27.9 with the search before it was a codeword the search never scored.
 inline constexpr double kMinIndependentLeadOfAFit = 30;
+/// Squares narrower than this one way (px, stage::ShortExtentPx at the fitted corners: small, or
+/// steeply tilted) are where wrong winners that fit lead most. On the tuning probe with every
+/// frame saved at JPEG quality 90 (pintag_reader_probe --world tuning --reader model
+/// --jpeg-quality 90, seeds 22 and 23, 48 frames per bin, corners jittered by 0.6 px: 13,440
+/// readings; docs/DETECTOR.md, "The misread rate, measured by its tail"), 231 of the 237 wrong
+/// winners that fit and pass every other check lie on such squares, the two largest among them
+/// (45.0, which the lead of 30 accepted: a misread, and 36.3, which kMinLead refused). On the
+/// others (6, the largest 15.1) the tail's fit asks 30.1 for an estimated misread share of 1e-5:
+/// kMinIndependentLeadOfAFit stays.
+inline constexpr double kNarrowExtentPx = 18;
+/// Least independent lead of a winner that fits, on a narrow square. On that probe the narrow
+/// wrong winners' leads past 4 fall off exponentially with a scale of 6.7 (72 of them): 30 left an
+/// estimated 1.1e-4 of readings misread, 48 leaves 7e-6 (1.5e-5 with the scale one standard error
+/// larger). At the qualities the tuning world draws, wrong winners that fit fall off faster (scale
+/// 4.0, all squares together): 30 left 7e-6 there, 48 leaves under 1e-7.
+inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
 inline constexpr double kMinLead = 50;
@@ -45,6 +61,9 @@ inline constexpr double kMaxIndependentExcess = 8;
 inline constexpr double kMinSidePx = 16;
 /// Least Cr by which both red levels exceed both green ones (the palette's: 0.41).
 inline constexpr double kMinRedOverGreenCr = 0.1;
+
+/// True when a square with these (fitted) corners is narrower than kNarrowExtentPx.
+bool IsNarrow(const Corners& corners);
 
 /// True when a square with these (fitted) corners is under kMinSidePx: its codeword is refused
 /// whatever it is, so ReadCandidate does not search for one.
