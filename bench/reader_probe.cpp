@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "homography.hpp"
+#include "lead_tail.hpp"
 #include "pintag/scene/rng.hpp"
 #include "reading/codeword_search.hpp"
 #include "reading/decision.hpp"
@@ -84,6 +85,30 @@ struct Count {
   int right = 0, wrong = 0, unread = 0;
 };
 
+// The misread rate each lead threshold of reading/decision.hpp leaves, estimated from the tail of
+// the wrong winners' leads (lead_tail.hpp), and the leads that would leave 1e-5, 1e-6 and 1e-7.
+// Shares are of all readings: a class's own share is larger by all readings / its readings.
+void PrintLeadTails(const std::vector<double>& fit, const std::vector<double>& narrow_fit,
+                    const std::vector<double>& misfit, std::size_t readings) {
+  constexpr double kTailFrom = 4;  // past the bulk of wrong winners, below where they thin out
+  std::printf(
+      "wrong winners passing every check but the lead, of %zu readings "
+      "(independent units; tail above %.0f):\n",
+      readings, kTailFrom);
+  const auto print = [&](const char* what, const std::vector<double>& leads, double threshold) {
+    const LeadTail tail = FitLeadTail(leads, readings, kTailFrom);
+    const double largest = leads.empty() ? 0 : *std::max_element(leads.begin(), leads.end());
+    std::printf(
+        "  %-19s %4zu, largest %5.1f, %3zu in the tail, scale %5.2f: misread share at "
+        "%.0f %.1e; lead for 1e-5 %.1f, 1e-6 %.1f, 1e-7 %.1f\n",
+        what, leads.size(), largest, tail.above, tail.scale, threshold, tail.rateAbove(threshold),
+        tail.leadFor(1e-5), tail.leadFor(1e-6), tail.leadFor(1e-7));
+  };
+  print("fitting, narrow", narrow_fit, reading::kMinIndependentLeadOfANarrowFit);
+  print("fitting, not narrow", fit, reading::kMinIndependentLeadOfAFit);
+  print("not fitting", misfit, reading::kMinIndependentLead);
+}
+
 int Main(int argc, char** argv) {
   Args args;
   args.sweep.tagless_frames = 0;
@@ -121,11 +146,19 @@ int Main(int argc, char** argv) {
       args.max_size_px = std::atoi(next());
     } else if (a == "--frame") {
       args.frame = std::atoi(next());
+    } else if (a == "--jpeg-quality") {
+      // As pintag_bench's: every frame saved at this quality, not the one its light draws.
+      const int quality = std::atoi(next());
+      if (quality < 1 || quality > 100) {
+        std::fprintf(stderr, "pintag_reader_probe: --jpeg-quality is 1 to 100\n");
+        return 2;
+      }
+      args.sweep.jpeg_quality = quality;
     } else {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
-                   "[--threads N] "
+                   "[--jpeg-quality N] [--threads N] "
                    "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
@@ -147,6 +180,11 @@ int Main(int argc, char** argv) {
     return counts[slot(f.hard ? 1 : 0, f.size_index, f.tilt_index)];
   };
   std::mutex mutex;
+  // Independent leads of the wrong winners that pass every check but the lead, by which of the
+  // three thresholds of reading/decision.hpp applies: fitting (excess at most kMaxExcess) on a
+  // narrow square, fitting elsewhere, or not fitting.
+  std::vector<double> wrong_fit_leads, wrong_narrow_fit_leads, wrong_misfit_leads;
+  std::size_t model_readings = 0;
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
   if (csv != nullptr) {
     std::fprintf(
@@ -155,7 +193,7 @@ int Main(int argc, char** argv) {
         "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
         "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused,"
         "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass,other_refusal,"
-        "truth_over_winner\n");
+        "truth_over_winner,short_extent_px\n");
   }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
@@ -213,24 +251,39 @@ int Main(int argc, char** argv) {
                                                             : "wrong");
             WriteResidual(args.residuals, name, s.bgr, m.fit);
           }
+          const double short_extent =
+              m.fit.ok
+                  ? stage::ShortExtentPx(stage::HomographyFromQuad(
+                        {m.fit.corners[0], m.fit.corners[1], m.fit.corners[2], m.fit.corners[3]}))
+                  : 0;
+          const bool narrow = m.fit.ok && reading::IsNarrow(m.fit.corners);
           // Until the decision rule is settled, the probe accepts no codeword: it logs them.
           const std::lock_guard lock(mutex);
           if (csv != nullptr) {
-            std::fprintf(csv,
-                         "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
-                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s,%.2f\n",
-                         f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
-                         d, truth.id, refused.empty() ? dec.winner->value() : -1,
-                         dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
-                         dec.runner_up_distance, m.fit.luma_noise, m.fit.chroma_noise,
-                         m.fit.luma_blur.major, m.fit.luma_blur.minor, m.fit.luma_blur.sharpen,
-                         m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
-                         m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
-                         m.fit.chroma_samples,
-                         refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
-                         m.fit.chroma_correlation.x, m.fit.chroma_correlation.y,
-                         dec.lead / reading::VarianceInflation(m.fit.chroma_correlation),
-                         others_pass ? 1 : 0, other_refusal.c_str(), truth_over_winner);
+            std::fprintf(
+                csv,
+                "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
+                "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s,%.2f,%.2f\n",
+                f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0, d,
+                truth.id, refused.empty() ? dec.winner->value() : -1,
+                dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess, dec.runner_up_distance,
+                m.fit.luma_noise, m.fit.chroma_noise, m.fit.luma_blur.major, m.fit.luma_blur.minor,
+                m.fit.luma_blur.sharpen, m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
+                m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
+                m.fit.chroma_samples,
+                refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
+                m.fit.chroma_correlation.x, m.fit.chroma_correlation.y,
+                dec.lead / reading::VarianceInflation(m.fit.chroma_correlation),
+                others_pass ? 1 : 0, other_refusal.c_str(), truth_over_winner, short_extent);
+          }
+          ++model_readings;
+          if (dec.winner && dec.winner->value() != truth.id && others_pass) {
+            const double lead = dec.lead / reading::VarianceInflation(m.fit.chroma_correlation);
+            if (dec.excess > reading::kMaxExcess) {
+              wrong_misfit_leads.push_back(lead);
+            } else {
+              (narrow ? wrong_narrow_fit_leads : wrong_fit_leads).push_back(lead);
+            }
           }
           Count& c = at(f);
           if (!dec.winner) {
@@ -275,6 +328,10 @@ int Main(int argc, char** argv) {
       "%s world, seed %llu, %d frames per bin, jitter %.2f px x %d: right / wrong / unread\n",
       ToString(args.sweep.world).c_str(), static_cast<unsigned long long>(args.sweep.seed),
       args.sweep.frames_per_bin, args.jitter_px, args.jitter_px > 0 ? args.draws : 1);
+  if (args.sweep.jpeg_quality > 0) {
+    std::printf("every frame at JPEG quality %d, not the quality its light draws\n",
+                args.sweep.jpeg_quality);
+  }
   for (int hard = 0; hard < 2; ++hard) {
     std::printf("%s\n  size  ", hard ? "hard" : "moderate");
     for (int t = 0; t < kTiltCount; ++t) std::printf("%9d°", kTiltsDeg[t]);
@@ -292,6 +349,9 @@ int Main(int argc, char** argv) {
       }
       std::printf("   | %4d/%-4d %5d\n", right, all, wrong);
     }
+  }
+  if (args.model) {
+    PrintLeadTails(wrong_fit_leads, wrong_narrow_fit_leads, wrong_misfit_leads, model_readings);
   }
   return 0;
 }
