@@ -279,7 +279,7 @@ int Main(int argc, char** argv) {
           ++model_readings;
           if (dec.winner && dec.winner->value() != truth.id && others_pass) {
             const double lead = dec.lead / reading::VarianceInflation(m.fit.chroma_correlation);
-            if (dec.excess > reading::kMaxExcess) {
+            if (!(dec.excess <= reading::kMaxExcess)) {  // as RefuseCodeword decides "fits"
               wrong_misfit_leads.push_back(lead);
             } else {
               (narrow ? wrong_narrow_fit_leads : wrong_fit_leads).push_back(lead);

@@ -28,7 +28,8 @@ double MeanSidePx(const cv::Matx33d& tag_to_image);
 
 /// The square's extent (px) across its most foreshortened direction at its centre: the smaller
 /// singular value of the map's derivative there. A frontal square of side s gives s; tilted by θ,
-/// s cos θ, whatever the direction of the tilt.
+/// s cos θ whatever the direction of the tilt (exactly when its centre lies on the optical axis,
+/// closely elsewhere).
 double ShortExtentPx(const cv::Matx33d& tag_to_image);
 
 }  // namespace pintag::stage

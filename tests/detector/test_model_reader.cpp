@@ -278,6 +278,17 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
   r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 1.05;
   EXPECT_EQ(RefuseCodeword(r), "");
+  r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 0.98;
+  EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
+  // A winner that does not fit keeps its own threshold on a narrow square too.
+  ASSERT_LT(kMinIndependentLead, kMinIndependentLeadOfANarrowFit);
+  r.decision.lead = inflation * (kMinIndependentLead + kMinIndependentLeadOfANarrowFit) / 2;
+  r.decision.excess = kMaxExcess * 1.5;
+  ASSERT_LE(r.decision.excess / inflation, kMaxIndependentExcess);
+  EXPECT_EQ(RefuseCodeword(r), "");
+  r.decision.lead = inflation * kMinIndependentLead * 0.95;
+  EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
+  r.decision.excess = kMaxExcess * 0.5;
   r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
   r.fit.corners = squeezed(kNarrowExtentPx * 1.1);
   ASSERT_FALSE(IsNarrow(r.fit.corners));

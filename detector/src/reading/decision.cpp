@@ -20,7 +20,8 @@ bool TooSmallToRead(const Corners& corners) {
 }
 
 bool IsNarrow(const Corners& corners) {
-  return stage::ShortExtentPx(SquareHomography(corners)) < kNarrowExtentPx;
+  // Written so that a degenerate square (no finite extent) counts as narrow: the stricter rule.
+  return !(stage::ShortExtentPx(SquareHomography(corners)) >= kNarrowExtentPx);
 }
 
 std::string RefuseCodeword(const ModelReading& reading) {

@@ -22,15 +22,16 @@ namespace pintag::reading {
 /// to before.
 inline constexpr double kMinIndependentLead = 35;
 /// Least independent lead of a winner that explains the samples as well as the best free
-/// labelling does (excess at most kMaxExcess). The lead is a likelihood ratio only where the model
-/// fits. First set to 26 on a small probe (seeds 21-24, 8 frames per bin, corners jittered by
-/// 0.6 px, 3 draws), where such wrong winners reached 20.9; on the probe of kMinIndependentLead's
-/// size (48 frames per bin, 2 draws), seeds 21 and 24 whole and 22 and 23 in part, they reach
-/// 23.65 (seed 24, frame 3307: 32 px at 55° in hard light, past every other check), and 30 keeps
-/// 1.25 times that away. On seeds 21 and 24 it accepts 12 and 13 more of the 1,728 hard-light
-/// target readings than 32, none wrong (docs/DETECTOR.md, "Raised: that smaller lead"). Seeds 22
-/// and 23 run whole with the codeword search of 2026-11-29 (re-ranked around the winner): 17.0
-/// and 22.3; seed 22's 27.9 with the search before it was a codeword the search never scored.
+/// labelling does (excess at most kMaxExcess), on a square that is not narrow (below). The lead is
+/// a likelihood ratio only where the model fits. First set to 26 on a small probe (seeds 21-24, 8
+/// frames per bin, corners jittered by 0.6 px, 3 draws), where such wrong winners reached 20.9; on
+/// the probe of kMinIndependentLead's size (48 frames per bin, 2 draws), seeds 21 and 24 whole and
+/// 22 and 23 in part, they reach 23.65 (seed 24, frame 3307: 32 px at 55° in hard light, past every
+/// other check), and 30 keeps 1.25 times that away. On seeds 21 and 24 it accepts 12 and 13 more of
+/// the 1,728 hard-light target readings than 32, none wrong (docs/DETECTOR.md, "Raised: that
+/// smaller lead"). Seeds 22 and 23 run whole with the codeword search of 2026-11-29 (re-ranked
+/// around the winner): 17.0 and 22.3; seed 22's 27.9 with the search before it was a codeword the
+/// search never scored.
 inline constexpr double kMinIndependentLeadOfAFit = 30;
 /// Squares narrower than this one way (px, stage::ShortExtentPx at the fitted corners: small, or
 /// steeply tilted) are where wrong winners that fit lead most. On the tuning probe with every
