@@ -257,6 +257,8 @@ int Main(int argc, char** argv) {
                         {m.fit.corners[0], m.fit.corners[1], m.fit.corners[2], m.fit.corners[3]}))
                   : 0;
           const bool narrow = m.fit.ok && reading::IsNarrow(m.fit.corners);
+          const double lead_independent =
+              dec.lead / reading::VarianceInflation(m.fit.chroma_correlation);
           // Until the decision rule is settled, the probe accepts no codeword: it logs them.
           const std::lock_guard lock(mutex);
           if (csv != nullptr) {
@@ -272,17 +274,15 @@ int Main(int argc, char** argv) {
                 m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
                 m.fit.chroma_samples,
                 refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
-                m.fit.chroma_correlation.x, m.fit.chroma_correlation.y,
-                dec.lead / reading::VarianceInflation(m.fit.chroma_correlation),
+                m.fit.chroma_correlation.x, m.fit.chroma_correlation.y, lead_independent,
                 others_pass ? 1 : 0, other_refusal.c_str(), truth_over_winner, short_extent);
           }
           ++model_readings;
           if (dec.winner && dec.winner->value() != truth.id && others_pass) {
-            const double lead = dec.lead / reading::VarianceInflation(m.fit.chroma_correlation);
             if (!(dec.excess <= reading::kMaxExcess)) {  // as RefuseCodeword decides "fits"
-              wrong_misfit_leads.push_back(lead);
+              wrong_misfit_leads.push_back(lead_independent);
             } else {
-              (narrow ? wrong_narrow_fit_leads : wrong_fit_leads).push_back(lead);
+              (narrow ? wrong_narrow_fit_leads : wrong_fit_leads).push_back(lead_independent);
             }
           }
           Count& c = at(f);
