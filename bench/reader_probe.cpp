@@ -193,7 +193,7 @@ int Main(int argc, char** argv) {
         "luma_noise,chroma_noise,major,minor,sharpen,chroma_sigma,corner_error,corner_shift,"
         "evaluations,ms,residual,free_residual,luma_samples,chroma_samples,refused,"
         "chroma_correlation_x,chroma_correlation_y,lead_independent,others_pass,other_refusal,"
-        "truth_over_winner,short_extent_px\n");
+        "truth_over_winner,short_extent_px,chroma_deficit\n");
   }
   std::atomic<std::size_t> next{0};
   const auto worker = [&] {
@@ -262,20 +262,21 @@ int Main(int argc, char** argv) {
           // Until the decision rule is settled, the probe accepts no codeword: it logs them.
           const std::lock_guard lock(mutex);
           if (csv != nullptr) {
-            std::fprintf(
-                csv,
-                "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
-                "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s,%.2f,%.2f\n",
-                f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0, d,
-                truth.id, refused.empty() ? dec.winner->value() : -1,
-                dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess, dec.runner_up_distance,
-                m.fit.luma_noise, m.fit.chroma_noise, m.fit.luma_blur.major, m.fit.luma_blur.minor,
-                m.fit.luma_blur.sharpen, m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
-                m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
-                m.fit.chroma_samples,
-                refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
-                m.fit.chroma_correlation.x, m.fit.chroma_correlation.y, lead_independent,
-                others_pass ? 1 : 0, other_refusal.c_str(), truth_over_winner, short_extent);
+            std::fprintf(csv,
+                         "%d,%d,%d,%d,%d,%d,%d,%d,%.2f,%.2f,%d,%.5f,%.5f,%.2f,%.2f,%.2f,%.2f,%.3f,"
+                         "%.3f,%d,%.2f,%.1f,%.1f,%zu,%zu,%s,%.4f,%.4f,%.2f,%d,%s,%.2f,%.2f,%.2f\n",
+                         f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index], f.hard ? 1 : 0,
+                         d, truth.id, refused.empty() ? dec.winner->value() : -1,
+                         dec.winner ? dec.winner->value() : -1, dec.lead, dec.excess,
+                         dec.runner_up_distance, m.fit.luma_noise, m.fit.chroma_noise,
+                         m.fit.luma_blur.major, m.fit.luma_blur.minor, m.fit.luma_blur.sharpen,
+                         m.fit.chroma_blur.sigma, corner_error, m.fit.corner_shift,
+                         m.fit.evaluations, ms, dec.residual, dec.free_residual, m.fit.luma_samples,
+                         m.fit.chroma_samples,
+                         refused.empty() ? "" : refused.substr(0, refused.find(' ', 12)).c_str(),
+                         m.fit.chroma_correlation.x, m.fit.chroma_correlation.y, lead_independent,
+                         others_pass ? 1 : 0, other_refusal.c_str(), truth_over_winner,
+                         short_extent, dec.chroma_deficit);
           }
           ++model_readings;
           if (dec.winner && dec.winner->value() != truth.id && others_pass) {

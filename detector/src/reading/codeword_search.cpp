@@ -137,6 +137,7 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
     double residual;
     Candidate candidate;
     PaletteColours colours;
+    double chroma_residual;  // Cb's and Cr's part of `residual`
   };
   std::vector<Scored> scored;
   std::vector<bool> is_scored(4 * static_cast<std::size_t>(kKeyCount));
@@ -159,9 +160,10 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
     is_scored[slot(c.turns, c.key)] = true;
     const Labels labels = CodewordLabels(c.key, c.turns);
     double residual = 0;
+    ChannelResiduals parts{};
     const PaletteColours colours =
-        model.fit(model.relabelled(base.system, base.labels, labels), &residual);
-    scored.push_back({residual, c, colours});
+        model.fit(model.relabelled(base.system, base.labels, labels), &residual, &parts);
+    scored.push_back({residual, c, colours, parts[1] + parts[2]});
   };
   std::array<Base, 4> settled_bases;
   for (std::size_t r = 0; r < 4; ++r) settled_bases[r] = base_of(settled[r].labels);
@@ -240,6 +242,9 @@ CodewordDecision SearchCodewords(const PaletteModel& model, const SettledLabelli
   const std::uint64_t b = book[static_cast<std::size_t>(scored[1].candidate.key)];
   decision.runner_up_distance =
       scored[1].candidate.turns == best.candidate.turns ? std::popcount(a ^ b) : kCanonicalCells;
+  double least_chroma = best.chroma_residual;
+  for (const Scored& s : scored) least_chroma = std::min(least_chroma, s.chroma_residual);
+  decision.chroma_deficit = best.chroma_residual - least_chroma;
   return decision;
 }
 

@@ -34,8 +34,12 @@ struct CodewordDecision {
   /// labelling's residual is measured against (codeword_search.hpp's callers set it).
   double free_residual = 0;
   int runner_up_distance = 0;  ///< cells in which the runner-up differs from the winner
-  PaletteColours colours{};    ///< the winner's six colours
-  int scored = 0;              ///< codewords whose exact residual was computed
+  /// How much better than the winner's the best colour fit among the scored codewords is (Cb's
+  /// and Cr's part of the residual, noise units, at least 0): the colour's preference for another
+  /// codeword, whatever the luminance says.
+  double chroma_deficit = 0;
+  PaletteColours colours{};  ///< the winner's six colours
+  int scored = 0;            ///< codewords whose exact residual was computed
 };
 
 /// Codewords of the winner's orientation scored again after the neighbourhood search, ranked by

@@ -42,6 +42,7 @@ std::string RefuseCodeword(const ModelReading& reading) {
   if (!fits && d.excess / inflation > kMaxIndependentExcess) {
     return "codeword explains the pixels worse than its cells read freely";
   }
+  if (d.chroma_deficit > kMaxChromaDeficit) return "colour prefers another codeword";
   // The colours must be a tag's: every cell level between the black and the quiet zone in
   // luminance, and red redder (higher Cr) than green by a clear step (the palette's reds sit at
   // Cr +0.34, its greens at −0.07 and −0.30; casts move all four together).

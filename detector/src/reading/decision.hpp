@@ -49,6 +49,15 @@ inline constexpr double kNarrowExtentPx = 18;
 /// larger). At the qualities the tuning world draws, wrong winners that fit fall off faster (scale
 /// 4.0, all squares together): 30 left 7e-6 there, 48 leaves under 1e-7.
 inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
+/// Most another scored codeword may explain the colour better than the winner does
+/// (CodewordDecision::chroma_deficit, noise units). Where the fitted corners or blur are off, a
+/// wrong codeword can explain the luminance better than the truth by more than any lead rule
+/// allows while the colour, in which the palette's zeros and ones differ as much, prefers another
+/// codeword. On the tuning probe (seeds 22 and 25 as drawn, 22 and 23 at quality 90, 13,440
+/// readings) one such wrong winner led by 62.4 independent samples with a deficit of 39.3; the
+/// rule refuses 5 of the 5,060 right target-bin readings it would otherwise accept
+/// (docs/DETECTOR.md, tenth sitting).
+inline constexpr double kMaxChromaDeficit = 20;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.
 inline constexpr double kMinLead = 50;

@@ -216,7 +216,8 @@ LevelSystem PaletteModel::relabelled(LevelSystem system, const Labels& from,
   return system;
 }
 
-PaletteColours PaletteModel::fit(const LevelSystem& system, double* residual) const {
+PaletteColours PaletteModel::fit(const LevelSystem& system, double* residual,
+                                 ChannelResiduals* by_channel) const {
   PaletteColours colours{};
   const auto used = [&](int level) { return system.regions[static_cast<std::size_t>(level)] > 0; };
   // The palette's order, where the free fit breaks it (kMinLumaStep, kMinCbStep): a class's one
@@ -260,7 +261,9 @@ PaletteColours PaletteModel::fit(const LevelSystem& system, double* residual) co
       colours[static_cast<std::size_t>(l)][static_cast<std::size_t>(ch)] =
           x[static_cast<std::size_t>(l)];
     }
-    total += weights_[static_cast<std::size_t>(ch)] * std::max(0.0, rss);
+    const double weighted = weights_[static_cast<std::size_t>(ch)] * std::max(0.0, rss);
+    if (by_channel != nullptr) (*by_channel)[static_cast<std::size_t>(ch)] = weighted;
+    total += weighted;
   }
   if (residual != nullptr) *residual = total;
   return colours;

@@ -25,6 +25,8 @@ inline constexpr double kGreenLumaStepOfRed = 0.75;
 inline constexpr double kGreenCbStepOfRed = 0.5;
 /// Per level, Y′, Cb, Cr.
 using PaletteColours = std::array<std::array<double, 3>, kLevels>;
+/// A weighted residual's parts: Y′, Cb, Cr.
+using ChannelResiduals = std::array<double, 3>;
 
 /// A labelling's equations over the six levels: B = Σ AᵀA[j][k] by the levels of j and k (one per
 /// system: luma, chroma) and Bᵀy = Σ Aᵀy[j] by the level of j (one per channel), and how many
@@ -43,11 +45,14 @@ class PaletteModel {
 
   /// The colours that explain the samples best under `labels`, each class's one held at least the
   /// least steps above its zero, and with `residual` the weighted residual they leave (yᵀy − 2 xᵀb
-  /// + xᵀBx per channel, from the labels' 6 × 6 equations).
-  PaletteColours fit(const Labels& labels, double* residual = nullptr) const {
-    return fit(levelSystem(labels), residual);
+  /// + xᵀBx per channel, from the labels' 6 × 6 equations); `by_channel`, that residual's parts
+  /// (Y′, Cb, Cr).
+  PaletteColours fit(const Labels& labels, double* residual = nullptr,
+                     ChannelResiduals* by_channel = nullptr) const {
+    return fit(levelSystem(labels), residual, by_channel);
   }
-  PaletteColours fit(const LevelSystem& system, double* residual = nullptr) const;
+  PaletteColours fit(const LevelSystem& system, double* residual = nullptr,
+                     ChannelResiduals* by_channel = nullptr) const;
 
   /// The labels' level system, summed over every region.
   LevelSystem levelSystem(const Labels& labels) const;

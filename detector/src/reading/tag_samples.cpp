@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <opencv2/imgproc.hpp>
 
 namespace pintag::reading {
 namespace {
@@ -39,6 +40,19 @@ constexpr double kCb = 0.5 / (1 - 0.114), kCr = 0.5 / (1 - 0.299);
 
 }  // namespace
 
+void UndoChromaUpsampling(cv::Mat* block_means) {
+  if (block_means->rows < 3 || block_means->cols < 3) return;
+  // The mean of a block's four upsampled pixels is this kernel over the stored samples. Jacobi
+  // steps towards its inverse: the kernel's centre, 36 / 64, outweighs the rest (28 / 64).
+  static const cv::Mat kernel = (cv::Mat_<double>(3, 3) << 1, 6, 1, 6, 36, 6, 1, 6, 1) / 64.0;
+  const cv::Mat means = block_means->clone();
+  cv::Mat blurred;
+  for (int step = 0; step < kUndoUpsamplingSteps; ++step) {
+    cv::filter2D(*block_means, blurred, CV_64F, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+    *block_means += (means - blurred) * (64.0 / 36.0);
+  }
+}
+
 TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int border) {
   TagSamples samples;
   double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
@@ -63,21 +77,35 @@ TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int bo
       if (WithinMargin(to_tag, x, y)) samples.luma.push_back({x, y, Luminance(row + 3 * x)});
     }
   }
-  // Blocks at even coordinates wholly inside: their centre decides.
+  // Blocks at even coordinates wholly inside: their centre decides. Every block of the box is
+  // averaged first, so that the upsampling can be undone across the box.
   const int bx0 = box.x + (box.x & 1), by0 = box.y + (box.y & 1);
-  for (int y = by0; y + 1 < box.y + box.height; y += 2) {
-    for (int x = bx0; x + 1 < box.x + box.width; x += 2) {
-      if (!WithinMargin(to_tag, x + 0.5, y + 0.5)) continue;
-      double cb = 0, cr = 0;
+  const int blocks_x = (box.x + box.width - bx0) / 2, blocks_y = (box.y + box.height - by0) / 2;
+  if (blocks_x <= 0 || blocks_y <= 0) return samples;
+  cv::Mat cb(blocks_y, blocks_x, CV_64F), cr(blocks_y, blocks_x, CV_64F);
+  for (int by = 0; by < blocks_y; ++by) {
+    for (int bx = 0; bx < blocks_x; ++bx) {
+      const int x = bx0 + 2 * bx, y = by0 + 2 * by;
+      double sum_cb = 0, sum_cr = 0;
       for (int dy = 0; dy < 2; ++dy) {
         const std::uint8_t* p = bgr.ptr<std::uint8_t>(y + dy) + 3 * x;
         for (int dx = 0; dx < 2; ++dx, p += 3) {
           const double luma = (0.299 * p[2] + 0.587 * p[1] + 0.114 * p[0]) / 255.0;
-          cb += kCb * (p[0] / 255.0 - luma);
-          cr += kCr * (p[2] / 255.0 - luma);
+          sum_cb += kCb * (p[0] / 255.0 - luma);
+          sum_cr += kCr * (p[2] / 255.0 - luma);
         }
       }
-      samples.chroma.push_back({x, y, cb / 4, cr / 4});
+      cb.at<double>(by, bx) = sum_cb / 4;
+      cr.at<double>(by, bx) = sum_cr / 4;
+    }
+  }
+  UndoChromaUpsampling(&cb);
+  UndoChromaUpsampling(&cr);
+  for (int by = 0; by < blocks_y; ++by) {
+    for (int bx = 0; bx < blocks_x; ++bx) {
+      const int x = bx0 + 2 * bx, y = by0 + 2 * by;
+      if (!WithinMargin(to_tag, x + 0.5, y + 0.5)) continue;
+      samples.chroma.push_back({x, y, cb.at<double>(by, bx), cr.at<double>(by, bx)});
     }
   }
   samples.bounds = box;

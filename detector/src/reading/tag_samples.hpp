@@ -16,7 +16,9 @@ struct LumaSample {
 };
 
 /// One 2 × 2 block's colour differences as JPEG stores them (BT.601 Cb and Cr of the sRGB values,
-/// −0.5 … 0.5), the block at even image coordinates as JPEG's chroma blocks are.
+/// −0.5 … 0.5), the block at even image coordinates as JPEG's chroma blocks are. They are taken
+/// from the decoded pixels with the decoder's upsampling undone (UndoChromaUpsampling), so that
+/// they are close to the samples the file stores.
 struct ChromaSample {
   int x = 0, y = 0;  ///< the block's top-left pixel
   double cb = 0, cr = 0;
@@ -30,6 +32,17 @@ struct TagSamples {
 
 /// Tag units beyond the square that are observed: the quiet zone's edge carries the square's.
 inline constexpr double kObservedMargin = 0.06;
+
+/// Jacobi steps of UndoChromaUpsampling: six leave the kernel's inverse within a few per cent at
+/// every frequency, and were what the reader probe measured (docs/DETECTOR.md, tenth sitting).
+inline constexpr int kUndoUpsamplingSteps = 6;
+
+/// Undoes, on a grid of 2 × 2 block means of decoded Cb or Cr, the decoder's chroma upsampling:
+/// libjpeg's default for 4:2:0 interpolates each pixel from its block's sample (9/16) and the
+/// three nearest neighbours' (3/16, 3/16, 1/16), so that a block's mean is the stored samples
+/// blurred by [1 6 1]/8 each way, and a chroma model fitted to those means sees colour twice
+/// blurred. Edges repeat the grid's border. Grids under 3 × 3 are left as they are.
+void UndoChromaUpsampling(cv::Mat* block_means);
 
 /// The samples within kObservedMargin of the square that `tag_to_image` maps the unit square to,
 /// inside `bgr` (8-bit BGR) and at least `border` pixels from its edge. Empty when the square is
