@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 
@@ -74,7 +75,9 @@ TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int bo
   for (int y = box.y; y < box.y + box.height; ++y) {
     const std::uint8_t* row = bgr.ptr<std::uint8_t>(y);
     for (int x = box.x; x < box.x + box.width; ++x) {
-      if (WithinMargin(to_tag, x, y)) samples.luma.push_back({x, y, Luminance(row + 3 * x)});
+      if (WithinMargin(to_tag, x, y)) {
+        samples.luma.push_back({x, y, Luminance(row + (3 * static_cast<std::ptrdiff_t>(x)))});
+      }
     }
   }
   // Blocks at even coordinates wholly inside: their centre decides. Every block of the box is
@@ -88,7 +91,8 @@ TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int bo
       const int x = bx0 + 2 * bx, y = by0 + 2 * by;
       double sum_cb = 0, sum_cr = 0;
       for (int dy = 0; dy < 2; ++dy) {
-        const std::uint8_t* p = bgr.ptr<std::uint8_t>(y + dy) + 3 * x;
+        const std::uint8_t* p =
+            bgr.ptr<std::uint8_t>(y + dy) + (3 * static_cast<std::ptrdiff_t>(x));
         for (int dx = 0; dx < 2; ++dx, p += 3) {
           const double luma = (0.299 * p[2] + 0.587 * p[1] + 0.114 * p[0]) / 255.0;
           sum_cb += kCb * (p[0] / 255.0 - luma);
