@@ -74,6 +74,8 @@ void Usage(FILE* to) {
       "  --world W             held-out (default) or tuning: which world's scenes\n"
       "  --jpeg-quality N      save every frame at JPEG quality N (1-100) instead of the "
       "quality its light draws\n"
+      "  --jpeg-chroma C       420 (default, as phones save) or 444: JPEG colour resolution "
+      "(held-out world)\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
       "  --csv FILE            also write one row per frame and detector\n"
@@ -136,6 +138,15 @@ bool ParseArgs(int argc, char** argv, Args* args) {
         return false;
       }
       args->sweep.jpeg_quality = static_cast<int>(quality);
+    } else if (a == "--jpeg-chroma") {
+      const char* v = value("--jpeg-chroma");
+      if (v == nullptr) return false;
+      const std::string chroma = v;
+      if (chroma != "420" && chroma != "444") {
+        std::fprintf(stderr, "pintag_bench: --jpeg-chroma is 420 or 444\n");
+        return false;
+      }
+      args->sweep.jpeg_full_chroma = chroma == "444";
     } else if (a == "--out") {
       const char* v = value("--out");
       if (v == nullptr) return false;
@@ -180,6 +191,10 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       Usage(stderr);
       return false;
     }
+  }
+  if (args->sweep.jpeg_full_chroma && args->sweep.world != scene::World::kHeldOut) {
+    std::fprintf(stderr, "pintag_bench: --jpeg-chroma 444 is for the held-out world\n");
+    return false;
   }
   return true;
 }

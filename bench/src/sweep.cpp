@@ -116,6 +116,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     frames[i].index = static_cast<int>(i);
     frames[i].world = options.world;
     frames[i].jpeg_quality = options.jpeg_quality;
+    frames[i].jpeg_full_chroma = options.jpeg_full_chroma;
   }
   return frames;
 }
@@ -149,6 +150,7 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
     spec.photometry.jpeg_quality = frame.jpeg_quality;
     spec.capture.jpeg_quality = frame.jpeg_quality;
   }
+  spec.capture.jpeg_full_chroma = frame.jpeg_full_chroma;
   const bool held_out = frame.world == scene::World::kHeldOut;
   if (frame.tagless() && frame.blank_label_px == 0) return spec;
   scene::PlacedMarker placed;

@@ -44,6 +44,8 @@ struct SweepOptions {
   /// frame saved at this quality instead, the rest of its light unchanged (what a scanner app's
   /// upload quality costs).
   int jpeg_quality = 0;
+  /// Held-out world only: save every frame's JPEG with full-resolution colour (4:4:4), not 4:2:0.
+  bool jpeg_full_chroma = false;
 };
 
 struct FrameSpec {
@@ -64,7 +66,8 @@ struct FrameSpec {
   /// none) at this tilt (placed at `centre`, turned by the two angles above).
   int blank_label_px = 0;
   double blank_label_tilt_deg = 0;
-  int jpeg_quality = 0;  ///< SweepOptions::jpeg_quality
+  int jpeg_quality = 0;           ///< SweepOptions::jpeg_quality
+  bool jpeg_full_chroma = false;  ///< SweepOptions::jpeg_full_chroma
 
   bool tagless() const { return size_index < 0; }
 };

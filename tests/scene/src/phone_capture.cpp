@@ -182,15 +182,16 @@ cv::Mat Process(const cv::Mat& codes, const PhoneCapture& p) {
   return out;
 }
 
-/// 4:2:0 JPEG through TurboJPEG, decoded by OpenCV's libjpeg (fancy upsampling, as viewers do).
-cv::Mat JpegRoundTrip(const cv::Mat& bgr, int quality) {
+/// 4:2:0 (or 4:4:4) JPEG through TurboJPEG, decoded by OpenCV's libjpeg (fancy upsampling, as
+/// viewers do).
+cv::Mat JpegRoundTrip(const cv::Mat& bgr, int quality, bool full_chroma) {
   const std::unique_ptr<void, int (*)(tjhandle)> compressor(tjInitCompress(), tjDestroy);
   if (!compressor) throw std::runtime_error("PhoneCapture: tjInitCompress failed");
   unsigned char* jpeg = nullptr;
   unsigned long size = 0;  // NOLINT(google-runtime-int): TurboJPEG's type
-  const int status =
-      tjCompress2(compressor.get(), bgr.data, bgr.cols, static_cast<int>(bgr.step), bgr.rows,
-                  TJPF_BGR, &jpeg, &size, TJSAMP_420, std::clamp(quality, 1, 100), 0);
+  const int status = tjCompress2(
+      compressor.get(), bgr.data, bgr.cols, static_cast<int>(bgr.step), bgr.rows, TJPF_BGR, &jpeg,
+      &size, full_chroma ? TJSAMP_444 : TJSAMP_420, std::clamp(quality, 1, 100), 0);
   const std::unique_ptr<unsigned char, void (*)(unsigned char*)> owned(jpeg, tjFree);
   if (status != 0) {
     throw std::runtime_error(std::string("PhoneCapture: JPEG at quality ") +
@@ -262,7 +263,7 @@ void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& p, Rng& rng) {
                  cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
   }
   frame = Process(Sense(linear, p, rng), p);
-  if (p.jpeg_quality > 0) frame = JpegRoundTrip(frame, p.jpeg_quality);
+  if (p.jpeg_quality > 0) frame = JpegRoundTrip(frame, p.jpeg_quality, p.jpeg_full_chroma);
 }
 
 }  // namespace detail

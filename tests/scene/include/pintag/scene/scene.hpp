@@ -121,7 +121,8 @@ struct Photometry {
 /// falloff, the illuminant's cast left by the white balance) and optics (defocus, motion) in linear
 /// light; a Bayer sensor (one colour per pixel, shot and read noise, 12 bits) and an edge-aware
 /// demosaic; the sRGB curve with an S-shaped contrast curve, a saturation boost and an unsharp mask
-/// on luma; a 4:2:0 JPEG through libjpeg (TurboJPEG), decoded as any image viewer decodes it.
+/// on luma; a 4:2:0 JPEG (4:4:4 on request) through libjpeg (TurboJPEG), decoded as any image
+/// viewer decodes it.
 struct PhoneCapture {
   double exposure = 1.0;                  ///< overall gain
   double gradient = 0;                    ///< brightness falloff across the frame, 0 … 0.5
@@ -137,7 +138,9 @@ struct PhoneCapture {
   double saturation = 1.0;                ///< chroma gain in YCbCr
   double sharpen_amount = 0;              ///< unsharp mask on luma, 0 = none
   double sharpen_sigma_px = 1.0;          ///< its Gaussian
-  int jpeg_quality = 90;                  ///< 1 … 100, always 4:2:0; 0: no JPEG (analysis only)
+  int jpeg_quality = 90;                  ///< 1 … 100; 0: no JPEG (analysis only)
+  /// 4:4:4 instead of the 4:2:0 phones save: what a reader gains from full-resolution colour.
+  bool jpeg_full_chroma = false;
   /// Mild: exposure 0.8 … 1.15, falloff ≤ 0.25, a mild cast or none, defocus σ 0.2 … 0.8 px, a
   /// little motion blur now and then, noise about 1 … 3 code values at mid-grey, quality 75 … 95,
   /// light sharpening.
