@@ -182,9 +182,11 @@ cv::Rect GenieBox(const scene::MarkerTruth& truth, const scene::Camera& camera) 
          cv::Rect(0, 0, camera.width & ~1, camera.height & ~1);
 }
 
-reading::ModelReading ReadOnTruth(const cv::Mat& bgr, const scene::MarkerTruth& truth) {
+reading::ModelReading ReadOnTruth(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                                  const scene::MarkerTruth& truth) {
   return reading::ReadThroughModel(
-      bgr, {truth.corners_px[0], truth.corners_px[1], truth.corners_px[2], truth.corners_px[3]});
+      bgr, upsampling,
+      {truth.corners_px[0], truth.corners_px[1], truth.corners_px[2], truth.corners_px[3]});
 }
 
 /// Calls `work(i)` for i in [0, count) on `threads` threads (0: all cores), each index once.
@@ -234,7 +236,7 @@ void Judge(const FrameSpec& f, const scene::Camera& camera, int rivals, MarkerDe
     if (cv::norm(c - t) > truth.square_px / 2) continue;
     (found.id == truth.id ? r.detected : r.detector_wrong) = true;
   }
-  const reading::ModelReading m = ReadOnTruth(photo.bgr, truth);
+  const reading::ModelReading m = ReadOnTruth(photo.bgr, ChromaUpsampling::kBoth, truth);
   if (m.decision.winner && reading::RefuseCodeword(m).empty()) {
     r.reader = m.decision.winner->value() == truth.id ? 1 : -1;
   }
@@ -353,7 +355,7 @@ int RunMismatch(const Args& args, const std::vector<FrameSpec>& frames,
     for (int stage = 0; stage < kStages; ++stage) {
       const scene::Scene clean = scene::RenderScene(WithoutUpTo(spec, stage));
       const scene::MarkerTruth& truth = clean.truth.front();
-      const reading::ModelReading m = ReadOnTruth(clean.bgr, truth);
+      const reading::ModelReading m = ReadOnTruth(clean.bgr, ChromaUpsampling::kNone, truth);
       const bool ok = truth.fully_visible && m.fit.ok;
       residual[i][stage] = {ok ? 255 * m.fit.luma_noise : std::nan(""),
                             ok ? 255 * m.fit.chroma_noise : std::nan("")};

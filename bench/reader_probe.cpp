@@ -51,7 +51,7 @@ void WriteResidual(const std::string& dir, const std::string& name, const cv::Ma
                    const reading::ModelFit& fit) {
   const cv::Matx33d h =
       stage::HomographyFromQuad({fit.corners[0], fit.corners[1], fit.corners[2], fit.corners[3]});
-  const reading::TagSamples samples = reading::SampleTag(bgr, h);
+  const reading::TagSamples samples = reading::SampleTag(bgr, ChromaUpsampling::kBoth, h);
   if (samples.luma.empty()) return;
   const reading::RegionCoverage coverage(h, reading::CoverageBox(samples.bounds));
   const reading::Kernel kernel = reading::MakeKernel(fit.luma_blur);
@@ -213,7 +213,8 @@ int Main(int argc, char** argv) {
         if (args.model) {
           const double t0 = ThreadCpuMs();
           reading::FittedModel fitted;
-          const reading::ModelReading m = reading::ReadThroughModel(s.bgr, quad, &fitted);
+          const reading::ModelReading m =
+              reading::ReadThroughModel(s.bgr, ChromaUpsampling::kBoth, quad, &fitted);
           const double ms = ThreadCpuMs() - t0;
           // The truth's own residual over the winner's: below 0 the search missed a codeword that
           // explains the samples better; above, the model prefers a wrong one.
@@ -296,7 +297,8 @@ int Main(int argc, char** argv) {
           }
           continue;
         }
-        const stage::CandidateReading r = stage::ReadCandidate(s.bgr, quad, {});
+        const stage::CandidateReading r =
+            stage::ReadCandidate(s.bgr, ChromaUpsampling::kBoth, quad, {});
         const std::lock_guard lock(mutex);
         Count& c = at(f);
         if (!r.reading.payload.key) {

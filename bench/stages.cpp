@@ -57,6 +57,9 @@ struct Fixture {
   std::vector<reading::FittedModel> models;
 };
 
+/// The fixture's frames are saved as 4:2:0 JPEG (Photometry::Moderate, tuning world).
+constexpr ChromaUpsampling kFramesUpsampling = ChromaUpsampling::kBoth;
+
 scene::SceneSpec Spec(Marker marker, bool with_tags) {
   scene::SceneSpec spec;
   spec.seed = 20261122;
@@ -126,7 +129,8 @@ const Fixture& Get() {
         const reading::Corners corners{cand.refined[0], cand.refined[1], cand.refined[2],
                                        cand.refined[3]};
         std::string error;
-        reading::FittedModel model = reading::FitModel(f.tagged.bgr, corners, &error);
+        reading::FittedModel model =
+            reading::FitModel(f.tagged.bgr, kFramesUpsampling, corners, &error);
         if (!model.fit.ok) continue;
         f.model_corners.push_back(corners);
         f.models.push_back(model);  // trivially copyable: a move is a copy
@@ -352,7 +356,7 @@ void BM_Stage5b_FitModel(benchmark::State& state) {
   for (auto _ : state) {
     for (const reading::Corners& corners : f.model_corners) {
       std::string error;
-      benchmark::DoNotOptimize(reading::FitModel(f.tagged.bgr, corners, &error));
+      benchmark::DoNotOptimize(reading::FitModel(f.tagged.bgr, kFramesUpsampling, corners, &error));
     }
   }
   ReportCounts(state);

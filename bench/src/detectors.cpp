@@ -43,8 +43,9 @@ void PoseFromCorners(const scene::Camera& camera, Found* found) {
 
 class PinTagDetector final : public MarkerDetector {
  public:
-  PinTagDetector(const scene::Camera& camera, DetectorOptions options, bool tuned)
-      : options_(std::move(options)), tuned_(tuned) {
+  PinTagDetector(const scene::Camera& camera, DetectorOptions options, bool tuned,
+                 ChromaUpsampling upsampling)
+      : options_(std::move(options)), tuned_(tuned), upsampling_(upsampling) {
     options_.intrinsics = CameraIntrinsics{camera.fx, camera.fy, camera.cx, camera.cy, {}};
     options_.tag_size_m = kTagSideM;
     detector_ = Detector(options_);
@@ -62,7 +63,7 @@ class PinTagDetector final : public MarkerDetector {
   }
   std::vector<Found> detect(const cv::Mat& bgr) override {
     PINTAG_BENCH_PROFILE_BEGIN();
-    const DetectResult result = detector_.detect(bgr);
+    const DetectResult result = detector_.detect(bgr, nullptr, upsampling_);
     PINTAG_BENCH_PROFILE_END();
     timings_ = result.timings;
     std::vector<Found> out;
@@ -96,6 +97,7 @@ class PinTagDetector final : public MarkerDetector {
  private:
   DetectorOptions options_;
   bool tuned_ = false;
+  ChromaUpsampling upsampling_ = ChromaUpsampling::kBoth;
   Detector detector_;
   StageTimings timings_;
 };
@@ -179,8 +181,9 @@ class AprilTagDetector final : public MarkerDetector {
 }  // namespace
 
 std::unique_ptr<MarkerDetector> MakePinTagDetector(const scene::Camera& camera,
-                                                   const DetectorOptions& options, bool tuned) {
-  return std::make_unique<PinTagDetector>(camera, options, tuned);
+                                                   const DetectorOptions& options, bool tuned,
+                                                   ChromaUpsampling upsampling) {
+  return std::make_unique<PinTagDetector>(camera, options, tuned, upsampling);
 }
 std::unique_ptr<MarkerDetector> MakeArucoDetector(const scene::Camera& camera) {
   return std::make_unique<ArucoDetector>(camera);

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "pintag/detector/chroma_upsampling.hpp"
 #include "pintag/detector/options.hpp"
 #include "pintag/scene/scene.hpp"
 #include "sweep.hpp"
@@ -41,10 +42,11 @@ class MarkerDetector {
 };
 
 /// pintag::Detector with `options` (intrinsics and tag size are set here); `tuned` says in the
-/// report that they are not the defaults.
-std::unique_ptr<MarkerDetector> MakePinTagDetector(const scene::Camera& camera,
-                                                   const DetectorOptions& options = {},
-                                                   bool tuned = false);
+/// report that they are not the defaults. `upsampling`: how the frames' colour was decoded
+/// (the sweep's 4:2:0 JPEGs unless --jpeg-chroma 444).
+std::unique_ptr<MarkerDetector> MakePinTagDetector(
+    const scene::Camera& camera, const DetectorOptions& options = {}, bool tuned = false,
+    ChromaUpsampling upsampling = ChromaUpsampling::kBoth);
 /// cv::aruco::detectMarkers, DICT_5X5_1000, default DetectorParameters (no corner refinement).
 std::unique_ptr<MarkerDetector> MakeArucoDetector(const scene::Camera& camera);
 /// libapriltag tag36h10 with its defaults except quad_decimate; includes the BGR->gray conversion

@@ -29,8 +29,9 @@ double CornerError(const std::array<cv::Point2d, 4>& a, const std::array<cv::Poi
 
 }  // namespace
 
-std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
-                        const scene::Camera& camera, const DetectorOptions& tuned) {
+std::string ExplainMiss(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                        const scene::MarkerTruth& truth, const scene::Camera& camera,
+                        const DetectorOptions& tuned) {
   DetectorOptions options = tuned;
   options.intrinsics = CameraIntrinsics{camera.fx, camera.fy, camera.cx, camera.cy, {}};
   options.tag_size_m = kTagSideM;
@@ -40,7 +41,7 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
   stage::Quad exact;
   for (std::size_t i = 0; i < 4; ++i) exact[i] = truth.corners_px[i];
-  const stage::CandidateReading at_truth = stage::ReadCandidate(bgr, exact, thresholds);
+  const stage::CandidateReading at_truth = stage::ReadCandidate(bgr, upsampling, exact, thresholds);
   const std::string reader =
       !at_truth.reading.payload.key ? "unread at true corners"
       : *at_truth.reading.payload.key == TagKey(static_cast<std::uint16_t>(truth.id))
@@ -48,7 +49,7 @@ std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
           : "WRONG at true corners";
 
   // The detector's candidates on the tag: the one nearest the truth decides.
-  const DetectResult result = Detector(options).detect(bgr);
+  const DetectResult result = Detector(options).detect(bgr, nullptr, upsampling);
   const cv::Point2d centre = Centre(truth.corners_px);
   double best_error = 1e300;
   std::string best_reason;

@@ -13,7 +13,8 @@ namespace pintag::bench {
 /// A short text, starting with 1 (no candidate on the tag), 2 (a candidate, not decoded: its
 /// corner error band and rejection) or 3 (decoded there as another key), followed by what the
 /// readers make of the tag on its true corners; sorting the texts groups them.
-std::string ExplainMiss(const cv::Mat& bgr, const scene::MarkerTruth& truth,
-                        const scene::Camera& camera, const DetectorOptions& tuned = {});
+std::string ExplainMiss(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                        const scene::MarkerTruth& truth, const scene::Camera& camera,
+                        const DetectorOptions& tuned = {});
 
 }  // namespace pintag::bench

@@ -286,7 +286,10 @@ int Main(int argc, char** argv) {
       return 2;
     }
   }
-  detectors.push_back(MakePinTagDetector(camera, pintag_options, !args.pintag_options.empty()));
+  const ChromaUpsampling frames_upsampling =
+      args.sweep.jpeg_full_chroma ? ChromaUpsampling::kNone : ChromaUpsampling::kBoth;
+  detectors.push_back(
+      MakePinTagDetector(camera, pintag_options, !args.pintag_options.empty(), frames_upsampling));
   if (wanted("aruco")) detectors.push_back(MakeArucoDetector(camera));
   if (wanted("apriltag-d1")) detectors.push_back(MakeAprilTagDetector(camera, 1));
   if (wanted("apriltag-d2")) detectors.push_back(MakeAprilTagDetector(camera, 2));
@@ -403,8 +406,9 @@ int Main(int argc, char** argv) {
           stats.add(f, outcome);
           if (d.marker() == Marker::kPinTag && outcome.counted && !outcome.found &&
               args.explain_misses) {
-            const std::string why = ExplainMiss(
-                r.image(f, d.marker()), r.truthFor(f, d.marker()).front(), camera, pintag_options);
+            const std::string why =
+                ExplainMiss(r.image(f, d.marker()), frames_upsampling,
+                            r.truthFor(f, d.marker()).front(), camera, pintag_options);
             ++stats.misses[why][f.hard][static_cast<std::size_t>(f.size_index)];
             if (!args.dump_misses.empty()) {
               DumpMiss(args.dump_misses, f, r.image(f, d.marker()),

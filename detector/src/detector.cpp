@@ -117,10 +117,10 @@ Detection Rejected(const stage::Quad& quad, std::string reason,
 }
 
 // One quad of a cluster through stages 4 to 6; true when it decoded.
-bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stage::RedBlob>& blobs,
-                 const stage::BlobCluster& cluster, stage::Quad quad,
-                 const std::vector<stage::Quad>& read_before, const DetectorOptions& options,
-                 stage::ModelBudget* budget, ClusterOutput* out) {
+bool ProcessQuad(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::Mat& dark,
+                 const std::vector<stage::RedBlob>& blobs, const stage::BlobCluster& cluster,
+                 stage::Quad quad, const std::vector<stage::Quad>& read_before,
+                 const DetectorOptions& options, stage::ModelBudget* budget, ClusterOutput* out) {
   auto t1 = Clock::now();
   const stage::ElementAssignment rough = stage::AssignElements(
       stage::HomographyFromQuad(quad), blobs, cluster.blobs, stage::kRoughElementTolerance);
@@ -150,7 +150,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   // A square moved by the corner fit must pass step 4's element check too.
   stage::ElementAssignment fitted_assignment;
   const stage::CandidateReading candidate = stage::ReadCandidate(
-      bgr, quad, thresholds,
+      bgr, upsampling, quad, thresholds,
       [&](const stage::Quad& fitted) {
         fitted_assignment =
             stage::AssignElements(stage::HomographyFromQuad(fitted), blobs, cluster.blobs);
@@ -177,7 +177,7 @@ bool ProcessQuad(const cv::Mat& bgr, const cv::Mat& dark, const std::vector<stag
   return true;
 }
 
-void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
+void ProcessCluster(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::Mat& min_channel,
                     const std::vector<stage::RedBlob>& blobs, const stage::BlobCluster& cluster,
                     const std::vector<stage::Quad>& read_before, const DetectorOptions& options,
                     stage::ModelBudget* budget, ClusterOutput* out) {
@@ -190,8 +190,9 @@ void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
 
   bool decoded = false;
   for (const stage::Quad& quad : quads) {
-    decoded =
-        ProcessQuad(bgr, dark, blobs, cluster, quad, read_before, options, budget, out) || decoded;
+    decoded = ProcessQuad(bgr, upsampling, dark, blobs, cluster, quad, read_before, options, budget,
+                          out) ||
+              decoded;
   }
   if (decoded) return;
   // The outline gave no tag (a dim quiet zone on dark ground merges with the ground, or leaves
@@ -200,17 +201,21 @@ void ProcessCluster(const cv::Mat& bgr, const cv::Mat& min_channel,
       stage::ClusterElementQuads(cluster, blobs, options.min_square_px);
   out->candidates.found.insert(out->candidates.found.end(), placed.begin(), placed.end());
   for (const stage::Quad& quad : placed) {
-    if (ProcessQuad(bgr, dark, blobs, cluster, quad, read_before, options, budget, out)) break;
+    if (ProcessQuad(bgr, upsampling, dark, blobs, cluster, quad, read_before, options, budget,
+                    out)) {
+      break;
+    }
   }
 }
 
 // A square found by its darkness alone (stage 3e) through stages 4 to 6. Its corners are refined
 // already; there are no red blobs to hold against its elements, so the readers' rules decide.
-void ProcessDarkSquare(const cv::Mat& bgr, const stage::Quad& quad, const DetectorOptions& options,
-                       stage::ModelBudget* budget, ClusterOutput* out) {
+void ProcessDarkSquare(const cv::Mat& bgr, ChromaUpsampling upsampling, const stage::Quad& quad,
+                       const DetectorOptions& options, stage::ModelBudget* budget,
+                       ClusterOutput* out) {
   const stage::BitThresholds thresholds{options.min_bit_span_b, options.min_bit_margin};
   const stage::CandidateReading candidate = stage::ReadCandidate(
-      bgr, quad, thresholds,
+      bgr, upsampling, quad, thresholds,
       [&](const stage::Quad& fitted) { return stage::ElementsOutshineCentre(bgr, fitted); },
       budget);
   out->add(candidate.times);
@@ -275,10 +280,11 @@ bool InsideDecodedTag(cv::Point2d p, const std::vector<Detection>& detections, s
 
 // Stages 2 to 6 on the red runs of one redness threshold: every candidate's detection (decoded, or
 // rejected when asked for) is appended to `result`, and the stage times are added to its timings.
-void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::RedRuns& red,
-                int max_element_area_px, int min_cluster_blobs, int max_cluster_blobs,
-                const DetectorOptions& options, const stage::DebugImages* debug,
-                stage::ModelBudget* budget, DetectResult* result, Candidates* candidates) {
+void RunRedPass(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::Mat& min_channel,
+                const stage::RedRuns& red, int max_element_area_px, int min_cluster_blobs,
+                int max_cluster_blobs, const DetectorOptions& options,
+                const stage::DebugImages* debug, stage::ModelBudget* budget, DetectResult* result,
+                Candidates* candidates) {
   const auto t_red = Clock::now();
   if (debug != nullptr && debug->enabled()) debug->redness(stage::RunsToMask(red));
 
@@ -308,8 +314,8 @@ void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::Red
   std::vector<ClusterOutput> outputs(clusters.size());
   ForEach(clusters.size(), options.threads, [&](std::size_t i) {
     // Squares of earlier passes only: within a pass, clusters may run in parallel.
-    ProcessCluster(bgr, min_channel, blobs, clusters[i], candidates->read, options, budget,
-                   &outputs[i]);
+    ProcessCluster(bgr, upsampling, min_channel, blobs, clusters[i], candidates->read, options,
+                   budget, &outputs[i]);
   });
   Collect(outputs, result, candidates);
 }
@@ -318,8 +324,9 @@ void RunRedPass(const cv::Mat& bgr, const cv::Mat& min_channel, const stage::Red
 // and the squares the readers have tried already: a tag the red passes placed and could not read
 // is not read again. Reading it again from the dark square's corners found 3 more of 1,309 tags
 // over seeds 1-3 and doubled the time of those frames (seconds on hard-light 32 px tags).
-void RunDarkSquarePass(const cv::Mat& bgr, const cv::Mat& dark_half, const DetectorOptions& options,
-                       stage::ModelBudget* budget, DetectResult* result, Candidates* candidates) {
+void RunDarkSquarePass(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::Mat& dark_half,
+                       const DetectorOptions& options, stage::ModelBudget* budget,
+                       DetectResult* result, Candidates* candidates) {
   const auto start = Clock::now();
   const std::size_t decoded_before = result->detections.size();
   stage::DarkSquareLimits limits;
@@ -334,7 +341,7 @@ void RunDarkSquarePass(const cv::Mat& bgr, const cv::Mat& dark_half, const Detec
   std::vector<ClusterOutput> outputs(squares.size());
   ForEach(squares.size(), options.threads, [&](std::size_t i) {
     outputs[i].candidates.found.push_back(squares[i]);
-    ProcessDarkSquare(bgr, squares[i], options, budget, &outputs[i]);
+    ProcessDarkSquare(bgr, upsampling, squares[i], options, budget, &outputs[i]);
   });
   Collect(outputs, result, candidates);
 }
@@ -356,10 +363,15 @@ std::string_view ToString(IntrinsicsSource source) {
 Detector::Detector(DetectorOptions options) : options_(std::move(options)) {}
 
 DetectResult Detector::detect(const LoadedImage& image) const {
-  return detect(image.bgr, &image.exif);
+  return detect(image.bgr, &image.exif, image.chroma_upsampling);
 }
 
 DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const {
+  return detect(bgr, exif, ChromaUpsampling::kBoth);
+}
+
+DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif,
+                              ChromaUpsampling upsampling) const {
   DetectResult result;
   if (bgr.empty()) {
     result.error = "empty image";
@@ -386,16 +398,16 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif) const 
 
   Candidates candidates;
   stage::ModelBudget budget(std::max(0, options_.max_model_reads));
-  RunRedPass(bgr, scan.min_channel, scan.red,
+  RunRedPass(bgr, upsampling, scan.min_channel, scan.red,
              static_cast<int>(options_.max_element_area_ratio * bgr.total()), kMainMinClusterBlobs,
              /*max_cluster_blobs=*/0, options_, &debug, &budget, &result, &candidates);
   if (faint_pass) {
-    RunRedPass(bgr, scan.min_channel, scan.faint, options_.faint_max_element_area_px,
+    RunRedPass(bgr, upsampling, scan.min_channel, scan.faint, options_.faint_max_element_area_px,
                std::max(2, options_.faint_min_blobs), std::max(0, options_.faint_max_cluster_blobs),
                options_, nullptr, &budget, &result, &candidates);
   }
   if (options_.dark_square_candidates) {
-    RunDarkSquarePass(bgr, scan.dark_half, options_, &budget, &result, &candidates);
+    RunDarkSquarePass(bgr, upsampling, scan.dark_half, options_, &budget, &result, &candidates);
   }
   debug.quads(bgr, candidates.found);
   stage::RemoveDuplicates(&result.detections);

@@ -188,6 +188,24 @@ tjscalingfactor ScalingFor(int denominator) {
 LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat format,
                                const LoadOptions& options);
 
+/// Orientations 5 to 8 swap the image's axes.
+bool Transposes(int exif_orientation) {
+  return exif_orientation >= 5 && exif_orientation <= 8;
+}
+
+/// What TurboJPEG's full-size decode did to a JPEG's chroma (libjpeg's default upsampling: the
+/// triangle filter, "fancy"), in the axes of the image after `exif_orientation`.
+ChromaUpsampling JpegChromaUpsampling(int subsampling, int exif_orientation) {
+  ChromaUpsampling stored = ChromaUpsampling::kNone;
+  if (subsampling == TJSAMP_420) stored = ChromaUpsampling::kBoth;
+  if (subsampling == TJSAMP_422) stored = ChromaUpsampling::kAcross;
+  if (subsampling == TJSAMP_440) stored = ChromaUpsampling::kDown;
+  if (!Transposes(exif_orientation)) return stored;
+  if (stored == ChromaUpsampling::kAcross) return ChromaUpsampling::kDown;
+  if (stored == ChromaUpsampling::kDown) return ChromaUpsampling::kAcross;
+  return stored;
+}
+
 LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& options) {
   tjhandle tj = Decompressor();
   if (tj == nullptr) return Fail(ImageError::kCorrupt, "cannot start the JPEG decoder");
@@ -220,6 +238,11 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
   image.format = "jpeg";
   TakeJpegExif(bytes, &image);
   image.bgr = Reorient(bgr, image.exif_orientation);
+  // A scaled decode handles chroma in its reduced transforms: not modelled, left as it is.
+  const bool full_size = scale.num == scale.denom;
+  image.chroma_upsampling = full_size
+                                ? JpegChromaUpsampling(header->subsampling, image.exif_orientation)
+                                : ChromaUpsampling::kNone;
   LoadResult result;
   result.claimed_width = header->width;
   result.claimed_height = header->height;
@@ -266,6 +289,20 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
     if (std::memcmp(&b[pos + 4], "IEND", 4) == 0) return h;
     pos += 12 + length;
   }
+}
+
+/// Whether a WebP holds a lossy (VP8, 4:2:0) image: its first image chunk is "VP8 ", not "VP8L".
+/// Animations (ANMF frames) are not looked into.
+bool WebpIsLossy(std::span<const std::uint8_t> b) {
+  std::size_t pos = 12;
+  while (pos + 8 <= b.size()) {
+    if (std::memcmp(&b[pos], "VP8 ", 4) == 0) return true;
+    if (std::memcmp(&b[pos], "VP8L", 4) == 0) return false;
+    const std::size_t size = b[pos + 4] | (std::size_t{b[pos + 5]} << 8) |
+                             (std::size_t{b[pos + 6]} << 16) | (std::size_t{b[pos + 7]} << 24);
+    pos += 8 + size + (size & 1);
+  }
+  return false;
 }
 
 /// A WebP's canvas size from its first chunk (VP8X extended, VP8L lossless, or "VP8 " lossy).
@@ -419,6 +456,11 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   image.format = format_name;
   TakeExif(spec, &image);
   image.bgr = Reorient(bgr, image.exif_orientation);
+  // libwebp's default decode interpolates a lossy image's 4:2:0 chroma as libjpeg does. The
+  // other formats (and CMYK JPEG, converted by OpenImageIO) are taken as full resolution.
+  if (format == ImageFormat::kWebp && WebpIsLossy(bytes)) {
+    image.chroma_upsampling = ChromaUpsampling::kBoth;
+  }
   LoadResult result;
   result.claimed_width = spec.width;
   result.claimed_height = spec.height;

@@ -45,17 +45,18 @@ std::vector<std::uint8_t> ReadAll(const std::string& path) {
 // Writes a w × h RGB image whose pixel (x, y) is (x, y, 0), with extra attributes.
 std::string Write(const std::string& name, int w, int h,
                   const std::function<void(OIIO::ImageSpec&)>& attributes = {}) {
-  const std::string path = TempPath(name);
+  std::string path = TempPath(name);
   auto out = OIIO::ImageOutput::create(path);
   EXPECT_TRUE(out) << OIIO::geterror();
   OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
   if (attributes) attributes(spec);
   std::vector<std::uint8_t> pixels(static_cast<std::size_t>(w) * h * 3);
-  for (int y = 0; y < h; ++y)
+  for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       pixels[(static_cast<std::size_t>(y) * w + x) * 3] = static_cast<std::uint8_t>(x);
       pixels[(static_cast<std::size_t>(y) * w + x) * 3 + 1] = static_cast<std::uint8_t>(y);
     }
+  }
   EXPECT_TRUE(out->open(path, spec));
   EXPECT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
   out->close();
@@ -354,6 +355,54 @@ TEST(ImageIo, JpegPlanesAsStored) {
   EXPECT_LT(cv::mean(diff)[0], 1.5);
   const std::vector<std::uint8_t> png = Encode(".png", frame);
   EXPECT_EQ(LoadJpegPlanes(png).kind, ImageError::kUnsupported);
+}
+
+// The loader says how the decoder filled in subsampled colour, in the upright image's axes: the
+// reader undoes exactly that, and nothing where the colour was stored whole.
+TEST(ImageIo, ReportsTheDecodersChromaUpsampling) {
+  const struct {
+    const char* subsampling;
+    int orientation;
+    ChromaUpsampling expected;
+  } kJpegs[] = {{"4:2:0", 1, ChromaUpsampling::kBoth}, {"4:2:2", 1, ChromaUpsampling::kAcross},
+                {"4:2:2", 6, ChromaUpsampling::kDown}, {"4:2:2", 3, ChromaUpsampling::kAcross},
+                {"4:4:4", 1, ChromaUpsampling::kNone}, {"4:2:0", 8, ChromaUpsampling::kBoth}};
+  for (const auto& j : kJpegs) {
+    const std::string name = std::string("chroma-") + j.subsampling[2] + j.subsampling[4] + "-" +
+                             std::to_string(j.orientation) + ".jpg";
+    const LoadResult r = LoadImageFile(Write(name, 40, 30, [&](OIIO::ImageSpec& spec) {
+      spec.attribute("jpeg:subsampling", j.subsampling);
+      spec.attribute("Orientation", j.orientation);
+    }));
+    ASSERT_TRUE(r.image) << r.error;
+    EXPECT_EQ(r.image->exif_orientation, j.orientation);
+    EXPECT_EQ(r.image->chroma_upsampling, j.expected) << j.subsampling << " " << j.orientation;
+  }
+  const cv::Mat frame = PhoneLikeFrame(64, 48);
+  cv::Mat grey;
+  cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
+  const struct {
+    const char* what;
+    std::vector<std::uint8_t> bytes;
+    ChromaUpsampling expected;
+  } kOthers[] = {
+      {"greyscale JPEG", Encode(".jpg", grey), ChromaUpsampling::kNone},
+      {"PNG", Encode(".png", frame), ChromaUpsampling::kNone},
+      {"lossy WebP", Encode(".webp", frame, {cv::IMWRITE_WEBP_QUALITY, 90}),
+       ChromaUpsampling::kBoth},
+      {"lossless WebP", Encode(".webp", frame, {cv::IMWRITE_WEBP_QUALITY, 101}),
+       ChromaUpsampling::kNone},
+  };
+  for (const auto& o : kOthers) {
+    const LoadResult r = LoadImageBytes(o.bytes);
+    ASSERT_TRUE(r.image) << o.what << ": " << r.error;
+    EXPECT_EQ(r.image->chroma_upsampling, o.expected) << o.what;
+  }
+  LoadOptions halved;
+  halved.scale_denominator = 2;
+  const LoadResult scaled = LoadImageBytes(Encode(".jpg", frame), halved);
+  ASSERT_TRUE(scaled.image) << scaled.error;
+  EXPECT_EQ(scaled.image->chroma_upsampling, ChromaUpsampling::kNone);
 }
 
 TEST(ImageIo, DegenerateSizes) {

@@ -102,7 +102,8 @@ TEST(ModelReader, NeighbourOffsetsGiveEveryCodewordWithinSevenCells) {
 
 TEST(ModelReader, ExplainsASharpCleanTagClosely) {
   const auto scene = Tag(12345, 40, 30, 17, 0, 0, 1);
-  const ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  const ModelReading r =
+      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
   ASSERT_TRUE(r.fit.ok) << r.error;
   // What is left is the sub-sampled coverage and the renderer's own anti-aliasing: far below the
   // luminance steps between a tag's colours (0.1 and more).
@@ -122,7 +123,8 @@ TEST(ModelReader, ReadsSmallBlurredTags) {
       const auto scene =
           Tag(key, 30, 20, roll, 1.6, 2,
               static_cast<std::uint64_t>(key) * 7 + static_cast<std::uint64_t>(roll));
-      const ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+      const ModelReading r =
+          ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
       ASSERT_TRUE(r.fit.ok) << r.error;
       ASSERT_EQ(RefuseCodeword(r), "") << "key " << key << " roll " << roll;
       EXPECT_EQ(r.decision.winner->value(), key);
@@ -140,7 +142,7 @@ TEST(ModelReader, RefinesCornersAPixelOffAndReadsA24PxJpeg) {
   Corners start = TrueCorners(scene.truth[0]);
   const cv::Point2d offsets[4] = {{0.8, -0.6}, {-0.7, -0.5}, {0.6, 0.9}, {-0.9, 0.4}};
   for (std::size_t k = 0; k < 4; ++k) start[k] += offsets[k];
-  const ModelReading r = ReadThroughModel(jpeg, start);
+  const ModelReading r = ReadThroughModel(jpeg, ChromaUpsampling::kBoth, start);
   ASSERT_TRUE(r.fit.ok) << r.error;
   for (std::size_t k = 0; k < 4; ++k) {
     EXPECT_LT(cv::norm(r.fit.corners[k] - scene.truth[0].corners[k]), 0.4) << "corner " << k;
@@ -160,7 +162,7 @@ TEST(ModelReader, CornersMoveNoFurtherThanTheBoundTheSizeCheckRestsOn) {
   for (std::size_t k = 0; k < 4; ++k) start[k] += offsets[k];
   const double side =
       stage::MeanSidePx(stage::HomographyFromQuad({start[0], start[1], start[2], start[3]}));
-  const ModelReading r = ReadThroughModel(scene.bgr, start);
+  const ModelReading r = ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, start);
   ASSERT_TRUE(r.fit.ok) << r.error;
   EXPECT_GT(r.fit.corner_shift, 0.5);  // it did move them
   EXPECT_LE(r.fit.corner_shift, MaxCornerShiftPx(side) + 1e-9);
@@ -168,8 +170,8 @@ TEST(ModelReader, CornersMoveNoFurtherThanTheBoundTheSizeCheckRestsOn) {
   const auto small = Tag(4242, 12, 0, 0, 0.8, 1, 3);
   const Corners c = TrueCorners(small.truth[0]);
   stage::ModelBudget budget(1);
-  const stage::CandidateReading read =
-      stage::ReadCandidate(small.bgr, {c[0], c[1], c[2], c[3]}, {}, {}, &budget);
+  const stage::CandidateReading read = stage::ReadCandidate(
+      small.bgr, ChromaUpsampling::kNone, {c[0], c[1], c[2], c[3]}, {}, {}, &budget);
   EXPECT_FALSE(read.reading.payload.key);
   EXPECT_FALSE(read.times.model_read);
   EXPECT_EQ(read.reading.payload.error, "model: square too small to read its codeword");
@@ -191,7 +193,8 @@ TEST(ModelReader, ReadsASharpenedTag) {
   cv::merge(planes, ycrcb);
   cv::Mat sharpened;
   cv::cvtColor(ycrcb, sharpened, cv::COLOR_YCrCb2BGR);
-  const ModelReading r = ReadThroughModel(sharpened, TrueCorners(scene.truth[0]));
+  const ModelReading r =
+      ReadThroughModel(sharpened, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
   EXPECT_EQ(r.decision.winner->value(), 777);
@@ -202,7 +205,8 @@ TEST(ModelReader, ReadsASharpenedTag) {
 // reading's excess is set by hand to reach each side of the rule.
 TEST(ModelReader, AnExcessIsCountedInIndependentSamplesAsTheLeadIs) {
   const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ModelReading r =
+      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
   const std::string refused_for_excess =
@@ -223,7 +227,8 @@ TEST(ModelReader, AnExcessIsCountedInIndependentSamplesAsTheLeadIs) {
 
 TEST(ModelReader, AWinnerThatFitsAsWellAsTheFreeLabellingNeedsASmallerLead) {
   const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ModelReading r =
+      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
   const std::string refused_for_lead = "no codeword clearly nearest";
@@ -249,7 +254,8 @@ TEST(ModelReader, AWinnerThatFitsAsWellAsTheFreeLabellingNeedsASmallerLead) {
 // kNarrowExtentPx.
 TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r = ReadThroughModel(scene.bgr, TrueCorners(scene.truth[0]));
+  ModelReading r =
+      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
   ASSERT_FALSE(IsNarrow(r.fit.corners));
@@ -300,7 +306,7 @@ TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {
   cv::rectangle(bgr, {40, 40}, {79, 79}, cv::Scalar(25, 25, 25), cv::FILLED);
   cv::GaussianBlur(bgr, bgr, {}, 1.2);
   const Corners square = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
-  const ModelReading r = ReadThroughModel(bgr, square);
+  const ModelReading r = ReadThroughModel(bgr, ChromaUpsampling::kNone, square);
   ASSERT_TRUE(r.fit.ok);
   EXPECT_NE(RefuseCodeword(r), "");
 }
@@ -319,7 +325,7 @@ TEST(ModelReader, ColourfulNonTagsAreRefused) {
     }
     cv::GaussianBlur(bgr, bgr, {}, 1.5);
     const Corners square = {cv::Point2d(39.5, 39.5), {79.5, 39.5}, {79.5, 79.5}, {39.5, 79.5}};
-    const ModelReading r = ReadThroughModel(bgr, square);
+    const ModelReading r = ReadThroughModel(bgr, ChromaUpsampling::kNone, square);
     ASSERT_TRUE(r.fit.ok);
     EXPECT_NE(RefuseCodeword(r), "") << "trial " << trial;
   }
@@ -329,9 +335,9 @@ TEST(ModelReader, LargeSquaresAndSquaresOffTheImageAreNotModelled) {
   const cv::Mat bgr(400, 400, CV_8UC3, cv::Scalar(200, 200, 200));
   std::string error;
   const Corners large = {cv::Point2d(50, 50), {250, 50}, {250, 250}, {50, 250}};
-  EXPECT_FALSE(FitModel(bgr, large, &error).fit.ok);
+  EXPECT_FALSE(FitModel(bgr, ChromaUpsampling::kNone, large, &error).fit.ok);
   const Corners outside = {cv::Point2d(-500, -500), {-460, -500}, {-460, -460}, {-500, -460}};
-  EXPECT_FALSE(FitModel(bgr, outside, &error).fit.ok);
+  EXPECT_FALSE(FitModel(bgr, ChromaUpsampling::kNone, outside, &error).fit.ok);
 }
 
 }  // namespace

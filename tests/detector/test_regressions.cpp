@@ -146,7 +146,8 @@ TEST(Regressions, NoWrongKeyReadOnSquaresPlacedByTheTruth) {
   ASSERT_GE(cases.size(), 7U);
   for (const RegressionCase& c : cases) {
     ASSERT_FALSE(c.bgr.empty()) << c.name;
-    const stage::CandidateReading read = stage::ReadCandidate(c.bgr, PlacedSquare(c), {});
+    const stage::CandidateReading read =
+        stage::ReadCandidate(c.bgr, ChromaUpsampling::kBoth, PlacedSquare(c), {});
     if (read.reading.payload.key) {
       EXPECT_EQ(read.reading.payload.key->value(), c.key) << c.name;
     }
@@ -162,7 +163,8 @@ TEST(Regressions, TheCodewordSearchFindsTheCodewordThatExplainsTheSamplesBest) {
   ASSERT_GE(cases.size(), 1U);
   for (const RegressionCase& c : cases) {
     ASSERT_FALSE(c.bgr.empty()) << c.name;
-    const reading::ModelReading read = reading::ReadThroughModel(c.bgr, PlacedSquare(c));
+    const reading::ModelReading read =
+        reading::ReadThroughModel(c.bgr, ChromaUpsampling::kBoth, PlacedSquare(c));
     ASSERT_TRUE(read.fit.ok) << c.name << ": " << read.error;
     ASSERT_TRUE(read.decision.winner) << c.name;
     EXPECT_EQ(read.decision.winner->value(), c.key) << c.name;

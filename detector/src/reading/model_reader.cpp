@@ -294,7 +294,8 @@ double MaxCornerShiftPx(double side_px) {
   return side_px <= kRefineCornersMaxSidePx ? std::clamp(0.08 * side_px, 1.0, 3.0) : 0.0;
 }
 
-FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error) {
+FittedModel FitModel(const cv::Mat& bgr, ChromaUpsampling upsampling, const Corners& start,
+                     std::string* error) {
   FittedModel model;
   ModelFit& fit = model.fit;
   fit.corners = start;
@@ -303,7 +304,7 @@ FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* erro
     *error = "square too large or too small for the model";
     return model;
   }
-  const TagSamples samples = SampleTag(bgr, Homography(start));
+  const TagSamples samples = SampleTag(bgr, upsampling, Homography(start));
   if (samples.luma.size() < 64 || samples.chroma.size() < 16) {
     *error = "too few samples for the model";
     return model;
@@ -384,9 +385,10 @@ CodewordDecision DecideCodeword(const FittedModel& fitted) {
   return decision;
 }
 
-ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners, FittedModel* fitted) {
+ModelReading ReadThroughModel(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                              const Corners& corners, FittedModel* fitted) {
   ModelReading reading;
-  const FittedModel model = FitModel(bgr, corners, &reading.error);
+  const FittedModel model = FitModel(bgr, upsampling, corners, &reading.error);
   reading.fit = model.fit;
   if (model.fit.ok) reading.decision = DecideCodeword(model);
   if (fitted != nullptr) *fitted = model;

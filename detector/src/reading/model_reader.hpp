@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "pintag/detector/chroma_upsampling.hpp"
 #include "reading/codeword_search.hpp"
 #include "reading/edge_noise.hpp"
 #include "reading/psf.hpp"
@@ -71,17 +72,18 @@ inline constexpr double kRefineCornersMaxSidePx = 72;
 /// kRefineCornersMaxSidePx, where corners are not refined.
 double MaxCornerShiftPx(double side_px);
 
-/// Fits the model to the square starting at the corners `start` in `bgr` (8-bit BGR): blur search,
-/// corners refined (squares up to kRefineCornersMaxSidePx), final fit. fit.ok false and `error` set
-/// when it cannot.
-FittedModel FitModel(const cv::Mat& bgr, const Corners& start, std::string* error);
+/// Fits the model to the square starting at the corners `start` in `bgr` (8-bit BGR, its colour
+/// decoded with `upsampling`): blur search, corners refined (squares up to
+/// kRefineCornersMaxSidePx), final fit. fit.ok false and `error` set when it cannot.
+FittedModel FitModel(const cv::Mat& bgr, ChromaUpsampling upsampling, const Corners& start,
+                     std::string* error);
 
 /// The codeword that explains a fitted model best, and by how much (codeword_search.hpp).
 CodewordDecision DecideCodeword(const FittedModel& fitted);
 
 /// FitModel, then DecideCodeword; the fitted model into `fitted` when given (for probes that score
 /// other codewords on it).
-ModelReading ReadThroughModel(const cv::Mat& bgr, const Corners& corners,
-                              FittedModel* fitted = nullptr);
+ModelReading ReadThroughModel(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                              const Corners& corners, FittedModel* fitted = nullptr);
 
 }  // namespace pintag::reading

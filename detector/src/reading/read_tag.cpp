@@ -68,7 +68,7 @@ PayloadResult DecodeReading(const OrientationResult& orientation) {
   return payload;
 }
 
-CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
+CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, const Quad& quad,
                                const BitThresholds& thresholds,
                                const std::function<bool(const Quad&)>& accept_fitted,
                                ModelBudget* budget) {
@@ -106,7 +106,7 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
   }
   c.times.model_read = true;
   const reading::FittedModel model =
-      reading::FitModel(bgr, {quad[0], quad[1], quad[2], quad[3]}, &r.model.error);
+      reading::FitModel(bgr, upsampling, {quad[0], quad[1], quad[2], quad[3]}, &r.model.error);
   r.model.fit = model.fit;
   const auto t2 = Clock::now();
   c.times.model_fit_ms = Ms(t1, t2);

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "candidates/quads.hpp"
+#include "pintag/detector/chroma_upsampling.hpp"
 #include "reading/model_reader.hpp"
 #include "reading/orientation.hpp"
 #include "reading/payload.hpp"
@@ -65,16 +66,17 @@ struct ReadingTimes {
   bool model_skipped = false;  ///< the budget was spent
 };
 
-/// A candidate square read as the detector reads it. When the model decides, the corners are the
-/// ones it refined; `accept_fitted`, when given, may refuse them (the red path checks that its
-/// blobs still sit on the elements). Without a budget the model may always read.
+/// A candidate square read as the detector reads it, in `bgr` whose colour was decoded with
+/// `upsampling`. When the model decides, the corners are the ones it refined; `accept_fitted`,
+/// when given, may refuse them (the red path checks that its blobs still sit on the elements).
+/// Without a budget the model may always read.
 struct CandidateReading {
   TagReading reading;
   Quad quad{};                  ///< the corners the reading was made on
   bool corners_fitted = false;  ///< they are the model's
   ReadingTimes times;
 };
-CandidateReading ReadCandidate(const cv::Mat& bgr, const Quad& quad,
+CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, const Quad& quad,
                                const BitThresholds& thresholds,
                                const std::function<bool(const Quad&)>& accept_fitted = {},
                                ModelBudget* budget = nullptr);

@@ -41,20 +41,32 @@ constexpr double kCb = 0.5 / (1 - 0.114), kCr = 0.5 / (1 - 0.299);
 
 }  // namespace
 
-void UndoChromaUpsampling(cv::Mat* block_means) {
-  if (block_means->rows < 3 || block_means->cols < 3) return;
-  // The mean of a block's four upsampled pixels is this kernel over the stored samples. Jacobi
-  // steps towards its inverse: the kernel's centre, 36 / 64, outweighs the rest (28 / 64).
-  static const cv::Mat kernel = (cv::Mat_<double>(3, 3) << 1, 6, 1, 6, 36, 6, 1, 6, 1) / 64.0;
+void UndoChromaUpsampling(cv::Mat* block_means, ChromaUpsampling upsampling) {
+  const bool across =
+      upsampling == ChromaUpsampling::kBoth || upsampling == ChromaUpsampling::kAcross;
+  const bool down = upsampling == ChromaUpsampling::kBoth || upsampling == ChromaUpsampling::kDown;
+  if ((!across && !down) || (across && block_means->cols < 3) || (down && block_means->rows < 3)) {
+    return;
+  }
+  // The mean of a block's upsampled pixels is this kernel over the stored samples. Jacobi steps
+  // towards its inverse: the kernel's centre (36 / 64, or 6 / 8 along one axis) outweighs the
+  // rest.
+  const cv::Mat blur = (cv::Mat_<double>(3, 1) << 1, 6, 1) / 8.0;
+  const cv::Mat identity = (cv::Mat_<double>(3, 1) << 0, 1, 0);
+  const cv::Mat& along_x = across ? blur : identity;
+  const cv::Mat& along_y = down ? blur : identity;
+  const double centre = along_x.at<double>(1) * along_y.at<double>(1);
   const cv::Mat means = block_means->clone();
   cv::Mat blurred;
   for (int step = 0; step < kUndoUpsamplingSteps; ++step) {
-    cv::filter2D(*block_means, blurred, CV_64F, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
-    *block_means += (means - blurred) * (64.0 / 36.0);
+    cv::sepFilter2D(*block_means, blurred, CV_64F, along_x, along_y, cv::Point(-1, -1), 0,
+                    cv::BORDER_REPLICATE);
+    *block_means += (means - blurred) / centre;
   }
 }
 
-TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int border) {
+TagSamples SampleTag(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                     const cv::Matx33d& tag_to_image, int border) {
   TagSamples samples;
   double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
   for (const double u : {-kObservedMargin, 1 + kObservedMargin}) {
@@ -103,8 +115,8 @@ TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int bo
       cr.at<double>(by, bx) = sum_cr / 4;
     }
   }
-  UndoChromaUpsampling(&cb);
-  UndoChromaUpsampling(&cr);
+  UndoChromaUpsampling(&cb, upsampling);
+  UndoChromaUpsampling(&cr, upsampling);
   for (int by = 0; by < blocks_y; ++by) {
     for (int bx = 0; bx < blocks_x; ++bx) {
       const int x = bx0 + 2 * bx, y = by0 + 2 * by;

@@ -6,6 +6,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pintag/detector/chroma_upsampling.hpp"
+
 namespace pintag::reading {
 
 /// One pixel's brightness: linear-light luminance of its decoded colour (light mixes linearly
@@ -17,8 +19,8 @@ struct LumaSample {
 
 /// One 2 × 2 block's colour differences as JPEG stores them (BT.601 Cb and Cr of the sRGB values,
 /// −0.5 … 0.5), the block at even image coordinates as JPEG's chroma blocks are. They are taken
-/// from the decoded pixels with the decoder's upsampling undone (UndoChromaUpsampling), so that
-/// they are close to the samples the file stores.
+/// from the decoded pixels with the decoder's upsampling, where there was one, undone
+/// (UndoChromaUpsampling), so that they are close to the samples the file stores.
 struct ChromaSample {
   int x = 0, y = 0;  ///< the block's top-left pixel
   double cb = 0, cr = 0;
@@ -41,12 +43,15 @@ inline constexpr int kUndoUpsamplingSteps = 6;
 /// libjpeg's default for 4:2:0 interpolates each pixel from its block's sample (9/16) and the
 /// three nearest neighbours' (3/16, 3/16, 1/16), so that a block's mean is the stored samples
 /// blurred by [1 6 1]/8 each way, and a chroma model fitted to those means sees colour twice
-/// blurred. Edges repeat the grid's border. Grids under 3 × 3 are left as they are.
-void UndoChromaUpsampling(cv::Mat* block_means);
+/// blurred. 4:2:2 (and 4:4:0) interpolate along one axis only, [3 1]/4, so the blur is [1 6 1]/8
+/// along that axis alone. Edges repeat the grid's border. A grid under 3 samples along an
+/// interpolated axis, and kNone, leave the means as they are.
+void UndoChromaUpsampling(cv::Mat* block_means, ChromaUpsampling upsampling);
 
 /// The samples within kObservedMargin of the square that `tag_to_image` maps the unit square to,
-/// inside `bgr` (8-bit BGR) and at least `border` pixels from its edge. Empty when the square is
-/// not wholly in front of the camera.
-TagSamples SampleTag(const cv::Mat& bgr, const cv::Matx33d& tag_to_image, int border = 0);
+/// inside `bgr` (8-bit BGR, its colour decoded with `upsampling`) and at least `border` pixels
+/// from its edge. Empty when the square is not wholly in front of the camera.
+TagSamples SampleTag(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                     const cv::Matx33d& tag_to_image, int border = 0);
 
 }  // namespace pintag::reading

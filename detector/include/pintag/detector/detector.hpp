@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "pintag/detector/chroma_upsampling.hpp"
 #include "pintag/detector/detection.hpp"
 #include "pintag/detector/image_io.hpp"
 #include "pintag/detector/options.hpp"
@@ -18,10 +19,16 @@ class Detector {
  public:
   explicit Detector(DetectorOptions options = {});
 
-  /// Finds every tag in an 8-bit BGR image (CV_8UC3). `exif` feeds the camera model when no
-  /// intrinsics were given. An empty or wrongly typed image gives a result with `error` set.
+  /// Finds every tag in an 8-bit BGR image (CV_8UC3) whose colour was decoded with `upsampling`
+  /// (kNone for pixels whose colour was never subsampled: renders, PNG, 4:4:4 JPEG). `exif` feeds
+  /// the camera model when no intrinsics were given. An empty or wrongly typed image gives a
+  /// result with `error` set.
+  DetectResult detect(const cv::Mat& bgr, const ExifCamera* exif,
+                      ChromaUpsampling upsampling) const;
+  /// Same for pixels of unknown origin: taken as a decoded 4:2:0 JPEG, what phones save.
   DetectResult detect(const cv::Mat& bgr, const ExifCamera* exif = nullptr) const;
-  /// Same for an image loaded with LoadImageFile / LoadImageBytes (EXIF used).
+  /// Same for an image loaded with LoadImageFile / LoadImageBytes (EXIF and the decoder's chroma
+  /// upsampling used).
   DetectResult detect(const LoadedImage& image) const;
 
   const DetectorOptions& options() const { return options_; }

@@ -11,6 +11,7 @@
 #include <span>
 #include <string>
 
+#include "pintag/detector/chroma_upsampling.hpp"
 #include "pintag/detector/options.hpp"
 
 namespace pintag {
@@ -46,6 +47,9 @@ struct LoadedImage {
   ExifCamera exif;
   int exif_orientation = 1;  ///< as found in the file, 1 … 8
   std::string format;        ///< "jpeg", "png", "tiff" or "webp"
+  /// How the decoder filled in colour the file stores at lower resolution (JPEG's subsampling,
+  /// lossy WebP's 4:2:0), in the upright image's axes.
+  ChromaUpsampling chroma_upsampling = ChromaUpsampling::kNone;
 };
 
 struct LoadResult {
