@@ -355,7 +355,9 @@ int RunMismatch(const Args& args, const std::vector<FrameSpec>& frames,
     for (int stage = 0; stage < kStages; ++stage) {
       const scene::Scene clean = scene::RenderScene(WithoutUpTo(spec, stage));
       const scene::MarkerTruth& truth = clean.truth.front();
-      const reading::ModelReading m = ReadOnTruth(clean.bgr, ChromaUpsampling::kNone, truth);
+      // Stage 0 is the photo as saved (4:2:0 JPEG); the later stages have no JPEG.
+      const reading::ModelReading m = ReadOnTruth(
+          clean.bgr, stage == 0 ? ChromaUpsampling::kBoth : ChromaUpsampling::kNone, truth);
       const bool ok = truth.fully_visible && m.fit.ok;
       residual[i][stage] = {ok ? 255 * m.fit.luma_noise : std::nan(""),
                             ok ? 255 * m.fit.chroma_noise : std::nan("")};

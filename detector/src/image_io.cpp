@@ -194,8 +194,17 @@ bool Transposes(int exif_orientation) {
 }
 
 /// What TurboJPEG's full-size decode did to a JPEG's chroma (libjpeg's default upsampling: the
-/// triangle filter, "fancy"), in the axes of the image after `exif_orientation`.
-ChromaUpsampling JpegChromaUpsampling(int subsampling, int exif_orientation) {
+/// triangle filter, "fancy"), in the axes of the image after `exif_orientation`. The reader takes
+/// chroma blocks to start at even coordinates: an orientation that mirrors a stored axis of odd
+/// length moves them to odd ones, and such an image is reported as kNone (not modelled).
+ChromaUpsampling JpegChromaUpsampling(int subsampling, int exif_orientation, int stored_width,
+                                      int stored_height) {
+  const int o = exif_orientation;
+  const bool mirrors_x = o == 2 || o == 3 || o == 7 || o == 8;  // the stored columns' order
+  const bool mirrors_y = o == 3 || o == 4 || o == 6 || o == 7;  // the stored rows' order
+  if ((mirrors_x && stored_width % 2 != 0) || (mirrors_y && stored_height % 2 != 0)) {
+    return ChromaUpsampling::kNone;
+  }
   ChromaUpsampling stored = ChromaUpsampling::kNone;
   if (subsampling == TJSAMP_420) stored = ChromaUpsampling::kBoth;
   if (subsampling == TJSAMP_422) stored = ChromaUpsampling::kAcross;
@@ -241,7 +250,8 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
   // A scaled decode handles chroma in its reduced transforms: not modelled, left as it is.
   const bool full_size = scale.num == scale.denom;
   image.chroma_upsampling = full_size
-                                ? JpegChromaUpsampling(header->subsampling, image.exif_orientation)
+                                ? JpegChromaUpsampling(header->subsampling, image.exif_orientation,
+                                                       header->width, header->height)
                                 : ChromaUpsampling::kNone;
   LoadResult result;
   result.claimed_width = header->width;
@@ -300,6 +310,7 @@ bool WebpIsLossy(std::span<const std::uint8_t> b) {
     if (std::memcmp(&b[pos], "VP8L", 4) == 0) return false;
     const std::size_t size = b[pos + 4] | (std::size_t{b[pos + 5]} << 8) |
                              (std::size_t{b[pos + 6]} << 16) | (std::size_t{b[pos + 7]} << 24);
+    if (size > b.size() - pos - 8) return false;  // a chunk past the end: nothing more to find
     pos += 8 + size + (size & 1);
   }
   return false;

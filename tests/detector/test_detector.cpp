@@ -18,6 +18,9 @@ using testing::SyntheticCamera;
 using testing::SyntheticOptions;
 using testing::SyntheticTag;
 
+// The synthetic scenes are rendered straight to pixels: their colour was never subsampled.
+constexpr ChromaUpsampling kRendered = ChromaUpsampling::kNone;
+
 double MaxCornerError(const Detection& d, const testing::SyntheticTruth& t) {
   double worst = 0;
   for (int i = 0; i < 4; ++i) {
@@ -44,7 +47,7 @@ TEST(Detector, FrontalTagAtEveryRoll) {
     SyntheticOptions s;
     s.seed = static_cast<std::uint64_t>(roll) + 1;
     const auto scene = MakeScene({{.key = 12345, .square_px = 100, .roll_deg = roll}}, s);
-    const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr);
+    const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr, nullptr, kRendered);
     ASSERT_EQ(r.detections.size(), 1u) << "roll " << roll;
     const Detection& d = r.detections[0];
     ASSERT_TRUE(d.key);
@@ -62,7 +65,7 @@ TEST(Detector, SteepSeventyDegreesAtFortyEightPixels) {
     s.seed = static_cast<std::uint64_t>(axis) + 11;
     const auto scene = MakeScene(
         {{.key = 777, .square_px = 72, .tilt_deg = 70, .tilt_axis_deg = axis, .roll_deg = 20}}, s);
-    const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr);
+    const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr, nullptr, kRendered);
     ++total;
     for (const Detection& d : r.detections) {
       ASSERT_TRUE(d.key);
@@ -88,7 +91,7 @@ TEST(Detector, SeveralTagsAtDifferentSizesAndRotations) {
       {.key = 4242, .centre_px = {250, 420}, .square_px = 70, .tilt_deg = 55, .roll_deg = 120},
   };
   const auto scene = MakeScene(tags, s);
-  const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr);
+  const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr, nullptr, kRendered);
   ASSERT_EQ(r.detections.size(), tags.size());
   for (const SyntheticTag& t : tags) {
     bool seen = false;
@@ -107,7 +110,7 @@ TEST(Detector, OneElementCoveredStillDecodesWithPose) {
                                    .roll_deg = 15.0 * element,
                                    .occluded_element = element}},
                                  s);
-    const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr);
+    const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr, nullptr, kRendered);
     ASSERT_EQ(r.detections.size(), 1u) << "element " << element;
     const Detection& d = r.detections[0];
     ASSERT_TRUE(d.key) << d.reject_reason;
@@ -127,7 +130,8 @@ TEST(Detector, RedClutterWithoutTagsGivesNothing) {
     s.red_distractors = true;
     s.noise_sigma = 3;
     const auto scene = MakeScene({}, s);
-    EXPECT_TRUE(Detector(OptionsFor(s)).detect(scene.bgr).detections.empty()) << seed;
+    EXPECT_TRUE(Detector(OptionsFor(s)).detect(scene.bgr, nullptr, kRendered).detections.empty())
+        << seed;
   }
 }
 
@@ -137,7 +141,7 @@ TEST(Detector, BlurAndNoise) {
   s.blur_sigma = 1.0;
   s.noise_sigma = 4;
   const auto scene = MakeScene({{.key = 9999, .square_px = 80, .tilt_deg = 35, .roll_deg = 60}}, s);
-  const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr);
+  const DetectResult r = Detector(OptionsFor(s)).detect(scene.bgr, nullptr, kRendered);
   ASSERT_EQ(r.detections.size(), 1u);
   EXPECT_EQ(r.detections[0].key->value(), 9999);
 }
@@ -158,9 +162,9 @@ TEST(Detector, ThreadsGiveTheSameAnswer) {
   const auto scene =
       MakeScene({{.key = 5, .centre_px = {200, 200}}, {.key = 6, .centre_px = {700, 300}}}, s);
   DetectorOptions o = OptionsFor(s);
-  const auto one = Detector(o).detect(scene.bgr);
+  const auto one = Detector(o).detect(scene.bgr, nullptr, kRendered);
   o.threads = 2;
-  const auto two = Detector(o).detect(scene.bgr);
+  const auto two = Detector(o).detect(scene.bgr, nullptr, kRendered);
   ASSERT_EQ(one.detections.size(), 2u);
   ASSERT_EQ(two.detections.size(), 2u);
   // The same tags with the same corners and pose, in whatever order the threads finished.

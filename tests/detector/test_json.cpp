@@ -33,7 +33,8 @@ TEST(Json, OptionsRoundTripAndRejectUnknownFields) {
 TEST(Json, DetectionCarriesKeyCornersPoseAndBits) {
   testing::SyntheticOptions s;
   const auto scene = testing::MakeScene({{.key = 4321, .square_px = 100, .tilt_deg = 30}}, s);
-  const DetectResult r = Detector().detect(scene.bgr);
+  const DetectResult r =
+      Detector().detect(scene.bgr, nullptr, ChromaUpsampling::kNone);  // a render
   const nlohmann::json j = ToJson(r);
   ASSERT_EQ(j["detections"].size(), 1u);
   const nlohmann::json& d = j["detections"][0];
