@@ -55,6 +55,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_TRUE(tag["office"].is_string());
   EXPECT_EQ(out["image"]["width"], 1920);
   EXPECT_EQ(out["image"]["height"], 1080);
+  EXPECT_EQ(out["image"]["chroma_upsampling"], "4:2:0");  // OpenCV's JPEG, as a phone's
   EXPECT_EQ(out["intrinsics"]["source"], "given");
   EXPECT_EQ(out["plan"], "default");
   EXPECT_GT(out["time_ms"]["total"].get<double>(), 0);
@@ -204,6 +205,7 @@ TEST_F(ServeTest, EveryTagInAFrameActiveRetiredAndUnknownKeys) {
   const json out = ExpectJson(
       client().Post("/api/v1/detect", scanner(), std::string(png.begin(), png.end()), "image/png"));
   ASSERT_EQ(out["tags"].size(), 3U) << out.dump(1);
+  EXPECT_EQ(out["image"]["chroma_upsampling"], "none");  // a PNG's colour is whole
   std::map<int, json> by_key;
   for (const json& tag : out["tags"]) by_key[tag["key"].get<int>()] = tag;
   ASSERT_EQ(by_key.size(), 3U);

@@ -213,7 +213,8 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
                   {"height", image.rows},
                   {"format", loaded.image->format},
                   {"bytes", bytes.size()},
-                  {"exif_orientation", loaded.image->exif_orientation}};
+                  {"exif_orientation", loaded.image->exif_orientation},
+                  {"chroma_upsampling", std::string(ToString(loaded.image->chroma_upsampling))}};
   out["intrinsics"] = {{"source", std::string(ToString(result.intrinsics_source))},
                        {"fx", result.intrinsics.fx},
                        {"fy", result.intrinsics.fy},

@@ -4,6 +4,7 @@
 // interpolation to see the colour the file stores, and must not "undo" it where it never happened.
 
 #include <cstdint>
+#include <string_view>
 
 namespace pintag {
 
@@ -16,5 +17,8 @@ enum class ChromaUpsampling : std::uint8_t {
   kAcross,  ///< 4:2:2: half resolution across only (4:4:0 after a quarter turn)
   kDown,    ///< 4:4:0: half resolution down only (4:2:2 after a quarter turn)
 };
+
+/// "none", "4:2:0", "4:2:2" or "4:4:0" (the detect API's `image.chroma_upsampling`).
+std::string_view ToString(ChromaUpsampling upsampling);
 
 }  // namespace pintag
