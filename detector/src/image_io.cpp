@@ -50,6 +50,10 @@ std::uint32_t Be32(const std::uint8_t* p) {
   return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
          p[3];
 }
+std::uint32_t Le32(const std::uint8_t* p) {
+  return p[0] | (std::uint32_t{p[1]} << 8) | (std::uint32_t{p[2]} << 16) |
+         (std::uint32_t{p[3]} << 24);
+}
 
 cv::Mat Reorient(const cv::Mat& in, int orientation) {
   cv::Mat out;
@@ -308,8 +312,7 @@ bool WebpIsLossy(std::span<const std::uint8_t> b) {
   while (pos + 8 <= b.size()) {
     if (std::memcmp(&b[pos], "VP8 ", 4) == 0) return true;
     if (std::memcmp(&b[pos], "VP8L", 4) == 0) return false;
-    const std::size_t size = b[pos + 4] | (std::size_t{b[pos + 5]} << 8) |
-                             (std::size_t{b[pos + 6]} << 16) | (std::size_t{b[pos + 7]} << 24);
+    const std::size_t size = Le32(&b[pos + 4]);
     if (size > b.size() - pos - 8) return false;  // a chunk past the end: nothing more to find
     pos += 8 + size + (size & 1);
   }
