@@ -182,7 +182,8 @@ int Main(int argc, char** argv) {
   std::mutex mutex;
   // Independent leads of the wrong winners that pass every check but the lead, by which of the
   // three thresholds of reading/decision.hpp applies: fitting (excess at most kMaxExcess) on a
-  // narrow square, fitting elsewhere, or not fitting.
+  // narrow square, fitting elsewhere, or not fitting. On a narrow square every check but the lead
+  // already asks an excess of at most kMaxNarrowExcess, so no narrow winner counts as not fitting.
   std::vector<double> wrong_fit_leads, wrong_narrow_fit_leads, wrong_misfit_leads;
   std::size_t model_readings = 0;
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");

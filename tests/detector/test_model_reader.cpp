@@ -42,6 +42,19 @@ testing::SyntheticScene Tag(int key, double side, double tilt_deg, double roll_d
       {{.key = key, .square_px = side, .tilt_deg = tilt_deg, .roll_deg = roll_deg}}, o);
 }
 
+// `corners` squeezed towards their centre line across one pair of sides (C0 C1 against C3 C2), to
+// `extent_px` across: a square made narrow one way by hand.
+Corners SqueezedAcross(const Corners& corners, double extent_px) {
+  const cv::Point2d mid01 = (corners[0] + corners[1]) / 2, mid32 = (corners[3] + corners[2]) / 2;
+  const double across = cv::norm(mid32 - mid01);
+  const double k = extent_px / across;
+  const cv::Point2d centre = (mid01 + mid32) / 2;
+  const cv::Point2d unit = (mid32 - mid01) / across;
+  Corners squeezed = corners;
+  for (cv::Point2d& p : squeezed) p -= (1 - k) * unit * (p - centre).dot(unit);
+  return squeezed;
+}
+
 TEST(ModelReader, RegionsAreTheFormatsCells) {
   int checked = 0;
   for (int iy = -20; iy <= 420; ++iy) {
@@ -261,7 +274,7 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   ASSERT_FALSE(IsNarrow(r.fit.corners));
   r.fit.chroma_correlation = {0.6, 0.6};  // 16 times the variance: kMinLead is passed below
   const double inflation = VarianceInflation(r.fit.chroma_correlation);
-  r.decision.excess = kMaxExcess * 0.5;  // the winner fits
+  r.decision.excess = kMaxNarrowExcess * 0.5;  // the winner fits, by either square's limit
   ASSERT_LT(kMinIndependentLeadOfAFit, kMinIndependentLeadOfANarrowFit);
   r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
   ASSERT_GE(r.decision.lead, kMinLead);
@@ -269,16 +282,7 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   // The same corners squeezed towards their centre line, across one pair of sides, to a little
   // under kNarrowExtentPx and a little over.
   const Corners as_read = r.fit.corners;
-  const auto squeezed = [&](double extent_px) {
-    const cv::Point2d mid01 = (as_read[0] + as_read[1]) / 2, mid32 = (as_read[3] + as_read[2]) / 2;
-    const double across = cv::norm(mid32 - mid01);
-    const double k = extent_px / across;
-    Corners q = as_read;
-    const cv::Point2d centre = (mid01 + mid32) / 2;
-    const cv::Point2d unit = (mid32 - mid01) / across;
-    for (cv::Point2d& p : q) p -= (1 - k) * unit * (p - centre).dot(unit);
-    return q;
-  };
+  const auto squeezed = [&](double extent_px) { return SqueezedAcross(as_read, extent_px); };
   r.fit.corners = squeezed(kNarrowExtentPx * 0.9);
   ASSERT_TRUE(IsNarrow(r.fit.corners));
   EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
@@ -286,18 +290,46 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   EXPECT_EQ(RefuseCodeword(r), "");
   r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 0.98;
   EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
-  // A winner that does not fit keeps its own threshold on a narrow square too.
-  ASSERT_LT(kMinIndependentLead, kMinIndependentLeadOfANarrowFit);
-  r.decision.lead = inflation * (kMinIndependentLead + kMinIndependentLeadOfANarrowFit) / 2;
+  // A winner that does not fit is refused on a narrow square, even where its excess counted in
+  // independent samples would let it pass elsewhere.
+  r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 2;
   r.decision.excess = kMaxExcess * 1.5;
   ASSERT_LE(r.decision.excess / inflation, kMaxIndependentExcess);
-  EXPECT_EQ(RefuseCodeword(r), "");
-  r.decision.lead = inflation * kMinIndependentLead * 0.95;
-  EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
-  r.decision.excess = kMaxExcess * 0.5;
+  EXPECT_EQ(RefuseCodeword(r), "codeword explains the pixels worse than its cells read freely");
+  r.decision.excess = kMaxNarrowExcess * 0.5;
   r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
   r.fit.corners = squeezed(kNarrowExtentPx * 1.1);
   ASSERT_FALSE(IsNarrow(r.fit.corners));
+  EXPECT_EQ(RefuseCodeword(r), "");
+}
+
+// On a narrow square the winner must explain the samples within kMaxNarrowExcess of the free
+// labelling, however far it leads; elsewhere kMaxExcess (and the excess in independent samples)
+// still applies. A real reading's corners are squeezed by hand as above.
+TEST(ModelReader, AWinnerOnANarrowSquareMustFitWhateverItsLead) {
+  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
+  ModelReading r =
+      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  ASSERT_EQ(RefuseCodeword(r), "");
+  const std::string refused_for_excess =
+      "codeword explains the pixels worse than its cells read freely";
+  ASSERT_LT(kMaxNarrowExcess, kMaxExcess);
+  // Far past every lead rule.
+  r.decision.lead = 4 * std::max(kMinLead, VarianceInflation(r.fit.chroma_correlation) *
+                                               kMinIndependentLeadOfANarrowFit);
+  const Corners as_read = r.fit.corners;
+  const Corners narrow = SqueezedAcross(as_read, kNarrowExtentPx * 0.9);
+  ASSERT_FALSE(IsNarrow(as_read));
+  ASSERT_TRUE(IsNarrow(narrow));
+  const double between = (kMaxNarrowExcess + kMaxExcess) / 2;
+  r.decision.excess = between;
+  EXPECT_EQ(RefuseCodeword(r), "");  // the square as read is not narrow
+  r.fit.corners = narrow;
+  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  r.decision.excess = kMaxNarrowExcess * 1.05;
+  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  r.decision.excess = kMaxNarrowExcess * 0.95;
   EXPECT_EQ(RefuseCodeword(r), "");
 }
 

@@ -75,14 +75,15 @@ std::vector<int> Keys(const DetectResult& result) {
 }
 
 // The tags of read/ came from rules of the earlier readers (faint red pass, pairs of red blobs,
-// dark squares, nearest codeword beyond the best-ranked few). The model reader accepts a codeword
-// only with a lead of 35 counted in independent chroma samples (reading/decision.hpp; counted as
-// if every sample were independent, leads of 50 and even 150 let wrong codewords through). It
-// refuses five tags whose right codeword leads by less: seed 1 frames 73 (32 px, 55°: 25.0),
-// 469 and 470 (24 px, 0° and 20°, hard light: 31.5 and 31.8, motion blur correlating their
-// chroma residuals) and 760 (32 px, 65°), seed 3 frame 269 (32 px, 55°: 17.4). The least number
-// read is held here, and no tag of the folder may be read as another key.
-constexpr int kReadFolderMinRead = 10;
+// dark squares, nearest codeword beyond the best-ranked few). The model reader decides most of them
+// now, by a lead counted in independent chroma samples (reading/decision.hpp). The detector leaves
+// three of the 15 unread (2026-11-30). Read on their true corners, the model refuses two because
+// their fitted colours are not a tag's: seed 1 frame 469 (24 px, 0°, hard light) and seed 3 frame
+// 269 (32 px, 55°). The third is seed 1 frame 711 (32 px, 65°, a narrow square): its right codeword
+// leads by 106, but explains the samples 19 noise units worse than the free reading of its cells,
+// and kMaxNarrowExcess allows 10. The least number read is held here, and no tag of the folder may
+// be read as another key.
+constexpr int kReadFolderMinRead = 12;
 
 TEST(Regressions, ReadsTheTagsOfTheReadFolder) {
   const std::vector<RegressionCase> cases = LoadFolder("read");

@@ -32,14 +32,15 @@ std::string RefuseCodeword(const ModelReading& reading) {
   if (!d.winner) return "no codeword candidates";
   const double inflation = VarianceInflation(reading.fit.chroma_correlation);
   const bool fits = d.excess <= kMaxExcess;
-  const double least_independent_lead = !fits ? kMinIndependentLead
-                                        : IsNarrow(reading.fit.corners)
-                                            ? kMinIndependentLeadOfANarrowFit
-                                            : kMinIndependentLeadOfAFit;
+  const bool narrow = IsNarrow(reading.fit.corners);
+  const double least_independent_lead = !fits    ? kMinIndependentLead
+                                        : narrow ? kMinIndependentLeadOfANarrowFit
+                                                 : kMinIndependentLeadOfAFit;
   if (d.lead < kMinLead || d.lead / inflation < least_independent_lead) {
     return "no codeword clearly nearest";
   }
-  if (!fits && d.excess / inflation > kMaxIndependentExcess) {
+  if ((!fits && d.excess / inflation > kMaxIndependentExcess) ||
+      (narrow && !(d.excess <= kMaxNarrowExcess))) {
     return "codeword explains the pixels worse than its cells read freely";
   }
   if (d.chroma_deficit > kMaxChromaDeficit) return "colour prefers another codeword";

@@ -49,6 +49,18 @@ inline constexpr double kNarrowExtentPx = 18;
 /// larger). At the qualities the tuning world draws, wrong winners that fit fall off faster (scale
 /// 4.0, all squares together): 30 left 7e-6 there, 48 leaves under 1e-7.
 inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
+/// Most the winner may explain the samples worse than the best free labelling on a narrow square
+/// (noise units), whatever its lead. Right readings there explain the samples about as well as
+/// the free labelling: on the tuning probe (seeds 22–24 as drawn and 22–23 at quality 90, corners
+/// jittered by 0.6 px: 16,800 readings), 1,264 of the 1,413 accepted right narrow readings have an
+/// excess of at most 0. Past 10, the wrong winners that pass every other check outnumber the
+/// right accepted readings 115 to 42 (on other squares 14 to 95). A lead is a likelihood ratio
+/// only where the model fits. The rule refuses 19 of the 3,631 right target-bin readings the probe
+/// accepts as drawn, and 6 of 2,667 at quality 90 (15 would refuse 8 and 1). It was prompted by a
+/// held-out misread, so that frame is no evidence for it: seed 71 at quality 90, frame 4484 (32 px
+/// at 65° in hard light), read wrong with an independent lead of 66 at an excess of 12.6
+/// (docs/DETECTOR.md, thirteenth sitting).
+inline constexpr double kMaxNarrowExcess = 10;
 /// Most another scored codeword may explain the colour better than the winner does
 /// (CodewordDecision::chroma_deficit, noise units). Where the fitted corners or blur are off, a
 /// wrong codeword can explain the luminance better than the truth by more than any lead rule
