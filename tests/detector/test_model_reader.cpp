@@ -42,6 +42,16 @@ testing::SyntheticScene Tag(int key, double side, double tilt_deg, double roll_d
       {{.key = key, .square_px = side, .tilt_deg = tilt_deg, .roll_deg = roll_deg}}, o);
 }
 
+// The model's reading of a clean 40 px tag on its true corners, accepted as it is read: the
+// decision tests set its statistics by hand to reach each side of a rule.
+ModelReading ReadingToJudge() {
+  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
+  return ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+}
+
+constexpr const char* kRefusedForExcess =
+    "codeword explains the pixels worse than its cells read freely";
+
 // `corners` squeezed towards their centre line across one pair of sides (C0 C1 against C3 C2), to
 // `extent_px` across: a square made narrow one way by hand.
 Corners SqueezedAcross(const Corners& corners, double extent_px) {
@@ -217,31 +227,25 @@ TEST(ModelReader, ReadsASharpenedTag) {
 // judged as the lead is: in noise units, or else counted in independent chroma samples. A real
 // reading's excess is set by hand to reach each side of the rule.
 TEST(ModelReader, AnExcessIsCountedInIndependentSamplesAsTheLeadIs) {
-  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r =
-      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  ModelReading r = ReadingToJudge();
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
-  const std::string refused_for_excess =
-      "codeword explains the pixels worse than its cells read freely";
   r.fit.chroma_correlation = {0, 0};  // independent residuals: the noise-unit rule alone
   r.decision.excess = kMaxExcess * 1.5;
-  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.fit.chroma_correlation = {0.6, 0.6};  // 16 times the variance
   const double inflation = VarianceInflation(r.fit.chroma_correlation);
   ASSERT_NEAR(inflation, 16, 1e-9);
   ASSERT_GE(r.decision.lead / inflation, kMinIndependentLead);
   EXPECT_EQ(RefuseCodeword(r), "");
   r.decision.excess = kMaxIndependentExcess * inflation * 1.1;
-  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.decision.excess = kMaxExcess * 0.9;  // within the noise-unit rule, whatever the correlation
   EXPECT_EQ(RefuseCodeword(r), "");
 }
 
 TEST(ModelReader, AWinnerThatFitsAsWellAsTheFreeLabellingNeedsASmallerLead) {
-  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r =
-      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  ModelReading r = ReadingToJudge();
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
   const std::string refused_for_lead = "no codeword clearly nearest";
@@ -266,9 +270,7 @@ TEST(ModelReader, AWinnerThatFitsAsWellAsTheFreeLabellingNeedsASmallerLead) {
 // that fits needs the larger lead. A real reading's corners are squeezed by hand across
 // kNarrowExtentPx.
 TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
-  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r =
-      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  ModelReading r = ReadingToJudge();
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
   ASSERT_FALSE(IsNarrow(r.fit.corners));
@@ -295,7 +297,7 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 2;
   r.decision.excess = kMaxExcess * 1.5;
   ASSERT_LE(r.decision.excess / inflation, kMaxIndependentExcess);
-  EXPECT_EQ(RefuseCodeword(r), "codeword explains the pixels worse than its cells read freely");
+  EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.decision.excess = kMaxNarrowExcess * 0.5;
   r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
   r.fit.corners = squeezed(kNarrowExtentPx * 1.1);
@@ -307,13 +309,9 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
 // labelling, however far it leads; elsewhere kMaxExcess (and the excess in independent samples)
 // still applies. A real reading's corners are squeezed by hand as above.
 TEST(ModelReader, AWinnerOnANarrowSquareMustFitWhateverItsLead) {
-  const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  ModelReading r =
-      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  ModelReading r = ReadingToJudge();
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
-  const std::string refused_for_excess =
-      "codeword explains the pixels worse than its cells read freely";
   ASSERT_LT(kMaxNarrowExcess, kMaxExcess);
   // Far past every lead rule.
   r.decision.lead = 4 * std::max(kMinLead, VarianceInflation(r.fit.chroma_correlation) *
@@ -326,9 +324,9 @@ TEST(ModelReader, AWinnerOnANarrowSquareMustFitWhateverItsLead) {
   r.decision.excess = between;
   EXPECT_EQ(RefuseCodeword(r), "");  // the square as read is not narrow
   r.fit.corners = narrow;
-  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.decision.excess = kMaxNarrowExcess * 1.05;
-  EXPECT_EQ(RefuseCodeword(r), refused_for_excess);
+  EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.decision.excess = kMaxNarrowExcess * 0.95;
   EXPECT_EQ(RefuseCodeword(r), "");
 }
