@@ -43,10 +43,14 @@ testing::SyntheticScene Tag(int key, double side, double tilt_deg, double roll_d
 }
 
 // The model's reading of a clean 40 px tag on its true corners, accepted as it is read: the
-// decision tests set its statistics by hand to reach each side of a rule.
+// decision tests set its statistics by hand to reach each side of a rule. Its luminance noise is
+// raised to kLumaNoiseFloor where it is under it, so that a lead set by hand counts in full.
 ModelReading ReadingToJudge() {
   const auto scene = Tag(4242, 40, 20, 11, 0.8, 1, 3);
-  return ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  ModelReading reading =
+      ReadThroughModel(scene.bgr, ChromaUpsampling::kNone, TrueCorners(scene.truth[0]));
+  reading.fit.luma_noise = std::max(reading.fit.luma_noise, kLumaNoiseFloor);
+  return reading;
 }
 
 constexpr const char* kRefusedForExcess =
@@ -329,6 +333,27 @@ TEST(ModelReader, AWinnerOnANarrowSquareMustFitWhateverItsLead) {
   EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.decision.excess = kMaxNarrowExcess * 0.95;
   EXPECT_EQ(RefuseCodeword(r), "");
+}
+
+// Under kLumaNoiseFloor the lead is counted as if the luminance noise were the floor: a lead that
+// passes at the noise the fit measured is refused when the same fit claims a noise of a third of
+// the floor, and counted in full at the floor and above.
+TEST(ModelReader, ALeadIsCountedAtTheLuminanceNoiseFloor) {
+  ModelReading r = ReadingToJudge();
+  ASSERT_TRUE(r.fit.ok) << r.error;
+  ASSERT_EQ(RefuseCodeword(r), "");
+  r.fit.luma_noise = kLumaNoiseFloor;
+  EXPECT_DOUBLE_EQ(CountedLead(r), r.decision.lead);
+  r.fit.luma_noise = kLumaNoiseFloor * 2;
+  EXPECT_DOUBLE_EQ(CountedLead(r), r.decision.lead);
+  // A lead 4 times what every rule asks passes at the floor and fails at a third of it (1/9).
+  r.decision.lead =
+      4 * std::max(kMinLead, VarianceInflation(r.fit.chroma_correlation) * kMinIndependentLead);
+  r.fit.luma_noise = kLumaNoiseFloor;
+  EXPECT_EQ(RefuseCodeword(r), "");
+  r.fit.luma_noise = kLumaNoiseFloor / 3;
+  EXPECT_NEAR(CountedLead(r), r.decision.lead / 9, 1e-9 * r.decision.lead);
+  EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
 }
 
 TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {

@@ -24,6 +24,13 @@ bool IsNarrow(const Corners& corners) {
   return !(stage::ShortExtentPx(SquareHomography(corners)) >= kNarrowExtentPx);
 }
 
+double CountedLead(const ModelReading& reading) {
+  const double noise = reading.fit.luma_noise;
+  const double scale =
+      noise < kLumaNoiseFloor ? (noise / kLumaNoiseFloor) * (noise / kLumaNoiseFloor) : 1.0;
+  return reading.decision.lead * scale;
+}
+
 std::string RefuseCodeword(const ModelReading& reading) {
   const CodewordDecision& d = reading.decision;
   if (!reading.fit.ok) return reading.error.empty() ? "no model fitted" : reading.error;
@@ -36,7 +43,8 @@ std::string RefuseCodeword(const ModelReading& reading) {
   const double least_independent_lead = !fits    ? kMinIndependentLead
                                         : narrow ? kMinIndependentLeadOfANarrowFit
                                                  : kMinIndependentLeadOfAFit;
-  if (d.lead < kMinLead || d.lead / inflation < least_independent_lead) {
+  const double lead = CountedLead(reading);
+  if (lead < kMinLead || lead / inflation < least_independent_lead) {
     return "no codeword clearly nearest";
   }
   if ((!fits && d.excess / inflation > kMaxIndependentExcess) ||
