@@ -259,8 +259,10 @@ int Main(int argc, char** argv) {
                         {m.fit.corners[0], m.fit.corners[1], m.fit.corners[2], m.fit.corners[3]}))
                   : 0;
           const bool narrow = m.fit.ok && reading::IsNarrow(m.fit.corners);
+          // As the rules count it (reading::CountedLead: under the luminance noise floor, less
+          // than the lead column).
           const double lead_independent =
-              dec.lead / reading::VarianceInflation(m.fit.chroma_correlation);
+              reading::CountedLead(m) / reading::VarianceInflation(m.fit.chroma_correlation);
           // Until the decision rule is settled, the probe accepts no codeword: it logs them.
           const std::lock_guard lock(mutex);
           if (csv != nullptr) {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -335,10 +336,11 @@ TEST(ModelReader, AWinnerOnANarrowSquareMustFitWhateverItsLead) {
   EXPECT_EQ(RefuseCodeword(r), "");
 }
 
-// Under kLumaNoiseFloor the lead is counted as if the luminance noise were the floor: a lead that
-// passes at the noise the fit measured is refused when the same fit claims a noise of a third of
-// the floor, and counted in full at the floor and above.
+// Under kLumaNoiseFloor (two 8-bit code values) the lead is counted as if the luminance noise were
+// the floor: a lead that passes at the floor is refused when the same fit claims a noise of a
+// third of it, and counted in full at the floor and above.
 TEST(ModelReader, ALeadIsCountedAtTheLuminanceNoiseFloor) {
+  EXPECT_NEAR(kLumaNoiseFloor * 255, 2, 1e-12);
   ModelReading r = ReadingToJudge();
   ASSERT_TRUE(r.fit.ok) << r.error;
   ASSERT_EQ(RefuseCodeword(r), "");
@@ -354,6 +356,27 @@ TEST(ModelReader, ALeadIsCountedAtTheLuminanceNoiseFloor) {
   r.fit.luma_noise = kLumaNoiseFloor / 3;
   EXPECT_NEAR(CountedLead(r), r.decision.lead / 9, 1e-9 * r.decision.lead);
   EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
+}
+
+// A decision statistic that is not a number (a fit gone wrong) refuses the winner.
+TEST(ModelReader, AStatisticThatIsNotANumberRefuses) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const ModelReading accepted = ReadingToJudge();
+  ASSERT_TRUE(accepted.fit.ok) << accepted.error;
+  ASSERT_EQ(RefuseCodeword(accepted), "");
+  ModelReading r = accepted;
+  r.decision.lead = nan;
+  EXPECT_NE(RefuseCodeword(r), "");
+  r = accepted;
+  r.fit.luma_noise = nan;
+  r.decision.lead = nan;
+  EXPECT_NE(RefuseCodeword(r), "");
+  r = accepted;
+  r.decision.excess = nan;
+  EXPECT_NE(RefuseCodeword(r), "");
+  r = accepted;
+  r.decision.chroma_deficit = nan;
+  EXPECT_NE(RefuseCodeword(r), "");
 }
 
 TEST(ModelReader, ABlackSquareWithoutElementsGivesNoKey) {

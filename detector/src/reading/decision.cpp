@@ -43,15 +43,16 @@ std::string RefuseCodeword(const ModelReading& reading) {
   const double least_independent_lead = !fits    ? kMinIndependentLead
                                         : narrow ? kMinIndependentLeadOfANarrowFit
                                                  : kMinIndependentLeadOfAFit;
+  // Written so that a statistic that is not a number refuses (as IsNarrow does).
   const double lead = CountedLead(reading);
-  if (lead < kMinLead || lead / inflation < least_independent_lead) {
+  if (!(lead >= kMinLead) || !(lead / inflation >= least_independent_lead)) {
     return "no codeword clearly nearest";
   }
-  if ((!fits && d.excess / inflation > kMaxIndependentExcess) ||
+  if ((!fits && !(d.excess / inflation <= kMaxIndependentExcess)) ||
       (narrow && !(d.excess <= kMaxNarrowExcess))) {
     return "codeword explains the pixels worse than its cells read freely";
   }
-  if (d.chroma_deficit > kMaxChromaDeficit) return "colour prefers another codeword";
+  if (!(d.chroma_deficit <= kMaxChromaDeficit)) return "colour prefers another codeword";
   // The colours must be a tag's: every cell level between the black and the quiet zone in
   // luminance, and red redder (higher Cr) than green by a clear step (the palette's reds sit at
   // Cr +0.34, its greens at −0.07 and −0.30; casts move all four together).

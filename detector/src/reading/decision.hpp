@@ -62,15 +62,16 @@ inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
 /// (docs/DETECTOR.md, thirteenth sitting).
 inline constexpr double kMaxNarrowExcess = 10;
 /// Least luminance noise (of the black-to-white range: two 8-bit code values) at which a lead is
-/// counted. The lead is in units of the free model's residual, and where that residual is smaller
-/// the model's own approximations (blur shape, sharpening, the phone's tone curve), not the noise,
-/// decide how far a codeword leads. On the tuning probe at JPEG quality 100 (seeds 22 and 23, 24
-/// frames per bin up to 48 px, corners jittered by 0.6 px: 6,720 readings) one wrong winner was
-/// accepted: seed 22 frame 765 (24 px at 40° in hard light), read at a luminance noise of 0.0042,
-/// where the right accepted hard-light readings' 10th percentile is 0.011. Counted at this floor its
-/// lead falls from 63 to 18 noise units. On the seven tuning probes on record (as drawn, at quality
-/// 90 and 100: 23,520 readings) the floor refuses 11 of the 9,064 right target-bin readings
-/// accepted. It was set on that one wrong reading (docs/DETECTOR.md, thirteenth sitting).
+/// counted. The lead is in units of the free model's residual. Where that residual is smaller, the
+/// model's own approximations (blur shape, sharpening, the phone's tone curve) rather than the
+/// noise probably set how far a codeword leads. On the tuning probe at JPEG quality 100 (seeds 22
+/// and 23, 24 frames per bin up to 48 px, corners jittered by 0.6 px: 6,720 readings) one wrong
+/// winner was accepted: seed 22 frame 765 (24 px at 40° in hard light), read at a luminance noise
+/// of 0.0042, where the right accepted hard-light readings' 10th percentile is 0.011. Counted at
+/// this floor its lead falls from 63 to 18 noise units. On the seven tuning probes on record (as
+/// drawn, at quality 90 and 100: 23,520 readings) the floor refuses 11 of the 9,064 right
+/// target-bin readings accepted. It was set on that one wrong reading (docs/DETECTOR.md, thirteenth
+/// sitting).
 inline constexpr double kLumaNoiseFloor = 2.0 / 255;
 /// Most another scored codeword may explain the colour better than the winner does
 /// (CodewordDecision::chroma_deficit, noise units). Where the fitted corners or blur are off, a
@@ -103,8 +104,8 @@ bool IsNarrow(const Corners& corners);
 bool TooSmallToRead(const Corners& corners);
 
 /// The winner's lead as the rules count it (noise units): CodewordDecision::lead, scaled by
-/// (luma noise / kLumaNoiseFloor)² when the luminance noise is under the floor. Chroma's share of
-/// the lead is scaled too, which only makes the rules stricter.
+/// (luma noise / kLumaNoiseFloor)² when the luminance noise is under the floor (chroma's share
+/// too), so it never counts more than the lead itself.
 double CountedLead(const ModelReading& reading);
 
 /// Empty when `reading`'s winner is accepted, else why not.
