@@ -289,8 +289,7 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   // The same corners squeezed towards their centre line, across one pair of sides, to a little
   // under kNarrowExtentPx and a little over.
   const Corners as_read = r.fit.corners;
-  const auto squeezed = [&](double extent_px) { return SqueezedAcross(as_read, extent_px); };
-  r.fit.corners = squeezed(kNarrowExtentPx * 0.9);
+  r.fit.corners = SqueezedAcross(as_read, kNarrowExtentPx * 0.9);
   ASSERT_TRUE(IsNarrow(r.fit.corners));
   EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
   r.decision.lead = inflation * kMinIndependentLeadOfANarrowFit * 1.05;
@@ -305,7 +304,7 @@ TEST(ModelReader, AWinnerOnANarrowSquareNeedsTheLargerLead) {
   EXPECT_EQ(RefuseCodeword(r), kRefusedForExcess);
   r.decision.excess = kMaxNarrowExcess * 0.5;
   r.decision.lead = inflation * (kMinIndependentLeadOfAFit + kMinIndependentLeadOfANarrowFit) / 2;
-  r.fit.corners = squeezed(kNarrowExtentPx * 1.1);
+  r.fit.corners = SqueezedAcross(as_read, kNarrowExtentPx * 1.1);
   ASSERT_FALSE(IsNarrow(r.fit.corners));
   EXPECT_EQ(RefuseCodeword(r), "");
 }
@@ -369,7 +368,6 @@ TEST(ModelReader, AStatisticThatIsNotANumberRefuses) {
   EXPECT_NE(RefuseCodeword(r), "");
   r = accepted;
   r.fit.luma_noise = nan;
-  r.decision.lead = nan;
   EXPECT_NE(RefuseCodeword(r), "");
   r = accepted;
   r.decision.excess = nan;

@@ -25,9 +25,10 @@ bool IsNarrow(const Corners& corners) {
 }
 
 double CountedLead(const ModelReading& reading) {
+  // A noise that is not a number makes the lead one too, which RefuseCodeword refuses.
   const double noise = reading.fit.luma_noise;
   const double scale =
-      noise < kLumaNoiseFloor ? (noise / kLumaNoiseFloor) * (noise / kLumaNoiseFloor) : 1.0;
+      noise >= kLumaNoiseFloor ? 1.0 : (noise / kLumaNoiseFloor) * (noise / kLumaNoiseFloor);
   return reading.decision.lead * scale;
 }
 
