@@ -154,14 +154,20 @@ int Main(int argc, char** argv) {
         return 2;
       }
       args.sweep.jpeg_quality = quality;
+    } else if (a == "--s-curve") {
+      args.sweep.s_curve = true;  // as pintag_bench's
     } else {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
-                   "[--jpeg-quality N] [--threads N] "
+                   "[--jpeg-quality N] [--s-curve] [--threads N] "
                    "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
+  }
+  if (args.sweep.s_curve && args.sweep.world != scene::World::kTuning) {
+    std::fprintf(stderr, "pintag_reader_probe: --s-curve is for the tuning world\n");
+    return 2;
   }
   const scene::Camera camera = CameraFor(args.sweep.world);
   std::vector<FrameSpec> frames = MakeSweep(args.sweep, camera);
@@ -338,6 +344,7 @@ int Main(int argc, char** argv) {
     std::printf("every frame at JPEG quality %d, not the quality its light draws\n",
                 args.sweep.jpeg_quality);
   }
+  if (args.sweep.s_curve) std::printf("every frame's phone with an S-shaped tone curve\n");
   for (int hard = 0; hard < 2; ++hard) {
     std::printf("%s\n  size  ", hard ? "hard" : "moderate");
     for (int t = 0; t < kTiltCount; ++t) std::printf("%9d°", kTiltsDeg[t]);

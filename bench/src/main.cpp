@@ -76,6 +76,7 @@ void Usage(FILE* to) {
       "quality its light draws\n"
       "  --jpeg-chroma C       420 (default, as phones save) or 444: JPEG colour resolution "
       "(held-out world)\n"
+      "  --s-curve             give every frame's phone an S-shaped tone curve (tuning world)\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
       "  --csv FILE            also write one row per frame and detector\n"
@@ -147,6 +148,8 @@ bool ParseArgs(int argc, char** argv, Args* args) {
         return false;
       }
       args->sweep.jpeg_full_chroma = chroma == "444";
+    } else if (a == "--s-curve") {
+      args->sweep.s_curve = true;
     } else if (a == "--out") {
       const char* v = value("--out");
       if (v == nullptr) return false;
@@ -191,6 +194,12 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       Usage(stderr);
       return false;
     }
+  }
+  if (args->sweep.s_curve && args->sweep.world != scene::World::kTuning) {
+    std::fprintf(stderr,
+                 "pintag_bench: --s-curve is for the tuning world (the held-out phone has its "
+                 "own)\n");
+    return false;
   }
   if (args->sweep.jpeg_full_chroma && args->sweep.world != scene::World::kHeldOut) {
     std::fprintf(stderr, "pintag_bench: --jpeg-chroma 444 is for the held-out world\n");

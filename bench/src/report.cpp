@@ -88,6 +88,10 @@ std::string ReportMarkdown(const BenchResult& r) {
     md << "| JPEG quality | **every frame at " << r.sweep.jpeg_quality
        << "** (`--jpeg-quality`), not the quality its light draws |\n";
   }
+  if (r.sweep.s_curve) {
+    md << "| tone curve | **an S-curve on every frame** (`--s-curve`), as well as the power its "
+          "light draws |\n";
+  }
   if (r.sweep.jpeg_full_chroma) {
     md << "| JPEG colour | **full resolution (4:4:4)** (`--jpeg-chroma 444`), not the 4:2:0 "
           "phones save |\n";

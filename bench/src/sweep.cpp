@@ -117,6 +117,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     frames[i].world = options.world;
     frames[i].jpeg_quality = options.jpeg_quality;
     frames[i].jpeg_full_chroma = options.jpeg_full_chroma;
+    frames[i].s_curve = options.s_curve;
   }
   return frames;
 }
@@ -151,6 +152,10 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
     spec.capture.jpeg_quality = frame.jpeg_quality;
   }
   spec.capture.jpeg_full_chroma = frame.jpeg_full_chroma;
+  if (frame.s_curve) {
+    scene::Rng rng(Mix(frame.seed, 0x5C0E));
+    spec.photometry.tone_contrast = frame.hard ? rng.uniform(0.3, 0.9) : rng.uniform(0.1, 0.6);
+  }
   const bool held_out = frame.world == scene::World::kHeldOut;
   if (frame.tagless() && frame.blank_label_px == 0) return spec;
   scene::PlacedMarker placed;

@@ -46,6 +46,10 @@ struct SweepOptions {
   int jpeg_quality = 0;
   /// Held-out world only: save every frame's JPEG with full-resolution colour (4:4:4), not 4:2:0.
   bool jpeg_full_chroma = false;
+  /// Tuning world only: give every frame's phone an S-shaped tone curve (Photometry::
+  /// tone_contrast, drawn from the frame's seed: 0.1 … 0.6 in moderate light, 0.3 … 0.9 in hard),
+  /// the rest of its light unchanged. The held-out phone always has one of its own.
+  bool s_curve = false;
 };
 
 struct FrameSpec {
@@ -68,6 +72,7 @@ struct FrameSpec {
   double blank_label_tilt_deg = 0;
   int jpeg_quality = 0;           ///< SweepOptions::jpeg_quality
   bool jpeg_full_chroma = false;  ///< SweepOptions::jpeg_full_chroma
+  bool s_curve = false;           ///< SweepOptions::s_curve
 
   bool tagless() const { return size_index < 0; }
 };

@@ -5,7 +5,10 @@
 #include <apriltag/tag36h10.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -206,6 +209,44 @@ TEST(RenderScene, BayerKeepsFlatColoursAndFringesEdges) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 3) << "phase " << phase << " channel " << c;
     EXPECT_GT(cv::norm(plain.bgr, bayer.bgr, cv::NORM_INF), 20.0);  // edges do change
   }
+}
+
+// The S-curve (Photometry::tone_contrast) is one curve on every channel value: darker below
+// mid-grey, brighter above, black, mid-grey and white kept, order kept.
+TEST(RenderScene, SCurveDeepensDarksAndLiftsLightsKeepingTheirOrder) {
+  const Camera camera;
+  SceneSpec spec;
+  spec.real_background = false;
+  spec.markers.push_back(
+      Place(PinTagTexture(9), 9, camera, {960, 540}, DistanceFor(camera, 200), 30, 20, 10));
+  const cv::Mat plain = RenderScene(spec).bgr;
+  spec.photometry.tone_contrast = 0.8;
+  const cv::Mat curved = RenderScene(spec).bgr;
+  ASSERT_EQ(plain.size(), curved.size());
+  std::array<int, 256> lowest{}, highest{};
+  lowest.fill(256);
+  highest.fill(-1);
+  const auto* a = plain.ptr<std::uint8_t>();
+  const auto* b = curved.ptr<std::uint8_t>();
+  ASSERT_TRUE(plain.isContinuous() && curved.isContinuous());
+  for (std::size_t i = 0; i < plain.total() * 3; ++i) {
+    lowest[a[i]] = std::min(lowest[a[i]], static_cast<int>(b[i]));
+    highest[a[i]] = std::max(highest[a[i]], static_cast<int>(b[i]));
+  }
+  int seen = 0, moved = 0, previous = -1;
+  for (int v = 0; v < 256; ++v) {
+    if (highest[v] < 0) continue;
+    ++seen;
+    EXPECT_EQ(lowest[v], highest[v]) << "value " << v << " is not mapped to one value";
+    EXPECT_GE(lowest[v], previous) << "value " << v << " out of order";
+    previous = highest[v];
+    if (v < 127) EXPECT_LE(highest[v], v) << v;
+    if (v > 128) EXPECT_GE(lowest[v], v) << v;
+    if (v == 0 || v == 255) EXPECT_EQ(lowest[v], v);
+    moved += std::abs(lowest[v] - v) >= 10;
+  }
+  EXPECT_GT(seen, 100);  // a tag on a textured background covers most code values
+  EXPECT_GT(moved, 40);  // and a strong curve moves many of them by ten or more
 }
 
 // The truth corners are where the black square is: just inside each edge is dark, just outside is

@@ -185,15 +185,25 @@ void ApplyBayer(cv::Mat& frame, int phase) {
   cv::demosaicing(mosaic, frame, detail::BayerDemosaicCode(phase, /*edge_aware=*/false));
 }
 
-/// A phone's processing in 8-bit sRGB: tone power, saturation and colour denoising on the
-/// differences from the channels' mean, then an unsharp mask on each channel.
+/// A phone's processing in 8-bit sRGB: tone power and S-curve, saturation and colour denoising on
+/// the differences from the channels' mean, then an unsharp mask on each channel.
 void ApplyProcessing(cv::Mat& frame, const Photometry& p) {
   const bool tone = std::abs(p.tone_gamma - 1) > 1e-3;
+  const bool s_curve = p.tone_contrast > 1e-3;
   const bool colour = std::abs(p.saturation - 1) > 1e-3 || p.chroma_denoise_px > 0.05;
-  if (!tone && !colour && p.sharpen <= 0) return;
+  if (!tone && !s_curve && !colour && p.sharpen <= 0) return;
   cv::Mat f;
   frame.convertTo(f, CV_32FC3, 1.0 / 255);
   if (tone) cv::pow(cv::max(f, 0.0), p.tone_gamma, f);
+  if (s_curve) {
+    const auto c = static_cast<float>(std::min(p.tone_contrast, 1.0));
+    f.forEach<cv::Vec3f>([c](cv::Vec3f& pixel, const int* /*position*/) {
+      for (int i = 0; i < 3; ++i) {
+        const float v = std::clamp(pixel[i], 0.0f, 1.0f);
+        pixel[i] = v + c * (v * v * (3 - 2 * v) - v);  // towards the smoothstep
+      }
+    });
+  }
   if (colour) {
     std::vector<cv::Mat> channels;
     cv::split(f, channels);

@@ -103,6 +103,11 @@ struct Photometry {
   double chroma_denoise_px = 0;   ///< Gaussian sigma on those differences (colour noise reduction)
   double sharpen = 0;             ///< unsharp mask on every channel, amount
   double sharpen_sigma_px = 1.0;  ///< its Gaussian
+  /// An S-shaped tone curve after the power, as phones apply for contrast: each value v (0 … 1)
+  /// moved this share of the way to the smoothstep 3 v² − 2 v³, 0 … 1 (slope 1 − c at black and
+  /// white, 1 + c / 2 at mid-grey). Moderate and Hard leave it 0; pintag_bench and the reader
+  /// probe draw it with --s-curve.
+  double tone_contrast = 0;
   /// Random mild settings: gradient 0 … 0.3, any cast or none, defocus σ 0 … 1 px, motion blur
   /// 0 … 2 px half the time, noise σ 1 … 4, JPEG quality 75 … 95, exposure 0.8 … 1.15; tone gamma
   /// 0.85 … 1.15, saturation 0.95 … 1.3, colour denoising σ 0.5 … 1.5 px half the time, sharpening
