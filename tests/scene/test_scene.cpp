@@ -281,7 +281,8 @@ TEST(RenderScene, TruthCornersAreWhereTheBlackSquareIs) {
       const cv::Point2d a = truth.corners_px[e], b = truth.corners_px[(e + 1) % 4];
       const cv::Point2d along = (b - a) * (1.0 / Distance(a, b));
       const cv::Point2d inward(-along.y, along.x);  // C0 → C3 is clockwise in the image
-      for (double f = 0.1; f <= 0.9; f += 0.1) {
+      for (int tenth = 1; tenth <= 9; ++tenth) {
+        const double f = 0.1 * tenth;
         const cv::Point2d p = a + (b - a) * f;
         const int in =
             gray.at<std::uint8_t>(cvRound(p.y + 1.2 * inward.y), cvRound(p.x + 1.2 * inward.x));
@@ -305,10 +306,11 @@ TEST(RenderScene, TruthCornersAreWhereTheBlackSquareIs) {
         const cv::Point2d inward(-along.y, along.x);
         double sum = 0;
         int count = 0;
-        for (double f = 0.15; f < 0.9; f += 0.1) {
-          const cv::Point2d p = a + (b - a) * f;
+        for (int step = 0; step < 8; ++step) {
+          const cv::Point2d p = a + (b - a) * (0.15 + 0.1 * step);
           std::vector<double> profile;
-          for (double d = -3; d <= 3.001; d += 0.05) {
+          for (int k = 0; k <= 120; ++k) {  // -3 … 3 px across the edge, 0.05 px apart
+            const double d = -3 + 0.05 * k;
             cv::Mat patch;
             cv::getRectSubPix(linear, {1, 1}, cv::Point2f(p + d * inward), patch);
             profile.push_back(patch.at<float>(0));

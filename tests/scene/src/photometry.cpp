@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -61,7 +62,7 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
   constexpr bool kLinearOut = std::is_same_v<Out, float>;
   const int bands = flat ? 1 : 128;
   const auto& to_linear = detail::SrgbToLinearTable();
-  std::vector<std::array<Out, 256 * 3>> luts(bands);
+  std::vector<std::array<Out, std::size_t{256} * 3>> luts(bands);
   for (int b = 0; b < bands; ++b) {
     const double t = flat ? 0.0 : (b + 0.5) / bands;
     const double gain = p.exposure * (1.0 - std::clamp(p.gradient, 0.0, 1.0) * t);
@@ -93,9 +94,10 @@ cv::Mat ApplyLight(const cv::Mat& frame, const Photometry& p) {
     for (int x = 0; x < frame.cols; ++x, band_at += band_step_x) {
       const int band = std::clamp(static_cast<int>(band_at), 0, bands - 1);
       const Out* lut = luts[band].data();
-      dst[x * 3] = lut[src[x * 3]];
-      dst[x * 3 + 1] = lut[256 + src[x * 3 + 1]];
-      dst[x * 3 + 2] = lut[512 + src[x * 3 + 2]];
+      const std::ptrdiff_t i = 3 * static_cast<std::ptrdiff_t>(x);
+      dst[i] = lut[src[i]];
+      dst[i + 1] = lut[256 + src[i + 1]];
+      dst[i + 2] = lut[512 + src[i + 2]];
     }
   }
   return out;
