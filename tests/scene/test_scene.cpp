@@ -47,6 +47,16 @@ cv::Vec3b PixelAt(const cv::Mat& image, cv::Point2d p) {
   return image.at<cv::Vec3b>(cvRound(p.y), cvRound(p.x));
 }
 
+/// PinTag 9, 200 px across, at the frame's centre on a procedural background, no photometry.
+SceneSpec PinTagOnProceduralBackground(double tilt, double axis, double roll) {
+  const Camera camera;
+  SceneSpec spec;
+  spec.real_background = false;
+  spec.markers.push_back(
+      Place(PinTagTexture(9), 9, camera, {960, 540}, DistanceFor(camera, 200), tilt, axis, roll));
+  return spec;
+}
+
 TEST(Rng, SameSeedSameSequenceAndSaneDistributions) {
   Rng a(42), b(42), c(43);
   for (int i = 0; i < 100; ++i) EXPECT_EQ(a.next(), b.next());
@@ -191,11 +201,7 @@ TEST(RenderScene, ChosenPhotographAndCollages) {
 
 TEST(RenderScene, BayerKeepsFlatColoursAndFringesEdges) {
   // A frontal PinTag on a flat procedural background, with and without the colour filter array.
-  const Camera camera;
-  SceneSpec spec;
-  spec.real_background = false;
-  spec.markers.push_back(
-      Place(PinTagTexture(9), 9, camera, {960, 540}, DistanceFor(camera, 200), 0, 0, 0));
+  SceneSpec spec = PinTagOnProceduralBackground(0, 0, 0);
   const Scene plain = RenderScene(spec);
   const MarkerTruth& truth = plain.truth[0];
   const cv::Point2d red = ProjectSquarePoint(truth, {0.25, 0.25});
@@ -212,13 +218,9 @@ TEST(RenderScene, BayerKeepsFlatColoursAndFringesEdges) {
 }
 
 // The S-curve (Photometry::tone_contrast) is one curve on every channel value: darker below
-// mid-grey, brighter above, black, mid-grey and white kept, order kept.
+// mid-grey, brighter above, black and white kept, order kept.
 TEST(RenderScene, SCurveDeepensDarksAndLiftsLightsKeepingTheirOrder) {
-  const Camera camera;
-  SceneSpec spec;
-  spec.real_background = false;
-  spec.markers.push_back(
-      Place(PinTagTexture(9), 9, camera, {960, 540}, DistanceFor(camera, 200), 30, 20, 10));
+  SceneSpec spec = PinTagOnProceduralBackground(30, 20, 10);
   const cv::Mat plain = RenderScene(spec).bgr;
   spec.photometry.tone_contrast = 0.8;
   const cv::Mat curved = RenderScene(spec).bgr;
@@ -240,9 +242,15 @@ TEST(RenderScene, SCurveDeepensDarksAndLiftsLightsKeepingTheirOrder) {
     EXPECT_EQ(lowest[v], highest[v]) << "value " << v << " is not mapped to one value";
     EXPECT_GE(lowest[v], previous) << "value " << v << " out of order";
     previous = highest[v];
-    if (v < 127) EXPECT_LE(highest[v], v) << v;
-    if (v > 128) EXPECT_GE(lowest[v], v) << v;
-    if (v == 0 || v == 255) EXPECT_EQ(lowest[v], v);
+    if (v < 127) {
+      EXPECT_LE(highest[v], v) << v;
+    }
+    if (v > 128) {
+      EXPECT_GE(lowest[v], v) << v;
+    }
+    if (v == 0 || v == 255) {
+      EXPECT_EQ(lowest[v], v);
+    }
     moved += std::abs(lowest[v] - v) >= 10;
   }
   EXPECT_GT(seen, 100);  // a tag on a textured background covers most code values
