@@ -18,6 +18,9 @@ const std::uint8_t* LinearToSrgbTable();
 inline std::uint8_t LinearToSrgb8(const std::uint8_t* table, float linear) {
   if (!(linear > 0.0f)) return table[0];
   if (linear >= 1.0f) return table[kLinearSteps];
+  // Positive here, so adding a half and truncating rounds; std::lround would cost a libm call
+  // for each of a frame's six million values, and a tie either way picks a neighbouring entry.
+  // NOLINTNEXTLINE(bugprone-incorrect-roundings)
   return table[static_cast<int>(linear * kLinearSteps + 0.5f)];
 }
 
