@@ -165,8 +165,8 @@ int Main(int argc, char** argv) {
       return a == "--help" ? 0 : 2;
     }
   }
-  if (args.sweep.s_curve && args.sweep.world != scene::World::kTuning) {
-    std::fprintf(stderr, "pintag_reader_probe: --s-curve is for the tuning world\n");
+  if (const std::string error = SweepOptionsError(args.sweep); !error.empty()) {
+    std::fprintf(stderr, "pintag_reader_probe: %s\n", error.c_str());
     return 2;
   }
   const scene::Camera camera = CameraFor(args.sweep.world);

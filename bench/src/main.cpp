@@ -195,14 +195,8 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       return false;
     }
   }
-  if (args->sweep.s_curve && args->sweep.world != scene::World::kTuning) {
-    std::fprintf(stderr,
-                 "pintag_bench: --s-curve is for the tuning world (the held-out phone has its "
-                 "own)\n");
-    return false;
-  }
-  if (args->sweep.jpeg_full_chroma && args->sweep.world != scene::World::kHeldOut) {
-    std::fprintf(stderr, "pintag_bench: --jpeg-chroma 444 is for the held-out world\n");
+  if (const std::string error = SweepOptionsError(args->sweep); !error.empty()) {
+    std::fprintf(stderr, "pintag_bench: %s\n", error.c_str());
     return false;
   }
   return true;

@@ -56,6 +56,16 @@ std::string ToString(scene::World world) {
   return world == scene::World::kHeldOut ? "held-out" : "tuning";
 }
 
+std::string SweepOptionsError(const SweepOptions& options) {
+  if (options.s_curve && options.world != scene::World::kTuning) {
+    return "--s-curve is for the tuning world (the held-out phone has its own)";
+  }
+  if (options.jpeg_full_chroma && options.world != scene::World::kHeldOut) {
+    return "--jpeg-chroma 444 is for the held-out world";
+  }
+  return {};
+}
+
 std::string ToString(Marker marker) {
   switch (marker) {
     case Marker::kPinTag:

@@ -52,6 +52,10 @@ struct SweepOptions {
   bool s_curve = false;
 };
 
+/// Empty when the options go together, else what is wrong, worded for the command line: each
+/// world's own photometry options belong to it alone.
+std::string SweepOptionsError(const SweepOptions& options);
+
 struct FrameSpec {
   scene::World world = scene::World::kHeldOut;
   int index = 0;           ///< position in the sweep
