@@ -60,7 +60,6 @@ struct ClusterOutput {
   stage::ReadingTimes reading;  ///< summed over the candidates; model_read counted in model_reads
   int model_reads = 0;
   int model_skipped = 0;
-  int model_confirmed = 0;
 
   void add(const stage::ReadingTimes& t) {
     reading.sample_ms += t.sample_ms;
@@ -68,7 +67,6 @@ struct ClusterOutput {
     reading.codeword_ms += t.codeword_ms;
     model_reads += t.model_read ? 1 : 0;
     model_skipped += t.model_skipped ? 1 : 0;
-    model_confirmed += t.model_confirmed ? 1 : 0;
   }
 };
 
@@ -261,7 +259,6 @@ void Collect(std::vector<ClusterOutput>& outputs, DetectResult* result, Candidat
     t.codeword_ms += o.reading.codeword_ms;
     t.model_reads += o.model_reads;
     t.model_skipped += o.model_skipped;
-    t.model_confirmed += o.model_confirmed;
     for (Detection& d : o.detections) result->detections.push_back(std::move(d));
     candidates->found.insert(candidates->found.end(), o.candidates.found.begin(),
                              o.candidates.found.end());

@@ -111,9 +111,7 @@ json ToJson(const DetectResult& r) {
                      {"quads", t.quads_ms},         {"sample", t.sample_ms},
                      {"model_fit", t.model_fit_ms}, {"codeword", t.codeword_ms},
                      {"pose", t.pose_ms},           {"total", t.total_ms}};
-  j["model_reads"] = {{"read", t.model_reads},
-                      {"skipped_over_budget", t.model_skipped},
-                      {"confirmed", t.model_confirmed}};
+  j["model_reads"] = {{"read", t.model_reads}, {"skipped_over_budget", t.model_skipped}};
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }

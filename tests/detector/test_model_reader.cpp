@@ -357,95 +357,6 @@ TEST(ModelReader, ALeadIsCountedAtTheLuminanceNoiseFloor) {
   EXPECT_EQ(RefuseCodeword(r), "no codeword clearly nearest");
 }
 
-// A winner that fits and that two more reads from moved corners chose too needs a smaller lead,
-// on narrow squares and others, and no kMinLead; one that does not fit needs what it did. Only a
-// winner refused for its lead alone is worth the two reads.
-TEST(ModelReader, AWinnerConfirmedByRereadingNeedsASmallerLead) {
-  ModelReading r = ReadingToJudge();
-  ASSERT_TRUE(r.fit.ok) << r.error;
-  ASSERT_EQ(RefuseCodeword(r), "");
-  EXPECT_FALSE(WorthConfirming(r));  // accepted as it is
-  const std::string refused_for_lead = "no codeword clearly nearest";
-  const auto confirmed = [](const ModelReading& m) {
-    return RefuseCodeword(m, Confirmation::kByRereading);
-  };
-  r.fit.chroma_correlation = {0, 0};  // independent residuals: the lead counts in full
-  ASSERT_NEAR(VarianceInflation(r.fit.chroma_correlation), 1, 1e-12);
-  r.decision.excess = kMaxNarrowExcess * 0.5;  // the winner fits, by either square's limit
-  const Corners as_read = r.fit.corners;
-  const Corners narrow = SqueezedAcross(as_read, kNarrowExtentPx * 0.9);
-  ASSERT_TRUE(IsNarrow(narrow));
-  ASSERT_LT(kMinConfirmedIndependentLeadOfAFit, kMinIndependentLeadOfAFit);
-  ASSERT_LT(kMinConfirmedIndependentLeadOfANarrowFit, kMinIndependentLeadOfANarrowFit);
-  for (const bool is_narrow : {false, true}) {
-    SCOPED_TRACE(is_narrow ? "narrow" : "not narrow");
-    r.fit.corners = is_narrow ? narrow : as_read;
-    const double single = is_narrow ? kMinIndependentLeadOfANarrowFit : kMinIndependentLeadOfAFit;
-    const double least =
-        is_narrow ? kMinConfirmedIndependentLeadOfANarrowFit : kMinConfirmedIndependentLeadOfAFit;
-    r.decision.lead = (least + single) / 2;  // under kMinLead too
-    ASSERT_LT(r.decision.lead, kMinLead);
-    EXPECT_EQ(RefuseCodeword(r), refused_for_lead);
-    EXPECT_EQ(confirmed(r), "");
-    EXPECT_TRUE(WorthConfirming(r));
-    r.decision.lead = least * 0.95;
-    EXPECT_EQ(confirmed(r), refused_for_lead);
-    EXPECT_FALSE(WorthConfirming(r));
-  }
-  // A winner that does not fit gains nothing from agreement: kMinIndependentLead and kMinLead.
-  r.fit.corners = as_read;
-  r.decision.excess = kMaxExcess * 1.5;
-  r.fit.chroma_correlation = {0.6, 0.6};  // 16 times the variance: the excess rule lets it pass
-  const double inflation = VarianceInflation(r.fit.chroma_correlation);
-  ASSERT_LE(r.decision.excess / inflation, kMaxIndependentExcess);
-  r.decision.lead = inflation * kMinIndependentLead * 0.95;
-  ASSERT_GE(r.decision.lead / inflation, kMinConfirmedIndependentLeadOfAFit);
-  EXPECT_EQ(confirmed(r), refused_for_lead);
-  EXPECT_FALSE(WorthConfirming(r));
-  // Refused for something other than its lead: a second look would not change that.
-  r.decision.excess = kMaxNarrowExcess * 0.5;
-  r.fit.chroma_correlation = {0, 0};
-  r.decision.lead = (kMinConfirmedIndependentLeadOfAFit + kMinIndependentLeadOfAFit) / 2;
-  ASSERT_TRUE(WorthConfirming(r));
-  r.decision.chroma_deficit = kMaxChromaDeficit * 1.5;
-  EXPECT_EQ(confirmed(r), "colour prefers another codeword");
-  EXPECT_FALSE(WorthConfirming(r));
-}
-
-// A 24 px tag at 60° saved as a 4:2:0 JPEG, read by the detector's reader on corners 0.7 px off:
-// its winner, the truth, leads too little for one read, and two more reads from moved corners
-// choose it too, so it is accepted. The frame's budget pays for all three reads; without the two
-// more the same winner is refused.
-TEST(ModelReader, ReadCandidateAcceptsAWinnerTwoMoreReadsChoose) {
-  constexpr int kKey = 12345;
-  const auto scene = Tag(kKey, 24, 60, 17, 0.8, 2, 13169);
-  const cv::Mat jpeg = Jpeg420(scene.bgr, 85);
-  Corners c = TrueCorners(scene.truth[0]);
-  const cv::Point2d offsets[4] = {{0.56, -0.42}, {-0.49, -0.35}, {0.42, 0.63}, {-0.63, 0.28}};
-  for (std::size_t k = 0; k < 4; ++k) c[k] += offsets[k];
-  const stage::Quad quad{c[0], c[1], c[2], c[3]};
-
-  stage::ModelBudget budget(4);
-  const stage::CandidateReading read =
-      stage::ReadCandidate(jpeg, ChromaUpsampling::kBoth, quad, {}, {}, &budget);
-  ASSERT_TRUE(read.times.model_read);
-  EXPECT_EQ(RefuseCodeword(read.reading.model), "no codeword clearly nearest");
-  EXPECT_TRUE(WorthConfirming(read.reading.model));
-  EXPECT_TRUE(read.times.model_confirmed);
-  ASSERT_TRUE(read.reading.payload.key) << read.reading.payload.error;
-  EXPECT_EQ(read.reading.payload.key->value(), kKey);
-  EXPECT_TRUE(read.corners_fitted);
-  EXPECT_TRUE(budget.take());  // three of the four reads were spent
-  EXPECT_FALSE(budget.take());
-
-  stage::ModelBudget one_read(1);
-  const stage::CandidateReading alone =
-      stage::ReadCandidate(jpeg, ChromaUpsampling::kBoth, quad, {}, {}, &one_read);
-  EXPECT_FALSE(alone.times.model_confirmed);
-  EXPECT_FALSE(alone.reading.payload.key);
-  EXPECT_EQ(alone.reading.payload.error, "model: no codeword clearly nearest");
-}
-
 // A decision statistic that is not a number (a fit gone wrong) refuses the winner.
 TEST(ModelReader, AStatisticThatIsNotANumberRefuses) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -455,7 +366,6 @@ TEST(ModelReader, AStatisticThatIsNotANumberRefuses) {
   ModelReading r = accepted;
   r.decision.lead = nan;
   EXPECT_NE(RefuseCodeword(r), "");
-  EXPECT_NE(RefuseCodeword(r, Confirmation::kByRereading), "");  // no kMinLead there
   r = accepted;
   r.fit.luma_noise = nan;
   EXPECT_NE(RefuseCodeword(r), "");
@@ -505,5 +415,6 @@ TEST(ModelReader, LargeSquaresAndSquaresOffTheImageAreNotModelled) {
   const Corners outside = {cv::Point2d(-500, -500), {-460, -500}, {-460, -460}, {-500, -460}};
   EXPECT_FALSE(FitModel(bgr, ChromaUpsampling::kNone, outside, &error).fit.ok);
 }
+
 }  // namespace
 }  // namespace pintag::reading

@@ -13,16 +13,6 @@ cv::Matx33d SquareHomography(const Corners& corners) {
   return stage::HomographyFromQuad({corners[0], corners[1], corners[2], corners[3]});
 }
 
-/// The least independent lead asked of a winner: one that does not fit gains nothing from a
-/// narrow square's rule or from confirmation.
-double LeastIndependentLead(bool fits, bool narrow, bool confirmed) {
-  if (!fits) return kMinIndependentLead;
-  if (confirmed) {
-    return narrow ? kMinConfirmedIndependentLeadOfANarrowFit : kMinConfirmedIndependentLeadOfAFit;
-  }
-  return narrow ? kMinIndependentLeadOfANarrowFit : kMinIndependentLeadOfAFit;
-}
-
 }  // namespace
 
 bool TooSmallToRead(const Corners& corners) {
@@ -42,7 +32,7 @@ double CountedLead(const ModelReading& reading) {
   return reading.decision.lead * scale;
 }
 
-std::string RefuseCodeword(const ModelReading& reading, Confirmation confirmation) {
+std::string RefuseCodeword(const ModelReading& reading) {
   const CodewordDecision& d = reading.decision;
   if (!reading.fit.ok) return reading.error.empty() ? "no model fitted" : reading.error;
   // Before the winner: ReadCandidate does not search a codeword for a square this small.
@@ -51,11 +41,12 @@ std::string RefuseCodeword(const ModelReading& reading, Confirmation confirmatio
   const double inflation = VarianceInflation(reading.fit.chroma_correlation);
   const bool fits = d.excess <= kMaxExcess;
   const bool narrow = IsNarrow(reading.fit.corners);
-  const bool confirmed = confirmation == Confirmation::kByRereading && fits;
-  const double least_independent_lead = LeastIndependentLead(fits, narrow, confirmed);
+  const double least_independent_lead = !fits    ? kMinIndependentLead
+                                        : narrow ? kMinIndependentLeadOfANarrowFit
+                                                 : kMinIndependentLeadOfAFit;
   // Written so that a statistic that is not a number refuses (as IsNarrow does).
   const double lead = CountedLead(reading);
-  if (!(confirmed || lead >= kMinLead) || !(lead / inflation >= least_independent_lead)) {
+  if (!(lead >= kMinLead) || !(lead / inflation >= least_independent_lead)) {
     return "no codeword clearly nearest";
   }
   if ((!fits && !(d.excess / inflation <= kMaxIndependentExcess)) ||
@@ -85,11 +76,6 @@ std::string RefuseCodeword(const ModelReading& reading, Confirmation confirmatio
   if (least_red_cr - most_green_cr < kMinRedOverGreenCr)
     return "codeword's colours are not a tag's";
   return {};
-}
-
-bool WorthConfirming(const ModelReading& reading) {
-  return !RefuseCodeword(reading).empty() &&
-         RefuseCodeword(reading, Confirmation::kByRereading).empty();
 }
 
 }  // namespace pintag::reading

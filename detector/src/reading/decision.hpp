@@ -5,7 +5,6 @@
 // as the best labelling found without the code (its colours are ordered as the palette's: the
 // search admits no other).
 
-#include <cstdint>
 #include <string>
 
 #include "reading/model_reader.hpp"
@@ -62,20 +61,6 @@ inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
 /// at 65° in hard light), read wrong with an independent lead of 66 at an excess of 12.6
 /// (docs/DETECTOR.md, thirteenth sitting).
 inline constexpr double kMaxNarrowExcess = 10;
-/// Least independent lead of a winner that fits, on a narrow square and on any other, when two more
-/// reads of the square, started from its fitted corners moved by kConfirmationShiftPx, choose the
-/// same codeword (stage::ReadCandidate); kMinLead does not apply then. A wrong winner owes its lead
-/// to how this read's corners and blur settled; from other corners it is usually another codeword.
-/// On the tuning probes on record (pintag_reader_probe --world tuning --reader model, seeds 22–24,
-/// as drawn and at quality 90 and 100, corners jittered by 0.6 px, 2 draws: 14 runs), 97 of the 501
-/// wrong winners that pass every check but the lead are chosen by the other draw too; the largest
-/// of those leads are 25.95 on narrow squares and 20.8 on others. 36 and 26 keep them 1.39 and 1.25
-/// times away (docs/DETECTOR.md, fifteenth sitting).
-inline constexpr double kMinConfirmedIndependentLeadOfANarrowFit = 36;
-inline constexpr double kMinConfirmedIndependentLeadOfAFit = 26;
-/// How far (px) each corner is moved, in a fixed direction of its own, for the two confirming
-/// reads: about the corner error the probe's jitter of 0.6 px per axis gives.
-inline constexpr double kConfirmationShiftPx = 0.75;
 /// Least luminance noise (of the black-to-white range: two 8-bit code values) at which a lead is
 /// counted. The lead is in units of the free model's residual. Where that residual is smaller, the
 /// model's own approximations (blur shape, sharpening, the phone's tone curve) rather than the
@@ -123,18 +108,7 @@ bool TooSmallToRead(const Corners& corners);
 /// too), so it never counts more than the lead itself.
 double CountedLead(const ModelReading& reading);
 
-/// Whether other reads of the square chose the same winner (the lead rule then asks less).
-enum class Confirmation : std::uint8_t {
-  kNone,        ///< one read
-  kByRereading  ///< two more reads from moved corners chose the same codeword
-};
-
 /// Empty when `reading`'s winner is accepted, else why not.
-std::string RefuseCodeword(const ModelReading& reading,
-                           Confirmation confirmation = Confirmation::kNone);
-
-/// Whether a second look could change the verdict: `reading` is refused as one read but would be
-/// accepted if confirmed (its lead is all that stands in the way).
-bool WorthConfirming(const ModelReading& reading);
+std::string RefuseCodeword(const ModelReading& reading);
 
 }  // namespace pintag::reading

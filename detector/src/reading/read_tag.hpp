@@ -64,9 +64,6 @@ struct ReadingTimes {
   double codeword_ms = 0;   ///< 5c + 6 for the model's codeword
   bool model_read = false;
   bool model_skipped = false;  ///< the budget was spent
-  /// The model's winner was accepted because two more reads chose it (its times are in
-  /// model_fit_ms and codeword_ms).
-  bool model_confirmed = false;
 };
 
 /// A candidate square read as the detector reads it, in `bgr` whose colour was decoded with

@@ -74,9 +74,6 @@ struct StageTimings {
   double total_ms = 0;
   int model_reads = 0;    ///< candidates the model reader fitted
   int model_skipped = 0;  ///< candidates it did not read: DetectorOptions::max_model_reads spent
-  /// candidates whose winner was accepted because two more reads chose it too (each of those
-  /// reads is one of max_model_reads)
-  int model_confirmed = 0;
 };
 
 struct DetectResult {

@@ -73,9 +73,8 @@ struct DetectorOptions {
   bool dark_square_candidates = true;
 
   // --- time ---
-  /// Reads per frame that the model reader (stage 5b-5c, milliseconds each) may make of candidates
-  /// the direct reader failed on: one a candidate, and two more for a winner whose lead alone
-  /// falls short (they may confirm it). Spent in the order candidates come: the main red pass, its
+  /// Candidates per frame that the model reader (stage 5b-5c, milliseconds each) may read after
+  /// the direct reader failed on them. Spent in the order candidates come: the main red pass, its
   /// clusters with the most blobs first, then the faint pass, then dark squares. With threads > 1
   /// which candidates of one pass get the last reads depends on timing. 0 turns the model off.
   int max_model_reads = 16;
