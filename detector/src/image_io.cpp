@@ -237,6 +237,7 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
   if (header->colourspace == TJCS_CMYK || header->colourspace == TJCS_YCCK) {
     return LoadWithOpenImageIo(bytes, ImageFormat::kJpeg, options);
   }
+  if (options.before_decode) options.before_decode(header->width, header->height);
   const tjscalingfactor scale = ScalingFor(options.scale_denominator);
   cv::Mat bgr(TJSCALED(header->height, scale), TJSCALED(header->width, scale), CV_8UC3);
   if (tjDecompress2(tj, bytes.data(), bytes.size(), bgr.data, bgr.cols, static_cast<int>(bgr.step),
@@ -444,6 +445,7 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
     return Fail(ImageError::kTooLarge, TooLargeMessage(spec.width, spec.height, options.max_pixels),
                 spec.width, spec.height);
   }
+  if (options.before_decode) options.before_decode(spec.width, spec.height);
   const int channels = spec.nchannels;
   std::vector<std::uint8_t> data(static_cast<std::size_t>(spec.width) * spec.height * channels);
   if (!ReadAs8Bit(*input, spec, format, data.data())) {

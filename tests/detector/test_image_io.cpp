@@ -321,6 +321,35 @@ TEST(ImageIo, EveryExifOrientationMatchesOpenCv) {
   }
 }
 
+// The server's decode budget waits in this hook: it must come once per decoded photo, with the
+// stored size, and never for a photo refused before decoding (no budget held for nothing).
+TEST(ImageIo, BeforeDecodeIsToldTheSizeOnceAndOnlyForPhotosThatAreDecoded) {
+  std::vector<std::pair<int, int>> told;
+  LoadOptions options;
+  options.before_decode = [&](int width, int height) { told.emplace_back(width, height); };
+  for (const char* ext : {".jpg", ".png", ".tiff", ".webp"}) {
+    told.clear();
+    const LoadResult loaded = LoadImageBytes(Encode(ext, PhoneLikeFrame(64, 48)), options);
+    ASSERT_TRUE(loaded.image.has_value()) << ext << ": " << loaded.error;
+    ASSERT_EQ(told.size(), 1U) << ext;
+    EXPECT_EQ(told[0], std::make_pair(64, 48)) << ext;
+  }
+  options.max_pixels = 64 * 48 - 1;
+  for (const char* ext : {".jpg", ".png", ".tiff", ".webp"}) {
+    told.clear();
+    EXPECT_EQ(LoadImageBytes(Encode(ext, PhoneLikeFrame(64, 48)), options).kind,
+              ImageError::kTooLarge)
+        << ext;
+    EXPECT_TRUE(told.empty()) << ext;
+  }
+  options.max_pixels = kDefaultMaxPixels;
+  told.clear();
+  std::vector<std::uint8_t> cut = Encode(".png", PhoneLikeFrame(64, 48));
+  cut.resize(cut.size() / 2);
+  EXPECT_EQ(LoadImageBytes(cut, options).kind, ImageError::kCorrupt);
+  EXPECT_TRUE(told.empty());
+}
+
 TEST(ImageIo, ScaledJpegDecoding) {
   const cv::Mat frame = PhoneLikeFrame(640, 360);
   const std::vector<std::uint8_t> jpeg = Encode(".jpg", frame, {cv::IMWRITE_JPEG_QUALITY, 95});

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "app/connection_pool.hpp"
+#include "app/pixel_budget.hpp"
 #include "pintag/server/metrics.hpp"
 #include "replica/snapshot_publisher.hpp"
 
@@ -18,6 +19,7 @@ inline constexpr std::string_view kTagsRenderedCounter = "pintag_tags_rendered_t
 inline constexpr std::string_view kScansCounter = "pintag_scans_total";
 inline constexpr std::string_view kDetectionsCounter = "pintag_detections_total";
 inline constexpr std::string_view kUnknownKeysCounter = "pintag_detections_unknown_key_total";
+inline constexpr std::string_view kDecodeWaitsCounter = "pintag_decode_budget_waits_total";
 
 struct AppContext {
   std::shared_ptr<ConnectionPool> pool;
@@ -27,6 +29,8 @@ struct AppContext {
   std::int64_t max_pixels = 40'000'000;      ///< decoded pixels per uploaded photo
   std::size_t max_batch = 100;               ///< labels per POST /api/v1/labels; more is 413
   int max_tag_px = 4096;                     ///< largest ?px= of a tag image (square side)
+  /// Photo pixels decoded and detected at once, over every request (--max-decode-pixels).
+  std::shared_ptr<PixelBudget> decode_budget;
   /// Replication (docs/SCALING.md): which this server is, its primary when a replica, and the
   /// snapshot it hands replicas when a primary started with --snapshot (else none).
   bool read_only = false;

@@ -150,8 +150,18 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   // limit before decoding and refuses truncated files; its error kind is the HTTP status.
   const std::span<const std::uint8_t> data(reinterpret_cast<const std::uint8_t*>(bytes.data()),
                                            bytes.size());
+  // The photo's pixels are held from just before decoding until the answer is built (the
+  // overlay too): decoded photos and the detector's buffers are most of a server's memory.
+  PixelBudget::Reservation pixels;
+  LoadOptions load_options;
+  load_options.max_pixels = context.max_pixels;
+  load_options.before_decode = [&](int width, int height) {
+    bool waited = false;
+    pixels = context.decode_budget->reserve(std::int64_t{width} * height, &waited);
+    if (waited) context.metrics->increment(kDecodeWaitsCounter);
+  };
   const Clock::time_point decode_start = Clock::now();
-  const LoadResult loaded = LoadImageBytes(data, context.max_pixels);
+  const LoadResult loaded = LoadImageBytes(data, load_options);
   if (loaded.claimed_width > 0) {
     outcome->width = loaded.claimed_width;
     outcome->height = loaded.claimed_height;

@@ -6,6 +6,7 @@
 // or missing bottom.
 
 #include <cstdint>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <span>
@@ -40,6 +41,11 @@ struct LoadOptions {
   /// JPEG only: decode at 1/scale_denominator of the size (1, 2, 4 or 8; libjpeg-turbo skips the
   /// work, it does not resize afterwards). Other formats ignore it and load at full size.
   int scale_denominator = 1;
+  /// Called once, with the stored size the header claims, after that size passed `max_pixels` and
+  /// right before any pixel is decoded; not called for a photo refused before that. A server
+  /// waits here until its memory budget has room for the pixels (pintag serve
+  /// --max-decode-pixels). Exceptions it throws pass to the caller.
+  std::function<void(int width, int height)> before_decode;
 };
 
 struct LoadedImage {
