@@ -189,8 +189,10 @@ tjscalingfactor ScalingFor(int denominator) {
   return {1, 1};
 }
 
+/// `size_told`: before_decode was already called with the size our own header parser read (PNG,
+/// WebP); otherwise it is called here once OpenImageIO has read the header.
 LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat format,
-                               const LoadOptions& options);
+                               const LoadOptions& options, bool size_told = false);
 
 /// Orientations 5 to 8 swap the image's axes.
 bool Transposes(int exif_orientation) {
@@ -424,7 +426,7 @@ bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, ImageForma
 }
 
 LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat format,
-                               const LoadOptions& options) {
+                               const LoadOptions& options, bool size_told) {
   OIIO::Filesystem::IOMemReader reader(bytes.data(), bytes.size());
   OIIO::Filesystem::IOProxy* proxy = &reader;
   OIIO::ImageSpec config;
@@ -445,7 +447,7 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
     return Fail(ImageError::kTooLarge, TooLargeMessage(spec.width, spec.height, options.max_pixels),
                 spec.width, spec.height);
   }
-  if (options.before_decode) options.before_decode(spec.width, spec.height);
+  if (!size_told && options.before_decode) options.before_decode(spec.width, spec.height);
   const int channels = spec.nchannels;
   std::vector<std::uint8_t> data(static_cast<std::size_t>(spec.width) * spec.height * channels);
   if (!ReadAs8Bit(*input, spec, format, data.data())) {
@@ -532,7 +534,10 @@ LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, const LoadOptions
       if (!header.problem.empty()) {
         return Fail(ImageError::kCorrupt, header.problem, header.width, header.height);
       }
-      return LoadWithOpenImageIo(bytes, format, options);
+      // OpenImageIO decodes a whole WebP while it opens it: the size is told from our header.
+      const bool size_known = header.width > 0 && header.height > 0;
+      if (size_known && options.before_decode) options.before_decode(header.width, header.height);
+      return LoadWithOpenImageIo(bytes, format, options, size_known);
     }
     case ImageFormat::kTiff:
       return LoadWithOpenImageIo(bytes, ImageFormat::kTiff, options);

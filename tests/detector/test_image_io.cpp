@@ -3,6 +3,8 @@
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <malloc.h>
+#include <turbojpeg.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -348,6 +350,62 @@ TEST(ImageIo, BeforeDecodeIsToldTheSizeOnceAndOnlyForPhotosThatAreDecoded) {
   cut.resize(cut.size() / 2);
   EXPECT_EQ(LoadImageBytes(cut, options).kind, ImageError::kCorrupt);
   EXPECT_TRUE(told.empty());
+}
+
+// Bytes the heap holds now, in small blocks and in mmapped large ones.
+std::size_t HeapInUse() {
+  const struct mallinfo2 m = mallinfo2();
+  return m.uordblks + m.hblkhd;
+}
+
+/// A CMYK JPEG (print workflows): TurboJPEG encodes it, OpenImageIO decodes it.
+std::vector<std::uint8_t> CmykJpeg(int width, int height) {
+  std::vector<std::uint8_t> cmyk(static_cast<std::size_t>(width) * height * 4);
+  for (std::size_t i = 0; i < cmyk.size(); ++i) cmyk[i] = static_cast<std::uint8_t>(i * 7 % 251);
+  tjhandle tj = tjInitCompress();
+  unsigned char* jpeg = nullptr;
+  unsigned long size = 0;
+  const int failed =
+      tjCompress2(tj, cmyk.data(), width, 0, height, TJPF_CMYK, &jpeg, &size, TJSAMP_444, 90, 0);
+  std::vector<std::uint8_t> bytes;
+  if (failed == 0) bytes.assign(jpeg, jpeg + size);
+  tjFree(jpeg);
+  tjDestroy(tj);
+  EXPECT_EQ(failed, 0);
+  return bytes;
+}
+
+// The server waits for memory in before_decode, so no decoder may have made the photo's pixels by
+// then: the heap may grow by far less than the 2.4 MB of BGR a 1000 x 800 photo decodes to.
+// (OpenImageIO decodes a whole WebP while opening it; it was once told after that.)
+TEST(ImageIo, BeforeDecodeComesBeforeAnyPixelIsDecoded) {
+  const cv::Mat frame = PhoneLikeFrame(1000, 800);
+  const std::vector<std::pair<std::string, std::vector<std::uint8_t>>> photos = {
+      {"jpeg", Encode(".jpg", frame)},
+      {"png", Encode(".png", frame)},
+      {"tiff", Encode(".tiff", frame)},
+      {"webp", Encode(".webp", frame)},
+      {"lossless webp", Encode(".webp", frame, {cv::IMWRITE_WEBP_QUALITY, 101})},
+      {"cmyk jpeg", CmykJpeg(1000, 800)}};
+  for (const auto& photo : photos) {
+    const std::string& name = photo.first;
+    const std::vector<std::uint8_t>& bytes = photo.second;
+    std::size_t at_call = 0;
+    int calls = 0;
+    LoadOptions options;
+    options.before_decode = [&](int width, int height) {
+      at_call = HeapInUse();
+      ++calls;
+      EXPECT_EQ(width, 1000) << name;
+      EXPECT_EQ(height, 800) << name;
+    };
+    const std::size_t at_start = HeapInUse();
+    const LoadResult loaded = LoadImageBytes(bytes, options);
+    ASSERT_TRUE(loaded.image.has_value()) << name << ": " << loaded.error;
+    EXPECT_EQ(calls, 1) << name;
+    const std::size_t grown = at_call > at_start ? at_call - at_start : 0;
+    EXPECT_LT(grown, std::size_t{1000} * 800) << name << ": " << grown << " bytes before the call";
+  }
 }
 
 TEST(ImageIo, ScaledJpegDecoding) {

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -39,8 +40,9 @@ class Holder {
     while (!holding_ && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
     return holding_;
   }
+  void letGo() { let_go_ = true; }
   void finish() {
-    let_go_ = true;
+    letGo();
     if (thread_.joinable()) thread_.join();
   }
 
@@ -48,6 +50,28 @@ class Holder {
   std::atomic<bool> holding_{false}, let_go_{false};
   bool waited_ = false;  // written before holding_ is set, read after it is seen
   std::thread thread_;
+};
+
+// The holders of one test. When it ends (also on a failed assertion) all are told to let go, then
+// joined in the order they came: one still waiting is let through by those before it, so a
+// failure ends the test instead of hanging it on a thread that waits behind one not yet released.
+class Holders {
+ public:
+  explicit Holders(PixelBudget& budget) : budget_(budget) {}
+  ~Holders() {
+    for (const std::unique_ptr<Holder>& h : holders_) h->letGo();
+    for (const std::unique_ptr<Holder>& h : holders_) h->finish();
+  }
+  Holders(const Holders&) = delete;
+  Holders& operator=(const Holders&) = delete;
+  Holder& add(std::int64_t pixels) {
+    holders_.push_back(std::make_unique<Holder>(budget_, pixels));
+    return *holders_.back();
+  }
+
+ private:
+  PixelBudget& budget_;
+  std::vector<std::unique_ptr<Holder>> holders_;
 };
 
 constexpr auto kLongEnough = 10s;  // for something that must happen
@@ -82,9 +106,10 @@ TEST(PixelBudget, WhatFitsIsHeldAtOnceAndReleasedWhenTheReservationEnds) {
 
 TEST(PixelBudget, WhatDoesNotFitWaitsUntilRoomIsMade) {
   PixelBudget budget(10);
-  Holder first(budget, 6);
+  Holders holders(budget);
+  Holder& first = holders.add(6);
   ASSERT_TRUE(first.holdsWithin(kLongEnough));
-  Holder second(budget, 6);
+  Holder& second = holders.add(6);
   ASSERT_TRUE(InLine(budget, 1));
   EXPECT_FALSE(second.holding());
   EXPECT_EQ(budget.held(), 6);
@@ -97,11 +122,12 @@ TEST(PixelBudget, WhatDoesNotFitWaitsUntilRoomIsMade) {
 
 TEST(PixelBudget, ASmallPhotoDoesNotOvertakeALargeOneWaitingBeforeIt) {
   PixelBudget budget(10);
-  Holder first(budget, 6);
+  Holders holders(budget);
+  Holder& first = holders.add(6);
   ASSERT_TRUE(first.holdsWithin(kLongEnough));
-  Holder large(budget, 6);
+  Holder& large = holders.add(6);
   ASSERT_TRUE(InLine(budget, 1));
-  Holder small(budget, 1);  // fits beside the first, but comes later
+  Holder& small = holders.add(1);  // fits beside the first, but comes later
   ASSERT_TRUE(InLine(budget, 2));
   EXPECT_FALSE(large.holding());
   EXPECT_FALSE(small.holding());
@@ -113,14 +139,15 @@ TEST(PixelBudget, ASmallPhotoDoesNotOvertakeALargeOneWaitingBeforeIt) {
 
 TEST(PixelBudget, APhotoLargerThanTheBudgetRunsAloneRatherThanNever) {
   PixelBudget budget(10);
-  Holder other(budget, 3);
+  Holders holders(budget);
+  Holder& other = holders.add(3);
   ASSERT_TRUE(other.holdsWithin(kLongEnough));
-  Holder huge(budget, 25);
+  Holder& huge = holders.add(25);
   ASSERT_TRUE(InLine(budget, 1));
   EXPECT_FALSE(huge.holding());
   other.finish();
   ASSERT_TRUE(huge.holdsWithin(kLongEnough));
-  Holder after(budget, 1);
+  Holder& after = holders.add(1);
   ASSERT_TRUE(InLine(budget, 1));
   EXPECT_FALSE(after.holding());
   huge.finish();

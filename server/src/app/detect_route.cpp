@@ -157,6 +157,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   load_options.max_pixels = context.max_pixels;
   load_options.before_decode = [&](int width, int height) {
     bool waited = false;
+    pixels = {};  // never hold twice while waiting
     pixels = context.decode_budget->reserve(std::int64_t{width} * height, &waited);
     if (waited) context.metrics->increment(kDecodeWaitsCounter);
   };

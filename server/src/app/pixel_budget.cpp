@@ -15,7 +15,7 @@ PixelBudget::Reservation PixelBudget::reserve(std::int64_t pixels, bool* waited)
   std::unique_lock lock(mutex_);
   const std::uint64_t ticket = next_ticket_++;
   const auto my_turn = [&] {
-    return ticket == serving_ && (held_ == 0 || held_ + pixels <= capacity_);
+    return ticket == serving_ && (held_ == 0 || pixels <= capacity_ - held_);
   };
   const bool at_once = my_turn();
   if (!at_once) turn_.wait(lock, my_turn);

@@ -93,7 +93,7 @@ void Run(const ServeArgs& args) {
   if (max_decode_pixels < args.max_pixels) {
     throw UsageError("--max-decode-pixels " + std::to_string(max_decode_pixels) +
                      " is below --max-pixels " + std::to_string(args.max_pixels) +
-                     ": a photo the limit allows could never be decoded");
+                     ": it must hold at least one photo of the largest size allowed");
   }
   const bool read_only = args.replication.read_only || !args.replication.follow.empty();
   if (!read_only) OpenDb(args.db);  // creates and seeds a missing file, migrates an old one
