@@ -8,10 +8,13 @@
 #include <unistd.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <regex>
 #include <thread>
+#include <vector>
 
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
@@ -21,6 +24,31 @@ namespace pintag::serve_test {
 
 std::string PintagExe() {
   return PINTAG_EXE;
+}
+
+int CallsRightFromConcurrentClients(int port, int clients, int calls_each,
+                                    const std::function<bool(httplib::Client&)>& call) {
+  std::atomic<int> ready{0}, right{0};
+  std::vector<std::thread> threads;
+  threads.reserve(static_cast<std::size_t>(clients));
+  for (int c = 0; c < clients; ++c) {
+    threads.emplace_back([&] {
+      httplib::Client client("127.0.0.1", port);
+      client.set_read_timeout(60, 0);
+      ++ready;
+      while (ready < clients) std::this_thread::yield();  // all start together
+      for (int i = 0; i < calls_each; ++i) right += call(client) ? 1 : 0;
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  return right;
+}
+
+double MetricValue(const std::string& page, const std::string& name) {
+  const std::string line_start = "\n" + name + " ";
+  const std::size_t at = page.find(line_start);
+  if (at == std::string::npos) return std::nan("");
+  return std::stod(page.substr(at + line_start.size()));
 }
 
 CommandResult RunPintag(const std::string& arguments) {

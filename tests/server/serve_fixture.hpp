@@ -9,6 +9,7 @@
 #include <httplib.h>
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -66,6 +67,14 @@ struct CommandResult {
 CommandResult RunPintag(const std::string& arguments);
 /// The path of a seeded database made once per build (do not modify it).
 const std::string& SeededTemplate();
+
+/// `clients` threads, each with its own keep-alive client to 127.0.0.1:`port`, start together and
+/// make `calls_each` calls of `call`; returns how many calls `call` judged right.
+int CallsRightFromConcurrentClients(int port, int clients, int calls_each,
+                                    const std::function<bool(httplib::Client&)>& call);
+
+/// The value of an unlabelled metric in a Prometheus text page; NaN when it is not there.
+double MetricValue(const std::string& page, const std::string& name);
 
 /// A fixture with a seeded database copy, one token per role and a running server.
 class ServeTest : public ::testing::Test {

@@ -80,6 +80,22 @@ TEST_F(ServeTest, LabelsAndTagsComeAtTheAskedSizeAndResolution) {
   EXPECT_EQ(MetricLine(metrics, "pintag_tags_rendered_total"), "pintag_tags_rendered_total 2");
 }
 
+TEST_F(ServeTest, PngsLargerThanThePixelBudgetAreRenderedOneAtATime) {
+  // A 300 dpi label (1181 x 1772 px) is larger than this whole budget: each runs alone, in turn,
+  // and every one is still answered whole.
+  startServer({"--max-pixels", "1000000", "--max-pixels-in-flight", "1000000"});
+  constexpr int kCounters = 4, kLabels = 2;
+  const int rendered = CallsRightFromConcurrentClients(
+      server_->port(), kCounters, kLabels, [&](httplib::Client& counter_client) {
+        const httplib::Result r = counter_client.Get("/api/v1/labels/110001.png", counter());
+        if (!r || r->status != 200) return false;
+        const OIIO::ImageSpec spec = PngSpec(r->body);
+        return spec.width == 1181 && spec.height == 1772;
+      });
+  EXPECT_EQ(rendered, kCounters * kLabels);
+  EXPECT_GE(MetricValue(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total"), 1.0);
+}
+
 TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {
   const auto expect = [&](const std::string& path, int status, const std::string& fragment) {
     const json problem = ExpectProblem(client().Get(path, counter()), status);

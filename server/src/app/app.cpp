@@ -45,8 +45,8 @@ void DefineCounters(server::Metrics& metrics) {
   metrics.defineCounter(kScansCounter, "POST /api/v1/detect calls that sent a photo.");
   metrics.defineCounter(kDetectionsCounter, "Tags decoded in uploaded photos.");
   metrics.defineCounter(kUnknownKeysCounter, "Decoded tags whose key no pincode holds.");
-  metrics.defineCounter(kDecodeWaitsCounter,
-                        "Photos that waited for room under --max-decode-pixels before decoding.");
+  metrics.defineCounter(kPixelBudgetWaitsCounter,
+                        "Photos and PNGs that waited for room under --max-pixels-in-flight.");
 }
 
 }  // namespace
@@ -101,7 +101,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
           : std::make_shared<ConnectionPool>(config.scan_log_path, config.busy_timeout_ms);
   context->metrics = std::make_shared<server::Metrics>();
   context->max_pixels = config.max_pixels;
-  context->decode_budget = std::make_shared<PixelBudget>(config.max_decode_pixels);
+  context->pixel_budget = std::make_shared<PixelBudget>(config.max_pixels_in_flight);
   context->max_batch = config.max_batch;
   context->max_tag_px = config.max_tag_px;
   context->read_only = config.read_only;

@@ -21,10 +21,10 @@ struct AppConfig {
   std::optional<std::filesystem::path> web_dir;               ///< static files; none = none
   std::size_t max_body_bytes = server::kDefaultMaxBodyBytes;  ///< 25 MiB
   std::int64_t max_pixels = 40'000'000;                       ///< decoded pixels per photo
-  std::int64_t max_decode_pixels = 80'000'000;                ///< decoded at once, all requests
-  std::size_t max_batch = 100;                                ///< labels per POST /labels
-  int max_tag_px = 4096;                                      ///< largest tag PNG square side
-  int busy_timeout_ms = 5000;                                 ///< SQLite lock wait
+  std::int64_t max_pixels_in_flight = 80'000'000;  ///< photos and PNGs at once, all requests
+  std::size_t max_batch = 100;                     ///< labels per POST /labels
+  int max_tag_px = 4096;                           ///< largest tag PNG square side
+  int busy_timeout_ms = 5000;                      ///< SQLite lock wait
   /// A read-only replica (issue 22): db_path is a snapshot, reloaded through `pool`; writes
   /// answer 403 naming primary_url; scans go to scan_log_path.
   bool read_only = false;

@@ -19,7 +19,7 @@ inline constexpr std::string_view kTagsRenderedCounter = "pintag_tags_rendered_t
 inline constexpr std::string_view kScansCounter = "pintag_scans_total";
 inline constexpr std::string_view kDetectionsCounter = "pintag_detections_total";
 inline constexpr std::string_view kUnknownKeysCounter = "pintag_detections_unknown_key_total";
-inline constexpr std::string_view kDecodeWaitsCounter = "pintag_decode_budget_waits_total";
+inline constexpr std::string_view kPixelBudgetWaitsCounter = "pintag_pixel_budget_waits_total";
 
 struct AppContext {
   std::shared_ptr<ConnectionPool> pool;
@@ -29,13 +29,23 @@ struct AppContext {
   std::int64_t max_pixels = 40'000'000;      ///< decoded pixels per uploaded photo
   std::size_t max_batch = 100;               ///< labels per POST /api/v1/labels; more is 413
   int max_tag_px = 4096;                     ///< largest ?px= of a tag image (square side)
-  /// Photo pixels decoded and detected at once, over every request (--max-decode-pixels).
-  std::shared_ptr<PixelBudget> decode_budget;
+  /// Pixels of photos being decoded and detected and of PNGs being rendered, at once over every
+  /// request (--max-pixels-in-flight).
+  std::shared_ptr<PixelBudget> pixel_budget;
   /// Replication (docs/SCALING.md): which this server is, its primary when a replica, and the
   /// snapshot it hands replicas when a primary started with --snapshot (else none).
   bool read_only = false;
   std::string primary_url;
   std::shared_ptr<replica::SnapshotPublisher> publisher;
 };
+
+/// Room for an image of `pixels` under the context's budget (--max-pixels-in-flight), held until
+/// the reservation ends; a call that had to wait is counted in kPixelBudgetWaitsCounter.
+inline PixelBudget::Reservation HoldPixels(const AppContext& context, std::int64_t pixels) {
+  bool waited = false;
+  PixelBudget::Reservation held = context.pixel_budget->reserve(pixels, &waited);
+  if (waited) context.metrics->increment(kPixelBudgetWaitsCounter);
+  return held;
+}
 
 }  // namespace pintag::app

@@ -156,10 +156,8 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   LoadOptions load_options;
   load_options.max_pixels = context.max_pixels;
   load_options.before_decode = [&](int width, int height) {
-    bool waited = false;
     pixels = {};  // never hold twice while waiting
-    pixels = context.decode_budget->reserve(std::int64_t{width} * height, &waited);
-    if (waited) context.metrics->increment(kDecodeWaitsCounter);
+    pixels = HoldPixels(context, std::int64_t{width} * height);
   };
   const Clock::time_point decode_start = Clock::now();
   const LoadResult loaded = LoadImageBytes(data, load_options);

@@ -78,6 +78,7 @@ HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request) {
       IntegerQuery(request, "px", kDefaultTagPx, kMinTagSquarePx, context.max_tag_px);
   const double dpi = DpiQuery(request);
   const TagKey key = ActiveKey(context, request);
+  const PixelBudget::Reservation pixels = HoldPixels(context, px * px);
   const TagRaster raster = RenderTagRaster(key, {static_cast<int>(px), 4});
   std::string error;
   const std::vector<std::uint8_t> png = EncodePng(raster.image, dpi, &error);
@@ -109,6 +110,12 @@ HttpResponse GetLabelPdf(const AppContext& context, const HttpRequest& request) 
 
 HttpResponse GetLabelPng(const AppContext& context, const HttpRequest& request) {
   const LabelRequest label = ReadLabelRequest(context, request);
+  // Options out of range are refused by the renderer without a raster: nothing to hold for them.
+  PixelBudget::Reservation pixels;
+  if (ValidateLabelOptions(label.options, /*raster=*/true).empty()) {
+    const PixelSize size = LabelPixelSize(label.options);
+    pixels = HoldPixels(context, std::int64_t{size.width} * size.height);
+  }
   return Rendered(RenderLabelPng(label.content, label.options), context, "image/png",
                   "label-" + label.content.pincode.str() + ".png");
 }

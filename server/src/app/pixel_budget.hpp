@@ -1,9 +1,11 @@
 #pragma once
-// A bound on the photo pixels the server decodes and detects at once. Each upload holds its
-// pixels (the size its header claims) from just before decoding until its answer is built; an
-// upload that does not fit waits its turn. Decoding and detecting a photo costs about 7 bytes a
-// pixel at peak (a 33 MP photo: 230 MB more resident memory), so without this bound --threads
-// uploads of --max-pixels each could take more memory than the machine has.
+// A bound on the image pixels the server holds at once: photos being decoded and detected, label
+// and tag PNGs being rendered. An upload holds its pixels (the size its header claims) from just
+// before decoding until its answer is built, a PNG from just before rendering until it is
+// encoded; what does not fit waits its turn. Each costs about 7 to 8 bytes a pixel at peak (a
+// 33 MP photo: 230 MB more resident memory; a 1200 dpi label PNG, 33.5 MP: 263 MB), so without
+// this bound --threads requests of the largest size each could take more memory than the
+// machine has.
 
 #include <condition_variable>
 #include <cstdint>

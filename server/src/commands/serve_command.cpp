@@ -37,7 +37,7 @@ struct ServeArgs {
   std::string web;
   double max_body_mb = 25;
   std::int64_t max_pixels = 40'000'000;
-  std::optional<std::int64_t> max_decode_pixels;  // none: twice max_pixels
+  std::optional<std::int64_t> max_pixels_in_flight;  // none: twice max_pixels
   int max_batch = 100;
   int max_tag_px = 4096;
   int read_timeout_s = 5;
@@ -87,11 +87,11 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
-  // Two photos of the largest size at once by default: with a 40 MP limit, decoding and
-  // detection hold about 0.6 GB at most, however many threads serve.
-  const std::int64_t max_decode_pixels = args.max_decode_pixels.value_or(2 * args.max_pixels);
-  if (max_decode_pixels < args.max_pixels) {
-    throw UsageError("--max-decode-pixels " + std::to_string(max_decode_pixels) +
+  // Two photos of the largest size at once by default: with a 40 MP limit, photos and PNGs in
+  // flight hold about 0.6 GB at most, however many threads serve.
+  const std::int64_t max_pixels_in_flight = args.max_pixels_in_flight.value_or(2 * args.max_pixels);
+  if (max_pixels_in_flight < args.max_pixels) {
+    throw UsageError("--max-pixels-in-flight " + std::to_string(max_pixels_in_flight) +
                      " is below --max-pixels " + std::to_string(args.max_pixels) +
                      ": it must hold at least one photo of the largest size allowed");
   }
@@ -104,7 +104,7 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty()) config.web_dir = args.web;
   config.max_body_bytes = static_cast<std::size_t>(args.max_body_mb * 1024 * 1024);
   config.max_pixels = args.max_pixels;
-  config.max_decode_pixels = max_decode_pixels;
+  config.max_pixels_in_flight = max_pixels_in_flight;
   config.max_batch = static_cast<std::size_t>(args.max_batch);
   config.max_tag_px = args.max_tag_px;
   server::ServerOptions options;
@@ -199,12 +199,12 @@ void AddServeCommand(CLI::App& app) {
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000}))
       ->capture_default_str()
       ->envname("PINTAG_MAX_PIXELS");
-  cmd->add_option("--max-decode-pixels", args->max_decode_pixels,
-                  "photo pixels decoded and detected at once over all requests (about 7 bytes "
-                  "of memory each); more waits its turn. At least --max-pixels; default twice "
-                  "--max-pixels")
+  cmd->add_option("--max-pixels-in-flight", args->max_pixels_in_flight,
+                  "pixels of uploaded photos being decoded and detected and of label and tag PNGs "
+                  "being rendered, at once over all requests (about 7 bytes of memory each); "
+                  "more waits its turn. At least --max-pixels; default twice --max-pixels")
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{100'000'000'000}))
-      ->envname("PINTAG_MAX_DECODE_PIXELS");
+      ->envname("PINTAG_MAX_PIXELS_IN_FLIGHT");
   cmd->add_option("--max-batch", args->max_batch, "labels per POST /api/v1/labels (413 above)")
       ->check(CLI::Range(1, 10000))
       ->capture_default_str()

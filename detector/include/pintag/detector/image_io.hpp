@@ -44,7 +44,7 @@ struct LoadOptions {
   /// Called once, with the stored size the header claims, after that size passed `max_pixels` and
   /// right before any pixel is decoded; not called for a photo refused before that. A server
   /// waits here until its memory budget has room for the pixels (pintag serve
-  /// --max-decode-pixels). Exceptions it throws pass to the caller.
+  /// --max-pixels-in-flight). Exceptions it throws pass to the caller.
   std::function<void(int width, int height)> before_decode;
 };
 
