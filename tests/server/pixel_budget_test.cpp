@@ -1,4 +1,4 @@
-// The decode budget's promises, on real threads: what does not fit waits until room is made, the
+// The pixel budget's promises, on real threads: what does not fit waits until room is made, the
 // callers are served in the order they came, a photo larger than the whole budget runs alone, and
 // nothing is held once every reservation has ended. A thread is known to wait when the budget
 // counts it in line; a budget that let it through would never count it, and the test fails.

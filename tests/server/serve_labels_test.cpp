@@ -80,20 +80,35 @@ TEST_F(ServeTest, LabelsAndTagsComeAtTheAskedSizeAndResolution) {
   EXPECT_EQ(MetricLine(metrics, "pintag_tags_rendered_total"), "pintag_tags_rendered_total 2");
 }
 
-TEST_F(ServeTest, PngsLargerThanThePixelBudgetAreRenderedOneAtATime) {
-  // A 300 dpi label (1181 x 1772 px) is larger than this whole budget: each runs alone, in turn,
-  // and every one is still answered whole.
+TEST_F(ServeTest, PngsLargerThanThePixelBudgetWaitTheirTurnAndComeWhole) {
+  // A 300 dpi label (1181 x 1772 px) and a tag of 1024 px (1332 px with its quiet zone) are each
+  // larger than this whole budget: each runs alone, in turn, and every one is answered whole.
   startServer({"--max-pixels", "1000000", "--max-pixels-in-flight", "1000000"});
-  constexpr int kCounters = 4, kLabels = 2;
-  const int rendered = CallsRightFromConcurrentClients(
-      server_->port(), kCounters, kLabels, [&](httplib::Client& counter_client) {
-        const httplib::Result r = counter_client.Get("/api/v1/labels/110001.png", counter());
-        if (!r || r->status != 200) return false;
-        const OIIO::ImageSpec spec = PngSpec(r->body);
-        return spec.width == 1181 && spec.height == 1772;
-      });
-  EXPECT_EQ(rendered, kCounters * kLabels);
-  EXPECT_GE(MetricValue(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total"), 1.0);
+  constexpr int kCounters = 4, kEach = 2;
+  const auto waits = [&] {
+    return MetricValue(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total");
+  };
+  const auto png_of_size = [](const httplib::Result& r, int width, int height) {
+    if (!r || r->status != 200) return false;
+    const OIIO::ImageSpec spec = PngSpec(r->body);
+    return spec.width == width && spec.height == height;
+  };
+  EXPECT_EQ(CallsRightFromConcurrentClients(
+                server_->port(), kCounters, kEach,
+                [&](httplib::Client& c) {
+                  return png_of_size(c.Get("/api/v1/labels/110001.png", counter()), 1181, 1772);
+                }),
+            kCounters * kEach);
+  const double after_labels = waits();
+  EXPECT_GE(after_labels, 1.0);
+  EXPECT_EQ(CallsRightFromConcurrentClients(
+                server_->port(), kCounters, kEach,
+                [&](httplib::Client& c) {
+                  return png_of_size(c.Get("/api/v1/tags/110001.png?px=1024", counter()), 1332,
+                                     1332);
+                }),
+            kCounters * kEach);
+  EXPECT_GE(waits(), after_labels + 1);
 }
 
 TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {

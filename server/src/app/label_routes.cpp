@@ -78,7 +78,8 @@ HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request) {
       IntegerQuery(request, "px", kDefaultTagPx, kMinTagSquarePx, context.max_tag_px);
   const double dpi = DpiQuery(request);
   const TagKey key = ActiveKey(context, request);
-  const PixelBudget::Reservation pixels = HoldPixels(context, px * px);
+  const long long side = px + 2LL * QuietZonePx(static_cast<int>(px));  // the PNG's side
+  const PixelBudget::Reservation pixels = HoldPixels(context, side * side);
   const TagRaster raster = RenderTagRaster(key, {static_cast<int>(px), 4});
   std::string error;
   const std::vector<std::uint8_t> png = EncodePng(raster.image, dpi, &error);
