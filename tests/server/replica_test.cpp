@@ -42,21 +42,10 @@ std::int64_t CountRows(const std::string& path, const std::string& table) {
 // Lookups from 8 clients at once on `port`, so that its pool opens new connections: how many of
 // the 40 were answered 200.
 int LookupsFromManyClients(int port) {
-  std::vector<std::thread> clients;
-  std::atomic<int> good{0};
-  clients.reserve(8);
-  for (int t = 0; t < 8; ++t) {
-    clients.emplace_back([&] {
-      httplib::Client client("127.0.0.1", port);
-      client.set_read_timeout(30, 0);
-      for (int i = 0; i < 5; ++i) {
-        const auto r = client.Get("/api/v1/pincodes/560001");
-        if (r && r->status == 200) ++good;
-      }
-    });
-  }
-  for (std::thread& c : clients) c.join();
-  return good.load();
+  return CallsRightFromConcurrentClients(port, 8, 5, [](httplib::Client& client) {
+    const auto r = client.Get("/api/v1/pincodes/560001");
+    return r && r->status == 200;
+  });
 }
 
 // The files beside `snapshot` whose names start with its name and ".serving-".

@@ -436,7 +436,7 @@ TEST_F(ServeTest, PhotosBeyondThePixelBudgetWaitTheirTurnAndAllAreRead) {
       });
   EXPECT_EQ(read, kScanners * kUploads);
   // Uploads that overlapped waited; the counter says how many did.
-  EXPECT_GE(MetricValue(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total"), 1.0);
+  EXPECT_GE(Metric(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total"), 1.0);
 }
 
 TEST_F(ServeTest, APixelBudgetBelowOnePhotoIsRefusedBeforeAnythingIsCreated) {

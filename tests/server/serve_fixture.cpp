@@ -10,9 +10,9 @@
 #include <array>
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <regex>
+#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -44,11 +44,13 @@ int CallsRightFromConcurrentClients(int port, int clients, int calls_each,
   return right;
 }
 
-double MetricValue(const std::string& page, const std::string& name) {
-  const std::string line_start = "\n" + name + " ";
-  const std::size_t at = page.find(line_start);
-  if (at == std::string::npos) return std::nan("");
-  return std::stod(page.substr(at + line_start.size()));
+double Metric(const std::string& text, const std::string& series) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind(series + " ", 0) == 0) return std::stod(line.substr(series.size() + 1));
+  }
+  return 0;
 }
 
 CommandResult RunPintag(const std::string& arguments) {

@@ -73,8 +73,9 @@ const std::string& SeededTemplate();
 int CallsRightFromConcurrentClients(int port, int clients, int calls_each,
                                     const std::function<bool(httplib::Client&)>& call);
 
-/// The value of an unlabelled metric in a Prometheus text page; NaN when it is not there.
-double MetricValue(const std::string& page, const std::string& name);
+/// The value of one series (a name, with its labels if any) in a Prometheus text page; 0 when the
+/// page has no such line.
+double Metric(const std::string& text, const std::string& series);
 
 /// A fixture with a seeded database copy, one token per role and a running server.
 class ServeTest : public ::testing::Test {

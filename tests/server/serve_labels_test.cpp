@@ -86,7 +86,7 @@ TEST_F(ServeTest, PngsLargerThanThePixelBudgetWaitTheirTurnAndComeWhole) {
   startServer({"--max-pixels", "1000000", "--max-pixels-in-flight", "1000000"});
   constexpr int kCounters = 4, kEach = 2;
   const auto waits = [&] {
-    return MetricValue(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total");
+    return Metric(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total");
   };
   const auto png_of_size = [](const httplib::Result& r, int width, int height) {
     if (!r || r->status != 200) return false;

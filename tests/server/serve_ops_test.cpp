@@ -168,15 +168,6 @@ TEST_F(ServeTest, ReadyzFailsWhenTheDatabaseIsUnreachable) {
   ExpectJson(client().Get("/readyz"));
 }
 
-double Metric(const std::string& text, const std::string& series) {
-  std::istringstream lines(text);
-  std::string line;
-  while (std::getline(lines, line)) {
-    if (line.rfind(series + " ", 0) == 0) return std::stod(line.substr(series.size() + 1));
-  }
-  return 0;
-}
-
 TEST_F(ServeTest, MetricsCountWhatTheTestDid) {
   for (int i = 0; i < 3; ++i) ExpectJson(client().Get("/api/v1/pincodes/110001"));
   for (int i = 0; i < 2; ++i) ExpectProblem(client().Get("/api/v1/pincodes/999999"), 404);

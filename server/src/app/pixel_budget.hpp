@@ -42,7 +42,6 @@ class PixelBudget {
   /// to whether the call had to wait.
   Reservation reserve(std::int64_t pixels, bool* waited = nullptr);
 
-  std::int64_t capacity() const { return capacity_; }
   /// Pixels held now, and the most held at once since the budget was made.
   std::int64_t held() const;
   std::int64_t peak() const;
