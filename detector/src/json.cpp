@@ -111,7 +111,9 @@ json ToJson(const DetectResult& r) {
                      {"quads", t.quads_ms},         {"sample", t.sample_ms},
                      {"model_fit", t.model_fit_ms}, {"codeword", t.codeword_ms},
                      {"pose", t.pose_ms},           {"total", t.total_ms}};
-  j["model_reads"] = {{"read", t.model_reads}, {"skipped_over_budget", t.model_skipped}};
+  j["model_reads"] = {{"read", t.model_reads},
+                      {"reread", t.model_rereads},
+                      {"skipped_over_budget", t.model_skipped}};
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }

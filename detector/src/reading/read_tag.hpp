@@ -64,6 +64,7 @@ struct ReadingTimes {
   double codeword_ms = 0;   ///< 5c + 6 for the model's codeword
   bool model_read = false;
   bool model_skipped = false;  ///< the budget was spent
+  int model_rereads = 0;       ///< more reads of a narrow square's winner (their times included)
 };
 
 /// A candidate square read as the detector reads it, in `bgr` whose colour was decoded with
