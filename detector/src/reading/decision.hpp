@@ -61,9 +61,6 @@ inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
 /// at 65° in hard light), read wrong with an independent lead of 66 at an excess of 12.6
 /// (docs/DETECTOR.md, thirteenth sitting).
 inline constexpr double kMaxNarrowExcess = 10;
-/// How far (px) each corner is moved, in a fixed direction of its own, for the two re-reads of a
-/// narrow square's winner: about the corner error the probe's jitter of 0.6 px per axis gives.
-inline constexpr double kRereadShiftPx = 0.75;
 /// Least luminance noise (of the black-to-white range: two 8-bit code values) at which a lead is
 /// counted. The lead is in units of the free model's residual. Where that residual is smaller, the
 /// model's own approximations (blur shape, sharpening, the phone's tone curve) rather than the
@@ -111,7 +108,8 @@ bool TooSmallToRead(const Corners& corners);
 /// too), so it never counts more than the lead itself.
 double CountedLead(const ModelReading& reading);
 
-/// Empty when `reading`'s winner is accepted, else why not.
+/// Empty when `reading`'s winner passes the decision's rules, else why not. On a narrow square the
+/// detector then also re-reads it (reading/rereading.hpp) before it is accepted.
 std::string RefuseCodeword(const ModelReading& reading);
 
 }  // namespace pintag::reading

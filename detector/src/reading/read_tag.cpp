@@ -1,13 +1,12 @@
 #include "reading/read_tag.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
-#include <cmath>
 #include <utility>
 
 #include "homography.hpp"
 #include "reading/decision.hpp"
+#include "reading/rereading.hpp"
 #include "reading/sampling.hpp"
 
 namespace pintag::stage {
@@ -39,40 +38,24 @@ OrientationResult AsOrientation(const reading::CodewordDecision& d) {
   return o;
 }
 
-/// The square's corners, each moved by kRereadShiftPx in a fixed direction of its own (`sign` +1
-/// or -1: the two re-reads move them opposite ways). The directions are unrelated from corner to
-/// corner, so the moved square differs in place, size, turn and perspective at once, as a
-/// candidate's corner errors do.
-Quad MovedCorners(const Quad& quad, double sign) {
-  constexpr std::array<double, 4> kDirectionsDeg = {20, 245, 110, 335};
-  Quad moved = quad;
-  for (std::size_t k = 0; k < 4; ++k) {
-    const double a = kDirectionsDeg[k] * CV_PI / 180;
-    moved[k] += sign * reading::kRereadShiftPx * cv::Point2d(std::cos(a), std::sin(a));
-  }
-  return moved;
-}
+/// What the re-reads of a narrow square's winner found (reading/rereading.hpp).
+enum class RereadVerdict : std::uint8_t { kChosenAgain, kOtherWinner, kBudgetSpent };
 
-/// Whether two more model reads, started from `fitted` moved both ways (MovedCorners), choose
-/// `winner` too. Each read is taken from the budget; none left counts as disagreement.
-bool SurvivesRereading(const cv::Mat& bgr, ChromaUpsampling upsampling, const Quad& fitted,
-                       TagKey winner, ModelBudget* budget, ReadingTimes* times) {
+/// Two more model reads, from `fitted` moved both ways, each taken from the budget first; their
+/// times go to `times`.
+RereadVerdict Reread(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                     const reading::Corners& fitted, TagKey winner, ModelBudget* budget,
+                     ReadingTimes* times) {
   for (const double sign : {1.0, -1.0}) {
-    if (budget != nullptr && !budget->take()) return false;
+    if (budget != nullptr && !budget->take()) return RereadVerdict::kBudgetSpent;
     ++times->model_rereads;
-    const auto t0 = Clock::now();
-    const Quad start = MovedCorners(fitted, sign);
-    std::string error;
-    const reading::FittedModel model =
-        reading::FitModel(bgr, upsampling, {start[0], start[1], start[2], start[3]}, &error);
-    const auto t1 = Clock::now();
-    times->model_fit_ms += Ms(t0, t1);
-    if (!model.fit.ok || reading::TooSmallToRead(model.fit.corners)) return false;
-    const reading::CodewordDecision decision = reading::DecideCodeword(model);
-    times->codeword_ms += Ms(t1, Clock::now());
-    if (!decision.winner || *decision.winner != winner) return false;
+    const reading::Reread again =
+        reading::ReadAgain(bgr, upsampling, reading::MovedCorners(fitted, sign), winner);
+    times->model_fit_ms += again.fit_ms;
+    times->codeword_ms += again.codeword_ms;
+    if (!again.same_winner) return RereadVerdict::kOtherWinner;
   }
-  return true;
+  return RereadVerdict::kChosenAgain;
 }
 
 }  // namespace
@@ -155,14 +138,7 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
     r.model.decision = reading::DecideCodeword(model);
   }
   c.times.codeword_ms = Ms(t2, Clock::now());
-  std::string refused = reading::RefuseCodeword(r.model);
-  // On a narrow square a winner is read twice more from moved corners and kept only when both
-  // choose it too: a wrong winner there owes its lead to how one read's corners settled.
-  if (refused.empty() && reading::IsNarrow(fitted) &&
-      !SurvivesRereading(bgr, upsampling, {fitted[0], fitted[1], fitted[2], fitted[3]},
-                         *r.model.decision.winner, budget, &c.times)) {
-    refused = "a narrow square's winner not chosen again from moved corners";
-  }
+  const std::string refused = reading::RefuseCodeword(r.model);
   if (!refused.empty()) {
     r.payload.key.reset();
     r.payload.error = "model: " + refused;
@@ -179,6 +155,21 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
     r.payload.key.reset();
     r.payload.error = "model: the codec refuses the codeword";
     return c;
+  }
+  // Last, as the dearest check: on a narrow square the winner must be chosen again by two more
+  // reads from moved corners (reading/rereading.hpp).
+  if (reading::NeedsRereading(fitted)) {
+    const RereadVerdict verdict =
+        Reread(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times);
+    if (verdict != RereadVerdict::kChosenAgain) {
+      r.payload.key.reset();
+      c.times.model_skipped = verdict == RereadVerdict::kBudgetSpent;
+      r.payload.error = verdict == RereadVerdict::kBudgetSpent
+                            ? "model: this frame's model reads are spent before the narrow "
+                              "square's winner was read again (max_model_reads)"
+                            : "model: a narrow square's winner not chosen again from moved corners";
+      return c;
+    }
   }
   r.reader = Reader::kModel;
   c.quad = moved;

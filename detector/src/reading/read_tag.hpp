@@ -63,7 +63,7 @@ struct ReadingTimes {
   double model_fit_ms = 0;  ///< 5b
   double codeword_ms = 0;   ///< 5c + 6 for the model's codeword
   bool model_read = false;
-  bool model_skipped = false;  ///< the budget was spent
+  bool model_skipped = false;  ///< the budget was spent, before its read or its re-reads
   int model_rereads = 0;       ///< more reads of a narrow square's winner (their times included)
 };
 

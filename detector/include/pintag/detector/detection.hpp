@@ -74,7 +74,8 @@ struct StageTimings {
   double total_ms = 0;
   int model_reads = 0;    ///< candidates the model reader fitted
   int model_rereads = 0;  ///< more fits of narrow squares' winners, from moved corners
-  int model_skipped = 0;  ///< candidates it did not read: DetectorOptions::max_model_reads spent
+  int model_skipped = 0;  ///< candidates left because max_model_reads was spent (before their read
+                          ///< or their re-reads)
 };
 
 struct DetectResult {

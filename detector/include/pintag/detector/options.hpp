@@ -73,12 +73,12 @@ struct DetectorOptions {
   bool dark_square_candidates = true;
 
   // --- time ---
-  /// Candidates per frame that the model reader (stage 5b-5c, milliseconds each) may read after
-  /// the direct reader failed on them. Spent in the order candidates come: the main red pass, its
-  /// clusters with the most blobs first, then the faint pass, then dark squares. With threads > 1
-  /// which candidates of one pass get the last reads depends on timing. The two re-reads of a
-  /// winner on a narrow square come out of the same reads; a winner they cannot be had for is
-  /// refused. 0 turns the model off.
+  /// Model reads per frame (stage 5b-5c, milliseconds each), for candidates the direct reader
+  /// failed on. Spent in the order candidates come: the main red pass, its clusters with the most
+  /// blobs first, then the faint pass, then dark squares. The two re-reads of a winner on a narrow
+  /// square come out of the same reads; a winner they cannot be had for is refused. With
+  /// threads > 1 which candidates of one pass get the last reads, and so whether such a winner is
+  /// kept, depends on timing. 0 turns the model off.
   int max_model_reads = 16;
 
   // --- execution and diagnostics ---
