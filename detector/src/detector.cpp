@@ -26,6 +26,7 @@
 #include "candidates/redness.hpp"
 #include "debug_images.hpp"
 #include "duplicates.hpp"
+#include "elapsed_ms.hpp"
 #include "homography.hpp"
 #include "pintag/codec/geometry.hpp"
 #include "pose/camera_model.hpp"
@@ -42,10 +43,6 @@ constexpr int kMainMinClusterBlobs = 3;
 // outline of it, or a later pass finding the same cluster): reading it again gives the same
 // answer, and a model read costs milliseconds. (Load frames: 4 of 23 model reads were repeats.)
 constexpr double kSameSquarePx = 0.25;
-
-double Ms(Clock::time_point from, Clock::time_point to) {
-  return std::chrono::duration<double, std::milli>(to - from).count();
-}
 
 // The squares a detect() call looked at.
 struct Candidates {
@@ -131,7 +128,7 @@ bool ProcessQuad(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::Mat&
   const cv::Matx33d h = stage::HomographyFromQuad(quad);
   stage::ElementAssignment assignment = stage::AssignElements(h, blobs, cluster.blobs);
   const auto t2 = Clock::now();
-  out->quads_ms += Ms(t1, t2);
+  out->quads_ms += ElapsedMs(t1, t2);
   const auto reject = [&](std::string reason, const stage::OrientationResult* o = nullptr) {
     if (options.return_rejected) out->detections.push_back(Rejected(quad, std::move(reason), o));
     return false;
@@ -188,7 +185,7 @@ void ProcessCluster(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::M
   const std::vector<stage::Quad> quads =
       stage::ClusterQuads(dark, cluster, blobs, options.min_square_px);
   out->candidates.found.insert(out->candidates.found.end(), quads.begin(), quads.end());
-  out->quads_ms += Ms(t0, Clock::now());
+  out->quads_ms += ElapsedMs(t0, Clock::now());
 
   bool decoded = false;
   for (const stage::Quad& quad : quads) {
@@ -311,7 +308,7 @@ void RunRedPass(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv::Mat& 
                      return a.blobs.size() > b.blobs.size();
                    });
   const auto t_blobs = Clock::now();
-  result->timings.blobs_ms += Ms(t_red, t_blobs);
+  result->timings.blobs_ms += ElapsedMs(t_red, t_blobs);
   if (debug != nullptr) debug->blobs(bgr, blobs, clusters);
 
   std::vector<ClusterOutput> outputs(clusters.size());
@@ -340,7 +337,7 @@ void RunDarkSquarePass(const cv::Mat& bgr, ChromaUpsampling upsampling, const cv
                std::any_of(candidates->read.begin(), candidates->read.end(),
                            [&](const stage::Quad& q) { return stage::QuadContains(q, centre); });
       });
-  result->timings.quads_ms += Ms(start, Clock::now());
+  result->timings.quads_ms += ElapsedMs(start, Clock::now());
   std::vector<ClusterOutput> outputs(squares.size());
   ForEach(squares.size(), options.threads, [&](std::size_t i) {
     outputs[i].candidates.found.push_back(squares[i]);
@@ -397,7 +394,7 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif,
   scan_request.min_channel = true;
   scan_request.dark_half = options_.dark_square_candidates;
   const stage::FrameScan scan = stage::ScanFrame(bgr, scan_request);
-  result.timings.redness_ms += Ms(start, Clock::now());
+  result.timings.redness_ms += ElapsedMs(start, Clock::now());
 
   Candidates candidates;
   stage::ModelBudget budget(std::max(0, options_.max_model_reads));
@@ -429,8 +426,8 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif,
     d.pose_ambiguous = pose.ambiguous;
   }
   const auto end = Clock::now();
-  result.timings.pose_ms = Ms(t_pose, end);
-  result.timings.total_ms = Ms(start, end);
+  result.timings.pose_ms = ElapsedMs(t_pose, end);
+  result.timings.total_ms = ElapsedMs(start, end);
   debug.detections(bgr, result.detections);
   return result;
 }

@@ -151,16 +151,16 @@ TEST(Regressions, ModelReadsStayWithinTheFramesBudget) {
   EXPECT_GE(read_only_by_model, 5);
 }
 
-// A model winner on a narrow square is kept only when two more reads from moved corners choose it
-// too, and those reads come out of the frame's max_model_reads. The folder's narrow tags that the
-// model reads need exactly three reads: with one or two the winner is refused for want of its
-// re-reads (and the candidate counted as skipped), with three it is reported.
 DetectResult DetectWithModelReads(const cv::Mat& bgr, int reads) {
   DetectorOptions options;
   options.max_model_reads = reads;
   return Detector(options).detect(bgr);
 }
 
+// A model winner on a narrow square is kept only when two more reads from moved corners choose it
+// too, and those reads come out of the frame's max_model_reads. The folder's narrow tags that the
+// model reads need exactly three reads: with one or two the winner is refused for want of its
+// re-reads (and the candidate counted as skipped), with three it is reported.
 TEST(Regressions, NarrowSquaresWinnersAreReadTwiceMoreFromTheFramesBudget) {
   const std::vector<RegressionCase> cases = LoadFolder("read");
   const Detector with_default;

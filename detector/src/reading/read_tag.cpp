@@ -4,6 +4,7 @@
 #include <chrono>
 #include <utility>
 
+#include "elapsed_ms.hpp"
 #include "homography.hpp"
 #include "reading/decision.hpp"
 #include "reading/rereading.hpp"
@@ -13,10 +14,6 @@ namespace pintag::stage {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point from, Clock::time_point to) {
-  return std::chrono::duration<double, std::milli>(to - from).count();
-}
 
 // The model's codeword as an oriented reading, for the codec and the detection's cells.
 OrientationResult AsOrientation(const reading::CodewordDecision& d) {
@@ -100,7 +97,7 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
   r.orientation = ReadOrientation(SampleCells(bgr, HomographyFromQuad(quad)), thresholds);
   if (r.orientation.ok) r.payload = DecodeReading(r.orientation);
   const auto t1 = Clock::now();
-  c.times.sample_ms = Ms(t0, t1);
+  c.times.sample_ms = ElapsedMs(t0, t1);
   const double side = MeanSidePx(HomographyFromQuad(quad));
   const bool guessed = NeededRecovery(r.payload) && ElementsWithUnknownCells(r.orientation) > 1;
   if (r.payload.key && (!guessed || side > reading::kModelMaxSidePx)) {
@@ -130,14 +127,14 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
       reading::FitModel(bgr, upsampling, {quad[0], quad[1], quad[2], quad[3]}, &r.model.error);
   r.model.fit = model.fit;
   const auto t2 = Clock::now();
-  c.times.model_fit_ms = Ms(t1, t2);
+  c.times.model_fit_ms = ElapsedMs(t1, t2);
   // A fitted square under the least side is refused whatever its codeword (RefuseCodeword), so
   // its codeword is not searched for (a few milliseconds on 14-18 px squares).
   const reading::Corners& fitted = r.model.fit.corners;
   if (model.fit.ok && !reading::TooSmallToRead(fitted)) {
     r.model.decision = reading::DecideCodeword(model);
   }
-  c.times.codeword_ms = Ms(t2, Clock::now());
+  c.times.codeword_ms = ElapsedMs(t2, Clock::now());
   const std::string refused = reading::RefuseCodeword(r.model);
   if (!refused.empty()) {
     r.payload.key.reset();

@@ -5,18 +5,10 @@
 #include <cmath>
 #include <string>
 
+#include "elapsed_ms.hpp"
 #include "reading/decision.hpp"
 
 namespace pintag::reading {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point from, Clock::time_point to) {
-  return std::chrono::duration<double, std::milli>(to - from).count();
-}
-
-}  // namespace
 
 bool NeedsRereading(const Corners& fitted) {
   return IsNarrow(fitted);
@@ -34,16 +26,16 @@ Corners MovedCorners(const Corners& fitted, double sign) {
 
 Reread ReadAgain(const cv::Mat& bgr, ChromaUpsampling upsampling, const Corners& start,
                  TagKey winner) {
+  using Clock = std::chrono::steady_clock;
   Reread reread;
   const auto t0 = Clock::now();
   std::string error;
   const FittedModel model = FitModel(bgr, upsampling, start, &error);
   const auto t1 = Clock::now();
-  reread.fit_ms = Ms(t0, t1);
+  reread.fit_ms = ElapsedMs(t0, t1);
   if (!model.fit.ok || TooSmallToRead(model.fit.corners)) return reread;
-  reread.fitted = true;
   const CodewordDecision decision = DecideCodeword(model);
-  reread.codeword_ms = Ms(t1, Clock::now());
+  reread.codeword_ms = ElapsedMs(t1, Clock::now());
   reread.same_winner = decision.winner && *decision.winner == winner;
   return reread;
 }

@@ -30,8 +30,7 @@ Corners MovedCorners(const Corners& fitted, double sign);
 
 /// One re-read: the model fitted from `start` and its codeword decided.
 struct Reread {
-  bool fitted = false;  ///< a model was fitted and its square is not too small to read
-  bool same_winner = false;
+  bool same_winner = false;  ///< a model was fitted, its square not too small, the same winner
   double fit_ms = 0;
   double codeword_ms = 0;
 };
