@@ -65,6 +65,7 @@ void MarkerStats::add(const FrameSpec& frame, const Outcome& outcome) {
   Tally& bin = grid[frame.hard][frame.size_index][frame.tilt_index];
   ++bin.tags;
   bin.found += outcome.found;
+  poses.push_back({frame.index, frame.hard, frame.size_index, frame.tilt_index, outcome.found});
   if (!outcome.found) return;
   corner_error_px[frame.size_index].push_back(outcome.corner_error_px);
   if (!std::isnan(outcome.rotation_error_deg)) {

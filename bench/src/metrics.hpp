@@ -42,6 +42,15 @@ struct Tally {
   double percent() const { return tags > 0 ? 100.0 * found / tags : kNaN; }
 };
 
+/// One counted tag and whether the detector found it: the pairing of detectors pose by pose.
+struct PoseOutcome {
+  int frame = 0;  ///< FrameSpec::index, the same pose for every marker
+  bool hard = false;
+  int size_index = 0;
+  int tilt_index = 0;
+  bool found = false;
+};
+
 /// Everything the report says about one detector.
 struct MarkerStats {
   std::string name;
@@ -49,6 +58,7 @@ struct MarkerStats {
   Marker marker = Marker::kPinTag;
   /// [hard][size][tilt]
   std::array<std::array<std::array<Tally, kTiltCount>, kSizeCount>, 2> grid{};
+  std::vector<PoseOutcome> poses;  ///< every counted tag, in the order scored
   int tagged_frames = 0;
   int excluded = 0;  ///< tags not fully visible (not counted)
   int misreads = 0;

@@ -6,9 +6,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "plot.hpp"
+#include "recall_comparison.hpp"
 
 namespace pintag::bench {
 namespace {
@@ -64,6 +66,53 @@ std::string Row(const std::vector<std::string>& cells) {
   std::string line = "|";
   for (const std::string& c : cells) line += " " + c + " |";
   return line + "\n";
+}
+
+// How far PinTag's target-bin recall is from `other`'s beyond chance: the bins a detector as good
+// as `other` would trail in, and the paired difference over the same poses, per light.
+void WriteRecallComparison(const MarkerStats& pintag, const MarkerStats& other,
+                           std::ostringstream& md) {
+  std::vector<BinTally> bins;
+  for (int si = 0; si < kSizeCount; ++si) {
+    for (int ti = 0; ti < kTiltCount; ++ti) {
+      if (!InTarget(si, ti)) continue;
+      const Tally t = other.recall(-1, si, ti);
+      bins.push_back({t.tags, t.found});
+    }
+  }
+  const BinsBehindByChance chance = ChanceOfBinsBehind(bins);
+  md << "\nA detector exactly as good as " << other.name
+     << " in every bin (each tag found at its rate in that bin) would find fewer than it in "
+     << Fmt("%.1f", chance.expected) << " of these bins on average, and in at most 2 of them in "
+     << Fmt("%.0f", 100 * chance.atMost(2))
+     << " % of sweeps this size. Paired over the same poses (target bins; the interval is the "
+        "normal 95 % one, p is McNemar's exact two-sided test of equal recall):\n\n";
+  md << Header({"light", "poses", "PinTag only", other.name + " only",
+                "PinTag − " + other.name + ", points (95 % interval)", "p"});
+  std::map<int, bool> other_found;
+  for (const PoseOutcome& pose : other.poses) {
+    if (InTarget(pose.size_index, pose.tilt_index)) other_found[pose.frame] = pose.found;
+  }
+  for (int light = 0; light <= 2; ++light) {  // moderate, hard, both
+    PairedOutcomes o;
+    for (const PoseOutcome& pose : pintag.poses) {
+      if (!InTarget(pose.size_index, pose.tilt_index)) continue;
+      if (light < 2 && pose.hard != (light == 1)) continue;
+      const auto it = other_found.find(pose.frame);
+      if (it == other_found.end()) continue;
+      int& cell = pose.found ? (it->second ? o.both : o.only_first)
+                             : (it->second ? o.only_second : o.neither);
+      ++cell;
+    }
+    const RecallDifference d = CompareRecall(o);
+    md << Row(
+        {light == 0   ? "moderate"
+         : light == 1 ? "hard"
+                      : "both",
+         std::to_string(o.poses()), std::to_string(o.only_first), std::to_string(o.only_second),
+         Fmt("%+.1f", d.points) + " (" + Fmt("%+.1f", d.low) + " to " + Fmt("%+.1f", d.high) + ")",
+         Fmt(d.p_value < 0.001 ? "%.1e" : "%.3f", d.p_value)});
+  }
 }
 
 }  // namespace
@@ -234,6 +283,7 @@ std::string ReportMarkdown(const BenchResult& r) {
     }
     md << "\nPinTag finds fewer tags than ArUco in " << behind << " of the " << target_bins
        << " target bins.\n";
+    WriteRecallComparison(pintag, aruco, md);
   }
 
   // --- corner error by size ---
