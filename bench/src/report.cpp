@@ -22,6 +22,13 @@ std::string Fmt(const char* format, double v) {
   return buf;
 }
 
+// One decimal with its sign, the minus typeset (−) as the hand-written text has it.
+std::string Signed(double v) {
+  std::string text = Fmt("%+.1f", v);
+  if (!text.empty() && text[0] == '-') text.replace(0, 1, "−");
+  return text;
+}
+
 std::string Percent(const Tally& t) {
   return t.tags > 0 ? Fmt("%.1f", t.percent()) : "–";
 }
@@ -105,13 +112,13 @@ void WriteRecallComparison(const MarkerStats& pintag, const MarkerStats& other,
       ++cell;
     }
     const RecallDifference d = CompareRecall(o);
-    md << Row(
-        {light == 0   ? "moderate"
-         : light == 1 ? "hard"
-                      : "both",
-         std::to_string(o.poses()), std::to_string(o.only_first), std::to_string(o.only_second),
-         Fmt("%+.1f", d.points) + " (" + Fmt("%+.1f", d.low) + " to " + Fmt("%+.1f", d.high) + ")",
-         Fmt(d.p_value < 0.001 ? "%.1e" : "%.3f", d.p_value)});
+    md << Row({light == 0   ? "moderate"
+               : light == 1 ? "hard"
+                            : "both",
+               std::to_string(o.poses()), std::to_string(o.only_first),
+               std::to_string(o.only_second),
+               Signed(d.points) + " (" + Signed(d.low) + " to " + Signed(d.high) + ")",
+               Fmt(d.p_value < 0.001 ? "%.1e" : "%.3f", d.p_value)});
   }
 }
 
