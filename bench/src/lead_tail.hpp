@@ -2,8 +2,8 @@
 // How often the model reader would accept a wrong codeword, for rates too small to count. The
 // reader probe logs, for every reading, the winner's lead; the wrong winners that pass every
 // check but the lead are the misreads a lead threshold stands between. Their leads fall off
-// exponentially past a few units (docs/DETECTOR.md, "The misread rate, measured by its tail"),
-// so the share of readings whose wrong winner leads by more than T is estimated from the
+// exponentially past a few units (docs/DETECTOR-RESEARCH.md, "The misread rate, measured by its
+// tail"), so the share of readings whose wrong winner leads by more than T is estimated from the
 // exceedances over a low threshold u: (count above u / readings) × exp(−(T − u) / scale), with
 // scale the mean exceedance (the maximum-likelihood exponential fit).
 

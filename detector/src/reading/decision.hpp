@@ -28,8 +28,8 @@ inline constexpr double kMinIndependentLead = 35;
 /// the probe of kMinIndependentLead's size (48 frames per bin, 2 draws), seeds 21 and 24 whole and
 /// 22 and 23 in part, they reach 23.65 (seed 24, frame 3307: 32 px at 55° in hard light, past every
 /// other check), and 30 keeps 1.25 times that away. On seeds 21 and 24 it accepts 12 and 13 more of
-/// the 1,728 hard-light target readings than 32, none wrong (docs/DETECTOR.md, "Raised: that
-/// smaller lead"). Seeds 22 and 23 run whole with the codeword search of 2026-11-29 (re-ranked
+/// the 1,728 hard-light target readings than 32, none wrong (docs/DETECTOR-RESEARCH.md, "Raised:
+/// that smaller lead"). Seeds 22 and 23 run whole with the codeword search of 2026-11-29 (re-ranked
 /// around the winner): 17.0 and 22.3; seed 22's 27.9 with the search before it was a codeword the
 /// search never scored.
 inline constexpr double kMinIndependentLeadOfAFit = 30;
@@ -37,9 +37,9 @@ inline constexpr double kMinIndependentLeadOfAFit = 30;
 /// steeply tilted) are where wrong winners that fit lead most. On the tuning probe with every
 /// frame saved at JPEG quality 90 (pintag_reader_probe --world tuning --reader model
 /// --jpeg-quality 90, seeds 22 and 23, 48 frames per bin, corners jittered by 0.6 px: 13,440
-/// readings; docs/DETECTOR.md, "The misread rate, measured by its tail"), 231 of the 237 wrong
-/// winners that fit and pass every other check lie on such squares, the two largest among them
-/// (45.0, which the lead of 30 accepted: a misread, and 36.3, which kMinLead refused). On the
+/// readings; docs/DETECTOR-RESEARCH.md, "The misread rate, measured by its tail"), 231 of the 237
+/// wrong winners that fit and pass every other check lie on such squares, the two largest among
+/// them (45.0, which the lead of 30 accepted: a misread, and 36.3, which kMinLead refused). On the
 /// others (6, the largest 15.1) the tail's fit asks 30.1 for an estimated misread share of 1e-5:
 /// kMinIndependentLeadOfAFit stays.
 inline constexpr double kNarrowExtentPx = 18;
@@ -59,7 +59,7 @@ inline constexpr double kMinIndependentLeadOfANarrowFit = 48;
 /// accepts as drawn, and 6 of 2,667 at quality 90 (15 would refuse 8 and 1). It was prompted by a
 /// held-out misread, so that frame is no evidence for it: seed 71 at quality 90, frame 4484 (32 px
 /// at 65° in hard light), read wrong with an independent lead of 66 at an excess of 12.6
-/// (docs/DETECTOR.md, thirteenth sitting).
+/// (docs/DETECTOR-RESEARCH.md, thirteenth sitting).
 inline constexpr double kMaxNarrowExcess = 10;
 /// Least luminance noise (of the black-to-white range: two 8-bit code values) at which a lead is
 /// counted. The lead is in units of the free model's residual. Where that residual is smaller, the
@@ -70,8 +70,8 @@ inline constexpr double kMaxNarrowExcess = 10;
 /// of 0.0042, where the right accepted hard-light readings' 10th percentile is 0.011. Counted at
 /// this floor its lead falls from 63 to 18 noise units. On the seven tuning probes on record (as
 /// drawn, at quality 90 and 100: 23,520 readings) the floor refuses 11 of the 9,064 right
-/// target-bin readings accepted. It was set on that one wrong reading (docs/DETECTOR.md, thirteenth
-/// sitting).
+/// target-bin readings accepted. It was set on that one wrong reading (docs/DETECTOR-RESEARCH.md,
+/// thirteenth sitting).
 inline constexpr double kLumaNoiseFloor = 2.0 / 255;
 /// Most another scored codeword may explain the colour better than the winner does
 /// (CodewordDecision::chroma_deficit, noise units). Where the fitted corners or blur are off, a
@@ -80,7 +80,7 @@ inline constexpr double kLumaNoiseFloor = 2.0 / 255;
 /// codeword. On the tuning probe (seeds 22 and 25 as drawn, 22 and 23 at quality 90, 13,440
 /// readings) one such wrong winner led by 62.4 independent samples with a deficit of 39.3; the
 /// rule refuses 5 of the 5,060 right target-bin readings it would otherwise accept
-/// (docs/DETECTOR.md, tenth sitting).
+/// (docs/DETECTOR-RESEARCH.md, tenth sitting).
 inline constexpr double kMaxChromaDeficit = 20;
 /// And in noise units, whatever the correlation: the rule before the chroma noise was corrected,
 /// kept as a floor where residuals look independent and readings are fewest.

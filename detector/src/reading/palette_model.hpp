@@ -23,7 +23,7 @@ using Labels = std::array<int, kModelRegions>;
 /// could fit them with a level barely apart from its class's other; the larger steps lengthen
 /// right winners' leads on the target readings (median +18-20 % in moderate light, +6-10 % in
 /// hard; wrong winners' +4 %), and the same decision rule accepts 24 more moderate-light and 22
-/// more hard-light target readings, none wrong (docs/DETECTOR.md, twelfth sitting).
+/// more hard-light target readings, none wrong (docs/DETECTOR-RESEARCH.md, twelfth sitting).
 inline constexpr double kMinLumaStep = 0.08;  ///< of the quiet zone's luminance over the black's
 inline constexpr double kMinCbStep = 0.12;
 /// Green's least steps as parts of red's (the palette's: 1.46 in luminance, 1.0 in Cb).

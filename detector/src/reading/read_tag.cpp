@@ -106,9 +106,9 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
   }
   // The code's redundancy is laid out for one lost element (a covered one). A reading recovered
   // from unknown cells in several elements was read poorly throughout, and recovery spent the
-  // redundancy that would have shown a misread bit, so the model decides it (docs/DETECTOR.md,
-  // "Recovered direct readings"). Small or blurred cells mix: the model reads what direct
-  // samples could not.
+  // redundancy that would have shown a misread bit, so the model decides it
+  // (docs/DETECTOR-RESEARCH.md, "Recovered direct readings"). Small or blurred cells mix: the model
+  // reads what direct samples could not.
   r.payload.key.reset();  // every path below gives the model's key or says why there is none
   if (side > reading::kModelMaxSidePx) return c;
   // Each side changes by at most twice a corner's shift: a square that cannot reach the least side

@@ -15,7 +15,7 @@ namespace pintag::reading {
 
 /// How far (px) each corner is moved, in a fixed direction of its own, for each re-read: about
 /// the corner error the reader probe's jitter of 0.6 px per axis gives (chosen on the tuning
-/// probe in the fifteenth sitting, docs/DETECTOR.md).
+/// probe in the fifteenth sitting, docs/DETECTOR-RESEARCH.md).
 inline constexpr double kRereadShiftPx = 0.75;
 
 /// Whether an accepted winner on a square with these fitted corners must be re-read: on a narrow

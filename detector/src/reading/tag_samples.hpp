@@ -36,7 +36,8 @@ struct TagSamples {
 inline constexpr double kObservedMargin = 0.06;
 
 /// Jacobi steps of UndoChromaUpsampling: six leave the kernel's inverse within a few per cent at
-/// every frequency, and were what the reader probe measured (docs/DETECTOR.md, tenth sitting).
+/// every frequency, and were what the reader probe measured (docs/DETECTOR-RESEARCH.md, tenth
+/// sitting).
 inline constexpr int kUndoUpsamplingSteps = 6;
 
 /// Undoes, on a grid of 2 × 2 block means of decoded Cb or Cr, the decoder's chroma upsampling:
