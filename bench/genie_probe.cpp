@@ -10,10 +10,11 @@
 // PinTag does not, the loss is the detector's. Beside it, per frame: the full detector, the model
 // reader on the true corners, and ArUco on the same pose.
 //
-// With --mismatch (tuning world only) it asks instead what the model reader fails to explain when
-// there is nothing to explain but the scene: it reads each tag as photographed, on a rendering
-// without noise or JPEG, then again with the Bayer mosaic, the phone's processing and the optics
-// removed in turn, and reports the residual the model leaves each time.
+// With --mismatch it asks instead what the model reader fails to explain when there is nothing to
+// explain but the scene: it reads each tag as photographed, on a rendering without noise or JPEG,
+// then again with the Bayer mosaic, the phone's processing and the optics removed in turn, and
+// reports the residual the model leaves each time. In the held-out world the print (its colour
+// error, the label's resampling) stays: it is the scene.
 
 #include <algorithm>
 #include <array>
@@ -329,24 +330,32 @@ int RunGenie(const Args& args, const std::vector<FrameSpec>& frames, const scene
   return 0;
 }
 
-/// The tuning world's scene at stage 0 as photographed; from stage 1 without noise or JPEG, then
-/// without, cumulatively, 2 the Bayer mosaic, 3 the phone's processing, 4 the optics.
+/// The scene at stage 0 as photographed; from stage 1 without noise or JPEG, then without,
+/// cumulatively, 2 the Bayer mosaic, 3 the phone's processing, 4 the optics. Each world's own
+/// camera: the tuning world's Photometry, the held-out world's PhoneCapture.
 scene::SceneSpec WithoutUpTo(scene::SceneSpec spec, int stage) {
   if (stage == 0) return spec;
   spec = Clean(spec);
   scene::Photometry& p = spec.photometry;
-  if (stage >= 2) p.bayer = false;
-  if (stage >= 3) p.sharpen = 0, p.tone_gamma = 1, p.saturation = 1, p.chroma_denoise_px = 0;
-  if (stage >= 4) p.defocus_sigma_px = 0, p.motion_px = 0;
+  scene::PhoneCapture& c = spec.capture;
+  if (stage >= 2) p.bayer = false, c.mosaic = false;
+  if (stage >= 3) {
+    p.sharpen = 0, p.tone_gamma = 1, p.saturation = 1, p.chroma_denoise_px = 0;
+    c.contrast = 0, c.saturation = 1, c.sharpen_amount = 0;
+  }
+  if (stage >= 4) {
+    p.defocus_sigma_px = 0, p.motion_px = 0;
+    c.defocus_sigma_px = 0, c.motion_px = 0;
+  }
   return spec;
+}
+
+bool HasMosaic(const scene::SceneSpec& spec) {
+  return spec.world == scene::World::kTuning ? spec.photometry.bayer : spec.capture.mosaic;
 }
 
 int RunMismatch(const Args& args, const std::vector<FrameSpec>& frames,
                 const scene::Camera& camera) {
-  if (args.sweep.world != scene::World::kTuning) {
-    std::fprintf(stderr, "pintag_genie_probe: --mismatch needs --world tuning\n");
-    return 2;
-  }
   constexpr int kStages = 5;
   // [frame][stage]: luma and chroma residual, code values; NaN where not fully visible.
   std::vector<std::array<std::array<double, 2>, kStages>> residual(frames.size());
@@ -376,7 +385,7 @@ int RunMismatch(const Args& args, const std::vector<FrameSpec>& frames,
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const FrameSpec& f = frames[i];
       std::fprintf(csv, "%d,%d,%d,%d,%d", f.index, kSizesPx[f.size_index], kTiltsDeg[f.tilt_index],
-                   f.hard ? 1 : 0, SceneFor(f, Marker::kPinTag, camera).photometry.bayer ? 1 : 0);
+                   f.hard ? 1 : 0, HasMosaic(SceneFor(f, Marker::kPinTag, camera)) ? 1 : 0);
       for (const auto& r : residual[i]) std::fprintf(csv, ",%.2f,%.2f", r[0], r[1]);
       std::fprintf(csv, "\n");
     }

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -87,6 +86,10 @@ TEST(RecallDifference, McNemarsExactTestByHand) {
   const RecallDifference all_one_way = CompareRecall({80, 10, 0, 10});
   EXPECT_NEAR(all_one_way.p_value, 2.0 / 1024, 1e-12);
   EXPECT_NEAR(all_one_way.points, 10, 1e-12);
+  // 100 poses, the net count's variance 10 − 10² / 100 = 9, so the difference's standard error
+  // is 3 / 100: 10 ± 1.96 × 3 points.
+  EXPECT_NEAR(all_one_way.low, 10 - 1.959964 * 3, 1e-9);
+  EXPECT_NEAR(all_one_way.high, 10 + 1.959964 * 3, 1e-9);
   // Eight against two: 2 × (1 + 10 + 45) / 1024.
   EXPECT_NEAR(CompareRecall({50, 2, 8, 40}).p_value, 2 * 56.0 / 1024, 1e-12);
   EXPECT_NEAR(CompareRecall({50, 2, 8, 40}).points, -6, 1e-12);

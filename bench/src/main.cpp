@@ -76,6 +76,7 @@ void Usage(FILE* to) {
       "quality its light draws\n"
       "  --jpeg-chroma C       420 (default, as phones save) or 444: JPEG colour resolution "
       "(held-out world)\n"
+      "  --no-mosaic           a sensor without a colour filter array (held-out world; analysis)\n"
       "  --s-curve             give every frame's phone an S-shaped tone curve (tuning world)\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
@@ -148,6 +149,8 @@ bool ParseArgs(int argc, char** argv, Args* args) {
         return false;
       }
       args->sweep.jpeg_full_chroma = chroma == "444";
+    } else if (a == "--no-mosaic") {
+      args->sweep.no_mosaic = true;
     } else if (a == "--s-curve") {
       args->sweep.s_curve = true;
     } else if (a == "--out") {

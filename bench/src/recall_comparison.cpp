@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace pintag::bench {
 namespace {
@@ -62,16 +63,19 @@ BinsBehindByChance ChanceOfBinsBehind(std::span<const BinTally> reference_bins) 
 }
 
 RecallDifference CompareRecall(const PairedOutcomes& outcomes) {
-  RecallDifference d;
-  const int n = outcomes.poses();
-  if (n <= 0) return d;
-  const double b = outcomes.only_first, c = outcomes.only_second;
-  d.points = 100 * (b - c) / n;
-  // The paired difference's variance: each pose adds +1, −1 or 0 to b − c.
-  const double variance = std::max(0.0, (b + c) - (b - c) * (b - c) / n) / (double(n) * n);
-  const double half_width = 100 * 1.959964 * std::sqrt(variance);
-  d.low = d.points - half_width;
-  d.high = d.points + half_width;
+  constexpr double kZ95 = 1.959964;  // the standard normal's 97.5th percentile
+  RecallDifference difference;
+  const int poses = outcomes.poses();
+  if (poses <= 0) return difference;
+  const double only_first = outcomes.only_first, only_second = outcomes.only_second;
+  const double net = only_first - only_second;
+  difference.points = 100 * net / poses;
+  // Each pose adds +1, −1 or 0 to the net count: its variance over the poses, divided by n².
+  const double variance = std::max(0.0, (only_first + only_second) - net * net / poses) /
+                          (static_cast<double>(poses) * poses);
+  const double half_width = 100 * kZ95 * std::sqrt(variance);
+  difference.low = difference.points - half_width;
+  difference.high = difference.points + half_width;
   const int discordant = outcomes.only_first + outcomes.only_second;
   if (discordant > 0) {
     const std::vector<double> pmf = BinomialPmf(discordant, 0.5);
@@ -79,9 +83,9 @@ RecallDifference CompareRecall(const PairedOutcomes& outcomes) {
     for (int k = 0; k <= std::min(outcomes.only_first, outcomes.only_second); ++k) {
       tail += pmf[static_cast<std::size_t>(k)];
     }
-    d.p_value = std::min(1.0, 2 * tail);
+    difference.p_value = std::min(1.0, 2 * tail);
   }
-  return d;
+  return difference;
 }
 
 }  // namespace pintag::bench

@@ -9,7 +9,8 @@
 
 namespace pintag::bench {
 
-/// A bin of poses as the reference detector scored it.
+/// A bin of poses as the reference detector scored it (metrics.hpp's Tally, kept apart so that
+/// these statistics need nothing of the sweep).
 struct BinTally {
   int tags = 0;
   int found = 0;
@@ -17,7 +18,9 @@ struct BinTally {
 
 /// The number of bins in which a detector finds fewer tags than the reference, when in every bin
 /// both find each tag independently with the reference's own rate there (found / tags): what a
-/// detector exactly as good as the reference would score, by chance alone.
+/// detector exactly as good as the reference would score, by chance alone, if its misses were
+/// independent of the reference's. On the same poses they are not (a hard pose is hard for both),
+/// which makes trailing rarer than this: it bounds what chance does, from above.
 struct BinsBehindByChance {
   double expected = 0;
   std::vector<double> probability;  ///< [k]: the chance of being behind in exactly k bins

@@ -63,6 +63,9 @@ std::string SweepOptionsError(const SweepOptions& options) {
   if (options.jpeg_full_chroma && options.world != scene::World::kHeldOut) {
     return "--jpeg-chroma 444 is for the held-out world";
   }
+  if (options.no_mosaic && options.world != scene::World::kHeldOut) {
+    return "--no-mosaic is for the held-out world";
+  }
   return {};
 }
 
@@ -127,6 +130,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     frames[i].world = options.world;
     frames[i].jpeg_quality = options.jpeg_quality;
     frames[i].jpeg_full_chroma = options.jpeg_full_chroma;
+    frames[i].no_mosaic = options.no_mosaic;
     frames[i].s_curve = options.s_curve;
   }
   return frames;
@@ -162,6 +166,7 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
     spec.capture.jpeg_quality = frame.jpeg_quality;
   }
   spec.capture.jpeg_full_chroma = frame.jpeg_full_chroma;
+  spec.capture.mosaic = !frame.no_mosaic;
   if (frame.s_curve) {
     scene::Rng rng(Mix(frame.seed, 0x5C0E));
     spec.photometry.tone_contrast = frame.hard ? rng.uniform(0.3, 0.9) : rng.uniform(0.1, 0.6);

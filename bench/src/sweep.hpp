@@ -46,6 +46,9 @@ struct SweepOptions {
   int jpeg_quality = 0;
   /// Held-out world only: save every frame's JPEG with full-resolution colour (4:4:4), not 4:2:0.
   bool jpeg_full_chroma = false;
+  /// Held-out world only: a sensor whose every pixel senses all three colours, no colour filter
+  /// array and no demosaic (what the mosaic at the output's resolution costs each detector).
+  bool no_mosaic = false;
   /// Tuning world only: give every frame's phone an S-shaped tone curve (Photometry::
   /// tone_contrast, drawn from the frame's seed: 0.1 … 0.6 in moderate light, 0.3 … 0.9 in hard),
   /// the rest of its light unchanged. The held-out phone always has one of its own.
@@ -76,6 +79,7 @@ struct FrameSpec {
   double blank_label_tilt_deg = 0;
   int jpeg_quality = 0;           ///< SweepOptions::jpeg_quality
   bool jpeg_full_chroma = false;  ///< SweepOptions::jpeg_full_chroma
+  bool no_mosaic = false;         ///< SweepOptions::no_mosaic
   bool s_curve = false;           ///< SweepOptions::s_curve
 
   bool tagless() const { return size_index < 0; }

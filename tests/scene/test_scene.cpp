@@ -217,6 +217,40 @@ TEST(RenderScene, BayerKeepsFlatColoursAndFringesEdges) {
   }
 }
 
+// The held-out phone's colour filter array makes false colour where a grey edge crosses it; the
+// same sensor without the mosaic (PhoneCapture::mosaic, an analysis option) keeps the edge grey.
+TEST(RenderScene, HeldOutSensorWithoutMosaicMakesNoFalseColourAtEdges) {
+  SceneSpec spec = PinTagOnProceduralBackground(0, 0, 0);
+  spec.world = World::kHeldOut;
+  spec.capture = PhoneCapture{};  // no light change, blur, noise, processing or JPEG
+  spec.capture.jpeg_quality = 0;
+  spec.capture.defocus_sigma_px = 0.5;
+  const auto false_colour = [](const Scene& scene) {
+    // The largest spread between channels along the black square's top edge, where paper meets
+    // ink: both are neutral, so any spread there is false colour.
+    const MarkerTruth& truth = scene.truth[0];
+    int spread = 0;
+    for (int step = 2; step < 98; ++step) {
+      const cv::Point2d p = ProjectSquarePoint(truth, {step / 100.0, 0});
+      for (int dy = -2; dy <= 2; ++dy) {
+        const cv::Vec3b v = PixelAt(scene.bgr, p + cv::Point2d(0, dy));
+        spread =
+            std::max({spread, std::abs(v[0] - v[1]), std::abs(v[1] - v[2]), std::abs(v[0] - v[2])});
+      }
+    }
+    return spread;
+  };
+  int mosaic_spread = 0;
+  for (int phase = 0; phase < 4; ++phase) {
+    spec.capture.bayer_phase = phase;
+    mosaic_spread = std::max(mosaic_spread, false_colour(RenderScene(spec)));
+  }
+  spec.capture.mosaic = false;
+  const int plain_spread = false_colour(RenderScene(spec));
+  EXPECT_GT(mosaic_spread, 20);
+  EXPECT_LT(plain_spread, 8);
+}
+
 // The S-curve (Photometry::tone_contrast) is one curve on every channel value: darker below
 // mid-grey, brighter above, black and white kept, order kept.
 TEST(RenderScene, SCurveDeepensDarksAndLiftsLightsKeepingTheirOrder) {

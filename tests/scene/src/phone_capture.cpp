@@ -73,9 +73,10 @@ void ApplyLight(cv::Mat& linear, const PhoneCapture& p) {
     for (int x = 0; x < linear.cols; ++x) {
       const double t = (dx * x + dy * y - lowest) / span;
       const auto gain = static_cast<float>(p.exposure * (1 - p.gradient * t));
-      row[3 * x] *= gain;
-      row[3 * x + 1] *= gain;
-      row[3 * x + 2] *= gain;
+      const std::size_t i = 3 * static_cast<std::size_t>(x);
+      row[i] *= gain;
+      row[i + 1] *= gain;
+      row[i + 2] *= gain;
     }
   }
 }
@@ -112,11 +113,26 @@ const std::vector<float>& NormalTable() {
 }
 
 /// One colour per pixel in the phase's Bayer pattern, with shot and read noise, as 12-bit values;
-/// then OpenCV's edge-aware demosaic (12-bit BGR codes, 0 … 4095).
+/// then OpenCV's edge-aware demosaic (12-bit BGR codes, 0 … 4095). Without `mosaic`, every pixel
+/// keeps its three colours, with the same noise.
 cv::Mat Sense(const cv::Mat& linear, const PhoneCapture& p, Rng& rng) {
   const std::vector<float>& normal = NormalTable();
   const auto read_variance = static_cast<float>(p.read_noise * p.read_noise);
   const auto shot = static_cast<float>(p.shot_noise);
+  if (!p.mosaic) {
+    cv::Mat codes(linear.size(), CV_16UC3);
+    for (int y = 0; y < linear.rows; ++y) {
+      const auto* src = linear.ptr<float>(y);
+      auto* dst = codes.ptr<std::uint16_t>(y);
+      for (int i = 0; i < 3 * linear.cols; ++i) {
+        const float v = src[i];
+        const float sigma = std::sqrt(read_variance + shot * std::max(0.0f, v));
+        const float noisy = v + sigma * normal[rng.next() & 0xFFFFU];
+        dst[i] = static_cast<std::uint16_t>(std::clamp(noisy * 4095.0f + 0.5f, 0.0f, 4095.0f));
+      }
+    }
+    return codes;
+  }
   cv::Mat raw(linear.size(), CV_16UC1);
   for (int y = 0; y < linear.rows; ++y) {
     const auto* src = linear.ptr<float>(y);
@@ -152,7 +168,8 @@ cv::Mat Process(const cv::Mat& codes, const PhoneCapture& p) {
     auto* b = cb.ptr<float>(y);
     auto* r = cr.ptr<float>(y);
     for (int x = 0; x < codes.cols; ++x) {
-      const float bv = at(src[3 * x]), gv = at(src[3 * x + 1]), rv = at(src[3 * x + 2]);
+      const std::size_t i = 3 * static_cast<std::size_t>(x);
+      const float bv = at(src[i]), gv = at(src[i + 1]), rv = at(src[i + 2]);
       l[x] = 0.299f * rv + 0.587f * gv + 0.114f * bv;
       b[x] = 0.564f * (bv - l[x]) * static_cast<float>(p.saturation);
       r[x] = 0.713f * (rv - l[x]) * static_cast<float>(p.saturation);
@@ -174,9 +191,10 @@ cv::Mat Process(const cv::Mat& codes, const PhoneCapture& p) {
     const auto* r = cr.ptr<float>(y);
     auto* dst = out.ptr<std::uint8_t>(y);
     for (int x = 0; x < codes.cols; ++x) {
-      dst[3 * x] = to8(l[x] + 1.773f * b[x]);
-      dst[3 * x + 1] = to8(l[x] - 0.344f * b[x] - 0.714f * r[x]);
-      dst[3 * x + 2] = to8(l[x] + 1.403f * r[x]);
+      const std::size_t i = 3 * static_cast<std::size_t>(x);
+      dst[i] = to8(l[x] + 1.773f * b[x]);
+      dst[i + 1] = to8(l[x] - 0.344f * b[x] - 0.714f * r[x]);
+      dst[i + 2] = to8(l[x] + 1.403f * r[x]);
     }
   }
   return out;
@@ -245,7 +263,7 @@ PhoneCapture PhoneCapture::Hard(std::uint64_t seed) {
 
 namespace detail {
 
-void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& p, Rng& rng) {
+void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& capture, Rng& rng) {
   const auto& to_linear = SrgbToLinearTable();
   cv::Mat linear(frame.size(), CV_32FC3);
   for (int y = 0; y < frame.rows; ++y) {
@@ -253,17 +271,18 @@ void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& p, Rng& rng) {
     auto* dst = linear.ptr<float>(y);
     for (int i = 0; i < frame.cols * 3; ++i) dst[i] = to_linear[src[i]];
   }
-  ApplyLight(linear, p);
-  if (p.defocus_sigma_px > 0.05) {
-    cv::GaussianBlur(linear, linear, cv::Size(), p.defocus_sigma_px, p.defocus_sigma_px,
+  ApplyLight(linear, capture);
+  if (capture.defocus_sigma_px > 0.05) {
+    cv::GaussianBlur(linear, linear, cv::Size(), capture.defocus_sigma_px, capture.defocus_sigma_px,
                      cv::BORDER_REFLECT);
   }
-  if (p.motion_px >= 0.25) {
-    cv::filter2D(linear, linear, -1, MotionKernel(p.motion_px, p.motion_angle_deg),
+  if (capture.motion_px >= 0.25) {
+    cv::filter2D(linear, linear, -1, MotionKernel(capture.motion_px, capture.motion_angle_deg),
                  cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
   }
-  frame = Process(Sense(linear, p, rng), p);
-  if (p.jpeg_quality > 0) frame = JpegRoundTrip(frame, p.jpeg_quality, p.jpeg_full_chroma);
+  frame = Process(Sense(linear, capture, rng), capture);
+  if (capture.jpeg_quality > 0)
+    frame = JpegRoundTrip(frame, capture.jpeg_quality, capture.jpeg_full_chroma);
 }
 
 }  // namespace detail

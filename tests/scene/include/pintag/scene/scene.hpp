@@ -146,6 +146,9 @@ struct PhoneCapture {
   int jpeg_quality = 90;                  ///< 1 … 100; 0: no JPEG (analysis only)
   /// 4:4:4 instead of the 4:2:0 phones save: what a reader gains from full-resolution colour.
   bool jpeg_full_chroma = false;
+  /// false: every pixel senses all three colours, no demosaic (analysis only: what the colour
+  /// filter array costs a reader, pintag_genie_probe --mismatch).
+  bool mosaic = true;
   /// Mild: exposure 0.8 … 1.15, falloff ≤ 0.25, a mild cast or none, defocus σ 0.2 … 0.8 px, a
   /// little motion blur now and then, noise about 1 … 3 code values at mid-grey, quality 75 … 95,
   /// light sharpening.
