@@ -77,6 +77,9 @@ void Usage(FILE* to) {
       "  --jpeg-chroma C       420 (default, as phones save) or 444: JPEG colour resolution "
       "(held-out world)\n"
       "  --no-mosaic           a sensor without a colour filter array (held-out world; analysis)\n"
+      "  --sensor-scale K      a sensor of K x the output's resolution, demosaiced there and "
+      "scaled\n"
+      "                        down (1-4; held-out world; analysis)\n"
       "  --s-curve             give every frame's phone an S-shaped tone curve (tuning world)\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
@@ -151,6 +154,16 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       args->sweep.jpeg_full_chroma = chroma == "444";
     } else if (a == "--no-mosaic") {
       args->sweep.no_mosaic = true;
+    } else if (a == "--sensor-scale") {
+      const char* v = value("--sensor-scale");
+      if (v == nullptr) return false;
+      char* end = nullptr;
+      const long scale = std::strtol(v, &end, 10);
+      if (end == v || *end != '\0' || scale < 1 || scale > 4) {
+        std::fprintf(stderr, "pintag_bench: --sensor-scale is 1 to 4\n");
+        return false;
+      }
+      args->sweep.sensor_scale = static_cast<int>(scale);
     } else if (a == "--s-curve") {
       args->sweep.s_curve = true;
     } else if (a == "--out") {

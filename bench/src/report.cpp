@@ -161,6 +161,11 @@ std::string ReportMarkdown(const BenchResult& r) {
     md << "| sensor | **no colour filter array** (`--no-mosaic`): every pixel senses all three "
           "colours, nothing is demosaiced |\n";
   }
+  if (r.sweep.sensor_scale > 1) {
+    md << "| sensor | **" << r.sweep.sensor_scale
+       << " × the output's resolution** each way (`--sensor-scale`), demosaiced there and scaled "
+          "down |\n";
+  }
   if (r.sweep.jpeg_full_chroma) {
     md << "| JPEG colour | **full resolution (4:4:4)** (`--jpeg-chroma 444`), not the 4:2:0 "
           "phones save |\n";

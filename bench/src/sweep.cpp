@@ -66,6 +66,9 @@ std::string SweepOptionsError(const SweepOptions& options) {
   if (options.no_mosaic && options.world != scene::World::kHeldOut) {
     return "--no-mosaic is for the held-out world";
   }
+  if (options.sensor_scale != 1 && options.world != scene::World::kHeldOut) {
+    return "--sensor-scale is for the held-out world";
+  }
   return {};
 }
 
@@ -131,6 +134,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     frames[i].jpeg_quality = options.jpeg_quality;
     frames[i].jpeg_full_chroma = options.jpeg_full_chroma;
     frames[i].no_mosaic = options.no_mosaic;
+    frames[i].sensor_scale = options.sensor_scale;
     frames[i].s_curve = options.s_curve;
   }
   return frames;
@@ -167,6 +171,7 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
   }
   spec.capture.jpeg_full_chroma = frame.jpeg_full_chroma;
   spec.capture.mosaic = !frame.no_mosaic;
+  spec.capture.sensor_scale = frame.sensor_scale;
   if (frame.s_curve) {
     scene::Rng rng(Mix(frame.seed, 0x5C0E));
     spec.photometry.tone_contrast = frame.hard ? rng.uniform(0.3, 0.9) : rng.uniform(0.1, 0.6);

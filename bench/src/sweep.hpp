@@ -49,6 +49,9 @@ struct SweepOptions {
   /// Held-out world only: a sensor whose every pixel senses all three colours, no colour filter
   /// array and no demosaic (what the mosaic at the output's resolution costs each detector).
   bool no_mosaic = false;
+  /// Held-out world only: the phone senses and demosaics at this many times the output's
+  /// resolution along each axis, then scales down (1: as the held-out phone does).
+  int sensor_scale = 1;
   /// Tuning world only: give every frame's phone an S-shaped tone curve (Photometry::
   /// tone_contrast, drawn from the frame's seed: 0.1 … 0.6 in moderate light, 0.3 … 0.9 in hard),
   /// the rest of its light unchanged. The held-out phone always has one of its own.
@@ -80,6 +83,7 @@ struct FrameSpec {
   int jpeg_quality = 0;           ///< SweepOptions::jpeg_quality
   bool jpeg_full_chroma = false;  ///< SweepOptions::jpeg_full_chroma
   bool no_mosaic = false;         ///< SweepOptions::no_mosaic
+  int sensor_scale = 1;           ///< SweepOptions::sensor_scale
   bool s_curve = false;           ///< SweepOptions::s_curve
 
   bool tagless() const { return size_index < 0; }

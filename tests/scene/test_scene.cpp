@@ -217,9 +217,10 @@ TEST(RenderScene, BayerKeepsFlatColoursAndFringesEdges) {
   }
 }
 
-// The held-out phone's colour filter array makes false colour where a grey edge crosses it; the
-// same sensor without the mosaic (PhoneCapture::mosaic, an analysis option) keeps the edge grey.
-TEST(RenderScene, HeldOutSensorWithoutMosaicMakesNoFalseColourAtEdges) {
+// The held-out phone's colour filter array makes false colour where a grey edge crosses it; a
+// finer sensor scaled down makes less, and a sensor without the mosaic none (PhoneCapture::
+// mosaic and sensor_scale, analysis options).
+TEST(RenderScene, HeldOutSensorsFalseColourAtEdgesFollowsTheMosaicsScale) {
   SceneSpec spec = PinTagOnProceduralBackground(0, 0, 0);
   spec.world = World::kHeldOut;
   spec.capture = PhoneCapture{};  // no light change, blur, noise, processing or JPEG
@@ -245,9 +246,20 @@ TEST(RenderScene, HeldOutSensorWithoutMosaicMakesNoFalseColourAtEdges) {
     spec.capture.bayer_phase = phase;
     mosaic_spread = std::max(mosaic_spread, false_colour(RenderScene(spec)));
   }
+  // A sensor of twice the output's resolution, demosaiced there and scaled down: its false
+  // colour is finer than an output pixel and mostly averaged away.
+  spec.capture.sensor_scale = 2;
+  int fine_spread = 0;
+  for (int phase = 0; phase < 4; ++phase) {
+    spec.capture.bayer_phase = phase;
+    fine_spread = std::max(fine_spread, false_colour(RenderScene(spec)));
+  }
+  spec.capture.sensor_scale = 1;
   spec.capture.mosaic = false;
   const int plain_spread = false_colour(RenderScene(spec));
   EXPECT_GT(mosaic_spread, 20);
+  EXPECT_LT(fine_spread, mosaic_spread / 2);
+  EXPECT_GT(fine_spread, plain_spread);
   EXPECT_LT(plain_spread, 8);
 }
 

@@ -280,7 +280,21 @@ void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& capture, Rng& rng) {
     cv::filter2D(linear, linear, -1, MotionKernel(capture.motion_px, capture.motion_angle_deg),
                  cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
   }
-  frame = Process(Sense(linear, capture, rng), capture);
+  if (capture.sensor_scale > 1) {
+    // A finer sensor behind the same optics: the light upsampled, sensed, demosaiced, and the
+    // codes area-averaged back to the output's pixels. Averaging k² pixels divides the noise
+    // variance by k², so the sensor's own noise is k² times the output's.
+    const int k = capture.sensor_scale;
+    PhoneCapture fine = capture;
+    fine.read_noise *= k;
+    fine.shot_noise *= k * k;
+    cv::Mat upsampled, codes;
+    cv::resize(linear, upsampled, linear.size() * k, 0, 0, cv::INTER_LINEAR);
+    cv::resize(Sense(upsampled, fine, rng), codes, linear.size(), 0, 0, cv::INTER_AREA);
+    frame = Process(codes, capture);
+  } else {
+    frame = Process(Sense(linear, capture, rng), capture);
+  }
   if (capture.jpeg_quality > 0)
     frame = JpegRoundTrip(frame, capture.jpeg_quality, capture.jpeg_full_chroma);
 }

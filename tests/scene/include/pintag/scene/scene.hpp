@@ -149,6 +149,10 @@ struct PhoneCapture {
   /// false: every pixel senses all three colours, no demosaic (analysis only: what the colour
   /// filter array costs a reader, pintag_genie_probe --mismatch).
   bool mosaic = true;
+  /// The sensor's pixels per output pixel along each axis: 2 is a phone that senses and
+  /// demosaics at twice the saved image's resolution and then scales it down (analysis only; the
+  /// held-out world's phone is 1). The noise is scaled to stay the same per output pixel.
+  int sensor_scale = 1;
   /// Mild: exposure 0.8 … 1.15, falloff ≤ 0.25, a mild cast or none, defocus σ 0.2 … 0.8 px, a
   /// little motion blur now and then, noise about 1 … 3 code values at mid-grey, quality 75 … 95,
   /// light sharpening.
