@@ -110,16 +110,25 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       }
       return argv[++i];
     };
+    // An option's whole value as an integer in [lowest, highest], or a message and false.
+    const auto integer = [&](const char* name, long lowest, long highest, int* out) {
+      const char* v = value(name);
+      if (v == nullptr) return false;
+      char* end = nullptr;
+      const long parsed = std::strtol(v, &end, 10);
+      if (end == v || *end != '\0' || parsed < lowest || parsed > highest) {
+        std::fprintf(stderr, "pintag_bench: %s is %ld to %ld\n", name, lowest, highest);
+        return false;
+      }
+      *out = static_cast<int>(parsed);
+      return true;
+    };
     if (a == "--quick") {
       args->sweep.quick = true;
     } else if (a == "--frames-per-bin") {
-      const char* v = value("--frames-per-bin");
-      if (v == nullptr) return false;
-      args->sweep.frames_per_bin = std::max(1, std::atoi(v));
+      if (!integer("--frames-per-bin", 1, 100000, &args->sweep.frames_per_bin)) return false;
     } else if (a == "--tagless") {
-      const char* v = value("--tagless");
-      if (v == nullptr) return false;
-      args->sweep.tagless_frames = std::max(0, std::atoi(v));
+      if (!integer("--tagless", 0, 1000000, &args->sweep.tagless_frames)) return false;
     } else if (a == "--seed") {
       const char* v = value("--seed");
       if (v == nullptr) return false;
@@ -134,15 +143,7 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       }
       args->sweep.world = w == "tuning" ? scene::World::kTuning : scene::World::kHeldOut;
     } else if (a == "--jpeg-quality") {
-      const char* v = value("--jpeg-quality");
-      if (v == nullptr) return false;
-      char* end = nullptr;
-      const long quality = std::strtol(v, &end, 10);
-      if (end == v || *end != '\0' || quality < 1 || quality > 100) {
-        std::fprintf(stderr, "pintag_bench: --jpeg-quality is 1 to 100\n");
-        return false;
-      }
-      args->sweep.jpeg_quality = static_cast<int>(quality);
+      if (!integer("--jpeg-quality", 1, 100, &args->sweep.jpeg_quality)) return false;
     } else if (a == "--jpeg-chroma") {
       const char* v = value("--jpeg-chroma");
       if (v == nullptr) return false;
@@ -155,15 +156,7 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--no-mosaic") {
       args->sweep.no_mosaic = true;
     } else if (a == "--sensor-scale") {
-      const char* v = value("--sensor-scale");
-      if (v == nullptr) return false;
-      char* end = nullptr;
-      const long scale = std::strtol(v, &end, 10);
-      if (end == v || *end != '\0' || scale < 1 || scale > 4) {
-        std::fprintf(stderr, "pintag_bench: --sensor-scale is 1 to 4\n");
-        return false;
-      }
-      args->sweep.sensor_scale = static_cast<int>(scale);
+      if (!integer("--sensor-scale", 1, 4, &args->sweep.sensor_scale)) return false;
     } else if (a == "--s-curve") {
       args->sweep.s_curve = true;
     } else if (a == "--out") {
@@ -175,9 +168,7 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       if (v == nullptr) return false;
       args->csv = v;
     } else if (a == "--all-cores-every") {
-      const char* v = value("--all-cores-every");
-      if (v == nullptr) return false;
-      args->all_cores_every = std::max(1, std::atoi(v));
+      if (!integer("--all-cores-every", 1, 100000, &args->all_cores_every)) return false;
     } else if (a == "--one-thread-only") {
       args->all_cores = false;
     } else if (a == "--require-zero-misreads") {
