@@ -119,17 +119,18 @@ cv::Mat Sense(const cv::Mat& linear, const PhoneCapture& p, Rng& rng) {
   const std::vector<float>& normal = NormalTable();
   const auto read_variance = static_cast<float>(p.read_noise * p.read_noise);
   const auto shot = static_cast<float>(p.shot_noise);
+  // One sensed value: linear light `v` with its noise, a standard normal picked by 16 random bits.
+  const auto sensed = [&](float v, std::uint64_t draw) {
+    const float sigma = std::sqrt(read_variance + shot * std::max(0.0f, v));
+    const float noisy = v + sigma * normal[draw & 0xFFFFU];
+    return static_cast<std::uint16_t>(std::clamp(noisy * 4095.0f + 0.5f, 0.0f, 4095.0f));
+  };
   if (!p.mosaic) {
     cv::Mat codes(linear.size(), CV_16UC3);
     for (int y = 0; y < linear.rows; ++y) {
       const auto* src = linear.ptr<float>(y);
       auto* dst = codes.ptr<std::uint16_t>(y);
-      for (int i = 0; i < 3 * linear.cols; ++i) {
-        const float v = src[i];
-        const float sigma = std::sqrt(read_variance + shot * std::max(0.0f, v));
-        const float noisy = v + sigma * normal[rng.next() & 0xFFFFU];
-        dst[i] = static_cast<std::uint16_t>(std::clamp(noisy * 4095.0f + 0.5f, 0.0f, 4095.0f));
-      }
+      for (int i = 0; i < 3 * linear.cols; ++i) dst[i] = sensed(src[i], rng.next());
     }
     return codes;
   }
@@ -139,11 +140,9 @@ cv::Mat Sense(const cv::Mat& linear, const PhoneCapture& p, Rng& rng) {
     auto* dst = raw.ptr<std::uint16_t>(y);
     std::uint64_t bits = 0;
     for (int x = 0; x < linear.cols; ++x) {
-      const float v = src[3 * x + detail::BayerChannel(x, y, p.bayer_phase)];
-      const float sigma = std::sqrt(read_variance + shot * std::max(0.0f, v));
       if (x % 4 == 0) bits = rng.next();  // four 16-bit draws per 64 bits
-      const float noisy = v + sigma * normal[(bits >> (16 * (x % 4))) & 0xFFFFU];
-      dst[x] = static_cast<std::uint16_t>(std::clamp(noisy * 4095.0f + 0.5f, 0.0f, 4095.0f));
+      dst[x] =
+          sensed(src[3 * x + detail::BayerChannel(x, y, p.bayer_phase)], bits >> (16 * (x % 4)));
     }
   }
   cv::Mat demosaiced;
@@ -280,6 +279,7 @@ void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& capture, Rng& rng) {
     cv::filter2D(linear, linear, -1, MotionKernel(capture.motion_px, capture.motion_angle_deg),
                  cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
   }
+  cv::Mat codes;
   if (capture.sensor_scale > 1) {
     // A finer sensor behind the same optics: the light upsampled, sensed, demosaiced, and the
     // codes area-averaged back to the output's pixels. Averaging k² pixels divides the noise
@@ -288,13 +288,13 @@ void ApplyPhoneCapture(cv::Mat& frame, const PhoneCapture& capture, Rng& rng) {
     PhoneCapture fine = capture;
     fine.read_noise *= k;
     fine.shot_noise *= k * k;
-    cv::Mat upsampled, codes;
+    cv::Mat upsampled;
     cv::resize(linear, upsampled, linear.size() * k, 0, 0, cv::INTER_LINEAR);
     cv::resize(Sense(upsampled, fine, rng), codes, linear.size(), 0, 0, cv::INTER_AREA);
-    frame = Process(codes, capture);
   } else {
-    frame = Process(Sense(linear, capture, rng), capture);
+    codes = Sense(linear, capture, rng);
   }
+  frame = Process(codes, capture);
   if (capture.jpeg_quality > 0)
     frame = JpegRoundTrip(frame, capture.jpeg_quality, capture.jpeg_full_chroma);
 }
