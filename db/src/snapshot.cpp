@@ -75,6 +75,20 @@ Result<std::int64_t> RegistryVersion(Connection& connection) {
 }
 
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path) {
+  // Renaming a copy over a live database swaps the file under its open connections, whose
+  // write-ahead log then belongs to another file: the next checkpoint corrupts it.
+  std::error_code error;
+  if (std::filesystem::equivalent(out_path, source.path(), error)) {
+    return Error{ErrorCode::kConflict, "the snapshot " + out_path +
+                                           " would replace the database it is taken from; write "
+                                           "it to another path"};
+  }
+  if (std::filesystem::exists(out_path + "-wal", error)) {
+    return Error{
+        ErrorCode::kConflict,
+        out_path + " is a live database (" + out_path +
+            "-wal is beside it): a snapshot must not replace it; write it to another path"};
+  }
   try {
     TemporaryBeside temporary(out_path);
     SnapshotInfo info;

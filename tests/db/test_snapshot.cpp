@@ -209,6 +209,42 @@ TEST(Snapshot, AnUnwritableTargetIsAnErrorAndLeavesNothingBehind) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 }
 
+TEST(Snapshot, NeverReplacesALiveDatabase) {
+  TempDir dir;
+  const std::string live_path = test::CopyOfSeeded(dir);
+  Connection live = test::OpenExisting(live_path);
+  const std::string keys_before = KeysCsv(live);
+
+  // Its own source, by the same name and through another path to the same file.
+  const std::string by_another_path =
+      (dir.path() / "." / std::filesystem::path(live_path).filename()).string();
+  for (const std::string& out : {live_path, by_another_path}) {
+    const auto refused = WriteSnapshot(live, out);
+    ASSERT_FALSE(refused.ok()) << out;
+    EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+    EXPECT_NE(refused.error().message.find("would replace the database"), std::string::npos)
+        << refused.error().message;
+  }
+  // Another database a server has open (its write-ahead log beside it).
+  const std::string other_path = test::CopyOfSeeded(dir, "other.db");
+  Connection other = test::OpenExisting(other_path);
+  ASSERT_TRUE(std::filesystem::exists(other_path + "-wal"));
+  const auto other_refused = WriteSnapshot(live, other_path);
+  ASSERT_FALSE(other_refused.ok());
+  EXPECT_EQ(other_refused.error().code, ErrorCode::kConflict);
+
+  // Both still whole and unchanged, and still writable.
+  for (Connection* c : {&live, &other}) {
+    Statement check = c->prepare("PRAGMA integrity_check");
+    ASSERT_TRUE(check.step());
+    EXPECT_EQ(check.getText(0), "ok");
+    EXPECT_EQ(KeysCsv(*c), keys_before);
+  }
+  EXPECT_TRUE(AddPincode(live, Pincode(999001), {TestOffice("After Refusal")}).ok());
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
 TEST(Snapshot, VerifyRefusesWhatIsNotAWholeSnapshot) {
   TempDir dir;
   EXPECT_EQ(VerifySnapshot(dir.file("missing.db")).error().code, ErrorCode::kNotFound);
@@ -226,7 +262,7 @@ TEST(Snapshot, VerifyRefusesWhatIsNotAWholeSnapshot) {
   EXPECT_EQ(verified.error().code, ErrorCode::kStorage) << verified.error().message;
 }
 
-TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSource) {
+TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSourceOrItself) {
   if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
   TempDir dir;
   const std::string live = test::CopyOfSeeded(dir);
@@ -252,6 +288,12 @@ TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSource) {
   EXPECT_NE(refused.out.find("does not exist"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(missing));  // never created and seeded
   EXPECT_FALSE(std::filesystem::exists(dir.file("x.db")));
+
+  const auto over_itself =
+      test::RunCommand(test::PintagExe() + " snapshot --db " + live + " --out " + live + " 2>&1");
+  EXPECT_EQ(over_itself.exit_code, 1);
+  EXPECT_NE(over_itself.out.find("would replace the database it is taken from"), std::string::npos)
+      << over_itself.out;
 }
 
 TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {

@@ -27,7 +27,9 @@ struct SnapshotInfo {
 /// scan log (each server keeps its own), switched to a rollback journal (a single file that
 /// opens read-only anywhere), fsynced and renamed into place, and the directory fsynced: a
 /// reader of `out_path` sees the old file or the new one, never part of one. kStorage when the
-/// directory cannot be written; the temporary file is removed on every failure.
+/// directory cannot be written; the temporary file is removed on every failure. kConflict, with
+/// nothing written, when `out_path` is the source database itself or any other live database (a
+/// write-ahead log beside it).
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path);
 
 /// Puts a snapshot received as bytes (from a primary) at `path`: written to a temporary file
