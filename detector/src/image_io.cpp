@@ -380,6 +380,18 @@ const char* ProxyName(ImageFormat format) {
   return "image";
 }
 
+/// The first of a decoder's errors, with how many followed: a TIFF whose strips are missing
+/// reports one per row, thousands of lines for a photo.
+std::string FirstLine(const std::string& errors) {
+  const std::size_t end = errors.find('\n');
+  if (end == std::string::npos) return errors;
+  std::size_t more = 0;
+  for (std::size_t i = end; i < errors.size(); ++i)
+    more += errors[i] == '\n' && i + 1 < errors.size();
+  return errors.substr(0, end) +
+         (more > 0 ? " (and " + std::to_string(more) + " more errors)" : std::string());
+}
+
 /// Rows of native pixels converted at a time when an image is not 8-bit.
 constexpr std::size_t kNativeChunkBytes = std::size_t{4} << 20;
 
@@ -447,11 +459,22 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
     return Fail(ImageError::kTooLarge, TooLargeMessage(spec.width, spec.height, options.max_pixels),
                 spec.width, spec.height);
   }
+  // The pixel limit does not count channels, and decoding costs memory and time per channel: a
+  // TIFF header of a few hundred bytes can declare a thousand.
+  if (spec.nchannels > kMaxChannels) {
+    return Fail(ImageError::kUnsupported,
+                "the image has " + std::to_string(spec.nchannels) +
+                    " channels; a photo has at most " + std::to_string(kMaxChannels) +
+                    " (grey, grey and alpha, RGB or RGBA)",
+                spec.width, spec.height);
+  }
   if (!size_told && options.before_decode) options.before_decode(spec.width, spec.height);
   const int channels = spec.nchannels;
   std::vector<std::uint8_t> data(static_cast<std::size_t>(spec.width) * spec.height * channels);
-  if (!ReadAs8Bit(*input, spec, format, data.data())) {
-    std::string why = input->geterror();
+  // OpenImageIO can read a TIFF whose strips lie past the end of the file and report the
+  // failure only as a pending error: such rows were never decoded.
+  if (!ReadAs8Bit(*input, spec, format, data.data()) || input->has_error()) {
+    std::string why = FirstLine(input->geterror());
     if (why.empty()) why = "its rows cannot be addressed or converted to 8 bits";
     return Fail(ImageError::kCorrupt, "cannot decode image: " + why, spec.width, spec.height);
   }

@@ -262,13 +262,97 @@ TEST(ImageIo, ErrorsAreTypedNotToldByTheirText) {
 // A cut upload would otherwise decode with a grey (JPEG) or black (PNG) bottom and be read as a
 // partial photo.
 TEST(ImageIo, EveryTruncationIsCorrupt) {
-  for (const char* ext : {".jpg", ".png"}) {
+  for (const char* ext : {".jpg", ".png", ".tiff", ".webp"}) {
     const std::vector<std::uint8_t> whole = Encode(ext, PhoneLikeFrame(64, 48));
-    for (std::size_t n = 8; n + 1 < whole.size(); n += 7) {
+    // From 16 bytes: a WebP is told from other files by its first 12.
+    for (std::size_t n = 16; n + 1 < whole.size(); n += 7) {
       const LoadResult r = LoadImageBytes({whole.data(), n});
       EXPECT_FALSE(r.image) << ext << " cut at " << n << " of " << whole.size();
       EXPECT_EQ(r.kind, ImageError::kCorrupt) << ext << " cut at " << n << ": " << r.error;
     }
+  }
+}
+
+// Decoding costs memory and time per channel, which the pixel limit does not count: a header of a
+// few hundred bytes declaring a thousand channels took a second and about 1.5 GB per megapixel.
+// A photo has at most four (grey, grey and alpha, RGB, RGBA).
+TEST(ImageIo, ImagesWithMoreThanFourChannelsAreRefusedUndecoded) {
+  for (const int channels : {1, 2, 4, 5, 64, 1024}) {
+    const std::string path = TempPath("channels" + std::to_string(channels) + ".tif");
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out) << OIIO::geterror();
+    const OIIO::ImageSpec spec(16, 8, channels, OIIO::TypeDesc::UINT8);
+    const std::vector<std::uint8_t> pixels(std::size_t{16} * 8 * static_cast<std::size_t>(channels),
+                                           200);
+    ASSERT_TRUE(out->open(path, spec)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
+    out->close();
+    int decodes = 0;
+    LoadOptions options;
+    options.before_decode = [&](int, int) { ++decodes; };
+    const LoadResult r = LoadImageBytes(ReadAll(path), options);
+    if (channels <= 4) {
+      ASSERT_TRUE(r.image) << channels << " channels: " << r.error;
+      EXPECT_EQ(r.image->bgr.size(), cv::Size(16, 8));
+      EXPECT_EQ(decodes, 1);
+    } else {
+      EXPECT_FALSE(r.image) << channels << " channels";
+      EXPECT_EQ(r.kind, ImageError::kUnsupported) << channels << " channels: " << r.error;
+      EXPECT_NE(r.error.find(std::to_string(channels) + " channels"), std::string::npos) << r.error;
+      EXPECT_EQ(decodes, 0) << channels << " channels";
+    }
+  }
+}
+
+// A TIFF whose directory comes before its pixels still opens when the pixels are cut off;
+// OpenImageIO then reports the missing rows only as errors left pending, one per row.
+TEST(ImageIo, ATiffCutOffAfterItsDirectoryIsCorrupt) {
+  constexpr std::uint32_t kWidth = 64, kHeight = 48;
+  std::vector<std::uint8_t> tiff = {'I', 'I', 42, 0, 8, 0, 0, 0};
+  const auto put16 = [&](std::uint32_t v) {
+    tiff.push_back(static_cast<std::uint8_t>(v));
+    tiff.push_back(static_cast<std::uint8_t>(v >> 8));
+  };
+  const auto put32 = [&](std::uint32_t v) {
+    put16(v & 0xFFFFU);
+    put16(v >> 16);
+  };
+  // Grey, 8 bits, uncompressed, one row per strip: each strip's offset and size in two arrays.
+  constexpr std::uint32_t kEntries = 8;
+  constexpr std::uint32_t kOffsets = 8 + 2 + (12 * kEntries) + 4;
+  constexpr std::uint32_t kCounts = kOffsets + (4 * kHeight);
+  constexpr std::uint32_t kPixels = kCounts + (4 * kHeight);
+  const auto entry = [&](std::uint32_t tag, std::uint32_t type, std::uint32_t count,
+                         std::uint32_t value) {
+    put16(tag), put16(type), put32(count), put32(value);
+  };
+  put16(kEntries);
+  entry(256, 4, 1, kWidth);          // ImageWidth
+  entry(257, 4, 1, kHeight);         // ImageLength
+  entry(258, 3, 1, 8);               // BitsPerSample
+  entry(259, 3, 1, 1);               // Compression: none
+  entry(262, 3, 1, 1);               // PhotometricInterpretation: black is zero
+  entry(273, 4, kHeight, kOffsets);  // StripOffsets
+  entry(278, 4, 1, 1);               // RowsPerStrip
+  entry(279, 4, kHeight, kCounts);   // StripByteCounts
+  put32(0);                          // no next directory
+  for (std::uint32_t row = 0; row < kHeight; ++row) put32(kPixels + (row * kWidth));
+  for (std::uint32_t row = 0; row < kHeight; ++row) put32(kWidth);
+  for (std::uint32_t i = 0; i < kWidth * kHeight; ++i) tiff.push_back(static_cast<std::uint8_t>(i));
+  ASSERT_EQ(tiff.size(), kPixels + (kWidth * kHeight));
+
+  const LoadResult whole = LoadImageBytes(tiff);
+  ASSERT_TRUE(whole.image) << whole.error;
+  EXPECT_EQ(whole.image->bgr.at<cv::Vec3b>(1, 3), cv::Vec3b(67, 67, 67));  // row 1, column 3
+
+  for (const std::size_t keep :
+       {std::size_t{kPixels}, std::size_t{kPixels} + (kWidth * kHeight / 2)}) {
+    const LoadResult cut = LoadImageBytes({tiff.data(), keep});
+    EXPECT_FALSE(cut.image) << "cut at " << keep;
+    EXPECT_EQ(cut.kind, ImageError::kCorrupt) << "cut at " << keep;
+    // One line however many rows are missing: the message becomes an HTTP answer's detail.
+    EXPECT_EQ(cut.error.find('\n'), std::string::npos) << cut.error.substr(0, 400);
+    EXPECT_LT(cut.error.size(), 300U) << cut.error.substr(0, 400);
   }
 }
 

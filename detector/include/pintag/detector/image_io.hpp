@@ -18,6 +18,9 @@
 namespace pintag {
 
 inline constexpr std::int64_t kDefaultMaxPixels = 40'000'000;  ///< 40 MP
+/// Most channels a photo may have (grey, grey and alpha, RGB, RGBA); more is
+/// ImageError::kUnsupported, refused before decoding.
+inline constexpr int kMaxChannels = 4;
 
 /// Why a photo was not loaded: what an HTTP front end maps to 415, 413 and 400.
 enum class ImageError {
