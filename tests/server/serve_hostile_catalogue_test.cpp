@@ -66,7 +66,7 @@ std::string JpegClaiming(int width, int height) {
   return jpeg;
 }
 /// A little-endian TIFF whose one IFD claims width x height, 8-bit grey in one strip.
-std::string TiffClaiming(std::uint32_t width, std::uint32_t height) {
+std::string TiffClaiming(std::uint32_t width, std::uint32_t height, std::uint16_t channels = 1) {
   std::string tiff = "II*";
   tiff += '\0';
   const auto u16 = [&](std::uint16_t v) {
@@ -84,15 +84,15 @@ std::string TiffClaiming(std::uint32_t width, std::uint32_t height) {
     u32(1);
     u32(value);
   };
-  entry(256, 4, width);   // ImageWidth, LONG
-  entry(257, 4, height);  // ImageLength
-  entry(258, 3, 8);       // BitsPerSample
-  entry(259, 3, 1);       // Compression: none
-  entry(262, 3, 1);       // PhotometricInterpretation: grey
-  entry(273, 4, 128);     // StripOffsets
-  entry(277, 3, 1);       // SamplesPerPixel
-  entry(278, 4, height);  // RowsPerStrip
-  entry(279, 4, 64);      // StripByteCounts
+  entry(256, 4, width);     // ImageWidth, LONG
+  entry(257, 4, height);    // ImageLength
+  entry(258, 3, 8);         // BitsPerSample
+  entry(259, 3, 1);         // Compression: none
+  entry(262, 3, 1);         // PhotometricInterpretation: grey
+  entry(273, 4, 128);       // StripOffsets
+  entry(277, 3, channels);  // SamplesPerPixel
+  entry(278, 4, height);    // RowsPerStrip
+  entry(279, 4, 64);        // StripByteCounts
   u32(0);
   tiff += std::string(128 + 64 - tiff.size(), '\0');
   return tiff;
@@ -226,6 +226,14 @@ TEST_F(HostileCatalogue, JpegDecompressionBombHeader) {
 }
 TEST_F(HostileCatalogue, TiffDecompressionBombHeader) {
   expectRefused(detect(TiffClaiming(100000, 100000), "image/tiff"), 413, "Image Too Large");
+}
+TEST_F(HostileCatalogue, TiffHeaderClaimingAThousandChannels) {
+  // Within the pixel limit, but decoding costs per channel (about 1.5 GB a megapixel here).
+  const Answer answer = Send(server_->port(), detect(TiffClaiming(1000, 1000, 1024), "image/tiff"));
+  EXPECT_EQ(answer.status, 415) << answer.body;
+  EXPECT_NE(answer.body.find("1024 channels"), std::string::npos) << answer.body;
+  expectRefused(detect(TiffClaiming(1000, 1000, 1024), "image/tiff"), 415,
+                "Unsupported Image Format");
 }
 TEST_F(HostileCatalogue, WebpDecompressionBombHeader) {
   expectRefused(detect(WebpClaiming(16000, 16000), "image/webp"), 413, "Image Too Large");

@@ -169,8 +169,8 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
     case ImageError::kNone:
       break;
     case ImageError::kUnsupported:
-      throw HttpError(415, "the body is not a JPEG, PNG, TIFF or WebP image",
-                      "Unsupported Image Format");
+      // Not a JPEG, PNG, TIFF or WebP, or one no photo is (more than four channels).
+      throw HttpError(415, loaded.error, "Unsupported Image Format");
     case ImageError::kTooLarge:
       throw HttpError(413, loaded.error, "Image Too Large");
     case ImageError::kCorrupt:
