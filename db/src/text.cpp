@@ -12,6 +12,9 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
     return Error{ErrorCode::kInvalid, std::string(field) + " " + why};
   };
   if (value.empty() && !allow_empty) return invalid("is empty");
+  if (!allow_empty && value.find_first_not_of(' ') == std::string_view::npos) {
+    return invalid("is only spaces");
+  }
   if (value.size() > max_bytes) {
     return invalid("is " + std::to_string(value.size()) + " bytes long; at most " +
                    std::to_string(max_bytes) + " allowed");

@@ -145,12 +145,16 @@ TEST_F(Registry, RetiringAndAddingKeepEveryEarlierKey) {
 }
 
 TEST_F(Registry, AddRejectsBadOfficeText) {
-  PostOffice office{
-      .name = "", .division = "d", .region = "r", .circle = "c", .district = "d", .state = "s"};
-  const auto added = AddPincode(db_, Pincode(999003), {office});
-  ASSERT_FALSE(added.ok());
-  EXPECT_EQ(added.error().code, ErrorCode::kInvalid);
-  EXPECT_EQ(LookupPincode(db_, Pincode(999003)).error().code, ErrorCode::kNotFound);
+  for (const std::string name : {"", "   ", "bad\x01name"}) {
+    PostOffice office{
+        .name = name, .division = "d", .region = "r", .circle = "c", .district = "d", .state = "s"};
+    const auto added = AddPincode(db_, Pincode(999003), {office});
+    ASSERT_FALSE(added.ok()) << "'" << name << "'";
+    EXPECT_EQ(added.error().code, ErrorCode::kInvalid);
+    EXPECT_NE(added.error().message.find("office name"), std::string::npos)
+        << added.error().message;
+    EXPECT_EQ(LookupPincode(db_, Pincode(999003)).error().code, ErrorCode::kNotFound);
+  }
 }
 
 }  // namespace

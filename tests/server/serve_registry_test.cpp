@@ -125,5 +125,53 @@ TEST_F(ServeTest, AddAndRetireNeedAdmin) {
   ExpectProblem(client().Post("/api/v1/pincodes/99900/retire", admin(), "", "text/plain"), 400);
 }
 
+// What an admin posts is kept whole or refused whole: nothing typed is dropped on the way in.
+TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
+  const std::string office = R"("name": "Map Nagar", "district": "Testpur", "state": "Test State",
+      "circle": "Test", "region": "T", "division": "TD", "branch_type": "SO", "taluk": "Testpur",
+      "latitude": 28.6139, "longitude": 77.209)";
+  ExpectJson(
+      client().Post("/api/v1/pincodes", admin(),
+                    R"({"pincode": "999011", "offices": [{)" + office + "}]}", "application/json"),
+      201);
+  const json read = ExpectJson(client().Get("/api/v1/pincodes/999011"));
+  ASSERT_EQ(read["offices"].size(), 1U);
+  const json& kept = read["offices"][0];
+  EXPECT_DOUBLE_EQ(kept["latitude"].get<double>(), 28.6139);
+  EXPECT_DOUBLE_EQ(kept["longitude"].get<double>(), 77.209);
+  EXPECT_EQ(kept["taluk"], "Testpur");
+  EXPECT_EQ(kept["branch_type"], "SO");
+
+  // An office read back can be posted again as it is (country and its own pincode included).
+  json again = json::parse(R"({"pincode": "999011"})");
+  again["offices"] = read["offices"];
+  EXPECT_EQ(
+      ExpectProblem(client().Post("/api/v1/pincodes", admin(), again.dump(), "application/json"),
+                    409)["title"],
+      "Pincode Exists");  // refused for the pincode, not for the office's fields
+
+  const auto refused = [&](const std::string& body, const std::string& says) {
+    const json problem =
+        ExpectProblem(client().Post("/api/v1/pincodes", admin(), body, "application/json"), 400);
+    EXPECT_NE(problem.value("detail", "").find(says), std::string::npos) << body << "\n"
+                                                                         << problem.dump();
+    // Nothing was added.
+    ExpectProblem(client().Get("/api/v1/pincodes/999012"), 404);
+  };
+  refused(R"({"pincode": "999012", "offices": [{"name": "Only A Name"}]})",
+          "office 1 needs a non-empty district, state, circle, region, division");
+  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "distrct": "Typo"}]})",
+          "office 1: unknown field 'distrct'");
+  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "name": "   "}]})",
+          "needs a non-empty name");
+  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "latitude": "north"}]})",
+          "'latitude' must be a number");
+  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "latitude": 91}]})",
+          "latitude must be -90 to 90");
+  refused(R"({"pincode": "999012", "key": 5})", "unknown field 'key'");
+  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "pincode": "999013"}]})",
+          "is not the pincode being added");
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

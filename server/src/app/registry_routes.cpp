@@ -1,5 +1,8 @@
 // Registry routes: pincode and key lookups, office search, adding and retiring pincodes.
 
+#include <algorithm>
+#include <optional>
+
 #include "app/db_problems.hpp"
 #include "app/params.hpp"
 #include "app/registry_json.hpp"
@@ -8,29 +11,71 @@
 namespace pintag::app {
 namespace {
 
-std::string Field(const json& object, const char* name, bool required) {
-  if (!object.contains(name) || object[name].is_null()) {
-    if (required) throw HttpError(400, std::string("office field '") + name + "' is required");
-    return {};
-  }
-  if (!object[name].is_string())
-    throw HttpError(400, std::string("office field '") + name + "' must be a string");
-  return object[name].get<std::string>();
+// An office as GET /pincodes/{pin} writes it, so that one read can be posted back; any other
+// field is refused rather than dropped (a misspelt "distrct" would lose the district).
+constexpr const char* kRequiredFields[] = {"name",   "district", "state",
+                                           "circle", "region",   "division"};
+constexpr const char* kOptionalTextFields[] = {"branch_type", "delivery", "taluk"};
+constexpr const char* kOtherFields[] = {"latitude", "longitude", "country", "pincode"};
+
+bool Known(const std::string& field) {
+  const auto in = [&](const auto& names) {
+    return std::any_of(std::begin(names), std::end(names),
+                       [&](const char* name) { return field == name; });
+  };
+  return in(kRequiredFields) || in(kOptionalTextFields) || in(kOtherFields);
 }
 
-db::PostOffice OfficeFromJson(const json& o) {
-  if (!o.is_object()) throw HttpError(400, "each office must be an object");
-  db::PostOffice office;
-  office.name = Field(o, "name", true);
-  office.district = Field(o, "district", true);
-  office.state = Field(o, "state", true);
-  office.circle = Field(o, "circle", false);
-  office.region = Field(o, "region", false);
-  office.division = Field(o, "division", false);
-  if (auto v = Field(o, "branch_type", false); !v.empty()) office.branch_type = v;
-  if (auto v = Field(o, "delivery", false); !v.empty()) office.delivery = v;
-  if (auto v = Field(o, "taluk", false); !v.empty()) office.taluk = v;
-  return office;
+std::optional<double> Degrees(const json& o, const char* name, const std::string& office) {
+  if (!o.contains(name) || o[name].is_null()) return std::nullopt;
+  if (!o[name].is_number()) throw HttpError(400, office + ": '" + name + "' must be a number");
+  return o[name].get<double>();
+}
+
+db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode) {
+  const std::string office = "office " + std::to_string(index + 1);
+  if (!o.is_object()) throw HttpError(400, office + " must be an object");
+  for (const auto& [field, value] : o.items()) {
+    if (!Known(field))
+      throw HttpError(400, office + std::string(": unknown field '").append(field) + "'");
+  }
+  const auto text = [&](const char* name) -> std::optional<std::string> {
+    if (!o.contains(name) || o[name].is_null()) return std::nullopt;
+    if (!o[name].is_string()) throw HttpError(400, office + ": '" + name + "' must be a string");
+    return o[name].get<std::string>();
+  };
+  // Every missing or blank required field at once, so that a form can be put right in one go.
+  std::string missing;
+  for (const char* name : kRequiredFields) {
+    const std::optional<std::string> value = text(name);
+    if (!value || value->find_first_not_of(' ') == std::string::npos) {
+      missing += (missing.empty() ? "" : ", ") + std::string(name);
+    }
+  }
+  if (!missing.empty()) {
+    throw HttpError(400, office + " needs a non-empty " + missing +
+                             " (every office has name, district, state, circle, region and "
+                             "division)");
+  }
+  if (const auto country = text("country"); country && *country != "India") {
+    throw HttpError(400, office + ": 'country' can only be India");
+  }
+  if (const auto own = text("pincode"); own && *own != pincode.str()) {
+    throw HttpError(400, office + ": 'pincode' " + *own + " is not the pincode being added");
+  }
+  db::PostOffice result;
+  result.name = *text("name");
+  result.district = *text("district");
+  result.state = *text("state");
+  result.circle = *text("circle");
+  result.region = *text("region");
+  result.division = *text("division");
+  result.branch_type = text("branch_type");
+  result.delivery = text("delivery");
+  result.taluk = text("taluk");
+  result.latitude = Degrees(o, "latitude", office);
+  result.longitude = Degrees(o, "longitude", office);
+  return result;
 }
 
 }  // namespace
@@ -72,12 +117,21 @@ HttpResponse PostPincode(const AppContext& context, const HttpRequest& request) 
   const json body = JsonBody(request);
   if (!body.is_object() || !body.contains("pincode"))
     throw HttpError(400, R"(expected {"pincode": "NNNNNN", "offices": [{"name": …}, …]})");
+  for (const auto& [field, value] : body.items()) {
+    if (field != "pincode" && field != "offices") {
+      throw HttpError(400, "unknown field '" + field +
+                               "': a new pincode has 'pincode' and "
+                               "'offices' only (its key is allocated)");
+    }
+  }
   const Pincode pincode = PincodeValue(body["pincode"], "'pincode'");
   std::vector<db::PostOffice> offices;
-  if (body.contains("offices")) {
+  if (body.contains("offices") && !body["offices"].is_null()) {
     if (!body["offices"].is_array()) throw HttpError(400, "'offices' must be a list");
     if (body["offices"].size() > 1000) throw HttpError(413, "at most 1000 offices per pincode");
-    for (const json& office : body["offices"]) offices.push_back(OfficeFromJson(office));
+    for (std::size_t i = 0; i < body["offices"].size(); ++i) {
+      offices.push_back(OfficeFromJson(body["offices"][i], i, pincode));
+    }
   }
   auto connection = context.pool->acquire();
   auto added = db::AddPincode(*connection, pincode, offices);
