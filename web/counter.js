@@ -1,6 +1,6 @@
 // Dispatch counter: pincodes in, office and district to confirm, label preview, PDF out.
 import {
-  api, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, loadPlans,
+  api, ApiError, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, loadPlans,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -58,6 +58,12 @@ function updateButtons() {
   $('print-pdf').disabled = !ok;
 }
 
+// Only the registry's own 404 says a pincode does not exist; a server that could not be asked
+// (down, busy) says nothing about it.
+function notFound(row) {
+  return Boolean(row.error) && row.error.status === 404;
+}
+
 function renderTable() {
   const body = $('results-body');
   const found = rows.filter((r) => r.record).length;
@@ -72,7 +78,7 @@ function renderTable() {
       return el('tr', { class: 'is-error' },
         el('td', {}, el('input', { type: 'checkbox', disabled: true, 'aria-label': `${pin} cannot be printed` })),
         el('td', { class: 'mono' }, pin),
-        el('td', { colspan: 4 }, badge('error', row.valid ? 'not found' : 'invalid'), ' ', why));
+        el('td', { colspan: 4 }, badge('error', !row.valid ? 'invalid' : notFound(row) ? 'not found' : 'not checked'), ' ', why));
     }
     const r = row.record;
     const retired = r.status !== 'active';
@@ -227,7 +233,9 @@ $('batch-pdf').addEventListener('click', (event) => busy(event.currentTarget, as
     downloadBlob(blob, name);
     show($('print-msg'), messageBox('ok', `${pins.length} ${pins.length === 1 ? 'label' : 'labels'} in one PDF downloaded (${name}).`));
   } catch (error) {
-    show($('print-msg'), problemBox(error));
+    const tooMany = error instanceof ApiError && error.status === 413;
+    show($('print-msg'), problemBox(error, tooMany
+      ? { hint: 'Untick some labels and download this batch, then tick the rest for a second one.' } : {}));
   }
 }));
 

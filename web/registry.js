@@ -26,6 +26,12 @@ function showRecord(record, note) {
       el('ul', { class: 'small' }, offices.map((o) => el('li', {}, `${o.name} — ${o.district}`)))) : null);
 }
 
+// The details card is far below a long result list (thousands of pixels on a phone): bring it
+// into view, or a click on a pincode looks as if it did nothing.
+function revealDetail() {
+  $('detail-card').scrollIntoView({ block: 'nearest' });
+}
+
 async function showPincode(pin) {
   try {
     showRecord(await api(`/api/v1/pincodes/${pin}`));
@@ -41,7 +47,7 @@ async function runSearch() {
     const body = $('results-body');
     show(body, page.results.map((hit) => el('tr', {},
       el('td', { class: 'mono nowrap' },
-        el('button', { type: 'button', class: 'link', onclick: () => showPincode(hit.pincode),
+        el('button', { type: 'button', class: 'link', onclick: () => showPincode(hit.pincode).then(revealDetail),
           'aria-label': `Details of ${hit.pincode}` }, hit.pincode)),
       el('td', {}, hit.office.name),
       el('td', {}, hit.office.district),
@@ -75,7 +81,7 @@ $('search-form').addEventListener('submit', (event) => {
       }
       show($('search-msg'));
       await showPincode(pin);
-      $('detail-card').scrollIntoView({ block: 'nearest' });
+      revealDetail();
       return;
     }
     search = { q: $('s-q').value.trim(), district: $('s-district').value.trim(), state: $('s-state').value.trim(),
@@ -117,11 +123,13 @@ $('add-form').addEventListener('submit', (event) => {
     show($('add-msg'));
     const value = (id) => $(id).value.trim();
     const body = { pincode: value('a-pin') };
-    if (value('a-office') || value('a-district') || value('a-state')) {
-      const office = { name: value('a-office'), district: value('a-district'), state: value('a-state') };
-      for (const [field, id] of [['circle', 'a-circle'], ['region', 'a-region'], ['division', 'a-division'], ['branch_type', 'a-branch']]) {
-        if (value(id)) office[field] = value(id);
-      }
+    // Any office field filled sends the office with every required field, blank ones too: the
+    // server then names each one missing, and nothing typed is dropped.
+    const required = [['name', 'a-office'], ['district', 'a-district'], ['state', 'a-state'],
+      ['division', 'a-division'], ['region', 'a-region'], ['circle', 'a-circle']];
+    if ([...required, ['branch_type', 'a-branch']].some(([, id]) => value(id))) {
+      const office = Object.fromEntries(required.map(([field, id]) => [field, value(id)]));
+      if (value('a-branch')) office.branch_type = value('a-branch');
       body.offices = [office];
     }
     try {

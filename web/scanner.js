@@ -80,10 +80,15 @@ async function scan() {
   const file = $('photo').files[0];
   if (!file) return;
   const run = ++scanCount;
+  // Nothing of the last scan stays on screen once another photo is chosen.
   show($('scan-msg'));
   show($('tags'));
+  $('summary').textContent = '';
+  $('photo-figure').hidden = true;
   if (!token()) {
-    show($('scan-msg'), problemBox({ message: 'Paste a scanner token above first.' }, {}));
+    show($('scan-msg'), el('div', { class: 'alert alert-error', role: 'alert' },
+      el('strong', { class: 'problem-title' }, 'No scanner token'),
+      el('p', { class: 'problem-detail' }, 'Paste a scanner token above, then read the photo again.')));
     $('token').focus();
     return;
   }
@@ -101,6 +106,7 @@ async function scan() {
     $('summary').textContent = 'The photo could not be read.';
     $('photo-caption').textContent = 'Your photo.';
     show($('scan-msg'), problemBox(error));
+    reveal($('scan-msg'));
     return;
   }
   if (run !== scanCount) return;
@@ -118,6 +124,13 @@ async function scan() {
   showPhoto(photoUrl, n ? `Your photo with ${n === 1 ? 'the tag' : 'the tags'} outlined.` : 'Your photo.',
     `The photo with ${n} ${n === 1 ? 'tag' : 'tags'} outlined${n ? `: ${answer.tags.map((t) => t.pincode || 'unknown key').join(', ')}` : ''}`);
   $('scan-photo').dataset.outlined = '1';
+  reveal($('summary'));
+}
+
+// On a phone the answer lands below the screen: scroll to it unless it is already in view.
+function reveal(node) {
+  const box = node.getBoundingClientRect();
+  if (box.top < 0 || box.bottom > window.innerHeight) node.scrollIntoView({ block: 'start' });
 }
 
 // A file the browser cannot show (not an image): no broken picture, the problem box says why.

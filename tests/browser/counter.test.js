@@ -40,7 +40,7 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   await row.waitFor();
   assert.match(await row.textContent(), /Bengali Market/);
   assert.equal((await row.locator('td.district').textContent()).trim(), 'Central Delhi');
-  assert.match(await page.locator('tr.is-error').first().textContent(), /999999 is not in the registry/);
+  assert.match(await page.locator('tr.is-error').first().textContent(), /not found.*999999 is not in the registry/);
   assert.match(await page.locator('tr.is-error').nth(1).textContent(), /Not a pincode/);
 
   const preview = page.locator('#label-preview');
@@ -70,6 +70,23 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   assert.equal((await readFile(batchPath)).subarray(0, 5).toString(), '%PDF-');
   assert.deepEqual(pdfPageSize(batchPath), { pages: 2, size: '297.638 x 419.528' });
   await page.getByText('2 labels in one PDF downloaded').waitFor();
+  assert.deepEqual(page.problems, []);
+});
+
+test('a batch over the server\'s limit says what to do about it', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill(Array(101).fill('110001').join('\n'));
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const batchButton = page.getByRole('button', { name: /Batch PDF \(101 labels\)/ });
+  await batchButton.waitFor();
+  await batchButton.click();
+  const alert = page.locator('#print-msg [role="alert"]');
+  await alert.waitFor();
+  assert.match(await alert.textContent(), /HTTP 413/);
+  assert.match(await alert.textContent(), /at most 100 labels/);
+  assert.match(await alert.textContent(), /Untick some labels/);
   assert.deepEqual(page.problems, []);
 });
 

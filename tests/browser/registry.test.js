@@ -40,6 +40,9 @@ test('registry search finds offices by district and pages through them', async (
   const shownPin = (await firstPin.textContent()).trim();
   await firstPin.click();
   await page.locator('#detail-pincode').filter({ hasText: shownPin }).waitFor();
+  // … and brings it into view: it is drawn below the whole result list.
+  const shown = await page.locator('#detail-pincode').boundingBox();
+  assert.ok(shown.y >= 0 && shown.y + shown.height <= 900, JSON.stringify(shown));
   await screenshot(page, 'registry-search');
   assert.deepEqual(page.problems, []);
 });
@@ -89,6 +92,21 @@ test('admin adds a pincode, gets its key, then retires it', async () => {
   const retired = await (await fetch(`${server.url}/api/v1/pincodes/999001`)).json();
   assert.equal(retired.status, 'retired');
   await screenshot(page, 'registry-admin');
+  assert.deepEqual(page.problems, []);
+});
+
+test('an office filled in part is refused with every missing field named, and nothing is added', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#a-pin').fill('999012');
+  await page.locator('#a-division').fill('Foo Div');
+  await page.getByRole('button', { name: 'Add pincode' }).click();
+  const alert = page.locator('#add-msg [role="alert"]');
+  await alert.waitFor();
+  assert.match(await alert.textContent(), /office 1 needs a non-empty name, district, state, circle, region \(/);
+  const lookup = await fetch(`${server.url}/api/v1/pincodes/999012`);
+  assert.equal(lookup.status, 404);
   assert.deepEqual(page.problems, []);
 });
 

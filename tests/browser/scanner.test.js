@@ -93,7 +93,18 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   // The server saw one photo too (the handler counts it before it answers).
   const metrics = await (await fetch(`${server.url}/metrics`)).text();
   assert.match(metrics, /^pintag_scans_total 1$/m);
+  // On a phone the answer is below the form: the page scrolls to it.
+  const summary = await page.locator('#summary').boundingBox();
+  assert.ok(summary.y >= 0 && summary.y + summary.height <= 844, JSON.stringify(summary));
   await screenshot(page, 'scanner-phone');
+
+  // A next photo that cannot be read (no token now) leaves nothing of this scan on screen.
+  await page.locator('#token-forget').click();
+  await page.locator('#photo').setInputFiles(join(dir, 'notes.txt'));  // another file: a change
+  await page.locator('#scan-msg [role="alert"]').filter({ hasText: 'No scanner token' }).waitFor();
+  assert.equal(await page.locator('.tag-card').count(), 0);
+  assert.doesNotMatch(await page.locator('#summary').textContent(), /tag/);
+  assert.equal(await page.locator('#photo-figure').isHidden(), true);
   assert.deepEqual(page.problems, []);
 });
 
