@@ -404,6 +404,42 @@ TEST_F(HostileCatalogue, MultipartWithoutAnImagePart) {
                         Multipart("b", "photo", Encoded(".jpg"))),
                 400);
 }
+TEST_F(HostileCatalogue, RangeIsIgnoredEveryAnswerIsWhole) {
+  const Answer whole = Send(server_->port(), Request("GET", "/api/v1/pincodes/110001", {}));
+  ASSERT_EQ(whole.status, 200);
+  for (const std::string range : {"bytes=0-10", "bytes=999999-", "bytes=0-1,4-5"}) {
+    const Answer answer =
+        Send(server_->port(), Request("GET", "/api/v1/pincodes/110001", {"Range: " + range}));
+    EXPECT_EQ(answer.status, 200) << range;
+    EXPECT_EQ(answer.body, whole.body) << range;
+    EXPECT_EQ(answer.head.find("Content-Range"), std::string::npos) << range << answer.head;
+  }
+  // A Range cpp-httplib cannot parse is refused before any route is chosen: a problem, not a
+  // partial answer.
+  const Answer malformed =
+      Send(server_->port(), Request("GET", "/api/v1/pincodes/110001", {"Range: bytes=5-1"}));
+  EXPECT_EQ(malformed.status, 416);
+  EXPECT_NE(malformed.head.find("application/problem+json"), std::string::npos) << malformed.head;
+  const Answer spec = Send(server_->port(), Request("GET", "/openapi.json", {"Range: bytes=0-3"}));
+  EXPECT_EQ(spec.status, 200);
+  EXPECT_GT(spec.body.size(), 4U);
+}
+TEST_F(HostileCatalogue, TwoContentLengthsAreRefused) {
+  const std::string body = R"({"pincode": "999021"})";
+  const std::string length = "Content-Length: " + std::to_string(body.size());
+  expectRefused(
+      Request("POST", "/api/v1/pincodes",
+              {adminAuth(), "Content-Type: application/json", length, "Content-Length: 2"}, body,
+              ""),
+      400);
+  expectRefused(
+      Request("POST", "/api/v1/pincodes",
+              {adminAuth(), "Content-Type: application/json", length, "Transfer-Encoding: chunked"},
+              "15\r\n" + body + "\r\n0\r\n\r\n", ""),
+      400);
+  // Neither was taken as a request to add the pincode.
+  EXPECT_EQ(client().Get("/api/v1/pincodes/999021")->status, 404);
+}
 TEST_F(HostileCatalogue, GetWithABody) {
   expectRefused(Request("GET", "/api/v1/pincodes/110001", {}, "unexpected"), 400);
 }

@@ -103,6 +103,11 @@ bool AnnouncesBody(const httplib::Request& req) {
          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
 }
 
+bool AmbiguousLength(const httplib::Request& req) {
+  const std::size_t lengths = req.get_header_value_count("Content-Length");
+  return lengths > 1 || (lengths == 1 && req.has_header("Transfer-Encoding"));
+}
+
 /// A request that may carry a body but declares neither a length nor chunked coding has none
 /// (RFC 9112, section 6.3).
 bool HasNoBody(const httplib::Request& req) {
@@ -132,7 +137,18 @@ struct HttpServer::Impl {
                                            ? std::optional(req.get_header_value("X-Request-Id"))
                                            : std::nullopt);
     res.set_header("X-Request-Id", t_state.request_id);
+    // Every answer is whole: cpp-httplib 0.11.4 cut API answers to a Range with status 200, and
+    // answered an unsatisfiable one without a body. Ignoring Range is allowed (RFC 9110, 14.2).
+    const_cast<httplib::Request&>(req).ranges.clear();  // cpp-httplib's own object, not const
     t_state.admission = api->admit(req.method, req.path, Headers(req));
+    if (!t_state.admission.rejection && AmbiguousLength(req)) {
+      // Two lengths (or a length and chunked coding) let a proxy and this server split the
+      // stream into different requests: refuse, and close, whichever was meant.
+      t_state.admission.rejection =
+          ProblemResponse(400,
+                          "the request declares its body's length twice (Content-Length "
+                          "with another Content-Length or with Transfer-Encoding)");
+    }
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
       t_state.admission.rejection = ProblemResponse(400, req.method + " requests take no body");
