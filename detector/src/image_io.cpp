@@ -14,6 +14,7 @@
 #include <array>
 #include <cstddef>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
@@ -577,6 +578,10 @@ LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, std::int64_t max_
 }
 
 LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    return Fail(ImageError::kUnreadable, path + " is a directory, not a photo");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) return Fail(ImageError::kUnreadable, "cannot open " + path);
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),

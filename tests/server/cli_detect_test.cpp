@@ -94,6 +94,10 @@ TEST(CliDetect, RefusesWhatIsNotAPhotoWithAClearMessage) {
   EXPECT_NE(missing.status, 0);
   EXPECT_NE(missing.out.find("nowhere.jpg"), std::string::npos) << missing.out;
 
+  const CommandResult directory = RunPintag("detect " + dir.path().string());
+  EXPECT_NE(directory.status, 0);
+  EXPECT_NE(directory.out.find("is a directory, not a photo"), std::string::npos) << directory.out;
+
   const CommandResult bad_size = RunPintag("detect --tag-size-mm 0 " + text);
   EXPECT_NE(bad_size.status, 0);
   EXPECT_NE(bad_size.out.find("tag-size-mm"), std::string::npos) << bad_size.out;

@@ -17,6 +17,18 @@ TEST(CliKeys, LookupByKeyFindsItsPincode) {
   EXPECT_NE(found.out.find("pincode  110001"), std::string::npos) << found.out;
 }
 
+TEST(CliKeys, LookupSaysWhatIsMissingOrTooMuch) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult neither = RunPintag("keys lookup --db " + db);
+  EXPECT_NE(neither.status, 0);
+  EXPECT_NE(neither.out.find("give a pincode or --key KEY"), std::string::npos) << neither.out;
+  const CommandResult both = RunPintag("keys lookup 110001 --key 11684 --db " + db);
+  EXPECT_NE(both.status, 0);
+  EXPECT_NE(both.out.find("not both"), std::string::npos) << both.out;
+}
+
 TEST(CliKeys, KeysOutsideTheRangeAreRefusedAsTheApiRefusesThem) {
   const TempDir dir;
   for (const char* key : {"32768", "-1", "abc", "1e3", "0x10"}) {

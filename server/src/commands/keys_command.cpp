@@ -33,9 +33,8 @@ void Export(const KeysArgs& args) {
 }
 
 void Lookup(const KeysArgs& args) {
-  if (args.pincode.empty() == !args.key.has_value()) {
-    throw UsageError("give a pincode or --key, not both");
-  }
+  if (args.pincode.empty() && !args.key) throw UsageError("give a pincode or --key KEY");
+  if (!args.pincode.empty() && args.key) throw UsageError("give a pincode or --key, not both");
   db::Connection connection = OpenDb(args.db);
   std::optional<db::Result<db::PincodeRecord>> record;
   if (args.key) {
