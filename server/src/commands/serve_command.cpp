@@ -140,7 +140,7 @@ void Run(const ServeArgs& args) {
               << "  e.g. curl -H 'Authorization: Bearer " << first_admin << "' " << url
               << "/api/v1/tokens\n";
   } else if (!read_only) {
-    std::cout << "Tokens: pintag token create --role admin|counter|scanner --db " << args.db
+    std::cout << "Tokens: pintag token create --role admin|counter|scanner|replica --db " << args.db
               << "\n";
   }
   std::cout << "Stop with Ctrl-C.\n" << std::flush;
