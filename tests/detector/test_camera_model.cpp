@@ -51,6 +51,12 @@ TEST(CameraModel, AssumedFieldOfViewOtherwise) {
     EXPECT_EQ(c.source, IntrinsicsSource::kAssumed);
     EXPECT_NEAR(2 * std::atan(960 / c.intrinsics.fx) * 180 / std::numbers::pi, 65, 1e-9);
   }
+  // A phone held upright: the same lens, so the same focal length, and the same distance to a tag.
+  // The field of view is across the longer side, as a phone's is stated.
+  const ResolvedCamera portrait = ResolveCamera({}, nullptr, 1080, 1920);
+  EXPECT_EQ(portrait.intrinsics.fx, ResolveCamera({}, nullptr, 1920, 1080).intrinsics.fx);
+  EXPECT_EQ(portrait.intrinsics.cx, (1080 - 1) / 2.0);
+  EXPECT_EQ(portrait.intrinsics.cy, (1920 - 1) / 2.0);
 }
 
 }  // namespace

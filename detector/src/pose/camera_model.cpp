@@ -1,5 +1,6 @@
 #include "pose/camera_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -48,8 +49,10 @@ ResolvedCamera ResolveCamera(const DetectorOptions& options, const ExifCamera* e
   if (focal_px && std::isfinite(*focal_px) && *focal_px > 1) {
     out.source = IntrinsicsSource::kExif;
   } else {
-    const double hfov = options.assumed_hfov_deg * std::numbers::pi / 180.0;
-    focal_px = (width / 2.0) / std::tan(hfov / 2);
+    // Across the longer side: a portrait photo (EXIF-rotated upright) is the same lens turned, and
+    // taking the field of view across its width halved every distance.
+    const double fov = options.assumed_hfov_deg * std::numbers::pi / 180.0;
+    focal_px = (std::max(width, height) / 2.0) / std::tan(fov / 2);
     out.source = IntrinsicsSource::kAssumed;
   }
   out.intrinsics.fx = out.intrinsics.fy = *focal_px;

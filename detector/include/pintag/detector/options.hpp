@@ -38,9 +38,11 @@ struct ExifCamera {
 struct DetectorOptions {
   // --- camera and tag ---
   std::optional<CameraIntrinsics>
-      intrinsics;                ///< explicit intrinsics; default none (EXIF, else assumed)
-  double assumed_hfov_deg = 65;  ///< horizontal field of view when neither given nor EXIF, degrees
-  double tag_size_m = 0.050;     ///< side of the black square, metres (default 50 mm)
+      intrinsics;  ///< explicit intrinsics; default none (EXIF, else assumed)
+  /// Field of view across the photo's longer side (a phone's, held level) when intrinsics are
+  /// neither given nor in EXIF, degrees.
+  double assumed_hfov_deg = 65;
+  double tag_size_m = 0.050;  ///< side of the black square, metres (default 50 mm)
 
   // --- colour (CIELAB units, computed with integer stand-ins; see DESIGN.md §2) ---
   double red_min_a = 20;   ///< a pixel is red when a* >= this …
