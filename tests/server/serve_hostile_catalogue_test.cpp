@@ -404,6 +404,26 @@ TEST_F(HostileCatalogue, MultipartWithoutAnImagePart) {
                         Multipart("b", "photo", Encoded(".jpg"))),
                 400);
 }
+TEST_F(HostileCatalogue, MultipartWithTwoImagePartsIsRefusedNotHalfRead) {
+  // Two photos in one upload: answering for the first would report the second as read.
+  const std::string photo = Encoded(".jpg");
+  std::string body = Multipart("two", "image", photo);
+  body = body.substr(0, body.size() - std::string("--two--\r\n").size()) +
+         Multipart("two", "image", photo);
+  const std::string request =
+      Request("POST", "/api/v1/detect",
+              {scannerAuth(), "Content-Type: multipart/form-data; boundary=two"}, body);
+  const Answer answer = Send(server_->port(), request);
+  EXPECT_NE(answer.body.find("2 parts named 'image'"), std::string::npos) << answer.body;
+  expectRefused(request, 400);
+  // The same photo alone is read.
+  EXPECT_EQ(Send(server_->port(),
+                 Request("POST", "/api/v1/detect",
+                         {scannerAuth(), "Content-Type: multipart/form-data; boundary=two"},
+                         Multipart("two", "image", photo)))
+                .status,
+            200);
+}
 TEST_F(HostileCatalogue, RangeIsIgnoredEveryAnswerIsWhole) {
   const Answer whole = Send(server_->port(), Request("GET", "/api/v1/pincodes/110001", {}));
   ASSERT_EQ(whole.status, 200);

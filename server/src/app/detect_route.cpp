@@ -4,6 +4,7 @@
 // annotated, as PNG instead of the JSON (?overlay=1) or inside it as a data URL (?overlay=inline).
 // Every call that reaches the handler is written to the scan log, refusals of the photo included.
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cstdio>
@@ -261,6 +262,13 @@ HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
   if (request.content_type == "multipart/form-data") {
     const server::FormPart* part = request.part("image");
     if (part == nullptr) throw HttpError(400, "the multipart body needs a part named 'image'");
+    // One photo per call: reading the first of several would answer for photos never read.
+    const auto images = std::count_if(request.parts.begin(), request.parts.end(),
+                                      [](const server::FormPart& p) { return p.name == "image"; });
+    if (images > 1) {
+      throw HttpError(400, "the multipart body has " + std::to_string(images) +
+                               " parts named 'image'; send one photo per request");
+    }
     bytes = part->content;
   }
   if (bytes.empty()) throw HttpError(400, "no photo: the body is empty", "No Image");
