@@ -23,8 +23,10 @@ Error UnknownPlan(std::string_view name) {
 }
 
 /// Writes the plan in the caller's transaction.
-void WritePlan(Connection& connection, const SortPlan& plan) {
-  connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, plan.name).run();
+/// Returns true when a plan of that name was there and has been replaced.
+bool WritePlan(Connection& connection, const SortPlan& plan) {
+  const bool replaced =
+      connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, plan.name).run() > 0;
   connection
       .prepare(std::string("INSERT INTO sort_plans (name, fallback_bin, description, updated_at) "
                            "VALUES (?1, ?2, ?3, ") +
@@ -40,6 +42,7 @@ void WritePlan(Connection& connection, const SortPlan& plan) {
     insert.bind(1, id).bind(2, rule.prefix).bind(3, rule.bin).run();
     insert.reset();
   }
+  return replaced;
 }
 
 }  // namespace
@@ -119,13 +122,13 @@ std::string PlanToCsv(const SortPlan& plan) {
   return out;
 }
 
-Result<void> SavePlan(Connection& connection, const SortPlan& plan) {
+Result<bool> SavePlan(Connection& connection, const SortPlan& plan) {
   if (auto error = CheckPlan(plan)) return *error;
-  return Guard([&]() -> Result<void> {
+  return Guard([&]() -> Result<bool> {
     Transaction transaction(connection);
-    WritePlan(connection, plan);
+    const bool replaced = WritePlan(connection, plan);
     transaction.commit();
-    return {};
+    return replaced;
   });
 }
 

@@ -60,9 +60,13 @@ TEST_F(SortPlans, UnknownPlanIsAnErrorValue) {
 }
 
 TEST_F(SortPlans, SavingReplacesAndDeletingRemoves) {
-  ASSERT_TRUE(SavePlan(db_, HubPlan()).ok());
+  const Result<bool> created = SavePlan(db_, HubPlan());
+  ASSERT_TRUE(created.ok());
+  EXPECT_FALSE(created.value()) << "a new name is created, not replaced";
   SortPlan smaller{"hub-a", "other", "", {{"2", "two"}}};
-  ASSERT_TRUE(SavePlan(db_, smaller).ok());
+  const Result<bool> replaced = SavePlan(db_, smaller);
+  ASSERT_TRUE(replaced.ok());
+  EXPECT_TRUE(replaced.value());
   const SortPlan stored = GetPlan(db_, "hub-a").value();
   EXPECT_EQ(stored.rules, smaller.rules);
   EXPECT_EQ(stored.fallback_bin, "other");

@@ -112,11 +112,8 @@ HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) 
   }
   if (const auto problem = db::CheckPlan(plan)) ThrowDbError(*problem, "Bad Sort Plan");
   auto connection = context.pool->acquire();
-  const bool existed = db::GetPlan(*connection, name).ok();
-  Unwrap(db::SavePlan(*connection, plan), "Bad Sort Plan");
-  HttpResponse response =
-      HttpResponse::Json(PlanJson(LoadPlan(*connection, name)).dump(), existed ? 200 : 201);
-  return response;
+  const bool replaced = Unwrap(db::SavePlan(*connection, plan), "Bad Sort Plan");
+  return HttpResponse::Json(PlanJson(LoadPlan(*connection, name)).dump(), replaced ? 200 : 201);
 }
 
 }  // namespace pintag::app

@@ -51,8 +51,9 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv);
 /// The inverse: header, `*` row, then rules in ascending prefix order.
 std::string PlanToCsv(const SortPlan& plan);
 
-/// Creates the plan, or replaces the one with the same name (rules and all), in one transaction.
-Result<void> SavePlan(Connection& connection, const SortPlan& plan);
+/// Creates the plan, or replaces the one with the same name (rules and all), in one transaction;
+/// true when it replaced one (decided inside the transaction, so of two writers only one creates).
+Result<bool> SavePlan(Connection& connection, const SortPlan& plan);
 /// kNotFound for an unknown plan.
 Result<SortPlan> GetPlan(Connection& connection, std::string_view name);
 Result<std::vector<std::string>> ListPlans(Connection& connection);  ///< names, ascending
