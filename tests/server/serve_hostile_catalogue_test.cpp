@@ -515,19 +515,19 @@ TEST_F(HostileCatalogue, GarbageInsteadOfARequestLine) {
 TEST_F(HostileCatalogue, MadeUpMethodsDoNotGrowTheMetrics) {
   // Each refused request used to add a series to /metrics named after its method: a client could
   // grow the server's memory and its metrics page without bound.
-  // cpp-httplib keeps the connection after this 400, so an answer ends at its Content-Length.
+  // cpp-httplib keeps the connection after this refusal, so an answer ends at its Content-Length.
   for (int i = 0; i < 40; ++i) {
     std::string method = "X";
     method += std::to_string(i) + "METHOD";
     const Answer answer = Parse(
         test::SendRaw(server_->port(), Request(method, "/livez", {}), 5, test::HasWholeResponse));
-    EXPECT_EQ(answer.status, 400) << answer.head;
+    EXPECT_EQ(answer.status, 501) << answer.head;
   }
   const auto metrics = client().Get("/metrics");
   ASSERT_TRUE(metrics);
   ASSERT_EQ(metrics->status, 200);
   EXPECT_EQ(metrics->body.find("METHOD"), std::string::npos);
-  EXPECT_NE(metrics->body.find(R"(method="other",status="400")"), std::string::npos)
+  EXPECT_NE(metrics->body.find(R"(method="other",status="501")"), std::string::npos)
       << metrics->body.substr(0, 2000);
   expectHealthy();
 }
@@ -659,6 +659,28 @@ TEST_F(HostileCatalogue, BasicAuthInsteadOfBearer) {
 }
 TEST_F(HostileCatalogue, UnknownMethod) {
   expectRefused(Request("PATCH", "/api/v1/pincodes/110001", {}), 405);
+}
+TEST_F(HostileCatalogue, MadeUpMethodIsNotImplementedAndNamed) {
+  // A method no HTTP parser here knows is 501 (RFC 9110 section 15.6.2), the problem quoting it.
+  // cpp-httplib keeps the connection after refusing it, so an answer ends at its Content-Length.
+  const auto send = [this](const std::string& request) {
+    return Parse(test::SendRaw(server_->port(), request, 5, test::HasWholeResponse));
+  };
+  const Answer answer = send(Request("BREW", "/api/v1/pincodes/110001", {}));
+  EXPECT_EQ(answer.status, 501) << answer.head;
+  EXPECT_NE(answer.head.find("Content-Type: application/problem+json"), std::string::npos);
+  const json problem = json::parse(answer.body, nullptr, false);
+  EXPECT_EQ(problem.value("status", 0), 501) << answer.body;
+  EXPECT_NE(problem.value("detail", "").find("method 'BREW' is not one this server answers"),
+            std::string::npos)
+      << answer.body;
+  // Quoted printable and cut short: the detail never carries the request's bytes back whole.
+  const Answer long_one = send(Request(std::string(300, 'Q'), "/livez", {}));
+  EXPECT_EQ(long_one.status, 501);
+  EXPECT_LT(long_one.body.size(), 400U) << long_one.body;
+  // A request line that is not HTTP at all stays a 400.
+  EXPECT_EQ(send("GET\r\n\r\n").status, 400);
+  expectHealthy();
 }
 
 }  // namespace

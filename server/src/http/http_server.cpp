@@ -19,6 +19,7 @@
 #include <sys/socket.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -114,6 +115,22 @@ bool HasNoBody(const httplib::Request& req) {
   return (req.method == "POST" || req.method == "PUT" || req.method == "PATCH" ||
           req.method == "DELETE") &&
          !req.has_header("Content-Length") && !req.has_header("Transfer-Encoding");
+}
+
+/// cpp-httplib refuses a method it does not parse with a bare 400 before any route is chosen,
+/// after filling in the request's method; RFC 9110 makes that 501, and the problem names it.
+bool UnknownMethod(const httplib::Request& req) {
+  static constexpr std::array<std::string_view, 10> kParsed = {
+      "GET", "HEAD", "POST", "PUT", "DELETE", "CONNECT", "OPTIONS", "TRACE", "PATCH", "PRI"};
+  return !req.method.empty() &&
+         std::find(kParsed.begin(), kParsed.end(), req.method) == kParsed.end();
+}
+
+/// The method as the problem quotes it: printable ASCII, at most 40 characters.
+std::string QuotedMethod(const std::string& method) {
+  std::string out;
+  for (const char c : method.substr(0, 40)) out += (c > ' ' && c < 127) ? c : '?';
+  return "'" + out + (method.size() > 40 ? "…'" : "'");
 }
 
 }  // namespace
@@ -224,13 +241,21 @@ struct HttpServer::Impl {
   }
 
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).
-  httplib::Server::HandlerResponse onError(const httplib::Request&, httplib::Response& res) {
+  httplib::Server::HandlerResponse onError(const httplib::Request& req, httplib::Response& res) {
     // A request cpp-httplib refused before routing (malformed, too long) still gets an id.
     if (!t_state.active) {
       t_state.request_id = RequestIdFrom(std::nullopt);
       res.set_header("X-Request-Id", t_state.request_id);
     }
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    if (res.status == 400 && UnknownMethod(req)) {
+      res.status = 501;
+      Apply(ProblemResponse(501, "method " + QuotedMethod(req.method) +
+                                     " is not one this server answers (it answers GET, HEAD, "
+                                     "POST, PUT, PATCH, DELETE and OPTIONS)"),
+            res);
+      return httplib::Server::HandlerResponse::Handled;
+    }
     const HttpResponse problem =
         res.status == 413 ? tooLarge()
                           : ProblemResponse(res.status, std::string(StatusTitle(res.status)));
