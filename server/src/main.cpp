@@ -12,7 +12,8 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message (or the help); its own codes (100 and up) mean a usage error too.
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const pintag::cli::UsageError& e) {
     std::cerr << "pintag: " << e.what() << "\n";
     return 2;

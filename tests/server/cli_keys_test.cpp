@@ -22,7 +22,7 @@ TEST(CliKeys, LookupSaysWhatIsMissingOrTooMuch) {
   const std::string db = dir.file("copy.db");
   std::filesystem::copy_file(SeededTemplate(), db);
   const CommandResult neither = RunPintag("keys lookup --db " + db);
-  EXPECT_NE(neither.status, 0);
+  EXPECT_EQ(neither.status, 2);
   EXPECT_NE(neither.out.find("give a pincode or --key KEY"), std::string::npos) << neither.out;
   const CommandResult both = RunPintag("keys lookup 110001 --key 11684 --db " + db);
   EXPECT_NE(both.status, 0);
@@ -36,13 +36,24 @@ TEST(CliKeys, KeysOutsideTheRangeAreRefusedAsTheApiRefusesThem) {
          {"keys lookup --db " + dir.file("never.db") + " --key " + key,
           "render -o " + dir.file("tag.png") + " --size-px 128 --key " + key}) {
       const CommandResult refused = RunPintag(command);
-      EXPECT_NE(refused.status, 0) << command << ": " << refused.out;
+      EXPECT_EQ(refused.status, 2) << command << ": " << refused.out;
       EXPECT_NE(refused.out.find("a key is an integer from 0 to 32767"), std::string::npos)
           << command << ": " << refused.out;
     }
   }
   EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
+}
+
+TEST(CliKeys, ExitStatusTellsAWrongCommandLineFromAFailedJob) {
+  // 2: the command line is wrong, whether CLI11 or the command found it; 1: the job failed.
+  const TempDir dir;
+  EXPECT_EQ(RunPintag("keys lookup 110001 --no-such-option").status, 2);
+  EXPECT_EQ(RunPintag("serve --port not-a-port --db " + dir.file("never.db")).status, 2);
+  EXPECT_EQ(RunPintag("no-such-command").status, 2);
+  EXPECT_EQ(RunPintag("keys --help").status, 0);
+  EXPECT_EQ(RunPintag("detect " + dir.file("missing.jpg")).status, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));
 }
 
 }  // namespace
