@@ -101,6 +101,13 @@ $('next').addEventListener('click', (event) => busy(event.currentTarget, async (
   search.offset += search.limit;
   await runSearch();
 }));
+// A new page size applies to the results on screen at once, keeping the first row shown in view.
+$('s-limit').addEventListener('change', (event) => {
+  if (!search || $('search-results').hidden) return;
+  search.limit = Number(event.currentTarget.value);
+  search.offset = Math.floor(search.offset / search.limit) * search.limit;
+  busy($('search'), runSearch);
+});
 
 $('key-form').addEventListener('submit', (event) => {
   event.preventDefault();

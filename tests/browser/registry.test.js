@@ -44,6 +44,17 @@ test('registry search finds offices by district and pages through them', async (
   const shown = await page.locator('#detail-pincode').boundingBox();
   assert.ok(shown.y >= 0 && shown.y + shown.height <= 900, JSON.stringify(shown));
   await screenshot(page, 'registry-search');
+  // A new page size applies at once, and Next then steps by it: from rows 21–40, 50 a page
+  // shows the page holding row 21, rows 1–50.
+  await page.getByRole('button', { name: 'Next →' }).click();
+  await caption.filter({ hasText: `Offices 21–40 of ${total}` }).waitFor();
+  await page.getByLabel('Per page').selectOption('50');
+  await caption.filter({ hasText: `Offices 1–${Math.min(50, total)} of ${total}` }).waitFor();
+  assert.equal(await page.locator('#results-body tr').count(), Math.min(50, total));
+  if (total > 50) {
+    await page.getByRole('button', { name: 'Next →' }).click();
+    await caption.filter({ hasText: `Offices 51–${Math.min(100, total)} of ${total}` }).waitFor();
+  }
   assert.deepEqual(page.problems, []);
 });
 
