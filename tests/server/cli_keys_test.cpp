@@ -45,6 +45,20 @@ TEST(CliKeys, KeysOutsideTheRangeAreRefusedAsTheApiRefusesThem) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
 }
 
+TEST(CliKeys, RenderSaysWhyASizeInMillimetresIsRefusedInTheUsersNumbers) {
+  const TempDir dir;
+  // 2 mm at 300 dpi is 24 px, under the smallest square a tag may be drawn at.
+  const CommandResult small =
+      RunPintag("render --key 5 --size-mm 2 --dpi 300 -o " + dir.file("tag.png"));
+  EXPECT_EQ(small.status, 2) << small.out;
+  EXPECT_NE(small.out.find("--size-mm 2 at 300 dpi gives a 24 px square"), std::string::npos)
+      << small.out;
+  const CommandResult fraction =
+      RunPintag("render --key 5 --size-mm 2.5 --dpi 150 -o " + dir.file("tag.png"));
+  EXPECT_NE(fraction.out.find("--size-mm 2.5 at 150 dpi"), std::string::npos) << fraction.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
+}
+
 TEST(CliKeys, ExitStatusTellsAWrongCommandLineFromAFailedJob) {
   // 2: the command line is wrong, whether CLI11 or the command found it; 1: the job failed.
   const TempDir dir;

@@ -1,6 +1,7 @@
 // `pintag render`: one tag as PNG (raster, dpi recorded) or SVG (vector, exact size).
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -26,6 +27,13 @@ struct RenderArgs {
   double dpi = 300;
   std::string output;
 };
+
+/// As the user would write it: 0.5, 50, 300 (not std::to_string's 0.500000).
+std::string Shortest(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
 
 std::string Extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -54,10 +62,10 @@ void Run(const RenderArgs& args) {
                               ? *args.size_px
                               : static_cast<int>(std::lround(*args.size_mm / 25.4 * args.dpi));
     if (square_px < kMinTagSquarePx || square_px > kMaxSquarePx) {
-      throw UsageError("--size-mm " + std::to_string(*args.size_mm) + " at " +
-                       std::to_string(args.dpi) + " dpi gives a " + std::to_string(square_px) +
-                       " px square; it must be " + std::to_string(kMinTagSquarePx) + " to " +
-                       std::to_string(kMaxSquarePx) + " px");
+      throw UsageError("--size-mm " + Shortest(*args.size_mm) + " at " + Shortest(args.dpi) +
+                       " dpi gives a " + std::to_string(square_px) + " px square; it must be " +
+                       std::to_string(kMinTagSquarePx) + " to " + std::to_string(kMaxSquarePx) +
+                       " px");
     }
     const TagRaster raster = RenderTagRaster(key, {square_px, 4});
     std::string error;
