@@ -78,6 +78,26 @@ TEST(ServeFirstStart, CreatesSeedsAndPrintsOneAdminTokenOnStdoutOnly) {
   EXPECT_NE(again.out().find("pintag token create"), std::string::npos);
 }
 
+// Starts refused before anything is opened or created, each saying what to do instead.
+TEST(ServeStartRefusals, AnEmptyBindAddressIsAUsageErrorNotEveryInterface) {
+  const TempDir dir;
+  const CommandResult refused = RunPintag("serve --port 0 --bind '' --db " + dir.file("new.db"));
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--bind needs an address"), std::string::npos) << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
+}
+TEST(ServeStartRefusals, AReadOnlyReplicaWithoutItsSnapshotSaysHowToMakeOne) {
+  const TempDir dir;
+  const CommandResult refused =
+      RunPintag("serve --port 0 --read-only --db " + dir.file("missing.db"));
+  EXPECT_EQ(refused.status, 1) << refused.out;
+  EXPECT_NE(refused.out.find("does not exist: make one on the primary with `pintag snapshot"),
+            std::string::npos)
+      << refused.out;
+  // Nothing is left beside it (no serving link, no scan log).
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << refused.out;
+}
+
 // A start that cannot listen (port taken) exits non-zero and creates no token nobody would see.
 TEST_F(ServeTest, PortInUseFailsWithoutCreatingAToken) {
   const std::string fresh = dir_.file("fresh.db");

@@ -84,6 +84,8 @@ void Run(const ServeArgs& args) {
   LimitMallocArenas();
   OneOpenCvThreadPerRequest();
   server::ConfigureLog(server::ParseLogFormat(args.log_format).value_or(server::LogFormat::kText));
+  // An empty address would listen on every interface unasked.
+  if (args.bind.empty()) throw UsageError("--bind needs an address, e.g. 127.0.0.1 or 0.0.0.0");
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
@@ -125,7 +127,11 @@ void Run(const ServeArgs& args) {
   replication.start();
 
   const bool any = args.bind == "0.0.0.0" || args.bind == "::";
-  const std::string host = any ? "127.0.0.1" : args.bind;
+  // An IPv6 address goes in brackets in a URL (RFC 3986): http://[::1]:8080/.
+  const auto in_url = [](const std::string& address) {
+    return address.find(':') == std::string::npos ? address : "[" + address + "]";
+  };
+  const std::string host = args.bind == "::" ? "[::1]" : any ? "127.0.0.1" : in_url(args.bind);
   const std::string url = "http://" + host + ":" + std::to_string(http.port());
   std::cout << "PinTag serving " << url << "/ (database " << args.db << ", " << args.threads
             << " threads" << (any ? ", all interfaces" : "") << ")\n";

@@ -110,6 +110,12 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
       }
     }
   }
+  if (args_.follow.empty() && !std::filesystem::exists(db_path_)) {
+    throw std::runtime_error("--read-only serves a registry snapshot, and " + db_path_ +
+                             " does not exist: make one on the primary with `pintag snapshot "
+                             "--db FILE --out " +
+                             db_path_ + "`, or give --follow URL to fetch one");
+  }
   watcher_ = std::make_unique<replica::SnapshotWatcher>(
       db_path_, [this](const db::SnapshotInfo& loaded) { pool_->renew(loaded.path); });
 
