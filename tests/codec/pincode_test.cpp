@@ -29,6 +29,13 @@ TEST(Pincode, RejectsEverythingElseWithAReason) {
   }
   EXPECT_NE(ParsePincode("011000").error.find("start with 0"), std::string::npos);
   EXPECT_NE(ParsePincode("12345").error.find("6 digits"), std::string::npos);
+  // Counted in characters, not bytes: six fullwidth or Arabic-Indic digits are six characters,
+  // refused for their script, and seven of them are seven.
+  for (const std::string text : {"１１０００１", "١١٠٠٠١"}) {
+    EXPECT_NE(ParsePincode(text).error.find("other scripts' digits"), std::string::npos) << text;
+  }
+  EXPECT_NE(ParsePincode("１１０００１１").error.find("got 7 characters"), std::string::npos);
+  EXPECT_NE(ParsePincode("11000\xff\xfe").error.find("got 7 characters"), std::string::npos);
 }
 
 }  // namespace
