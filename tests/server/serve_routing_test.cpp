@@ -66,6 +66,16 @@ TEST_F(ServeTest, SortPlansReadAndWrite) {
   EXPECT_EQ(plan["fallback_bin"], "floor");
   EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/110001?plan=hub"))["bin"], "north");
   EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/560001?plan=hub"))["bin"], "floor");
+  // Fetched as CSV and put back, the plan keeps its description (the CSV cannot hold it);
+  // ?description= replaces it.
+  auto hub_csv = client().Get("/api/v1/sortplans/hub?format=csv");
+  ASSERT_TRUE(hub_csv);
+  plan = ExpectJson(client().Put("/api/v1/sortplans/hub", admin(), hub_csv->body, "text/csv"));
+  EXPECT_EQ(plan["description"], "two bins");
+  EXPECT_EQ(plan["fallback_bin"], "floor");
+  plan = ExpectJson(client().Put("/api/v1/sortplans/hub?description=one%20bin", admin(),
+                                 hub_csv->body, "text/csv"));
+  EXPECT_EQ(plan["description"], "one bin");
 
   // Malformed plans: no fallback row, a bad prefix, a duplicate, bad JSON.
   ExpectProblem(client().Put("/api/v1/sortplans/bad", admin(), "prefix,bin\n11,a\n", "text/csv"),

@@ -104,7 +104,8 @@ HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request) 
 HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) {
   const std::string name = PlanNameParam(request);
   db::SortPlan plan;
-  if (request.content_type == "text/csv") {
+  const bool csv = request.content_type == "text/csv";
+  if (csv) {
     plan = Unwrap(db::ParsePlanCsv(name, request.body), "Bad Sort Plan");
     if (const auto description = request.queryParam("description")) plan.description = *description;
   } else {
@@ -112,6 +113,13 @@ HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) 
   }
   if (const auto problem = db::CheckPlan(plan)) ThrowDbError(*problem, "Bad Sort Plan");
   auto connection = context.pool->acquire();
+  // The CSV has no place for the description: one fetched as CSV, edited and put back keeps it,
+  // unless ?description= says otherwise.
+  if (csv && !request.queryParam("description")) {
+    if (const auto existing = db::GetPlan(*connection, name)) {
+      plan.description = existing->description;
+    }
+  }
   const bool replaced = Unwrap(db::SavePlan(*connection, plan), "Bad Sort Plan");
   return HttpResponse::Json(PlanJson(LoadPlan(*connection, name)).dump(), replaced ? 200 : 201);
 }
