@@ -13,6 +13,7 @@ const token = bindToken({
 
 const SVG = 'http://www.w3.org/2000/svg';
 let photoUrl = null;
+let photoUnshowable = false;  // the browser cannot draw this file (a TIFF, say); the server can read it
 let scanCount = 0;
 
 function detectPath(extra = {}) {
@@ -29,7 +30,7 @@ function showPhoto(url, caption, alt) {
   $('scan-photo').src = url;
   $('scan-photo').alt = alt;
   $('photo-caption').textContent = caption;
-  $('photo-figure').hidden = false;
+  $('photo-figure').hidden = photoUnshowable;
 }
 
 function svg(name, attributes, text) {
@@ -94,6 +95,7 @@ async function scan() {
   }
   if (photoUrl) URL.revokeObjectURL(photoUrl);
   photoUrl = URL.createObjectURL(file);
+  photoUnshowable = false;
   $('outlines').replaceChildren();
   $('scan-photo').removeAttribute('data-outlined');
   showPhoto(photoUrl, 'Your photo. Reading…', 'The photo being read');
@@ -114,7 +116,8 @@ async function scan() {
   const n = answer.tag_count;
   $('summary').textContent = `${n === 0 ? 'No tag' : n === 1 ? '1 tag' : `${n} tags`} read in `
     + `${Math.round(answer.time_ms.total)} ms · photo ${answer.image.width} × ${answer.image.height}`
-    + `${approximate ? ' · distances approximate (camera field of view assumed)' : ''}`;
+    + `${approximate ? ' · distances approximate (camera field of view assumed)' : ''}`
+    + `${photoUnshowable ? ' · this browser cannot show the photo itself (e.g. a TIFF)' : ''}`;
   show($('tags'), answer.tags.map((tag) => tagCard(tag, approximate)));
   if (n === 0) {
     show($('tags'), el('li', { class: 'alert alert-info' },
@@ -134,7 +137,13 @@ function reveal(node) {
 }
 
 // A file the browser cannot show (not an image): no broken picture, the problem box says why.
-$('scan-photo').addEventListener('error', () => { $('photo-figure').hidden = true; });
+$('scan-photo').addEventListener('error', () => {
+  photoUnshowable = true;
+  $('photo-figure').hidden = true;
+  if ($('scan-photo').dataset.outlined && !$('summary').textContent.includes('cannot show the photo')) {
+    $('summary').textContent += ' · this browser cannot show the photo itself (e.g. a TIFF)';
+  }
+});
 
 $('photo').addEventListener('change', () => {
   $('scan').disabled = !$('photo').files.length;

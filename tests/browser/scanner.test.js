@@ -3,7 +3,8 @@
 import assert from 'node:assert/strict';
 import { mkdtemp, rm, writeFile } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
-import { join } from 'node:path';
+import { dirname, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
 import { after, before, test } from 'node:test';
 import { createToken, launchBrowser, newPage, screenshot, startServer } from './harness.js';
 
@@ -123,4 +124,21 @@ test('scanner shows the problem for a non-image file and for a token of the wron
   await page.locator('#token').fill(counterToken);
   await page.locator('#photo').setInputFiles(labelPng);
   await alert.filter({ hasText: 'HTTP 403' }).waitFor();
+});
+
+test('a TIFF the browser cannot draw is still read, and the page says why no photo is shown', async () => {
+  // A committed 8-bit RGB TIFF holding one tag (also a seed of the image fuzz target).
+  const tiff = join(dirname(fileURLToPath(import.meta.url)), '../../fuzz/corpus/image_detect/tag.tif');
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/scanner.html`);
+  await page.locator('#token').fill(scannerToken);
+  await page.locator('#photo').setInputFiles(tiff);
+  await page.locator('.tag-card').first().waitFor();
+  const summary = page.locator('#summary');
+  await summary.filter({ hasText: 'cannot show the photo itself' }).waitFor();
+  assert.match(await summary.textContent(), /^1 tag read/);
+  assert.equal((await summary.textContent()).match(/cannot show the photo/g).length, 1);
+  assert.equal(await page.locator('#photo-figure').isHidden(), true);  // no broken picture
+  await screenshot(page, 'scanner-tiff');
+  assert.deepEqual(page.problems, []);
 });
