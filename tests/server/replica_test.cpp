@@ -207,6 +207,15 @@ TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem)
   ASSERT_TRUE(unchanged);
   EXPECT_EQ(unchanged->status, 304);
   EXPECT_TRUE(unchanged->body.empty());
+  // As RFC 9110 reads the header: a list naming it, a weak form of it, or `*` is 304 too.
+  for (const std::string& header : {"\"other\", " + etag, "W/" + etag, std::string("*")}) {
+    httplib::Headers listed = Auth(replica_token_);
+    listed.emplace("If-None-Match", header);
+    EXPECT_EQ(StatusOf(primary.Get("/api/v1/registry/snapshot", listed)), 304) << header;
+  }
+  httplib::Headers other = Auth(replica_token_);
+  other.emplace("If-None-Match", "\"other\", W/\"another\"");
+  EXPECT_EQ(StatusOf(primary.Get("/api/v1/registry/snapshot", other)), 200);
 
   addPincode(primary, "999124");
   const auto changed = primary.Get("/api/v1/registry/snapshot", current);

@@ -1,11 +1,38 @@
 // GET /api/v1/registry and GET /api/v1/registry/snapshot: which registry version a server
 // serves, and the primary's snapshot for its read-only replicas (docs/SCALING.md).
 
+#include <optional>
+#include <string>
+#include <string_view>
+
 #include "app/routes.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "replica/snapshot_follower.hpp"
 
 namespace pintag::app {
+namespace {
+
+/// RFC 9110 section 13.1.2: `*`, or a comma-separated list of entity tags, weak ones (W/"…")
+/// compared by their opaque part, as If-None-Match's weak comparison does.
+bool NoneMatchNames(std::string_view header, std::string_view etag) {
+  const auto trimmed = [](std::string_view text) {
+    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+    while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+    return text;
+  };
+  if (trimmed(header) == "*") return true;
+  while (!header.empty()) {
+    const std::size_t comma = header.find(',');
+    std::string_view tag = trimmed(header.substr(0, comma));
+    if (tag.rfind("W/", 0) == 0) tag.remove_prefix(2);
+    if (tag == etag) return true;
+    if (comma == std::string_view::npos) break;
+    header.remove_prefix(comma + 1);
+  }
+  return false;
+}
+
+}  // namespace
 
 HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& /*request*/) {
   db::Result<std::int64_t> version = db::Result<std::int64_t>(0);
@@ -27,7 +54,8 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   }
   const db::Result<std::int64_t> live = context.publisher->liveVersion();
   if (!live) throw HttpError(503, "the live database is not readable");
-  if (request.header("If-None-Match") == replica::VersionETag(*live)) {
+  const std::optional<std::string> none_match = request.header("If-None-Match");
+  if (none_match && NoneMatchNames(*none_match, replica::VersionETag(*live))) {
     HttpResponse not_modified = HttpResponse::Bytes("application/vnd.sqlite3", "", 304);
     not_modified.headers.emplace_back("ETag", replica::VersionETag(*live));
     return not_modified;
