@@ -16,6 +16,26 @@ std::size_t CharacterCount(std::string_view text) {
   return count;
 }
 
+/// The scripts a pincode is likely typed in by mistake: the digit blocks of India's scripts,
+/// Arabic-Indic ones and fullwidth ones (an East Asian keyboard). Each block is ten code points.
+bool IsDigitOfAnotherScript(char32_t point) {
+  static constexpr char32_t kZeros[] = {0x0660, 0x06F0, 0x0966, 0x09E6, 0x0A66, 0x0AE6,
+                                        0x0B66, 0x0BE6, 0x0C66, 0x0CE6, 0x0D66, 0xFF10};
+  for (const char32_t zero : kZeros) {
+    if (point >= zero && point <= zero + 9) return true;
+  }
+  return false;
+}
+
+bool HasDigitOfAnotherScript(std::string_view text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const Utf8CodePoint point = DecodeUtf8(text, i);
+    if (point.length > 0 && IsDigitOfAnotherScript(point.value)) return true;
+    i += point.length > 0 ? point.length : 1;
+  }
+  return false;
+}
+
 }  // namespace
 
 ParsedPincode ParsePincode(std::string_view text) {
@@ -27,10 +47,10 @@ ParsedPincode ParsePincode(std::string_view text) {
   std::uint32_t value = 0;
   for (const char c : text) {
     if (c < '0' || c > '9') {
-      // Six characters in more than six bytes: digits of another script, or fullwidth ones.
-      return {std::nullopt, text.size() == 6 ? "a pincode has only the digits 0-9"
-                                             : "a pincode has only the digits 0-9 (ASCII); "
-                                               "other scripts' digits are not read"};
+      return {std::nullopt, HasDigitOfAnotherScript(text)
+                                ? "a pincode has only the digits 0-9 (ASCII); other scripts' "
+                                  "digits are not read"
+                                : "a pincode has only the digits 0-9"};
     }
     value = value * 10 + static_cast<std::uint32_t>(c - '0');
   }

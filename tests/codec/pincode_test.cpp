@@ -31,8 +31,14 @@ TEST(Pincode, RejectsEverythingElseWithAReason) {
   EXPECT_NE(ParsePincode("12345").error.find("6 digits"), std::string::npos);
   // Counted in characters, not bytes: six fullwidth or Arabic-Indic digits are six characters,
   // refused for their script, and seven of them are seven.
-  for (const std::string text : {"１１０００１", "١١٠٠٠١"}) {
+  for (const std::string text : {"１１０００１", "١١٠٠٠١", "११०००१", "110০01"}) {
     EXPECT_NE(ParsePincode(text).error.find("other scripts' digits"), std::string::npos) << text;
+  }
+  // A six-character text with another non-ASCII character is not told it holds such digits.
+  for (const std::string text : {"11000é", "11000\u00a0", "Ω11000"}) {
+    const std::string error = ParsePincode(text).error;
+    EXPECT_NE(error.find("only the digits 0-9"), std::string::npos) << text;
+    EXPECT_EQ(error.find("other scripts"), std::string::npos) << text;
   }
   EXPECT_NE(ParsePincode("１１０００１１").error.find("got 7 characters"), std::string::npos);
   EXPECT_NE(ParsePincode("11000\xff\xfe").error.find("got 7 characters"), std::string::npos);
