@@ -24,7 +24,14 @@ Error UnknownPlan(std::string_view name) {
 
 /// Writes the plan in the caller's transaction.
 /// Returns true when a plan of that name was there and has been replaced.
-bool WritePlan(Connection& connection, const SortPlan& plan) {
+bool WritePlan(Connection& connection, const SortPlan& plan,
+               StoredDescription description = StoredDescription::kReplace) {
+  std::string kept = plan.description;
+  if (description == StoredDescription::kKeep) {
+    Statement stored = connection.prepare("SELECT description FROM sort_plans WHERE name = ?1");
+    stored.bind(1, plan.name);
+    if (stored.step()) kept = stored.getText(0);
+  }
   const bool replaced =
       connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, plan.name).run() > 0;
   connection
@@ -33,7 +40,7 @@ bool WritePlan(Connection& connection, const SortPlan& plan) {
                detail::kNowSql + ")")
       .bind(1, plan.name)
       .bind(2, plan.fallback_bin)
-      .bind(3, plan.description)
+      .bind(3, kept)
       .run();
   const std::int64_t id = connection.lastInsertRowid();
   Statement insert =
@@ -122,11 +129,11 @@ std::string PlanToCsv(const SortPlan& plan) {
   return out;
 }
 
-Result<bool> SavePlan(Connection& connection, const SortPlan& plan) {
+Result<bool> SavePlan(Connection& connection, const SortPlan& plan, StoredDescription description) {
   if (auto error = CheckPlan(plan)) return *error;
   return Guard([&]() -> Result<bool> {
     Transaction transaction(connection);
-    const bool replaced = WritePlan(connection, plan);
+    const bool replaced = WritePlan(connection, plan, description);
     transaction.commit();
     return replaced;
   });

@@ -75,6 +75,19 @@ TEST_F(SortPlans, SavingReplacesAndDeletingRemoves) {
   EXPECT_EQ(db_.queryInt64("SELECT count(*) FROM sort_rules WHERE bin = 'two'"), 0);
 }
 
+TEST_F(SortPlans, KeepingTheStoredDescriptionKeepsItOnlyWhenThereIsOne) {
+  ASSERT_TRUE(SavePlan(db_, HubPlan()).ok());  // "test plan"
+  SortPlan from_csv{"hub-a", "other", "", {{"2", "two"}}};
+  ASSERT_TRUE(SavePlan(db_, from_csv, StoredDescription::kKeep).ok());
+  EXPECT_EQ(GetPlan(db_, "hub-a").value().description, "test plan");
+  EXPECT_EQ(GetPlan(db_, "hub-a").value().rules, from_csv.rules);
+  SortPlan fresh{"hub-b", "other", "given", {{"2", "two"}}};
+  ASSERT_TRUE(SavePlan(db_, fresh, StoredDescription::kKeep).ok());
+  EXPECT_EQ(GetPlan(db_, "hub-b").value().description, "given");
+  ASSERT_TRUE(SavePlan(db_, from_csv).ok());  // kReplace: the description given, empty
+  EXPECT_EQ(GetPlan(db_, "hub-a").value().description, "");
+}
+
 TEST_F(SortPlans, RejectsMalformedPlans) {
   SortPlan plan = HubPlan();
   plan.rules.push_back({"1234567", "x"});

@@ -115,12 +115,10 @@ HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) 
   auto connection = context.pool->acquire();
   // The CSV has no place for the description: one fetched as CSV, edited and put back keeps it,
   // unless ?description= says otherwise.
-  if (csv && !request.queryParam("description")) {
-    if (const auto existing = db::GetPlan(*connection, name)) {
-      plan.description = existing->description;
-    }
-  }
-  const bool replaced = Unwrap(db::SavePlan(*connection, plan), "Bad Sort Plan");
+  const db::StoredDescription description = csv && !request.queryParam("description")
+                                                ? db::StoredDescription::kKeep
+                                                : db::StoredDescription::kReplace;
+  const bool replaced = Unwrap(db::SavePlan(*connection, plan, description), "Bad Sort Plan");
   return HttpResponse::Json(PlanJson(LoadPlan(*connection, name)).dump(), replaced ? 200 : 201);
 }
 

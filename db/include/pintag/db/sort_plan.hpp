@@ -51,9 +51,16 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv);
 /// The inverse: header, `*` row, then rules in ascending prefix order.
 std::string PlanToCsv(const SortPlan& plan);
 
+/// What saving over a stored plan does with its description.
+enum class StoredDescription {
+  kReplace,  ///< the saved plan's description replaces it
+  kKeep,     ///< it stays (a plan from CSV, which has no place for one); a new plan gets the given
+};
+
 /// Creates the plan, or replaces the one with the same name (rules and all), in one transaction;
 /// true when it replaced one (decided inside the transaction, so of two writers only one creates).
-Result<bool> SavePlan(Connection& connection, const SortPlan& plan);
+Result<bool> SavePlan(Connection& connection, const SortPlan& plan,
+                      StoredDescription description = StoredDescription::kReplace);
 /// kNotFound for an unknown plan.
 Result<SortPlan> GetPlan(Connection& connection, std::string_view name);
 Result<std::vector<std::string>> ListPlans(Connection& connection);  ///< names, ascending
