@@ -657,7 +657,7 @@ TEST_F(HostileCatalogue, CounterTokenOnTheScannerRoute) {
 TEST_F(HostileCatalogue, BasicAuthInsteadOfBearer) {
   expectRefused(Request("GET", "/api/v1/tokens", {"Authorization: Basic YWRtaW46YWRtaW4="}), 401);
 }
-TEST_F(HostileCatalogue, UnknownMethod) {
+TEST_F(HostileCatalogue, WrongMethodOnAKnownPathIs405) {
   expectRefused(Request("PATCH", "/api/v1/pincodes/110001", {}), 405);
 }
 TEST_F(HostileCatalogue, MadeUpMethodIsNotImplementedAndNamed) {
@@ -678,8 +678,10 @@ TEST_F(HostileCatalogue, MadeUpMethodIsNotImplementedAndNamed) {
   const Answer long_one = send(Request(std::string(300, 'Q'), "/livez", {}));
   EXPECT_EQ(long_one.status, 501);
   EXPECT_LT(long_one.body.size(), 400U) << long_one.body;
-  // A request line that is not HTTP at all stays a 400.
-  EXPECT_EQ(send("GET\r\n\r\n").status, 400);
+  // A request line that is not HTTP at all stays a 400, whatever its first word.
+  for (const std::string line : {"GET", "hello", "SSH-2.0-OpenSSH_9.2", "BREW /livez"}) {
+    EXPECT_EQ(send(line + "\r\n\r\n").status, 400) << line;
+  }
   expectHealthy();
 }
 

@@ -119,10 +119,12 @@ bool HasNoBody(const httplib::Request& req) {
 
 /// cpp-httplib refuses a method it does not parse with a bare 400 before any route is chosen,
 /// after filling in the request's method; RFC 9110 makes that 501, and the problem names it.
+/// Only for a request line of three parts ending in an HTTP version (cpp-httplib fills in the
+/// version only then): "hello" or an SSH banner stays a 400.
 bool UnknownMethod(const httplib::Request& req) {
   static constexpr std::array<std::string_view, 10> kParsed = {
       "GET", "HEAD", "POST", "PUT", "DELETE", "CONNECT", "OPTIONS", "TRACE", "PATCH", "PRI"};
-  return !req.method.empty() &&
+  return !req.method.empty() && req.version.rfind("HTTP/", 0) == 0 &&
          std::find(kParsed.begin(), kParsed.end(), req.method) == kParsed.end();
 }
 
@@ -254,6 +256,8 @@ struct HttpServer::Impl {
                                      " is not one this server answers (it answers GET, HEAD, "
                                      "POST, PUT, PATCH, DELETE and OPTIONS)"),
             res);
+      // What followed the request line is unread: the connection cannot be reused.
+      res.set_header("Connection", "close");
       return httplib::Server::HandlerResponse::Handled;
     }
     const HttpResponse problem =
