@@ -127,11 +127,15 @@ void Run(const ServeArgs& args) {
   replication.start();
 
   const bool any = args.bind == "0.0.0.0" || args.bind == "::";
-  // An IPv6 address goes in brackets in a URL (RFC 3986): http://[::1]:8080/.
+  // An IPv6 address goes in brackets in a URL, its zone's % as %25 (RFC 3986, RFC 6874):
+  // http://[::1]:8080/. Every-interface binds print 127.0.0.1, which answers where IPv6 is off.
   const auto in_url = [](const std::string& address) {
-    return address.find(':') == std::string::npos ? address : "[" + address + "]";
+    if (address.find(':') == std::string::npos || address.front() == '[') return address;
+    std::string bracketed = "[";
+    for (const char c : address) bracketed += c == '%' ? std::string("%25") : std::string(1, c);
+    return bracketed + "]";
   };
-  const std::string host = args.bind == "::" ? "[::1]" : any ? "127.0.0.1" : in_url(args.bind);
+  const std::string host = any ? "127.0.0.1" : in_url(args.bind);
   const std::string url = "http://" + host + ":" + std::to_string(http.port());
   std::cout << "PinTag serving " << url << "/ (database " << args.db << ", " << args.threads
             << " threads" << (any ? ", all interfaces" : "") << ")\n";
