@@ -40,10 +40,18 @@ async function showPincode(pin) {
   }
 }
 
+let searchRequest = 0;  // only the latest search's answer is drawn
+
+// Previous and Next are off while a page loads; the answer sets them (not `busy`, which would put
+// back what they were before the click).
 async function runSearch() {
+  const request = ++searchRequest;
+  $('prev').disabled = true;
+  $('next').disabled = true;
   show($('search-msg'));
   try {
     const page = await api(`/api/v1/pincodes${query(search)}`);
+    if (request !== searchRequest) return;
     const body = $('results-body');
     show(body, page.results.map((hit) => el('tr', {},
       el('td', { class: 'mono nowrap' },
@@ -65,6 +73,7 @@ async function runSearch() {
     $('next').disabled = last >= page.total;
     $('search-results').hidden = false;
   } catch (error) {
+    if (request !== searchRequest) return;
     $('search-results').hidden = true;
     show($('search-msg'), problemBox(error));
   }
@@ -93,20 +102,21 @@ $('search-form').addEventListener('submit', (event) => {
     await runSearch();
   });
 });
-$('prev').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+$('prev').addEventListener('click', () => {
   search.offset = Math.max(0, search.offset - search.limit);
-  await runSearch();
-}));
-$('next').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+  runSearch();
+});
+$('next').addEventListener('click', () => {
   search.offset += search.limit;
-  await runSearch();
-}));
-// A new page size applies to the results on screen at once, keeping the first row shown in view.
+  runSearch();
+});
+// A new page size applies to the search at once, shown or still loading, keeping the first row
+// shown in view.
 $('s-limit').addEventListener('change', (event) => {
-  if (!search || $('search-results').hidden) return;
+  if (!search) return;
   search.limit = Number(event.currentTarget.value);
   search.offset = Math.floor(search.offset / search.limit) * search.limit;
-  busy($('search'), runSearch);
+  runSearch();
 });
 
 $('key-form').addEventListener('submit', (event) => {
