@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <regex>
@@ -153,6 +154,36 @@ TEST(LabelSvg, IsSizedInMillimetresWithAPointViewBox) {
       << text.substr(0, 400);
   EXPECT_NE(text.find("viewBox=\"0 0 288 432\""), std::string::npos) << text.substr(0, 400);
   EXPECT_NE(text.find("</svg>"), std::string::npos);
+}
+
+TEST(LabelText, ALongBinIsPrintedWholeOnTwoLines) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // Cut to one line, "Mumbai West Sorting Chute…" lost the chute's number, the part that sorts.
+  LabelContent label = test::SampleLabel();
+  label.bin = "Mumbai West Sorting Chute 12 Level 3 North Wing";
+  for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In}) {
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << pdf.error;
+    test::TempDir dir;
+    const auto path = dir.path() / "label.pdf";
+    test::WriteFile(path, pdf.bytes);
+    const auto text = test::Run("pdftotext '" + path.string() + "' -");
+    ASSERT_TRUE(text.has_value());
+    std::string words;  // the text with every run of whitespace made one space
+    for (const char c : *text) {
+      if (std::isspace(static_cast<unsigned char>(c))) {
+        if (!words.empty() && words.back() != ' ') words += ' ';
+      } else {
+        words += c;
+      }
+    }
+    EXPECT_NE(words.find("Mumbai West Sorting Chute 12 Level 3 North Wing"), std::string::npos)
+        << words;
+    EXPECT_EQ(words.find("\u2026"), std::string::npos) << words;
+  }
+  // A short bin stays on one line, as large as before.
+  label.bin = "N-07";
+  EXPECT_TRUE(RenderLabelPdf(label));
 }
 
 TEST(LabelText, HostileNamesStillRender) {

@@ -1,6 +1,7 @@
 #include "label/label_draw.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -132,6 +133,34 @@ void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
   }
 }
 
+// The bin on one line when it fits at 3 mm or more, else on two of one size, broken at the space
+// that makes the longer line shortest: the end of a bin name ("… chute 12") is as much the answer
+// as its start, so it is not cut off while a break can show it.
+void DrawBinValue(cairo_t* cr, const std::string& bin, double x, double width, double baseline,
+                  double size, double height) {
+  constexpr double kOneLineMinMm = 3.0;
+  if (AdvancePerSize(cr, bin, true) * kOneLineMinMm <= width ||
+      bin.find(' ') == std::string::npos) {
+    DrawLine(cr, bin, x, width, baseline, {.bold = true, .size = size, .min_size = kOneLineMinMm});
+    return;
+  }
+  std::size_t cut = 0;
+  double longer = std::numeric_limits<double>::infinity();
+  for (std::size_t space = bin.find(' '); space != std::string::npos;
+       space = bin.find(' ', space + 1)) {
+    const double advance = std::max(AdvancePerSize(cr, bin.substr(0, space), true),
+                                    AdvancePerSize(cr, bin.substr(space + 1), true));
+    if (advance < longer) {
+      longer = advance;
+      cut = space;
+    }
+  }
+  const double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
+  const LineStyle style{.bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm};
+  DrawLine(cr, bin.substr(0, cut), x, width, baseline - style.size * 1.12, style);
+  DrawLine(cr, bin.substr(cut + 1), x, width, baseline, style);
+}
+
 void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
   SelectFont(cr, true, kCaptionMm);
   cairo_move_to(cr, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
@@ -148,8 +177,8 @@ void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
     DrawLine(cr, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
              {.bold = false, .size = std::min(value_size, 5.0), .min_size = 2.0});
   } else {
-    DrawLine(cr, bin, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
-             {.bold = true, .size = value_size, .min_size = 3.0, .align = Align::kLeft});
+    DrawBinValue(cr, bin, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
+                 value_size, value_h);
   }
 
   const double right_x = box.x + box.w * 0.58;
