@@ -32,6 +32,7 @@ function pdfLines(path) {
 test('counter looks up pincodes, previews a label and downloads single and batch PDFs', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);
+  assert.equal(await page.getByText('Ctrl+Enter').isVisible(), true);  // a desktop has a keyboard
   await page.locator('#token').fill(counterToken);
   await page.locator('#pins').fill('110001\n560001, 999999 12345');
   await page.getByRole('button', { name: 'Look up' }).click();
@@ -111,5 +112,8 @@ test('the counter page fits a phone screen', async () => {
   await page.locator('#label-preview').waitFor();
   const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
   assert.ok(overflow <= 0, `page is ${overflow}px wider than the phone screen`);
+  // A phone has no Ctrl key: the shortcut is not offered there, the rest of the hint is.
+  assert.equal(await page.getByText('Ctrl+Enter').isVisible(), false);
+  assert.equal(await page.getByText('A pincode listed twice prints twice.').isVisible(), true);
   await screenshot(page, 'counter-phone');
 });
