@@ -3,6 +3,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cctype>
 #include <cstdio>
 #include <regex>
 #include <sstream>
@@ -264,6 +265,65 @@ TEST_F(ServeTest, LabelsWithoutAPlanPrintTheDefaultPlansBin) {
                                                        "(default: default)") != std::string::npos);
     }
     EXPECT_TRUE(documented) << method << " " << path;
+  }
+}
+
+// A pincode serves many offices (110001: 21); the clerk can print the addressee's.
+TEST_F(ServeTest, ALabelPrintsTheOfficeAskedFor) {
+  ASSERT_EQ(std::system("command -v pdftotext > /dev/null 2>&1"), 0)
+      << "pdftotext is missing: install poppler-utils (scripts/debian-packages-test.txt)";
+  const json record = ExpectJson(client().Get("/api/v1/pincodes/110001"));
+  ASSERT_GT(record["offices"].size(), 2U);
+  const std::string main_office = record["office"];
+  std::string other;  // an office of 110001 that is not the one printed by default
+  for (const json& office : record["offices"]) {
+    if (office["name"] != main_office) other = office["name"];
+  }
+  ASSERT_FALSE(other.empty());
+  std::string typed = other;  // as a clerk might type it: lower case, a space after
+  for (char& c : typed) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  typed += " ";
+
+  std::string query;  // percent-encoded
+  for (const char c : typed) {
+    if (std::isalnum(static_cast<unsigned char>(c))) {
+      query += c;
+    } else {
+      char hex[4];
+      std::snprintf(hex, sizeof hex, "%%%02X", static_cast<unsigned char>(c));
+      query += hex;
+    }
+  }
+  auto single = client().Get("/api/v1/labels/110001.pdf?office=" + query, counter());
+  ASSERT_TRUE(single);
+  ASSERT_EQ(single->status, 200) << single->body.substr(0, 300);
+  std::vector<std::string> lines = PdfLines(dir_, single->body, 1);
+  EXPECT_TRUE(HasLine(lines, other)) << other;
+  EXPECT_FALSE(HasLine(lines, main_office)) << main_office;
+  lines = PdfLines(dir_, client().Get("/api/v1/labels/110001.pdf", counter())->body, 1);
+  EXPECT_TRUE(HasLine(lines, main_office)) << "without office=, the main office";
+
+  const json batch = {{"pincodes", {"110001", {{"pincode", "110001"}, {"office", other}}}}};
+  auto both = client().Post("/api/v1/labels", counter(), batch.dump(), "application/json");
+  ASSERT_TRUE(both);
+  ASSERT_EQ(both->status, 200) << both->body.substr(0, 300);
+  EXPECT_TRUE(HasLine(PdfLines(dir_, both->body, 1), main_office));
+  EXPECT_TRUE(HasLine(PdfLines(dir_, both->body, 2), other));
+
+  // An office the pincode does not have is refused, naming some it has; so are bad items.
+  const json unknown = ExpectProblem(
+      client().Get("/api/v1/labels/110001.png?office=Nowhere%20Nagar", counter()), 400);
+  EXPECT_EQ(unknown["title"], "Unknown Office");
+  EXPECT_NE(unknown["detail"].get<std::string>().find(main_office), std::string::npos)
+      << unknown.dump();
+  for (const char* body : {R"({"pincodes": [{"pincode": "110001", "office": "Nowhere Nagar"}]})",
+                           R"({"pincodes": [{"office": "Janpath"}]})",
+                           R"({"pincodes": [{"pincode": "110001", "office": 7}]})",
+                           R"({"pincodes": [{"pincode": "110001", "floor": "2"}]})"}) {
+    const json problem =
+        ExpectProblem(client().Post("/api/v1/labels", counter(), body, "application/json"), 400);
+    EXPECT_NE(problem["detail"].get<std::string>().find("pincodes[0]"), std::string::npos)
+        << body << " " << problem.dump();
   }
 }
 

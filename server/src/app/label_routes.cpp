@@ -2,6 +2,11 @@
 // SVG; many as one PDF). Labels print the bin of the asked sort plan, the default plan when none
 // is asked for. Unknown pincodes are 404, retired ones 410.
 
+#include <algorithm>
+#include <cctype>
+#include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "app/db_problems.hpp"
@@ -21,12 +26,51 @@ constexpr double kDefaultTagMm = 50;
 constexpr double kMinTagMm = 5;
 constexpr double kMaxTagMm = 500;
 
-// What a label prints for an active pincode under `plan`.
-LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan) {
+std::string_view TrimmedSpaces(std::string_view text) {
+  while (!text.empty() && text.front() == ' ') text.remove_prefix(1);
+  while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
+  return text;
+}
+
+/// Names as a clerk types them: ASCII case and spaces at either end do not count (the
+/// directory has names such as "New Delhi ").
+bool SameName(std::string_view a, std::string_view b) {
+  a = TrimmedSpaces(a);
+  b = TrimmedSpaces(b);
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+/// The office a label prints: the one named (a pincode can serve a dozen offices, and the
+/// addressee's is the one a person reads), else the main one.
+const db::PostOffice* ChosenOffice(const db::PincodeRecord& record,
+                                   const std::optional<std::string>& name) {
+  if (!name || TrimmedSpaces(*name).empty()) return MainOffice(record);
+  for (const db::PostOffice& office : record.offices) {
+    if (SameName(office.name, *name)) return &office;
+  }
+  std::string known;
+  for (std::size_t i = 0; i < record.offices.size() && i < 5; ++i) {
+    known += (i == 0 ? "" : ", ") + record.offices[i].name;
+  }
+  if (record.offices.size() > 5) {
+    known += " and " + std::to_string(record.offices.size() - 5) + " more";
+  }
+  throw HttpError(400,
+                  "pincode " + record.pincode.str() + " has no office named '" +
+                      name->substr(0, 80) + "'" + (known.empty() ? "" : "; its offices: " + known),
+                  "Unknown Office");
+}
+
+// What a label prints for an active pincode under `plan`, naming `office` or the main one.
+LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan,
+                      const std::optional<std::string>& office_name = std::nullopt) {
   LabelContent label;
   label.pincode = record.pincode;
   label.key = record.key;
-  if (const db::PostOffice* office = MainOffice(record)) label.office = office->name;
+  if (const db::PostOffice* office = ChosenOffice(record, office_name)) label.office = office->name;
   label.district = record.district;
   label.state = record.state;
   label.plan = plan.name;
@@ -61,7 +105,7 @@ LabelRequest ReadLabelRequest(const AppContext& context, const HttpRequest& requ
   const std::string plan_name = PlanQuery(request);
   auto connection = context.pool->acquire();
   const db::PincodeRecord record = LoadActivePincode(*connection, pincode);
-  label.content = LabelFor(record, LoadPlan(*connection, plan_name));
+  label.content = LabelFor(record, LoadPlan(*connection, plan_name), request.queryParam("office"));
   return label;
 }
 
@@ -150,19 +194,51 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   options.size = size ? LabelSizeValue(*size) : LabelSizeQuery(request);
   const std::optional<std::string> plan_name = text("plan");
   const std::string plan = plan_name ? PlanNameValue(*plan_name) : PlanQuery(request);
-  std::vector<Pincode> pincodes;
-  pincodes.reserve(pins.size());
+  // Each item is a pincode, or {"pincode": …, "office": …} to print that office's name.
+  struct Item {
+    Pincode pincode;
+    std::optional<std::string> office;
+  };
+  std::vector<Item> items;
+  items.reserve(pins.size());
   for (std::size_t i = 0; i < pins.size(); ++i) {
-    pincodes.push_back(PincodeValue(pins[i], "pincodes[" + std::to_string(i) + "]"));
+    const std::string where = "pincodes[" + std::to_string(i) + "]";
+    if (!pins[i].is_object()) {
+      items.push_back({PincodeValue(pins[i], where), std::nullopt});
+      continue;
+    }
+    for (const auto& [field, value] : pins[i].items()) {
+      if (field != "pincode" && field != "office") {
+        throw HttpError(400, where + " has an unknown field '" + field.substr(0, 40) +
+                                 "'; an item is a pincode or {\"pincode\", \"office\"}");
+      }
+    }
+    if (!pins[i].contains("pincode")) throw HttpError(400, where + " needs a 'pincode'");
+    Item item{PincodeValue(pins[i]["pincode"], where + ".pincode"), std::nullopt};
+    if (pins[i].contains("office")) {
+      if (!pins[i]["office"].is_string()) {
+        throw HttpError(400, where + ".office must be a string");
+      }
+      item.office = pins[i]["office"].get<std::string>();
+    }
+    items.push_back(std::move(item));
   }
 
   std::vector<LabelContent> labels;
-  labels.reserve(pincodes.size());
+  labels.reserve(items.size());
   {
     auto connection = context.pool->acquire();
     const db::SortPlan sort_plan = LoadPlan(*connection, plan);
-    for (const Pincode pincode : pincodes) {
-      labels.push_back(LabelFor(LoadActivePincode(*connection, pincode), sort_plan));
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      try {
+        labels.push_back(
+            LabelFor(LoadActivePincode(*connection, items[i].pincode), sort_plan, items[i].office));
+      } catch (const HttpError& e) {
+        // Which item of the batch, so a clerk finds the line to fix.
+        server::Problem problem = e.problem();
+        problem.detail = "pincodes[" + std::to_string(i) + "]: " + problem.detail;
+        throw HttpError(std::move(problem));
+      }
     }
   }
   return Rendered(RenderLabelsPdf(labels, options), context, "application/pdf", "labels.pdf",

@@ -71,6 +71,12 @@ std::string PlanQuery(const HttpRequest& request) {
   return PlanNameValue(request.queryParam("plan").value_or(""));
 }
 
+server::QueryParamDoc OfficeQueryDoc() {
+  return {"office",
+          "the office whose name the label prints, one of the pincode's (default: its head "
+          "office, else a sub office, else the first)"};
+}
+
 server::QueryParamDoc PlanQueryDoc() {
   return {"plan",
           "sort plan whose bins are used (default: " + std::string(db::kDefaultPlanName) + ")"};

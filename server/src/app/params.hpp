@@ -34,6 +34,7 @@ std::string PlanNameParam(const server::HttpRequest& request);
 /// ?plan=: the sort plan whose bins are used; absent or empty: the default plan.
 std::string PlanQuery(const server::HttpRequest& request);
 server::QueryParamDoc PlanQueryDoc();
+server::QueryParamDoc OfficeQueryDoc();  ///< `office` of the label routes
 
 /// ?size=: a label size (100x150mm, a6, 4x6in, WxH mm|cm|in); absent: 100 x 150 mm.
 LabelSize LabelSizeQuery(const server::HttpRequest& request);
