@@ -12,10 +12,12 @@ const token = bindToken({
 const kPreviewDpi = 120;
 const kConcurrency = 6;
 
-/** Rows of the table, in the order typed: {text, valid, record, error, include}. */
+/** Rows of the table, in the order typed: {text, valid, record, error, include, office}; `office`
+ * is the office chosen for the label, null for the record's own. */
 let rows = [];
-/** The pincode whose label is shown. */
+/** The pincode whose label is shown, and its row (a pincode typed twice has two). */
 let selected = null;
+let selectedRow = -1;
 let previewUrl = null;
 let previewRequest = 0;
 
@@ -88,13 +90,12 @@ function renderTable() {
     });
     const previewButton = el('button', {
       type: 'button', class: 'link', 'aria-label': `Preview the label for ${pin}`, disabled: retired,
-      onclick: () => select(pin),
+      onclick: () => select(index),
     }, 'Preview');
-    return el('tr', { class: pin === selected ? 'is-selected' : null, 'data-pincode': pin, 'data-row': index },
+    return el('tr', { class: index === selectedRow ? 'is-selected' : null, 'data-pincode': pin, 'data-row': index },
       el('td', {}, check),
       el('td', { class: 'mono nowrap' }, pin),
-      el('td', {}, r.office || '—', retired ? [' ', badge(r.status)] : null,
-        r.office_count > 1 ? el('div', { class: 'small muted' }, `${r.office_count} offices`) : null),
+      el('td', {}, officeCell(row, index, retired), retired ? [' ', badge(r.status)] : null),
       el('td', { class: 'district' }, r.district),
       el('td', { class: 'hide-narrow' }, r.state),
       el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
@@ -113,14 +114,15 @@ async function lookup() {
   }
   const unique = [...new Set(parsed.filter((p) => p.valid).map((p) => p.text))];
   const answers = await lookupAll(unique);
-  rows = parsed.map((p) => ({ ...p, ...(answers.get(p.text) || {}), include: true }));
+  rows = parsed.map((p) => ({ ...p, ...(answers.get(p.text) || {}), include: true, office: null }));
   // A failure that is not about the pincode itself (server down, busy) is worth saying once.
   const general = [...answers.values()].find((a) => a.error && ![400, 404].includes(a.error.status));
   if (general) show($('lookup-msg'), problemBox(general.error));
   renderTable();
-  const first = rows.find((r) => r.record && r.record.status === 'active');
+  const first = rows.findIndex((r) => r.record && r.record.status === 'active');
   selected = null;
-  if (first) await select(first.text);
+  selectedRow = -1;
+  if (first >= 0) await select(first);
   else {
     clearPreview('No printable pincode in the list.');
     updateButtons();
@@ -133,16 +135,32 @@ function clearPreview(text) {
   show($('preview'), el('p', { class: 'placeholder' }, text));
 }
 
-async function select(pin) {
-  selected = pin;
-  for (const tr of $('results-body').rows) tr.classList.toggle('is-selected', tr.dataset.pincode === pin);
+async function select(index) {
+  selectedRow = index;
+  selected = rows[index].text;
+  for (const tr of $('results-body').rows) tr.classList.toggle('is-selected', Number(tr.dataset.row) === index);
   updateButtons();
   await refreshPreview();
 }
 
+// The office the label prints: a pincode with several offers them all, the record's own first.
+function officeCell(row, index, retired) {
+  const r = row.record;
+  const names = (r.offices || []).map((o) => o.name);
+  if (retired || names.length < 2) return r.office || '—';
+  const ordered = [r.office, ...names.filter((n) => n !== r.office)];
+  return el('select', {
+    class: 'office-choice', 'aria-label': `Office printed on the label for ${row.text}`,
+    onchange: (event) => {
+      row.office = event.target.value === r.office ? null : event.target.value;
+      if (index === selectedRow) refreshPreview();
+    },
+  }, ordered.map((name) => el('option', { value: name, selected: name === (row.office || r.office) ? true : null }, name)));
+}
+
 async function refreshPreview() {
   if (!selected) return;
-  const row = rows.find((r) => r.text === selected);
+  const row = rows[selectedRow];
   if (!token()) {
     clearPreview('Paste a counter token above to preview and print labels.');
     return;
@@ -150,11 +168,12 @@ async function refreshPreview() {
   const request = ++previewRequest;
   $('preview').setAttribute('aria-busy', 'true');
   try {
-    const blob = await api(`/api/v1/labels/${selected}.png${labelQuery({ dpi: kPreviewDpi })}`, { token: token(), as: 'blob' });
+    const blob = await api(`/api/v1/labels/${selected}.png${labelQuery({ dpi: kPreviewDpi, office: row.office })}`,
+      { token: token(), as: 'blob' });
     if (request !== previewRequest) return;
     if (previewUrl) URL.revokeObjectURL(previewUrl);
     previewUrl = URL.createObjectURL(blob);
-    const office = row && row.record ? row.record.office : '';
+    const office = row.office || (row.record ? row.record.office : '');
     const plan = `plan ${planValue() || 'default'}`;
     show($('preview'),
       el('img', { id: 'label-preview', src: previewUrl, alt: `Label for ${selected}${office ? ` (${office})` : ''}` }),
@@ -171,7 +190,8 @@ async function refreshPreview() {
 }
 
 async function labelPdf() {
-  return api(`/api/v1/labels/${selected}.pdf${labelQuery()}`, { token: token(), as: 'blob' });
+  return api(`/api/v1/labels/${selected}.pdf${labelQuery({ office: rows[selectedRow].office })}`,
+    { token: token(), as: 'blob' });
 }
 
 function needToken() {
@@ -223,10 +243,11 @@ $('print-pdf').addEventListener('click', (event) => {
 
 $('batch-pdf').addEventListener('click', (event) => busy(event.currentTarget, async () => {
   if (needToken()) return;
-  const pins = printable().map((r) => r.text);
+  const chosen = printable();
+  const pins = chosen.map((r) => r.text);
   show($('print-msg'));
   try {
-    const body = { pincodes: pins, size: sizeValue() };
+    const body = { pincodes: chosen.map((r) => (r.office ? { pincode: r.text, office: r.office } : r.text)), size: sizeValue() };
     if (planValue()) body.plan = planValue();
     const blob = await api('/api/v1/labels', { method: 'POST', token: token(), json: body, as: 'blob' });
     const name = `labels-${pins.length}.pdf`;

@@ -74,6 +74,38 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   assert.deepEqual(page.problems, []);
 });
 
+test('a clerk picks the office a label prints, row by row', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001\n110001');  // two parcels, two addressees
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  const second = page.locator('tr[data-row="1"]');
+  const choice = second.getByLabel('Office printed on the label for 110001');
+  assert.equal(await choice.inputValue(), 'Bengali Market');  // the record's own comes first
+  await choice.selectOption('Janpath');
+  await second.getByRole('button', { name: 'Preview the label for 110001' }).click();
+  await page.waitForFunction(() => /Janpath/.test(document.getElementById('label-preview')?.alt || ''));
+  // Only the row previewed is marked, not every row of that pincode.
+  assert.equal(await page.locator('tr.is-selected').count(), 1);
+  assert.equal(await page.locator('tr.is-selected').getAttribute('data-row'), '1');
+
+  const [single] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: 'Download PDF' }).click()]);
+  const singleLines = pdfLines(await single.path());
+  assert.ok(singleLines.includes('Janpath') && !singleLines.includes('Bengali Market'), singleLines.join(' | '));
+
+  const [batch] = await Promise.all([page.waitForEvent('download'),
+    page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).click()]);
+  const batchPath = await batch.path();
+  const pageText = (n) => execFileSync('pdftotext', ['-f', String(n), '-l', String(n), batchPath, '-'], { encoding: 'utf8' });
+  assert.match(pageText(1), /Bengali Market/);
+  assert.match(pageText(2), /Janpath/);
+  assert.doesNotMatch(pageText(2), /Bengali Market/);
+  await screenshot(page, 'counter-office');
+  assert.deepEqual(page.problems, []);
+});
+
 test('a batch over the server\'s limit says what to do about it', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);
