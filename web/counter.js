@@ -118,10 +118,11 @@ async function lookup() {
   // A failure that is not about the pincode itself (server down, busy) is worth saying once.
   const general = [...answers.values()].find((a) => a.error && ![400, 404].includes(a.error.status));
   if (general) show($('lookup-msg'), problemBox(general.error));
-  renderTable();
-  const first = rows.findIndex((r) => r.record && r.record.status === 'active');
+  // Forget the old selection before drawing, or the new table marks a row nobody picked.
   selected = null;
   selectedRow = -1;
+  renderTable();
+  const first = rows.findIndex((r) => r.record && r.record.status === 'active');
   if (first >= 0) await select(first);
   else {
     clearPreview('No printable pincode in the list.');
@@ -130,6 +131,8 @@ async function lookup() {
 }
 
 function clearPreview(text) {
+  ++previewRequest; // a preview still on its way must not replace this text
+  $('preview').removeAttribute('aria-busy');
   if (previewUrl) URL.revokeObjectURL(previewUrl);
   previewUrl = null;
   show($('preview'), el('p', { class: 'placeholder' }, text));
@@ -138,7 +141,12 @@ function clearPreview(text) {
 async function select(index) {
   selectedRow = index;
   selected = rows[index].text;
-  for (const tr of $('results-body').rows) tr.classList.toggle('is-selected', Number(tr.dataset.row) === index);
+  for (const tr of $('results-body').rows) {
+    const chosen = Number(tr.dataset.row) === index;
+    tr.classList.toggle('is-selected', chosen);
+    if (chosen) tr.setAttribute('aria-current', 'true');
+    else tr.removeAttribute('aria-current');
+  }
   updateButtons();
   await refreshPreview();
 }
@@ -150,7 +158,7 @@ function officeCell(row, index, retired) {
   if (retired || names.length < 2) return r.office || '—';
   const ordered = [r.office, ...names.filter((n) => n !== r.office)];
   return el('select', {
-    class: 'office-choice', 'aria-label': `Office printed on the label for ${row.text}`,
+    class: 'office-choice', 'aria-label': `Office printed on the label for ${row.text} (row ${index + 1})`,
     onchange: (event) => {
       row.office = event.target.value === r.office ? null : event.target.value;
       if (index === selectedRow) refreshPreview();
@@ -178,7 +186,7 @@ async function refreshPreview() {
     show($('preview'),
       el('img', { id: 'label-preview', src: previewUrl, alt: `Label for ${selected}${office ? ` (${office})` : ''}` }),
       el('figcaption', { class: 'small muted', style: 'margin-top:0.6rem' },
-        `${selected} · ${sizeText[sizeValue()] || sizeValue()} · ${plan}`));
+        [selected, office, sizeText[sizeValue()] || sizeValue(), plan].filter(Boolean).join(' · ')));
   } catch (error) {
     if (request !== previewRequest) return;
     if (previewUrl) URL.revokeObjectURL(previewUrl);

@@ -90,6 +90,9 @@ test('a clerk picks the office a label prints, row by row', async () => {
   // Only the row previewed is marked, not every row of that pincode.
   assert.equal(await page.locator('tr.is-selected').count(), 1);
   assert.equal(await page.locator('tr.is-selected').getAttribute('data-row'), '1');
+  assert.equal(await page.locator('tr[aria-current="true"]').getAttribute('data-row'), '1');
+  // The caption under the preview names the office too, not only the image's alt text.
+  assert.match(await page.locator('#preview figcaption').innerText(), /Janpath/);
 
   const [single] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: 'Download PDF' }).click()]);
   const singleLines = pdfLines(await single.path());

@@ -309,6 +309,13 @@ TEST_F(ServeTest, ALabelPrintsTheOfficeAskedFor) {
   ASSERT_EQ(both->status, 200) << both->body.substr(0, 300);
   EXPECT_TRUE(HasLine(PdfLines(dir_, both->body, 1), main_office));
   EXPECT_TRUE(HasLine(PdfLines(dir_, both->body, 2), other));
+  // "office": null is the same as no office: the main one.
+  auto unnamed =
+      client().Post("/api/v1/labels", counter(),
+                    R"({"pincodes": [{"pincode": "110001", "office": null}]})", "application/json");
+  ASSERT_TRUE(unnamed);
+  ASSERT_EQ(unnamed->status, 200) << unnamed->body.substr(0, 300);
+  EXPECT_TRUE(HasLine(PdfLines(dir_, unnamed->body, 1), main_office));
 
   // An office the pincode does not have is refused, naming some it has; so are bad items.
   const json unknown = ExpectProblem(

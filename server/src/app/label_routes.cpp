@@ -215,9 +215,10 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
     }
     if (!pins[i].contains("pincode")) throw HttpError(400, where + " needs a 'pincode'");
     Item item{PincodeValue(pins[i]["pincode"], where + ".pincode"), std::nullopt};
-    if (pins[i].contains("office")) {
+    // "office": null is the same as leaving it out: the pincode's main office.
+    if (pins[i].contains("office") && !pins[i]["office"].is_null()) {
       if (!pins[i]["office"].is_string()) {
-        throw HttpError(400, where + ".office must be a string");
+        throw HttpError(400, where + ".office must be a string or null");
       }
       item.office = pins[i]["office"].get<std::string>();
     }
@@ -234,9 +235,12 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
         labels.push_back(
             LabelFor(LoadActivePincode(*connection, items[i].pincode), sort_plan, items[i].office));
       } catch (const HttpError& e) {
-        // Which item of the batch, so a clerk finds the line to fix.
+        // Which item of the batch, so a clerk finds the line to fix; a server fault is not
+        // the item's.
         server::Problem problem = e.problem();
-        problem.detail = "pincodes[" + std::to_string(i) + "]: " + problem.detail;
+        if (problem.status < 500) {
+          problem.detail = "pincodes[" + std::to_string(i) + "]: " + problem.detail;
+        }
         throw HttpError(std::move(problem));
       }
     }
