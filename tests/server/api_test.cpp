@@ -180,7 +180,13 @@ TEST_F(ApiTest, CountsRequestsByRouteAndStatus) {
   api_.handle(Get("/api/v1/echo/a"));
   api_.handle(Get("/api/v1/nope"));
   api_.handle(Get("/api/v1/files/x.bin"));
+  HttpRequest wrong_method = Get("/api/v1/echo/b");
+  wrong_method.method = "DELETE";
+  api_.handle(wrong_method);
   EXPECT_EQ(metrics_->requestCount("/livez", "GET", 200), 2);
+  EXPECT_EQ(metrics_->requestCount("/api/v1/echo/{word}", "DELETE", 405), 1)
+      << "a wrong method is counted under the route its path matched";
+  EXPECT_EQ(metrics_->requestCount("unmatched", "DELETE", 405), 0);
   EXPECT_EQ(metrics_->requestCount("/api/v1/echo/{word}", "GET", 200), 1);
   EXPECT_EQ(metrics_->requestCount("unmatched", "GET", 404), 1);
   EXPECT_EQ(metrics_->requestCount("/api/v1/files/{name}.bin", "GET", 401), 1);

@@ -62,9 +62,14 @@ TEST(Router, ReportsMethodsAllowedOnAKnownPath) {
   RouteMatch m = router.match("DELETE", "/api/v1/sortplans/main");
   EXPECT_EQ(m.route, nullptr);
   EXPECT_EQ(m.allowed_methods, (std::vector<std::string>{"PUT", "GET"}));
+  EXPECT_EQ(m.allowed_pattern, "/api/v1/sortplans/{name}");
   m = router.match("GET", "/api/v1/nothing");
   EXPECT_EQ(m.route, nullptr);
   EXPECT_TRUE(m.allowed_methods.empty());
+  EXPECT_TRUE(m.allowed_pattern.empty());
+  m = router.match("GET", "/api/v1/sortplans/main");
+  ASSERT_NE(m.route, nullptr);
+  EXPECT_TRUE(m.allowed_pattern.empty());
 }
 
 TEST(Router, NoMatchForTrailingSlashesOrExtraSegments) {

@@ -14,7 +14,7 @@ namespace {
 constexpr std::size_t kMaxTokenLength = 4096;
 // cpp-httplib 0.11.4 bounds each header line (8 KiB) but not how many come: past these, 431.
 constexpr std::size_t kMaxHeaderCount = 100;
-constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
+constexpr std::size_t kMaxHeaderBytes = std::size_t{64} * 1024;
 
 std::string Lower(std::string_view text) {
   std::string out(text);
@@ -114,7 +114,8 @@ Admission Api::admit(std::string_view method, std::string_view path,
           ProblemResponse(405, std::string(method) + " is not allowed here; use " + allow);
       response.headers.emplace_back("Allow", allow);
       admission.rejection = std::move(response);
-      admission.route_label = "unmatched";
+      // The path is one of ours: an operator wants to see which route is called wrongly.
+      admission.route_label = admission.match.allowed_pattern;
       return admission;
     }
     if (static_files_ && (method == "GET" || method == "HEAD") &&

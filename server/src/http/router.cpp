@@ -112,9 +112,13 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
         break;
       }
       result.allowed_methods.push_back(routes_[i].method);
+      if (result.allowed_pattern.empty()) result.allowed_pattern = routes_[i].pattern;
     }
   }
-  if (result.route != nullptr) result.allowed_methods.clear();
+  if (result.route != nullptr) {
+    result.allowed_methods.clear();
+    result.allowed_pattern.clear();
+  }
   return result;
 }
 

@@ -42,6 +42,7 @@ struct RouteMatch {
   const Route* route = nullptr;               ///< null when nothing matched
   std::map<std::string, std::string> params;  ///< path parameters of the matched route
   std::vector<std::string> allowed_methods;   ///< when the path matched other methods only
+  std::string allowed_pattern;  ///< then, the pattern the path matched (a 405's metrics label)
 };
 
 class Router {
