@@ -159,7 +159,9 @@ function officeCell(row, index, retired) {
   const ordered = [r.office, ...names.filter((n) => n !== r.office)];
   return el('select', {
     class: 'office-choice', 'aria-label': `Office printed on the label for ${row.text} (row ${index + 1})`,
+    title: row.office || r.office, // a narrow column cuts long names; hovering shows it whole
     onchange: (event) => {
+      event.target.title = event.target.value;
       row.office = event.target.value === r.office ? null : event.target.value;
       if (index === selectedRow) refreshPreview();
     },

@@ -84,7 +84,9 @@ test('a clerk picks the office a label prints, row by row', async () => {
   const second = page.locator('tr[data-row="1"]');
   const choice = second.getByLabel('Office printed on the label for 110001');
   assert.equal(await choice.inputValue(), 'Bengali Market');  // the record's own comes first
+  assert.equal(await choice.getAttribute('title'), 'Bengali Market');  // whole, where cut
   await choice.selectOption('Janpath');
+  assert.equal(await choice.getAttribute('title'), 'Janpath');
   await second.getByRole('button', { name: 'Preview the label for 110001' }).click();
   await page.waitForFunction(() => /Janpath/.test(document.getElementById('label-preview')?.alt || ''));
   // Only the row previewed is marked, not every row of that pincode.
