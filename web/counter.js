@@ -71,8 +71,12 @@ function renderTable() {
   const found = rows.filter((r) => r.record).length;
   $('results-caption').textContent =
     `${rows.length} ${rows.length === 1 ? 'pincode' : 'pincodes'}, ${found} found. Tick the ones to print.`;
+  const copies = new Map();
+  for (const row of rows) copies.set(row.text, (copies.get(row.text) || 0) + 1);
   show(body, rows.map((row, index) => {
     const pin = row.text;
+    // A pincode listed twice gets two rows; their controls are told apart by row number.
+    const which = copies.get(pin) > 1 ? `${pin} (row ${index + 1})` : pin;
     if (!row.record) {
       const why = !row.valid
         ? 'Not a pincode: six digits, the first 1–9.'
@@ -85,17 +89,17 @@ function renderTable() {
     const r = row.record;
     const retired = r.status !== 'active';
     const check = el('input', {
-      type: 'checkbox', checked: row.include && !retired, disabled: retired, 'aria-label': `Print a label for ${pin}`,
+      type: 'checkbox', checked: row.include && !retired, disabled: retired, 'aria-label': `Print a label for ${which}`,
       onchange: (event) => { row.include = event.target.checked; updateButtons(); },
     });
     const previewButton = el('button', {
-      type: 'button', class: 'link', 'aria-label': `Preview the label for ${pin}`, disabled: retired,
+      type: 'button', class: 'link', 'aria-label': `Preview the label for ${which}`, disabled: retired,
       onclick: () => select(index),
     }, 'Preview');
-    return el('tr', { class: index === selectedRow ? 'is-selected' : null, 'data-pincode': pin, 'data-row': index },
+    return el('tr', { 'data-pincode': pin, 'data-row': index },
       el('td', {}, check),
       el('td', { class: 'mono nowrap' }, pin),
-      el('td', {}, officeCell(row, index, retired), retired ? [' ', badge(r.status)] : null),
+      el('td', {}, officeCell(row, index, which, retired), retired ? [' ', badge(r.status)] : null),
       el('td', { class: 'district' }, r.district),
       el('td', { class: 'hide-narrow' }, r.state),
       el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
@@ -152,13 +156,13 @@ async function select(index) {
 }
 
 // The office the label prints: a pincode with several offers them all, the record's own first.
-function officeCell(row, index, retired) {
+function officeCell(row, index, which, retired) {
   const r = row.record;
   const names = (r.offices || []).map((o) => o.name);
   if (retired || names.length < 2) return r.office || '—';
   const ordered = [r.office, ...names.filter((n) => n !== r.office)];
   return el('select', {
-    class: 'office-choice', 'aria-label': `Office printed on the label for ${row.text} (row ${index + 1})`,
+    class: 'office-choice', 'aria-label': `Office printed on the label for ${which}`,
     title: row.office || r.office, // a narrow column cuts long names; hovering shows it whole
     onchange: (event) => {
       event.target.title = event.target.value;

@@ -87,7 +87,9 @@ test('a clerk picks the office a label prints, row by row', async () => {
   assert.equal(await choice.getAttribute('title'), 'Bengali Market');  // whole, where cut
   await choice.selectOption('Janpath');
   assert.equal(await choice.getAttribute('title'), 'Janpath');
-  await second.getByRole('button', { name: 'Preview the label for 110001' }).click();
+  // Two rows of one pincode: their controls' names say which row they are.
+  await page.getByRole('button', { name: 'Preview the label for 110001 (row 2)', exact: true }).click();
+  assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 110001 (row 1)', exact: true }).count(), 1);
   await page.waitForFunction(() => /Janpath/.test(document.getElementById('label-preview')?.alt || ''));
   // Only the row previewed is marked, not every row of that pincode.
   assert.equal(await page.locator('tr.is-selected').count(), 1);

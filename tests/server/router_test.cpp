@@ -70,6 +70,11 @@ TEST(Router, ReportsMethodsAllowedOnAKnownPath) {
   m = router.match("GET", "/api/v1/sortplans/main");
   ASSERT_NE(m.route, nullptr);
   EXPECT_TRUE(m.allowed_pattern.empty());
+  // A path both a literal and a parameter pattern match: the literal names it.
+  m = router.match("DELETE", "/api/v1/pincodes/search");
+  EXPECT_EQ(m.route, nullptr);
+  EXPECT_EQ(m.allowed_pattern, "/api/v1/pincodes/search");
+  EXPECT_EQ(m.allowed_methods, std::vector<std::string>{"GET"}) << "each method once";
 }
 
 TEST(Router, NoMatchForTrailingSlashesOrExtraSegments) {

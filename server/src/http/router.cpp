@@ -1,5 +1,6 @@
 #include "pintag/server/router.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace pintag::server {
@@ -111,7 +112,10 @@ RouteMatch Router::match(std::string_view method, std::string_view path) const {
         result.allowed_methods.clear();
         break;
       }
-      result.allowed_methods.push_back(routes_[i].method);
+      std::vector<std::string>& allowed = result.allowed_methods;
+      if (std::find(allowed.begin(), allowed.end(), routes_[i].method) == allowed.end()) {
+        allowed.push_back(routes_[i].method);  // once, though two patterns may take it
+      }
       if (result.allowed_pattern.empty()) result.allowed_pattern = routes_[i].pattern;
     }
   }

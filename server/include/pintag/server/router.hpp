@@ -51,7 +51,10 @@ class Router {
   Router& add(Route route);
 
   /// The route for `method` (HEAD matches GET) and `path`. When the path exists for other methods
-  /// only, `route` is null and `allowed_methods` lists them (for 405 and Allow).
+  /// only, `route` is null, `allowed_methods` lists them (for 405 and Allow) and
+  /// `allowed_pattern` is the pattern it matched; where a literal pattern and a parameter
+  /// pattern both match, the literal one (as for a match), while `allowed_methods` lists the
+  /// methods of both, each once.
   RouteMatch match(std::string_view method, std::string_view path) const;
 
   const std::vector<Route>& routes() const { return routes_; }
