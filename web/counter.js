@@ -82,7 +82,7 @@ function renderTable() {
         ? 'Not a pincode: six digits, the first 1–9.'
         : (row.error && (row.error.detail || row.error.title)) || 'Not found.';
       return el('tr', { class: 'is-error' },
-        el('td', {}, el('input', { type: 'checkbox', disabled: true, 'aria-label': `${pin} cannot be printed` })),
+        el('td', {}, el('input', { type: 'checkbox', disabled: true, 'aria-label': `${which} cannot be printed` })),
         el('td', { class: 'mono' }, pin),
         el('td', { colspan: 4 }, badge('error', !row.valid ? 'invalid' : notFound(row) ? 'not found' : 'not checked'), ' ', why));
     }
