@@ -113,14 +113,38 @@ TEST(Grouping, SmallRedSpecksAlongTheSquaresEdgeAreFringesNotConflicts) {
   EXPECT_TRUE(with(Blob(100 + 0.5 * 60, 100 + 0.92 * 60, 5)).conflict);  // area 19
   // Near the edge but inside an element's green ring (0.2 from its centre): not a fringe.
   EXPECT_TRUE(with(Blob(100 + 0.25 * 60, 100 + 0.07 * 60, 3)).conflict);
-  // A speck at an element slot that already has its blob is two blobs in one slot.
-  EXPECT_TRUE(with(Blob(100 + 0.27 * 60, 100 + 0.27 * 60, 3)).conflict);
+  // A speck at an element slot that already has its blob, outside its red disk (radius 0.10) but
+  // inside the slot's tolerance (0.075 along each axis), is two blobs in one slot.
+  EXPECT_TRUE(with(Blob(100 + 0.325 * 60, 100 + 0.325 * 60, 3)).conflict);
   // Around a 24 px square (element blobs of area 18) a 7 px speck is more than a quarter.
   std::vector<RedBlob> small;
   AddTag(&small, 300, 100, 24);
   small.push_back(Blob(300 + 0.47 * 24, 100 + 0.96 * 24, 3));
   const Quad small_quad = {cv::Point2d(300, 100), {324, 100}, {324, 124}, {300, 124}};
   EXPECT_TRUE(AssignElements(HomographyFromQuad(small_quad), small, {0, 1, 2, 3, 4}).conflict);
+}
+
+// A red disk whose darker bit-0 quadrants fell below the redness threshold passes as its bit-1
+// quadrants alone: two or three blobs at one slot, each inside the disk. They are one element.
+TEST(Grouping, PiecesOfOneRedDiskAreOneElementNotAConflict) {
+  const double s = 100;
+  std::vector<RedBlob> blobs;
+  AddTag(&blobs, 100, 100, s, 0);  // elements 1-3 whole; element 0 in pieces, below
+  // Quadrants q = 0 (up to right) and 2 (down to left) of element 0, whose centre is (125, 125):
+  // a quarter disk's centroid lies 0.042 S from the centre along each axis.
+  const int first_piece = static_cast<int>(blobs.size());
+  blobs.push_back(Blob(125 + 4.2, 125 - 4.2, 0.1 * s));
+  blobs.push_back(Blob(125 - 4.2, 125 + 4.2, 0.12 * s));  // the larger piece
+  const Quad quad = {cv::Point2d(100, 100), {200, 100}, {200, 200}, {100, 200}};
+  const cv::Matx33d h = HomographyFromQuad(quad);
+  const ElementAssignment a = AssignElements(h, blobs, {0, 1, 2, 3, 4});
+  EXPECT_FALSE(a.conflict);
+  EXPECT_EQ(a.found, 4);
+  EXPECT_EQ(a.blob[0], first_piece + 1);
+  // A piece whose centroid lies outside the disk (0.075 S along each axis: 0.106 S from the
+  // centre, in the green ring) is not part of it.
+  blobs.push_back(Blob(125 + 7.5, 125 + 7.5, 0.05 * s));
+  EXPECT_TRUE(AssignElements(h, blobs, {0, 1, 2, 3, 4, 5}).conflict);
 }
 
 }  // namespace

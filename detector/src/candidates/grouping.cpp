@@ -18,6 +18,12 @@ constexpr double kRoiDiameters = 2.6;  // element centre -> square edge + quiet 
 constexpr double kRoiSpacings = 1.0;   // the same in element spacings (0.5 S): 0.8
 constexpr double kPairRoiSpacings = 1.8;
 
+// A blob's centroid in tag units (its homogeneous weight was checked when it was placed).
+cv::Point2d ToTag(const cv::Matx33d& image_to_tag, const RedBlob& blob) {
+  const cv::Vec3d p = image_to_tag * cv::Vec3d(blob.centroid.x, blob.centroid.y, 1);
+  return {p[0] / p[2], p[1] / p[2]};
+}
+
 int Find(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -128,11 +134,22 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
       const geometry::Point c = geometry::kElementCentres[e];
       if (std::abs(u - c.x) > tolerance || std::abs(v - c.y) > tolerance) continue;
       placed = true;
-      if (result.blob[e] >= 0) {
-        result.conflict = true;
-      } else {
+      if (result.blob[e] < 0) {
         result.blob[e] = i;
         ++result.found;
+        continue;
+      }
+      // A second blob at a slot is another piece of the element's red disk when both centroids
+      // lie inside it; otherwise it is red where the format has none.
+      const auto inside_disk = [&](double pu, double pv) {
+        return std::hypot(pu - c.x, pv - c.y) <= geometry::kRedRadius;
+      };
+      const cv::Point2d first = ToTag(inverse, blobs[static_cast<std::size_t>(result.blob[e])]);
+      if (!inside_disk(u, v) || !inside_disk(first.x, first.y)) {
+        result.conflict = true;
+      } else if (blobs[static_cast<std::size_t>(i)].area >
+                 blobs[static_cast<std::size_t>(result.blob[e])].area) {
+        result.blob[e] = i;  // the slot names its largest piece
       }
     }
     if (!placed) elsewhere.emplace_back(i, cv::Point2d(u, v));

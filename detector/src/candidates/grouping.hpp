@@ -40,7 +40,9 @@ inline constexpr int kFringeMaxAreaPx = 16;
 /// Maps blobs through `tag_to_image` (unit square -> px) and assigns each to the element whose
 /// nominal centre it lies near (within `tolerance` tag units in u and in v). A blob inside the
 /// square on no element is a conflict, unless it is a colour fringe of the square's edge (see
-/// kFringeBand).
+/// kFringeBand); so are two blobs at one slot, unless both are pieces of its red disk: their
+/// centroids lie within the disk's radius of its centre. (Where a disk's bit-0 quadrants are
+/// darker than its bit-1 ones, blur and a steep tilt can leave only the lighter ones red enough.)
 inline constexpr double kElementTolerance = 0.08;
 /// For a quad before corner refinement: a blurred square's thresholded outline can be several
 /// pixels off along a steeply tilted side (slots are 0.5 apart, so still unambiguous).
