@@ -57,9 +57,10 @@ struct Args {
   bool explain_misses = true;  ///< ExplainMiss on every missed tag (a second detect call)
   bool quiet = false;
   std::string detectors = "pintag,aruco,apriltag-d1,apriltag-d2";
-  std::string pintag_options;  ///< JSON object of DetectorOptions fields, for tuning runs
-  std::string dump_misses;     ///< directory for crops of the tags PinTag missed
-  std::string save_frames;     ///< directory for every PinTag (and tagless) frame as rendered
+  std::string pintag_options;    ///< JSON object of DetectorOptions fields, for tuning runs
+  std::string dump_misses;       ///< directory for crops of the tags PinTag missed
+  std::string save_frames;       ///< directory for every PinTag (and tagless) frame as rendered
+  std::vector<int> only_frames;  ///< --frame: these frames of the sweep alone (reproducing one)
   int chunk = 24;
 };
 
@@ -96,6 +97,8 @@ void Usage(FILE* to) {
       "  --dump-misses DIR     write a PNG crop of every tag PinTag missed, named by bin and "
       "the stage that lost it\n"
       "  --save-frames DIR     write every PinTag and tagless frame as rendered (PNG)\n"
+      "  --frame N             run frame N of the sweep alone (repeatable): a long run's miss or\n"
+      "                        misread again, with the other options the run had\n"
       "  --no-explain          skip the per-miss diagnosis (long misread runs: it detects again)\n"
       "  --quiet               no progress on stderr\n");
 }
@@ -189,6 +192,16 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--save-frames");
       if (v == nullptr) return false;
       args->save_frames = v;
+    } else if (a == "--frame") {
+      const char* v = value("--frame");
+      if (v == nullptr) return false;
+      char* end = nullptr;
+      const long n = std::strtol(v, &end, 10);
+      if (*v == '\0' || *end != '\0' || n < 0 || n > 10'000'000) {
+        std::fprintf(stderr, "pintag_bench: --frame needs a frame number, not %s\n", v);
+        return false;
+      }
+      args->only_frames.push_back(static_cast<int>(n));
     } else if (a == "--no-explain") {
       args->explain_misses = false;
     } else if (a == "--quiet") {
@@ -276,7 +289,21 @@ int Main(int argc, char** argv) {
   result.photos = static_cast<int>(scene::BackgroundPhotos(args.sweep.world).size());
   result.camera = CameraFor(args.sweep.world);
   const scene::Camera camera = result.camera;
-  const std::vector<FrameSpec> frames = MakeSweep(args.sweep, camera);
+  const std::vector<FrameSpec> frames = [&] {
+    std::vector<FrameSpec> all = MakeSweep(args.sweep, camera);
+    if (args.only_frames.empty()) return all;
+    std::vector<FrameSpec> kept;
+    for (const int n : args.only_frames) {
+      const auto it =
+          std::find_if(all.begin(), all.end(), [&](const FrameSpec& f) { return f.index == n; });
+      if (it != all.end()) kept.push_back(*it);
+    }
+    return kept;
+  }();
+  if (frames.empty()) {
+    std::fprintf(stderr, "pintag_bench: no frame of this sweep has the number given to --frame\n");
+    return 2;
+  }
   for (const FrameSpec& f : frames) (f.tagless() ? result.tagless_frames : result.tagged_frames)++;
   const int cores = std::max(1, result.machine.cores);
   result.all_cores = args.all_cores ? cores : 0;
@@ -486,7 +513,7 @@ int Main(int argc, char** argv) {
            "time_ms_all_cores\n";
     for (const CsvRow& row : rows) {
       const FrameSpec& f = frames[static_cast<std::size_t>(row.frame)];
-      csv << row.frame << ',' << (f.tagless() ? 0 : kSizesPx[f.size_index]) << ','
+      csv << f.index << ',' << (f.tagless() ? 0 : kSizesPx[f.size_index]) << ','
           << (f.tagless() ? -1 : kTiltsDeg[f.tilt_index]) << ',' << (f.hard ? "hard" : "moderate")
           << ',' << detectors[static_cast<std::size_t>(row.detector)]->name() << ','
           << row.outcome.counted << ',' << row.outcome.found << ',' << row.outcome.misreads << ','
