@@ -235,13 +235,17 @@ struct Rendered {
 };
 
 // A crop around the missed tag (its quiet zone and some background) as it is, for re-running the
-// detector on, and enlarged 4x with nearest neighbour so that single pixels stay visible.
+// detector on, and enlarged 4x with nearest neighbour so that single pixels stay visible. Beside
+// the crop, its truth in the form of tests/data/regressions/ (key, corners in crop pixels), so a
+// miss or misread worth keeping can be committed as it is. The crop starts on even pixels, which
+// keeps a 4:2:0 frame's chroma blocks where the frame had them.
 void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
-              const scene::MarkerTruth& truth, const std::string& why) {
+              const scene::MarkerTruth& truth, const std::string& why, const std::string& run) {
   cv::Rect box =
       cv::boundingRect(std::vector<cv::Point2f>(truth.corners_px.begin(), truth.corners_px.end()));
   const int pad = static_cast<int>(truth.square_px * 0.5) + 4;
-  box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
+  const int x0 = std::max(0, (box.x - pad) & ~1), y0 = std::max(0, (box.y - pad) & ~1);
+  box = cv::Rect(x0, y0, box.x + box.width + pad - x0, box.y + box.height + pad - y0) &
         cv::Rect(0, 0, bgr.cols, bgr.rows);
   cv::Mat enlarged;
   cv::resize(bgr(box), enlarged, {}, 4, 4, cv::INTER_NEAREST);
@@ -257,6 +261,22 @@ void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
                   f.index, truth.id, reason.c_str(), large ? "-x4" : "");
     cv::imwrite(name, large ? enlarged : bgr(box));
   }
+  nlohmann::json corners = nlohmann::json::array();
+  for (const cv::Point2f& c : truth.corners_px) {
+    const auto at = [](double v) { return std::round(v * 100) / 100; };
+    corners.push_back({at(static_cast<double>(c.x) - box.x), at(static_cast<double>(c.y) - box.y)});
+  }
+  const nlohmann::json sidecar = {
+      {"key", truth.id},
+      {"corners", corners},
+      {"square_offsets", {{0, 0}, {0, 0}, {0, 0}, {0, 0}}},
+      {"source", run + ", frame " + std::to_string(f.index) + ", cropped at (" +
+                     std::to_string(box.x) + ", " + std::to_string(box.y) + ")"},
+      {"note", why},
+  };
+  std::string json_name = name;
+  json_name.replace(json_name.size() - std::string("-x4.png").size(), std::string::npos, ".json");
+  std::ofstream(json_name) << sidecar.dump(2) << '\n';
 }
 
 struct CsvRow {
@@ -449,7 +469,7 @@ int Main(int argc, char** argv) {
             ++stats.misses[why][f.hard][static_cast<std::size_t>(f.size_index)];
             if (!args.dump_misses.empty()) {
               DumpMiss(args.dump_misses, f, r.image(f, d.marker()),
-                       r.truthFor(f, d.marker()).front(), why);
+                       r.truthFor(f, d.marker()).front(), why, result.command_line);
             }
           }
           if (d.marker() == Marker::kPinTag && !args.dump_misses.empty() &&
