@@ -1,6 +1,6 @@
 // Committed regression images (tests/data/regressions/): frames of the benchmark sweep, cropped
 // around their tag and saved losslessly with the truth, so that no change of the scene generator
-// changes what is tested. Three folders, as zxing keeps black-box folders with a pass count and a
+// changes what is tested. Four folders, as zxing keeps black-box folders with a pass count and a
 // misread budget:
 //   read/            tags an earlier detector read only through a rule made for them: read them
 //   misread-detect/  frames on which the detector once reported a wrong key: never again
@@ -8,6 +8,8 @@
 //                    truth (plus recorded corner offsets): never again
 //   search/          squares (truth plus recorded offsets) on which the model's codeword search
 //                    once missed the codeword that explains the samples best: find it
+// A fifth folder, misread-open/, holds frames that today's detector still misreads. No test reads
+// it (it would fail); it keeps the frame for the fix, whose commit moves it to misread-detect/.
 // Each PNG has a JSON beside it: key, corners (C0 … C3, crop pixels), square offsets, source. The
 // square offsets are one placement (four [dx, dy]) or a list of placements, when several jittered
 // squares of one tag once gave a wrong key.
