@@ -156,11 +156,15 @@ int Main(int argc, char** argv) {
       args.sweep.jpeg_quality = quality;
     } else if (a == "--s-curve") {
       args.sweep.s_curve = true;  // as pintag_bench's
+    } else if (a == "--no-mosaic") {
+      args.sweep.no_mosaic = true;  // as pintag_bench's: analysis of the held-out phone
+    } else if (a == "--sensor-scale") {
+      args.sweep.sensor_scale = std::atoi(next());  // as pintag_bench's; checked below
     } else {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
-                   "[--jpeg-quality N] [--s-curve] [--threads N] "
+                   "[--jpeg-quality N] [--s-curve] [--no-mosaic] [--sensor-scale K] [--threads N] "
                    "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
