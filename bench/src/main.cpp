@@ -262,9 +262,9 @@ void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
     cv::imwrite(name, large ? enlarged : bgr(box));
   }
   nlohmann::json corners = nlohmann::json::array();
-  for (const cv::Point2f& c : truth.corners_px) {
+  for (const cv::Point2d& c : truth.corners_px) {
     const auto at = [](double v) { return std::round(v * 100) / 100; };
-    corners.push_back({at(static_cast<double>(c.x) - box.x), at(static_cast<double>(c.y) - box.y)});
+    corners.push_back({at(c.x - box.x), at(c.y - box.y)});
   }
   const nlohmann::json sidecar = {
       {"key", truth.id},
