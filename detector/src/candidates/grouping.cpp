@@ -18,12 +18,6 @@ constexpr double kRoiDiameters = 2.6;  // element centre -> square edge + quiet 
 constexpr double kRoiSpacings = 1.0;   // the same in element spacings (0.5 S): 0.8
 constexpr double kPairRoiSpacings = 1.8;
 
-// A blob's centroid in tag units (its homogeneous weight was checked when it was placed).
-cv::Point2d ToTag(const cv::Matx33d& image_to_tag, const RedBlob& blob) {
-  const cv::Vec3d p = image_to_tag * cv::Vec3d(blob.centroid.x, blob.centroid.y, 1);
-  return {p[0] / p[2], p[1] / p[2]};
-}
-
 int Find(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -124,6 +118,7 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
   const cv::Matx33d inverse = tag_to_image.inv();
   // Blobs inside the square but on no element: a conflict unless they are fringes (below).
   std::vector<std::pair<int, cv::Point2d>> elsewhere;
+  std::array<cv::Point2d, 4> slot_uv;  // where each slot's blob lies, tag units
   for (int i : candidates) {
     const cv::Vec3d p = inverse * cv::Vec3d(blobs[i].centroid.x, blobs[i].centroid.y, 1);
     if (std::abs(p[2]) < 1e-12) continue;
@@ -136,20 +131,21 @@ ElementAssignment AssignElements(const cv::Matx33d& tag_to_image, const std::vec
       placed = true;
       if (result.blob[e] < 0) {
         result.blob[e] = i;
+        slot_uv[e] = {u, v};
         ++result.found;
         continue;
       }
       // A second blob at a slot is another piece of the element's red disk when both centroids
       // lie inside it; otherwise it is red where the format has none.
-      const auto inside_disk = [&](double pu, double pv) {
-        return std::hypot(pu - c.x, pv - c.y) <= geometry::kRedRadius;
+      const auto inside_disk = [&](cv::Point2d at) {
+        return std::hypot(at.x - c.x, at.y - c.y) <= geometry::kRedRadius;
       };
-      const cv::Point2d first = ToTag(inverse, blobs[static_cast<std::size_t>(result.blob[e])]);
-      if (!inside_disk(u, v) || !inside_disk(first.x, first.y)) {
+      if (!inside_disk({u, v}) || !inside_disk(slot_uv[e])) {
         result.conflict = true;
       } else if (blobs[static_cast<std::size_t>(i)].area >
                  blobs[static_cast<std::size_t>(result.blob[e])].area) {
         result.blob[e] = i;  // the slot names its largest piece
+        slot_uv[e] = {u, v};
       }
     }
     if (!placed) elsewhere.emplace_back(i, cv::Point2d(u, v));
