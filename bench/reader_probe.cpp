@@ -159,7 +159,8 @@ int Main(int argc, char** argv) {
     } else if (a == "--no-mosaic") {
       args.sweep.no_mosaic = true;  // as pintag_bench's: analysis of the held-out phone
     } else if (a == "--sensor-scale") {
-      args.sweep.sensor_scale = std::atoi(next());  // as pintag_bench's; checked below
+      args.sweep.sensor_scale =
+          std::atoi(next());  // as pintag_bench's; SweepOptionsError checks it
     } else {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "

@@ -254,13 +254,13 @@ void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
     if (!std::isalnum(static_cast<unsigned char>(c))) c = '-';
   }
   char name[256];
-  for (const bool large : {false, true}) {
-    std::snprintf(name, sizeof name, "%s/%03dpx-%02ddeg-%s-f%04d-key%d-%s%s.png", dir.c_str(),
-                  kSizesPx[static_cast<std::size_t>(f.size_index)],
-                  kTiltsDeg[static_cast<std::size_t>(f.tilt_index)], f.hard ? "hard" : "mod",
-                  f.index, truth.id, reason.c_str(), large ? "-x4" : "");
-    cv::imwrite(name, large ? enlarged : bgr(box));
-  }
+  std::snprintf(name, sizeof name, "%s/%03dpx-%02ddeg-%s-f%04d-key%d-%s", dir.c_str(),
+                kSizesPx[static_cast<std::size_t>(f.size_index)],
+                kTiltsDeg[static_cast<std::size_t>(f.tilt_index)], f.hard ? "hard" : "mod", f.index,
+                truth.id, reason.c_str());
+  const std::string base = name;
+  cv::imwrite(base + ".png", bgr(box));
+  cv::imwrite(base + "-x4.png", enlarged);
   nlohmann::json corners = nlohmann::json::array();
   for (const cv::Point2d& c : truth.corners_px) {
     const auto at = [](double v) { return std::round(v * 100) / 100; };
@@ -274,9 +274,7 @@ void DumpMiss(const std::string& dir, const FrameSpec& f, const cv::Mat& bgr,
                      std::to_string(box.x) + ", " + std::to_string(box.y) + ")"},
       {"note", why},
   };
-  std::string json_name = name;
-  json_name.replace(json_name.size() - std::string("-x4.png").size(), std::string::npos, ".json");
-  std::ofstream(json_name) << sidecar.dump(2) << '\n';
+  std::ofstream(base + ".json") << sidecar.dump(2) << '\n';
 }
 
 struct CsvRow {

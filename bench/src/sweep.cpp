@@ -66,6 +66,7 @@ std::string SweepOptionsError(const SweepOptions& options) {
   if (options.no_mosaic && options.world != scene::World::kHeldOut) {
     return "--no-mosaic is for the held-out world";
   }
+  if (options.sensor_scale < 1 || options.sensor_scale > 4) return "--sensor-scale is 1 to 4";
   if (options.sensor_scale != 1 && options.world != scene::World::kHeldOut) {
     return "--sensor-scale is for the held-out world";
   }
