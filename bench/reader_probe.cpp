@@ -156,6 +156,8 @@ int Main(int argc, char** argv) {
       args.sweep.jpeg_quality = quality;
     } else if (a == "--s-curve") {
       args.sweep.s_curve = true;  // as pintag_bench's
+    } else if (a == "--vng-demosaic") {
+      args.sweep.vng_demosaic = true;  // as pintag_bench's
     } else if (a == "--no-mosaic") {
       args.sweep.no_mosaic = true;  // as pintag_bench's: analysis of the held-out phone
     } else if (a == "--sensor-scale") {
@@ -165,7 +167,8 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
-                   "[--jpeg-quality N] [--s-curve] [--no-mosaic] [--sensor-scale K] [--threads N] "
+                   "[--jpeg-quality N] [--s-curve] [--vng-demosaic] [--no-mosaic] [--sensor-scale "
+                   "K] [--threads N] "
                    "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
@@ -350,6 +353,9 @@ int Main(int argc, char** argv) {
                 args.sweep.jpeg_quality);
   }
   if (args.sweep.s_curve) std::printf("every frame's phone with an S-shaped tone curve\n");
+  if (args.sweep.vng_demosaic) {
+    std::printf("every frame's phone with a colour filter array, demosaiced by VNG\n");
+  }
   for (int hard = 0; hard < 2; ++hard) {
     std::printf("%s\n  size  ", hard ? "hard" : "moderate");
     for (int t = 0; t < kTiltCount; ++t) std::printf("%9d°", kTiltsDeg[t]);

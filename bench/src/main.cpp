@@ -82,6 +82,8 @@ void Usage(FILE* to) {
       "scaled\n"
       "                        down (1-4; held-out world; analysis)\n"
       "  --s-curve             give every frame's phone an S-shaped tone curve (tuning world)\n"
+      "  --vng-demosaic        give every frame's phone a colour filter array demosaiced by VNG "
+      "(tuning world)\n"
       "  --out DIR             where BENCHMARKS.md and images/ go (default: the source "
       "tree's docs/)\n"
       "  --csv FILE            also write one row per frame and detector\n"
@@ -162,6 +164,8 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       if (!integer("--sensor-scale", 1, 4, &args->sweep.sensor_scale)) return false;
     } else if (a == "--s-curve") {
       args->sweep.s_curve = true;
+    } else if (a == "--vng-demosaic") {
+      args->sweep.vng_demosaic = true;
     } else if (a == "--out") {
       const char* v = value("--out");
       if (v == nullptr) return false;

@@ -157,6 +157,10 @@ std::string ReportMarkdown(const BenchResult& r) {
     md << "| tone curve | **an S-curve on every frame** (`--s-curve`), as well as the power its "
           "light draws |\n";
   }
+  if (r.sweep.vng_demosaic) {
+    md << "| sensor | **a colour filter array on every frame, demosaiced by variable numbers of "
+          "gradients** (`--vng-demosaic`), not bilinearly |\n";
+  }
   if (r.sweep.no_mosaic) {
     md << "| sensor | **no colour filter array** (`--no-mosaic`): every pixel senses all three "
           "colours, nothing is demosaiced |\n";

@@ -60,6 +60,9 @@ std::string SweepOptionsError(const SweepOptions& options) {
   if (options.s_curve && options.world != scene::World::kTuning) {
     return "--s-curve is for the tuning world (the held-out phone has its own)";
   }
+  if (options.vng_demosaic && options.world != scene::World::kTuning) {
+    return "--vng-demosaic is for the tuning world (the held-out phone has its own)";
+  }
   if (options.jpeg_full_chroma && options.world != scene::World::kHeldOut) {
     return "--jpeg-chroma 444 is for the held-out world";
   }
@@ -137,6 +140,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     frames[i].no_mosaic = options.no_mosaic;
     frames[i].sensor_scale = options.sensor_scale;
     frames[i].s_curve = options.s_curve;
+    frames[i].vng_demosaic = options.vng_demosaic;
   }
   return frames;
 }
@@ -176,6 +180,10 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
   if (frame.s_curve) {
     scene::Rng rng(Mix(frame.seed, 0x5C0E));
     spec.photometry.tone_contrast = frame.hard ? rng.uniform(0.3, 0.9) : rng.uniform(0.1, 0.6);
+  }
+  if (frame.vng_demosaic) {
+    spec.photometry.bayer = true;
+    spec.photometry.vng_demosaic = true;
   }
   const bool held_out = frame.world == scene::World::kHeldOut;
   if (frame.tagless() && frame.blank_label_px == 0) return spec;

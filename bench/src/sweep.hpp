@@ -56,6 +56,10 @@ struct SweepOptions {
   /// tone_contrast, drawn from the frame's seed: 0.1 … 0.6 in moderate light, 0.3 … 0.9 in hard),
   /// the rest of its light unchanged. The held-out phone always has one of its own.
   bool s_curve = false;
+  /// Tuning world only: give every frame's phone a colour filter array, demosaiced by variable
+  /// numbers of gradients (Photometry::vng_demosaic) rather than bilinearly, the rest of its light
+  /// unchanged. An edge-directed demosaic of the tuning world's own, not the held-out phone's.
+  bool vng_demosaic = false;
 };
 
 /// Empty when the options go together, else what is wrong, worded for the command line: each
@@ -85,6 +89,7 @@ struct FrameSpec {
   bool no_mosaic = false;         ///< SweepOptions::no_mosaic
   int sensor_scale = 1;           ///< SweepOptions::sensor_scale
   bool s_curve = false;           ///< SweepOptions::s_curve
+  bool vng_demosaic = false;      ///< SweepOptions::vng_demosaic
 
   bool tagless() const { return size_index < 0; }
 };

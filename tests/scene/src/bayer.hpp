@@ -29,4 +29,12 @@ inline int BayerDemosaicCode(int phase, bool edge_aware) {
   return edge_aware ? kEdgeAware[i] : kBilinear[i];
 }
 
+/// OpenCV's variable-number-of-gradients demosaic code for `phase` (8-bit only): edge-directed,
+/// like a phone's and unlike the bilinear one, yet not the held-out phone's edge-aware method.
+inline int BayerVngDemosaicCode(int phase) {
+  constexpr std::array<int, 4> kVng = {cv::COLOR_BayerBG2BGR_VNG, cv::COLOR_BayerGB2BGR_VNG,
+                                       cv::COLOR_BayerGR2BGR_VNG, cv::COLOR_BayerRG2BGR_VNG};
+  return kVng[static_cast<std::size_t>(phase & 3)];
+}
+
 }  // namespace pintag::scene::detail

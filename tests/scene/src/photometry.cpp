@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -176,15 +177,59 @@ void ApplyNoise(cv::Mat& frame, double sigma, Rng& rng) {
   });
 }
 
-/// Keeps one colour per pixel in the phase's Bayer pattern (bayer.hpp), then demosaics bilinearly.
-void ApplyBayer(cv::Mat& frame, int phase) {
-  cv::Mat mosaic(frame.size(), CV_8UC1);
-  for (int y = 0; y < frame.rows; ++y) {
-    const auto* src = frame.ptr<std::uint8_t>(y);
+/// One colour per pixel of `bgr` (8-bit) in the phase's Bayer pattern (bayer.hpp).
+cv::Mat Mosaic(const cv::Mat& bgr, int phase) {
+  cv::Mat mosaic(bgr.size(), CV_8UC1);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const auto* src = bgr.ptr<std::uint8_t>(y);
     auto* dst = mosaic.ptr<std::uint8_t>(y);
-    for (int x = 0; x < frame.cols; ++x) dst[x] = src[3 * x + detail::BayerChannel(x, y, phase)];
+    for (int x = 0; x < bgr.cols; ++x) dst[x] = src[3 * x + detail::BayerChannel(x, y, phase)];
   }
-  cv::demosaicing(mosaic, frame, detail::BayerDemosaicCode(phase, /*edge_aware=*/false));
+  return mosaic;
+}
+
+/// Rows by which OpenCV's VNG demosaic moves the picture up (2 in OpenCV 4.6: opencv/opencv issue
+/// 5089), measured once on a smooth test picture so that an OpenCV without the fault needs none.
+int VngRowsUp() {
+  static const int rows = [] {
+    cv::Mat picture(64, 64, CV_8UC3);
+    for (int y = 0; y < picture.rows; ++y) {
+      for (int x = 0; x < picture.cols; ++x) {
+        const double a = 0.3 * x + 0.2 * y, b = 0.25 * y - 0.15 * x;
+        picture.at<cv::Vec3b>(y, x) =
+            cv::Vec3b(cv::saturate_cast<std::uint8_t>(128 + 90 * std::sin(a)),
+                      cv::saturate_cast<std::uint8_t>(128 + 90 * std::sin(b)),
+                      cv::saturate_cast<std::uint8_t>(128 + 90 * std::cos(a + b)));
+      }
+    }
+    cv::Mat demosaiced;
+    cv::demosaicing(Mosaic(picture, 0), demosaiced, detail::BayerVngDemosaicCode(0));
+    const cv::Rect inside(8, 8, 48, 48);
+    int best = 0;
+    double least = std::numeric_limits<double>::infinity();
+    for (int up = -4; up <= 4; ++up) {
+      const double error =
+          cv::norm(picture(inside), demosaiced(inside - cv::Point(0, up)), cv::NORM_L1);
+      if (error < least) least = error, best = up;
+    }
+    return best;
+  }();
+  return rows;
+}
+
+/// Keeps one colour per pixel in the phase's Bayer pattern, then demosaics bilinearly or (`vng`)
+/// by variable numbers of gradients, put back where the scene is.
+void ApplyBayer(cv::Mat& frame, int phase, bool vng) {
+  const cv::Mat mosaic = Mosaic(frame, phase);
+  if (!vng) {
+    cv::demosaicing(mosaic, frame, detail::BayerDemosaicCode(phase, /*edge_aware=*/false));
+    return;
+  }
+  cv::Mat demosaiced;
+  cv::demosaicing(mosaic, demosaiced, detail::BayerVngDemosaicCode(phase));
+  const int up = VngRowsUp();
+  const cv::Matx23d shift(1, 0, 0, 0, 1, up);
+  cv::warpAffine(demosaiced, frame, shift, frame.size(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
 }
 
 /// A phone's processing in 8-bit sRGB: tone power and S-curve, saturation and colour denoising on
@@ -308,7 +353,7 @@ void ApplyPhotometry(cv::Mat& frame, const Photometry& p, Rng& rng) {
       ApplyNoise(frame, p.noise_sigma, rng);
     }
   }
-  if (p.bayer) ApplyBayer(frame, p.bayer_phase);
+  if (p.bayer) ApplyBayer(frame, p.bayer_phase, p.vng_demosaic);
   ApplyProcessing(frame, p);
   if (p.jpeg_quality > 0) {
     std::vector<std::uint8_t> bytes;

@@ -96,6 +96,10 @@ struct Photometry {
   /// colour fringes along sharp edges, colour noise.
   bool bayer = false;
   int bayer_phase = 0;  ///< 0 … 3: RGGB, GRBG, GBRG, BGGR
+  /// Demosaic by OpenCV's variable number of gradients instead of bilinearly: an edge-directed
+  /// demosaic, whose false colour on small regions is unlike the bilinear one's. Moderate and Hard
+  /// leave it off; pintag_bench and the reader probe set it with --vng-demosaic.
+  bool vng_demosaic = false;
   // A phone's processing after the sensor, in 8-bit sRGB before the JPEG (the tuning world's own;
   // the held-out world's phone is PhoneCapture, made differently):
   double tone_gamma = 1.0;        ///< power on code values / 255 (below 1 brightens)
