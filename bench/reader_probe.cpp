@@ -167,8 +167,8 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
-                   "[--jpeg-quality N] [--s-curve] [--vng-demosaic] [--no-mosaic] [--sensor-scale "
-                   "K] [--threads N] "
+                   "[--jpeg-quality N] [--s-curve] [--vng-demosaic] [--no-mosaic] "
+                   "[--sensor-scale K] [--threads N] "
                    "[--verbose] [--reader model [--csv FILE] [--residuals DIR]]\n");
       return a == "--help" ? 0 : 2;
     }
