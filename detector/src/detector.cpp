@@ -57,6 +57,7 @@ struct ClusterOutput {
   stage::ReadingTimes reading;  ///< summed over the candidates; model_read counted in model_reads
   int model_reads = 0;
   int model_rereads = 0;
+  int mosaic_rereads = 0;
   int model_skipped = 0;
 
   void add(const stage::ReadingTimes& t) {
@@ -65,6 +66,7 @@ struct ClusterOutput {
     reading.codeword_ms += t.codeword_ms;
     model_reads += t.model_read ? 1 : 0;
     model_rereads += t.model_rereads;
+    mosaic_rereads += t.mosaic_rereads;
     model_skipped += t.model_skipped ? 1 : 0;
   }
 };
@@ -258,6 +260,7 @@ void Collect(std::vector<ClusterOutput>& outputs, DetectResult* result, Candidat
     t.codeword_ms += o.reading.codeword_ms;
     t.model_reads += o.model_reads;
     t.model_rereads += o.model_rereads;
+    t.mosaic_rereads += o.mosaic_rereads;
     t.model_skipped += o.model_skipped;
     for (Detection& d : o.detections) result->detections.push_back(std::move(d));
     candidates->found.insert(candidates->found.end(), o.candidates.found.begin(),

@@ -113,6 +113,7 @@ json ToJson(const DetectResult& r) {
                      {"pose", t.pose_ms},           {"total", t.total_ms}};
   j["model_reads"] = {{"read", t.model_reads},
                       {"reread", t.model_rereads},
+                      {"mosaic_reread", t.mosaic_rereads},
                       {"skipped_over_budget", t.model_skipped}};
   if (!r.error.empty()) j["error"] = r.error;
   return j;

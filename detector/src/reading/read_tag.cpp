@@ -7,6 +7,7 @@
 #include "elapsed_ms.hpp"
 #include "homography.hpp"
 #include "reading/decision.hpp"
+#include "reading/mosaic_reread.hpp"
 #include "reading/rereading.hpp"
 #include "reading/sampling.hpp"
 
@@ -53,6 +54,24 @@ RereadVerdict Reread(const cv::Mat& bgr, ChromaUpsampling upsampling,
     if (!again.same_winner) return RereadVerdict::kOtherWinner;
   }
   return RereadVerdict::kChosenAgain;
+}
+
+/// Reads of the winner through a mosaic of our own, one Bayer layout after another, until one
+/// accepts it again (reading/mosaic_reread.hpp); each taken from the budget first, their times
+/// going to `times`.
+RereadVerdict RereadThroughMosaics(const cv::Mat& bgr, ChromaUpsampling upsampling,
+                                   const reading::Corners& fitted, TagKey winner,
+                                   ModelBudget* budget, ReadingTimes* times) {
+  const reading::SquareCrop crop = reading::CropAroundCorners(bgr, fitted);
+  for (int phase = 0; phase < reading::kMosaicPhases; ++phase) {
+    if (budget != nullptr && !budget->take()) return RereadVerdict::kBudgetSpent;
+    ++times->mosaic_rereads;
+    const reading::MosaicReread again = reading::ReadThroughMosaic(crop, upsampling, winner, phase);
+    times->model_fit_ms += again.fit_ms;
+    times->codeword_ms += again.codeword_ms;
+    if (again.accepted_again) return RereadVerdict::kChosenAgain;
+  }
+  return RereadVerdict::kOtherWinner;
 }
 
 }  // namespace
@@ -153,8 +172,8 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
     r.payload.error = "model: the codec refuses the codeword";
     return c;
   }
-  // Last, as the dearest check: on a narrow square the winner must be chosen again by two more
-  // reads from moved corners (reading/rereading.hpp).
+  // Then the dearest checks: on a narrow square the winner must be chosen again by two more reads
+  // from moved corners (reading/rereading.hpp) ...
   if (reading::NeedsRereading(fitted)) {
     const RereadVerdict verdict =
         Reread(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times);
@@ -165,6 +184,21 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
                             ? "model: this frame's model reads are spent before the narrow "
                               "square's winner was read again (max_model_reads)"
                             : "model: a narrow square's winner not chosen again from moved corners";
+      return c;
+    }
+  }
+  // ... and a winner whose lead a demosaic's error could have made must be accepted again through
+  // a mosaic of our own (reading/mosaic_reread.hpp).
+  if (reading::NeedsMosaicCheck(r.model)) {
+    const RereadVerdict verdict =
+        RereadThroughMosaics(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times);
+    if (verdict != RereadVerdict::kChosenAgain) {
+      r.payload.key.reset();
+      c.times.model_skipped = verdict == RereadVerdict::kBudgetSpent;
+      r.payload.error = verdict == RereadVerdict::kBudgetSpent
+                            ? "model: this frame's model reads are spent before the winner was "
+                              "read again through a mosaic (max_model_reads)"
+                            : "model: the winner is not accepted again through any Bayer mosaic";
       return c;
     }
   }

@@ -63,8 +63,9 @@ struct ReadingTimes {
   double model_fit_ms = 0;  ///< 5b
   double codeword_ms = 0;   ///< 5c + 6 for the model's codeword
   bool model_read = false;
-  bool model_skipped = false;  ///< the budget was spent, before its read or its re-reads
+  bool model_skipped = false;  ///< the budget was spent, before its read or one of its re-reads
   int model_rereads = 0;       ///< more reads of a narrow square's winner (their times included)
+  int mosaic_rereads = 0;      ///< reads of the winner through a mosaic (their times included)
 };
 
 /// A candidate square read as the detector reads it, in `bgr` whose colour was decoded with

@@ -72,10 +72,11 @@ struct StageTimings {
   double codeword_ms = 0;   ///< 5c + 6 for the model: the codeword decision and the codec's check
   double pose_ms = 0;       ///< 7
   double total_ms = 0;
-  int model_reads = 0;    ///< candidates the model reader fitted
-  int model_rereads = 0;  ///< more fits of narrow squares' winners, from moved corners
-  int model_skipped = 0;  ///< candidates left because max_model_reads was spent (before their read
-                          ///< or their re-reads)
+  int model_reads = 0;     ///< candidates the model reader fitted
+  int model_rereads = 0;   ///< more fits of narrow squares' winners, from moved corners
+  int mosaic_rereads = 0;  ///< more fits of winners, through a Bayer mosaic of the detector's own
+  int model_skipped = 0;   ///< candidates left because max_model_reads was spent (before their
+                           ///< read or one of their re-reads)
 };
 
 struct DetectResult {

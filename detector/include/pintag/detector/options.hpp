@@ -77,8 +77,9 @@ struct DetectorOptions {
   // --- time ---
   /// Model reads per frame (stage 5b-5c, milliseconds each), for candidates the direct reader
   /// failed on. Spent in the order candidates come: the main red pass, its clusters with the most
-  /// blobs first, then the faint pass, then dark squares. The two re-reads of a winner on a narrow
-  /// square come out of the same reads; a winner they cannot be had for is refused. With
+  /// blobs first, then the faint pass, then dark squares. A winner's re-reads come out of the same
+  /// reads (two on a narrow square; up to four through a Bayer mosaic when its lead is under 100
+  /// independent samples, usually one); a winner they cannot be had for is refused. With
   /// threads > 1 which candidates of one pass get the last reads, and so whether such a winner is
   /// kept, depends on timing. 0 turns the model off.
   int max_model_reads = 16;
