@@ -35,7 +35,7 @@ TEST(MosaicReread, EveryLayoutGivesAUniformColourBack) {
     ASSERT_EQ(back.type(), CV_8UC3);
     for (int y = 2; y < 22; ++y) {
       for (int x = 2; x < 22; ++x) {
-        const cv::Vec3b got = back.at<cv::Vec3b>(y, x);
+        const cv::Vec3b& got = back.at<cv::Vec3b>(y, x);
         for (int c = 0; c < 3; ++c) {
           ASSERT_NEAR(got[c], colour[c], 1) << "phase " << phase << " at " << x << "," << y;
         }
@@ -88,12 +88,28 @@ TEST(MosaicReread, TheCropStartsOnAChromaBlockAndHoldsTheSquare) {
   const cv::Point at(110, 90);
   EXPECT_EQ(crop.bgr.at<cv::Vec3b>(at - cv::Point(origin)), frame.at<cv::Vec3b>(at));
 
-  // Near the frame's edge the crop stops at the frame.
-  const Corners near_edge = {cv::Point2d(3.5, 5.5), cv::Point2d(30.5, 5.5), cv::Point2d(30.5, 32.5),
-                             cv::Point2d(3.5, 32.5)};
-  const SquareCrop clipped = CropAroundCorners(frame, near_edge);
-  EXPECT_EQ(clipped.corners[0], near_edge[0]);
-  EXPECT_LE(clipped.bgr.cols, frame.cols);
+  // Near the frame's top-left corner the crop starts at the frame's.
+  const Corners near_origin = {cv::Point2d(3.5, 5.5), cv::Point2d(30.5, 5.5),
+                               cv::Point2d(30.5, 32.5), cv::Point2d(3.5, 32.5)};
+  EXPECT_EQ(CropAroundCorners(frame, near_origin).corners[0], near_origin[0]);
+
+  // Near the bottom-right one, in a frame of odd size, it ends at the frame's and still starts on
+  // even pixels.
+  const cv::Mat odd = NoisePicture(201, 301);
+  const Corners near_end = {cv::Point2d(271.5, 171.5), cv::Point2d(296.5, 171.5),
+                            cv::Point2d(296.5, 196.5), cv::Point2d(271.5, 196.5)};
+  const SquareCrop at_end = CropAroundCorners(odd, near_end);
+  ASSERT_FALSE(at_end.bgr.empty());
+  const cv::Point2d end_origin = near_end[0] - at_end.corners[0];
+  EXPECT_EQ(static_cast<int>(end_origin.x) % 2, 0);
+  EXPECT_EQ(static_cast<int>(end_origin.y) % 2, 0);
+  EXPECT_EQ(end_origin.x + at_end.bgr.cols, odd.cols);
+  EXPECT_EQ(end_origin.y + at_end.bgr.rows, odd.rows);
+
+  // A corner that is not a number gives no crop (and so no re-read).
+  Corners broken = corners;
+  broken[2].y = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(CropAroundCorners(frame, broken).bgr.empty());
 }
 
 // A small, blurred tag saved as a phone saves it: its right winner survives a mosaic of our own

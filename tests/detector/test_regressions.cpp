@@ -198,7 +198,11 @@ TEST(Regressions, MosaicRereadsComeOutOfTheFramesBudget) {
   int checked = 0;
   for (const RegressionCase& c : cases) {
     const DetectResult full = with_default.detect(c.bgr);
-    if (full.timings.mosaic_rereads == 0 || !Reports(full, c.key)) continue;
+    // Frames whose mosaic re-reads all belong to the one tag the model read.
+    if (full.timings.mosaic_rereads == 0 || full.timings.model_reads != 1 ||
+        !Reports(full, c.key)) {
+      continue;
+    }
     ++checked;
     const int all = full.timings.model_reads + full.timings.model_rereads;
     const DetectResult short_of_mosaic = DetectWithModelReads(c.bgr, all);
@@ -223,7 +227,7 @@ TEST(Regressions, NoWrongKeyOnFramesThatOnceGaveOne) {
 
 TEST(Regressions, NoWrongKeyReadOnSquaresPlacedByTheTruth) {
   const std::vector<RegressionCase> cases = LoadFolder("misread-square");
-  ASSERT_GE(cases.size(), 10U);
+  ASSERT_GE(cases.size(), 8U);
   for (const RegressionCase& c : cases) {
     ASSERT_FALSE(c.bgr.empty()) << c.name;
     for (const std::array<cv::Point2d, 4>& square : PlacedSquares(c)) {

@@ -21,8 +21,10 @@ bool NeedsMosaicCheck(const ModelReading& reading) {
 }
 
 SquareCrop CropAroundCorners(const cv::Mat& bgr, const Corners& corners) {
+  SquareCrop crop;
   double left = corners[0].x, right = left, top = corners[0].y, bottom = top;
   for (const cv::Point2d& c : corners) {
+    if (!std::isfinite(c.x) || !std::isfinite(c.y)) return crop;
     left = std::min(left, c.x), right = std::max(right, c.x);
     top = std::min(top, c.y), bottom = std::max(bottom, c.y);
   }
@@ -34,7 +36,6 @@ SquareCrop CropAroundCorners(const cv::Mat& bgr, const Corners& corners) {
   const int y0 = clamp(std::floor(top) - kMosaicCropMarginPx, bgr.rows) & ~1;
   const int x1 = clamp(std::ceil(right) + kMosaicCropMarginPx + 1, bgr.cols);
   const int y1 = clamp(std::ceil(bottom) + kMosaicCropMarginPx + 1, bgr.rows);
-  SquareCrop crop;
   if (x1 <= x0 || y1 <= y0) return crop;
   crop.bgr = bgr(cv::Rect(x0, y0, x1 - x0, y1 - y0));
   const cv::Point2d origin(x0, y0);
@@ -56,10 +57,9 @@ cv::Mat Remosaic(const cv::Mat& bgr, int phase) {
       out[x] = in[x][channel];
     }
   }
-  // OpenCV names a layout by the colours at (1, 1) and (2, 1): RGGB is "BG", GRBG is "GB",
-  // GBRG is "GR" and BGGR is "RG".
   constexpr std::array<int, kMosaicPhases> kBilinearCodes = {
-      cv::COLOR_BayerBG2BGR, cv::COLOR_BayerGB2BGR, cv::COLOR_BayerGR2BGR, cv::COLOR_BayerRG2BGR};
+      cv::COLOR_BayerRGGB2BGR, cv::COLOR_BayerGRBG2BGR, cv::COLOR_BayerGBRG2BGR,
+      cv::COLOR_BayerBGGR2BGR};
   cv::Mat demosaiced;
   cv::demosaicing(sensed, demosaiced, kBilinearCodes[static_cast<std::size_t>(phase & 3)]);
   return demosaiced;

@@ -34,7 +34,8 @@ bool NeedsMosaicCheck(const ModelReading& reading);
 
 /// The part of a frame around a square: its corners' box plus kMosaicCropMarginPx, clipped to the
 /// frame, with its origin at even coordinates so that a JPEG's 2 × 2 chroma blocks keep their
-/// place. `corners` are the square's, in the crop's coordinates.
+/// place. `corners` are the square's, in the crop's coordinates. Empty when a corner is not finite
+/// or the box lies outside the frame.
 struct SquareCrop {
   cv::Mat bgr;
   Corners corners{};

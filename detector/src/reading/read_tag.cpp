@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <string>
 #include <utility>
 
 #include "elapsed_ms.hpp"
@@ -36,7 +37,8 @@ OrientationResult AsOrientation(const reading::CodewordDecision& d) {
   return o;
 }
 
-/// What the re-reads of a narrow square's winner found (reading/rereading.hpp).
+/// What a winner's re-reads found: a narrow square's (reading/rereading.hpp) or through a mosaic
+/// (reading/mosaic_reread.hpp).
 enum class RereadVerdict : std::uint8_t { kChosenAgain, kOtherWinner, kBudgetSpent };
 
 /// Two more model reads, from `fitted` moved both ways, each taken from the budget first; their
@@ -63,6 +65,7 @@ RereadVerdict RereadThroughMosaics(const cv::Mat& bgr, ChromaUpsampling upsampli
                                    const reading::Corners& fitted, TagKey winner,
                                    ModelBudget* budget, ReadingTimes* times) {
   const reading::SquareCrop crop = reading::CropAroundCorners(bgr, fitted);
+  if (crop.bgr.empty()) return RereadVerdict::kOtherWinner;
   for (int phase = 0; phase < reading::kMosaicPhases; ++phase) {
     if (budget != nullptr && !budget->take()) return RereadVerdict::kBudgetSpent;
     ++times->mosaic_rereads;
@@ -72,6 +75,21 @@ RereadVerdict RereadThroughMosaics(const cv::Mat& bgr, ChromaUpsampling upsampli
     if (again.accepted_again) return RereadVerdict::kChosenAgain;
   }
   return RereadVerdict::kOtherWinner;
+}
+
+/// Unless `verdict` is kChosenAgain, refuses the candidate's key, saying which re-reads were not
+/// had (`unpaid`) or did not choose the winner (`not_chosen`); true when it refused.
+bool RefusedByRereads(RereadVerdict verdict, const char* unpaid, const char* not_chosen,
+                      CandidateReading* c) {
+  if (verdict == RereadVerdict::kChosenAgain) return false;
+  c->reading.payload.key.reset();
+  c->times.model_skipped = verdict == RereadVerdict::kBudgetSpent;
+  c->reading.payload.error =
+      verdict == RereadVerdict::kBudgetSpent
+          ? std::string("model: this frame's model reads are spent before ") + unpaid +
+                " (max_model_reads)"
+          : std::string("model: ") + not_chosen;
+  return true;
 }
 
 }  // namespace
@@ -174,33 +192,20 @@ CandidateReading ReadCandidate(const cv::Mat& bgr, ChromaUpsampling upsampling, 
   }
   // Then the dearest checks: on a narrow square the winner must be chosen again by two more reads
   // from moved corners (reading/rereading.hpp) ...
-  if (reading::NeedsRereading(fitted)) {
-    const RereadVerdict verdict =
-        Reread(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times);
-    if (verdict != RereadVerdict::kChosenAgain) {
-      r.payload.key.reset();
-      c.times.model_skipped = verdict == RereadVerdict::kBudgetSpent;
-      r.payload.error = verdict == RereadVerdict::kBudgetSpent
-                            ? "model: this frame's model reads are spent before the narrow "
-                              "square's winner was read again (max_model_reads)"
-                            : "model: a narrow square's winner not chosen again from moved corners";
-      return c;
-    }
+  if (reading::NeedsRereading(fitted) &&
+      RefusedByRereads(Reread(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times),
+                       "the narrow square's winner was read again",
+                       "a narrow square's winner not chosen again from moved corners", &c)) {
+    return c;
   }
   // ... and a winner whose lead a demosaic's error could have made must be accepted again through
   // a mosaic of our own (reading/mosaic_reread.hpp).
-  if (reading::NeedsMosaicCheck(r.model)) {
-    const RereadVerdict verdict =
-        RereadThroughMosaics(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times);
-    if (verdict != RereadVerdict::kChosenAgain) {
-      r.payload.key.reset();
-      c.times.model_skipped = verdict == RereadVerdict::kBudgetSpent;
-      r.payload.error = verdict == RereadVerdict::kBudgetSpent
-                            ? "model: this frame's model reads are spent before the winner was "
-                              "read again through a mosaic (max_model_reads)"
-                            : "model: the winner is not accepted again through any Bayer mosaic";
-      return c;
-    }
+  if (reading::NeedsMosaicCheck(r.model) &&
+      RefusedByRereads(
+          RereadThroughMosaics(bgr, upsampling, fitted, *r.model.decision.winner, budget, &c.times),
+          "the winner was read again through a mosaic",
+          "the winner is not accepted again through any Bayer mosaic", &c)) {
+    return c;
   }
   r.reader = Reader::kModel;
   c.quad = moved;
