@@ -66,15 +66,22 @@ TEST(MosaicReread, EachPixelKeepsTheColourItsFilterPasses) {
   }
 }
 
+// Where `crop` starts in the frame its square's `corners` were given in; it must be on a 4:2:0
+// chroma block (even pixels).
+cv::Point2d ExpectStartOnAChromaBlock(const SquareCrop& crop, const Corners& corners) {
+  const cv::Point2d origin = corners[0] - crop.corners[0];
+  EXPECT_EQ(static_cast<int>(origin.x) % 2, 0);
+  EXPECT_EQ(static_cast<int>(origin.y) % 2, 0);
+  return origin;
+}
+
 TEST(MosaicReread, TheCropStartsOnAChromaBlockAndHoldsTheSquare) {
   const cv::Mat frame = NoisePicture(200, 300);
   const Corners corners = {cv::Point2d(101.3, 77.6), cv::Point2d(131.2, 80.1),
                            cv::Point2d(128.9, 109.4), cv::Point2d(99.7, 106.8)};
   const SquareCrop crop = CropAroundCorners(frame, corners);
   ASSERT_FALSE(crop.bgr.empty());
-  const cv::Point2d origin = corners[0] - crop.corners[0];
-  EXPECT_EQ(static_cast<int>(origin.x) % 2, 0);
-  EXPECT_EQ(static_cast<int>(origin.y) % 2, 0);
+  const cv::Point2d origin = ExpectStartOnAChromaBlock(crop, corners);
   EXPECT_LE(origin.x, 99.7 - kMosaicCropMarginPx);
   EXPECT_LE(origin.y, 77.6 - kMosaicCropMarginPx);
   for (std::size_t k = 0; k < 4; ++k) {
@@ -100,9 +107,7 @@ TEST(MosaicReread, TheCropStartsOnAChromaBlockAndHoldsTheSquare) {
                             cv::Point2d(296.5, 196.5), cv::Point2d(271.5, 196.5)};
   const SquareCrop at_end = CropAroundCorners(odd, near_end);
   ASSERT_FALSE(at_end.bgr.empty());
-  const cv::Point2d end_origin = near_end[0] - at_end.corners[0];
-  EXPECT_EQ(static_cast<int>(end_origin.x) % 2, 0);
-  EXPECT_EQ(static_cast<int>(end_origin.y) % 2, 0);
+  const cv::Point2d end_origin = ExpectStartOnAChromaBlock(at_end, near_end);
   EXPECT_EQ(end_origin.x + at_end.bgr.cols, odd.cols);
   EXPECT_EQ(end_origin.y + at_end.bgr.rows, odd.rows);
 
