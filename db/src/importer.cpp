@@ -247,7 +247,6 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
       Statement all = connection.prepare("SELECT pincode FROM pincodes");
       while (all.step()) known.insert(static_cast<std::uint32_t>(all.getInt64(0)));
     }
-    Statement find = connection.prepare("SELECT 1 FROM offices WHERE pincode = ?1 AND name = ?2");
     Statement upsert = connection.prepare(detail::UpsertOfficeSql());
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const ParsedRow& row = rows[i];
@@ -259,15 +258,14 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
         }
         report.pincodes_added.emplace_back(row.pincode, *key);
       }
-      find.bind(1, std::int64_t{row.pincode.value()}).bind(2, row.office.name);
-      const bool existed = find.step();
-      find.reset();
+      const detail::OfficeMatch match =
+          detail::ClaimOffice(connection, row.pincode, row.office.name);
       detail::BindOffice(upsert, row.pincode, row.office, source);
       const int changed = upsert.run();
       upsert.reset();
-      if (!existed) {
+      if (match == detail::OfficeMatch::kNone) {
         ++report.offices_added;
-      } else if (changed > 0) {
+      } else if (changed > 0 || match == detail::OfficeMatch::kRenamed) {
         ++report.offices_updated;
       } else {
         ++report.offices_unchanged;

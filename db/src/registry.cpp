@@ -316,16 +316,34 @@ void BindOffice(Statement& upsert, Pincode pincode, const PostOffice& office,
       .bind(13, source);
 }
 
+OfficeMatch ClaimOffice(Connection& connection, Pincode pincode, const std::string& name) {
+  // SQLite's trim() drops spaces only, as the seed and the importer do. A pincode has at most a
+  // few dozen offices, all reached through the (pincode, name) index; an exact name sorts first.
+  Statement find = connection.prepare(
+      "SELECT id, name = ?2 FROM offices WHERE pincode = ?1 AND trim(name) = trim(?2) "
+      "ORDER BY name = ?2 DESC, id LIMIT 1");
+  find.bind(1, std::int64_t{pincode.value()}).bind(2, name);
+  if (!find.step()) return OfficeMatch::kNone;
+  if (find.getInt64(1) != 0) return OfficeMatch::kSame;
+  const std::int64_t id = find.getInt64(0);
+  find.reset();
+  connection
+      .prepare(std::string("UPDATE offices SET name = ?2, updated_at = ") + kNowSql +
+               " WHERE id = ?1")
+      .bind(1, id)
+      .bind(2, name)
+      .run();
+  return OfficeMatch::kRenamed;
+}
+
 int UpsertOffice(Connection& connection, Pincode pincode, const PostOffice& office,
                  std::string_view source) {
-  // Prepared per call; the importer keeps its own prepared copies for speed (see importer.cpp).
-  Statement find = connection.prepare("SELECT id FROM offices WHERE pincode = ?1 AND name = ?2");
-  find.bind(1, std::int64_t{pincode.value()}).bind(2, office.name);
-  const bool existed = find.step();
+  const OfficeMatch match = ClaimOffice(connection, pincode, office.name);
   Statement upsert = connection.prepare(UpsertOfficeSql());
   BindOffice(upsert, pincode, office, source);
   const int changed = upsert.run();
-  return existed ? (changed > 0 ? 2 : 0) : 1;
+  if (match == OfficeMatch::kNone) return 1;
+  return changed > 0 || match == OfficeMatch::kRenamed ? 2 : 0;
 }
 
 }  // namespace detail

@@ -26,8 +26,16 @@ const std::string& UpsertOfficeSql();
 void BindOffice(Statement& upsert, Pincode pincode, const PostOffice& office,
                 std::string_view source);
 
-/// Inserts or updates the office (pincode, office.name); returns 0 unchanged, 1 inserted,
-/// 2 updated. Absent optional fields keep what is stored.
+/// Whether `pincode` has an office named `name`: kNone, kSame, or kRenamed when one was stored
+/// under a name that differs only in spaces at either end (a database seeded before the seed was
+/// trimmed has 55 such names, e.g. "New Delhi "); that office now carries `name`, so an upsert
+/// that follows updates it instead of adding a second office.
+enum class OfficeMatch { kNone, kSame, kRenamed };
+OfficeMatch ClaimOffice(Connection& connection, Pincode pincode, const std::string& name);
+
+/// Inserts or updates the office (pincode, office.name), claiming one stored under the name
+/// with spaces at either end (ClaimOffice); returns 0 unchanged, 1 inserted, 2 updated (renamed
+/// included). Absent optional fields keep what is stored.
 int UpsertOffice(Connection& connection, Pincode pincode, const PostOffice& office,
                  std::string_view source);
 

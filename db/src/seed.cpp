@@ -80,6 +80,16 @@ std::string Unescape(std::string_view text) {
   return out;
 }
 
+// A field as the registry stores it: unescaped, without the spaces the package has at either end
+// of some names ("New Delhi "). The importer trims India Post's fields the same way, so an office
+// it imports matches the seeded one instead of being added beside it. Inner spaces are kept.
+std::string Stored(std::string_view text) {
+  std::string out = Unescape(text);
+  const std::size_t first = out.find_first_not_of(' ');
+  if (first == std::string::npos) return {};
+  return out.substr(first, out.find_last_not_of(' ') - first + 1);
+}
+
 /// Reads lines and tab-separated fields from the inflated text.
 class Reader {
  public:
@@ -144,7 +154,7 @@ SeedCounts SeedDatabase(Connection& connection) {
     const auto section = Split(reader.line());
     if (section.size() != 2 || section[0].substr(1) != kFields[f]) Corrupt("bad section");
     const long count = Number(section[1]);
-    for (long i = 0; i < count; ++i) dictionaries[f].push_back(Unescape(reader.line()));
+    for (long i = 0; i < count; ++i) dictionaries[f].push_back(Stored(reader.line()));
   }
   const auto section = Split(reader.line());
   if (section.size() != 2 || section[0] != "@offices") Corrupt("bad offices section");
@@ -161,7 +171,7 @@ SeedCounts SeedDatabase(Connection& connection) {
     pincode += static_cast<std::uint32_t>(delta);
     if (pincode < 100000 || pincode > 999999) Corrupt("pincode out of range");
     if (pincodes.empty() || delta != 0) pincodes.emplace_back(pincode);
-    SeedOffice office{pincode, Unescape(fields[1]), {}};
+    SeedOffice office{pincode, Stored(fields[1]), {}};
     for (int f = 0; f < kFieldCount; ++f) {
       const long index = Number(fields[2 + f]);
       if (index < 0 || index >= static_cast<long>(dictionaries[f].size())) Corrupt("bad index");

@@ -108,6 +108,42 @@ TEST_F(Importer, ReadsTheNewerLayoutAndIsIdempotent) {
   }
 }
 
+// A database seeded before the seed was trimmed holds names such as "Connaught Place " (55 in
+// all). India Post's file names the office without the space: the import updates that office and
+// gives it the trimmed name, instead of adding a second one beside it.
+TEST_F(Importer, UpdatesAnOfficeStoredWithASpaceAtAnEndInsteadOfAddingIt) {
+  db_.execute(
+      "UPDATE offices SET name = 'Connaught Place ' WHERE pincode = 110001 AND "
+      "name = 'Connaught Place'");
+  const auto before = LookupPincode(db_, Pincode(110001)).value();
+  const auto report = ImportDirectoryCsv(db_, kNewerCsv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->offices_added, 3);  // the three offices of the two new pincodes
+  EXPECT_EQ(report->offices_updated, 1);
+  const auto delhi = LookupPincode(db_, Pincode(110001)).value();
+  EXPECT_EQ(delhi.offices.size(), before.offices.size());
+  int named = 0;
+  for (const PostOffice& office : delhi.offices) {
+    EXPECT_NE(office.name, "Connaught Place ");
+    if (office.name != "Connaught Place") continue;
+    ++named;
+    EXPECT_EQ(office.branch_type, "SO");
+  }
+  EXPECT_EQ(named, 1);
+
+  // The name's change alone is an update too: with everything else as imported, renaming it back
+  // and importing again reports one office updated, none added.
+  db_.execute(
+      "UPDATE offices SET name = 'Connaught Place ' WHERE pincode = 110001 AND "
+      "name = 'Connaught Place'");
+  const auto again = ImportDirectoryCsv(db_, kNewerCsv);
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_EQ(again->offices_added, 0);
+  EXPECT_EQ(again->offices_updated, 1);
+  EXPECT_EQ(again->offices_unchanged, 3);
+  EXPECT_EQ(LookupPincode(db_, Pincode(110001)).value().offices.size(), before.offices.size());
+}
+
 TEST_F(Importer, ReadsTheOlderLayout) {
   const auto report = ImportDirectoryCsv(db_, kOlderCsv);
   ASSERT_TRUE(report.ok()) << report.error().message;

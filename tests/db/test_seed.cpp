@@ -87,6 +87,23 @@ TEST(Seed, TwoIndependentlySeededDatabasesHaveIdenticalKeyTables) {
   EXPECT_EQ(exported.out, csv);  // `keys export` prints exactly the table
 }
 
+// The package publishes 55 office names (and one district) with a space at an end, such as
+// 110001's "New Delhi ". Stored so, an India Post import of the same office under its trimmed
+// name would add it a second time; the seed stores them trimmed, as the importer does.
+TEST(Seed, StoresNoNameWithSpacesAtEitherEnd) {
+  Connection connection = test::OpenExisting(test::SeededTemplate());
+  EXPECT_EQ(connection.queryInt64(
+                "SELECT count(*) FROM offices WHERE name <> trim(name) OR circle <> trim(circle) "
+                "OR region <> trim(region) OR division <> trim(division) "
+                "OR district <> trim(district) OR state <> trim(state)"),
+            0);
+  EXPECT_EQ(connection.queryInt64(
+                "SELECT count(*) FROM offices WHERE pincode = 110001 AND name = 'New Delhi'"),
+            1);
+  // Inner spaces are the package's and stay ("Ambala  HQ" is a region).
+  EXPECT_GT(connection.queryInt64("SELECT count(*) FROM offices WHERE region = 'Ambala  HQ'"), 0);
+}
+
 TEST(Seed, ShipsTheDefaultPlanOneBinPerTwoDigitPrefix) {
   Connection connection = test::OpenExisting(test::SeededTemplate());
   const auto plan = GetPlan(connection, kDefaultPlanName);
