@@ -265,7 +265,7 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
       upsert.reset();
       if (match == detail::OfficeMatch::kNone) {
         ++report.offices_added;
-      } else if (changed > 0 || match == detail::OfficeMatch::kRenamed) {
+      } else if (changed > 0 || match == detail::OfficeMatch::kClaimed) {
         ++report.offices_updated;
       } else {
         ++report.offices_unchanged;

@@ -1,6 +1,9 @@
 #include "pintag/db/registry.hpp"
 
 #include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include "guard.hpp"
 #include "pintag/db/text.hpp"
@@ -316,24 +319,45 @@ void BindOffice(Statement& upsert, Pincode pincode, const PostOffice& office,
       .bind(13, source);
 }
 
+namespace {
+std::string TrimmedSpaces(std::string_view text) {
+  const std::size_t first = text.find_first_not_of(' ');
+  if (first == std::string_view::npos) return {};
+  return std::string(text.substr(first, text.find_last_not_of(' ') - first + 1));
+}
+}  // namespace
+
 OfficeMatch ClaimOffice(Connection& connection, Pincode pincode, const std::string& name) {
-  // SQLite's trim() drops spaces only, as the seed and the importer do. A pincode has at most a
-  // few dozen offices, all reached through the (pincode, name) index; an exact name sorts first.
-  Statement find = connection.prepare(
-      "SELECT id, name = ?2 FROM offices WHERE pincode = ?1 AND trim(name) = trim(?2) "
-      "ORDER BY name = ?2 DESC, id LIMIT 1");
-  find.bind(1, std::int64_t{pincode.value()}).bind(2, name);
-  if (!find.step()) return OfficeMatch::kNone;
-  if (find.getInt64(1) != 0) return OfficeMatch::kSame;
-  const std::int64_t id = find.getInt64(0);
-  find.reset();
-  connection
-      .prepare(std::string("UPDATE offices SET name = ?2, updated_at = ") + kNowSql +
-               " WHERE id = ?1")
-      .bind(1, id)
-      .bind(2, name)
-      .run();
-  return OfficeMatch::kRenamed;
+  // Only a trimmed name claims others: the API stores text verbatim, so "Main " posted there stays
+  // itself, and no office is ever renamed towards spaces.
+  const bool trimmed = name == TrimmedSpaces(name);
+  // SQLite's trim() drops spaces only, as TrimmedSpaces does. A pincode has at most a few dozen
+  // offices, all reached through the (pincode, name) index; the exact name sorts first.
+  std::vector<std::pair<std::int64_t, bool>> twins;  // id, exactly `name`
+  {
+    Statement find = connection.prepare(
+        trimmed ? "SELECT id, name = ?2 FROM offices WHERE pincode = ?1 AND trim(name) = ?2 "
+                  "ORDER BY name = ?2 DESC, id"
+                : "SELECT id, 1 FROM offices WHERE pincode = ?1 AND name = ?2");
+    find.bind(1, std::int64_t{pincode.value()}).bind(2, name);
+    while (find.step()) twins.emplace_back(find.getInt64(0), find.getInt64(1) != 0);
+  }
+  if (twins.empty()) return OfficeMatch::kNone;
+  if (twins.size() == 1 && twins[0].second) return OfficeMatch::kSame;
+  // The first keeps the office (renamed unless it is exact); the rest are the same office stored
+  // again under a spaced name, by an import before imports matched them: folded into it.
+  if (!twins[0].second) {
+    connection
+        .prepare(std::string("UPDATE offices SET name = ?2, updated_at = ") + kNowSql +
+                 " WHERE id = ?1")
+        .bind(1, twins[0].first)
+        .bind(2, name)
+        .run();
+  }
+  for (std::size_t i = 1; i < twins.size(); ++i) {
+    connection.prepare("DELETE FROM offices WHERE id = ?1").bind(1, twins[i].first).run();
+  }
+  return OfficeMatch::kClaimed;
 }
 
 int UpsertOffice(Connection& connection, Pincode pincode, const PostOffice& office,
@@ -343,7 +367,7 @@ int UpsertOffice(Connection& connection, Pincode pincode, const PostOffice& offi
   BindOffice(upsert, pincode, office, source);
   const int changed = upsert.run();
   if (match == OfficeMatch::kNone) return 1;
-  return changed > 0 || match == OfficeMatch::kRenamed ? 2 : 0;
+  return changed > 0 || match == OfficeMatch::kClaimed ? 2 : 0;
 }
 
 }  // namespace detail

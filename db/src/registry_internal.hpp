@@ -26,15 +26,19 @@ const std::string& UpsertOfficeSql();
 void BindOffice(Statement& upsert, Pincode pincode, const PostOffice& office,
                 std::string_view source);
 
-/// Whether `pincode` has an office named `name`: kNone, kSame, or kRenamed when one was stored
-/// under a name that differs only in spaces at either end (a database seeded before the seed was
-/// trimmed has 55 such names, e.g. "New Delhi "); that office now carries `name`, so an upsert
-/// that follows updates it instead of adding a second office.
-enum class OfficeMatch { kNone, kSame, kRenamed };
+/// Finds `pincode`'s office named `name`. When `name` has no space at either end (the importer's
+/// names never do), a stored name that differs from it only in such spaces is the same office:
+/// kNone, kSame when it is stored exactly once as `name`, or kClaimed when the stored office was
+/// renamed to `name`, or twins of it stored under spaced names were deleted, leaving the one
+/// office (a database seeded before the seed was trimmed has 55 such names, e.g. "New Delhi ",
+/// and an import then added the trimmed name beside them). An upsert that follows then updates
+/// that office instead of adding another. A `name` with such spaces (the API stores text
+/// verbatim) matches only itself.
+enum class OfficeMatch { kNone, kSame, kClaimed };
 OfficeMatch ClaimOffice(Connection& connection, Pincode pincode, const std::string& name);
 
-/// Inserts or updates the office (pincode, office.name), claiming one stored under the name
-/// with spaces at either end (ClaimOffice); returns 0 unchanged, 1 inserted, 2 updated (renamed
+/// Inserts or updates the office (pincode, office.name), claiming one stored under the name with
+/// spaces at either end (ClaimOffice); returns 0 unchanged, 1 inserted, 2 updated (claimed
 /// included). Absent optional fields keep what is stored.
 int UpsertOffice(Connection& connection, Pincode pincode, const PostOffice& office,
                  std::string_view source);

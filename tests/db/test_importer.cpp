@@ -58,6 +58,7 @@ TEST_F(Importer, ReadsTheNewerLayoutAndIsIdempotent) {
 
   // New pincodes get the keys probing finds past every existing key.
   std::vector<TagKey> taken;
+  taken.reserve(keys_before.size());
   for (const KeyRow& row : keys_before) taken.push_back(row.key);
   KeyAllocator allocator(taken);
   EXPECT_EQ(report->pincodes_added[0].first, Pincode(999011));
@@ -112,9 +113,9 @@ TEST_F(Importer, ReadsTheNewerLayoutAndIsIdempotent) {
 // all). India Post's file names the office without the space: the import updates that office and
 // gives it the trimmed name, instead of adding a second one beside it.
 TEST_F(Importer, UpdatesAnOfficeStoredWithASpaceAtAnEndInsteadOfAddingIt) {
-  db_.execute(
-      "UPDATE offices SET name = 'Connaught Place ' WHERE pincode = 110001 AND "
-      "name = 'Connaught Place'");
+  const std::int64_t id =
+      db_.queryInt64("SELECT id FROM offices WHERE pincode = 110001 AND name = 'Connaught Place'");
+  db_.execute("UPDATE offices SET name = 'Connaught Place ' WHERE id = " + std::to_string(id));
   const auto before = LookupPincode(db_, Pincode(110001)).value();
   const auto report = ImportDirectoryCsv(db_, kNewerCsv);
   ASSERT_TRUE(report.ok()) << report.error().message;
@@ -127,6 +128,7 @@ TEST_F(Importer, UpdatesAnOfficeStoredWithASpaceAtAnEndInsteadOfAddingIt) {
     EXPECT_NE(office.name, "Connaught Place ");
     if (office.name != "Connaught Place") continue;
     ++named;
+    EXPECT_EQ(office.id, id);  // the same row, renamed
     EXPECT_EQ(office.branch_type, "SO");
   }
   EXPECT_EQ(named, 1);
@@ -142,6 +144,30 @@ TEST_F(Importer, UpdatesAnOfficeStoredWithASpaceAtAnEndInsteadOfAddingIt) {
   EXPECT_EQ(again->offices_updated, 1);
   EXPECT_EQ(again->offices_unchanged, 3);
   EXPECT_EQ(LookupPincode(db_, Pincode(110001)).value().offices.size(), before.offices.size());
+}
+
+// A database seeded before the seed was trimmed that had an India Post import since holds an
+// office twice, as "Connaught Place " from the seed and "Connaught Place" from the import. The
+// next import of it folds the spaced twin into the other.
+TEST_F(Importer, FoldsATwinStoredWithASpaceAtAnEndIntoTheOffice) {
+  db_.execute(
+      "INSERT INTO offices (pincode, name, division, region, circle, district, state, source, "
+      "updated_at) SELECT pincode, name || ' ', division, region, circle, district, state, "
+      "source, updated_at FROM offices WHERE pincode = 110001 AND name = 'Connaught Place'");
+  const std::int64_t id =
+      db_.queryInt64("SELECT id FROM offices WHERE pincode = 110001 AND name = 'Connaught Place'");
+  const auto before = LookupPincode(db_, Pincode(110001)).value();
+  const auto report = ImportDirectoryCsv(db_, kNewerCsv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->offices_added, 3);
+  EXPECT_EQ(report->offices_updated, 1);
+  const auto delhi = LookupPincode(db_, Pincode(110001)).value();
+  EXPECT_EQ(delhi.offices.size(), before.offices.size() - 1);
+  EXPECT_EQ(db_.queryInt64("SELECT count(*) FROM offices WHERE pincode = 110001 AND "
+                           "trim(name) = 'Connaught Place'"),
+            1);
+  EXPECT_EQ(
+      db_.queryInt64("SELECT branch_type = 'SO' FROM offices WHERE id = " + std::to_string(id)), 1);
 }
 
 TEST_F(Importer, ReadsTheOlderLayout) {

@@ -99,6 +99,7 @@ TEST_F(Registry, RetiringAndAddingKeepEveryEarlierKey) {
   EXPECT_EQ(by_key->status, PincodeStatus::kRetired);
 
   std::vector<TagKey> taken;
+  taken.reserve(before.size());
   for (const KeyRow& row : before) taken.push_back(row.key);
   KeyAllocator expected(taken);
   PostOffice office{.name = "Field Post Office",

@@ -87,9 +87,10 @@ TEST(Seed, TwoIndependentlySeededDatabasesHaveIdenticalKeyTables) {
   EXPECT_EQ(exported.out, csv);  // `keys export` prints exactly the table
 }
 
-// The package publishes 55 office names (and one district) with a space at an end, such as
-// 110001's "New Delhi ". Stored so, an India Post import of the same office under its trimmed
-// name would add it a second time; the seed stores them trimmed, as the importer does.
+// The package publishes 55 office names, such as 110001's "New Delhi ", and one region
+// ("Bangalore HQ ") with a space at an end. Stored so, an India Post import of the same office
+// under its trimmed name would add it a second time; the seed stores them trimmed, as the
+// importer does.
 TEST(Seed, StoresNoNameWithSpacesAtEitherEnd) {
   Connection connection = test::OpenExisting(test::SeededTemplate());
   EXPECT_EQ(connection.queryInt64(
