@@ -319,19 +319,11 @@ void BindOffice(Statement& upsert, Pincode pincode, const PostOffice& office,
       .bind(13, source);
 }
 
-namespace {
-std::string TrimmedSpaces(std::string_view text) {
-  const std::size_t first = text.find_first_not_of(' ');
-  if (first == std::string_view::npos) return {};
-  return std::string(text.substr(first, text.find_last_not_of(' ') - first + 1));
-}
-}  // namespace
-
 OfficeMatch ClaimOffice(Connection& connection, Pincode pincode, const std::string& name) {
   // Only a trimmed name claims others: the API stores text verbatim, so "Main " posted there stays
   // itself, and no office is ever renamed towards spaces.
-  const bool trimmed = name == TrimmedSpaces(name);
-  // SQLite's trim() drops spaces only, as TrimmedSpaces does. A pincode has at most a few dozen
+  const bool trimmed = name == TrimSpaces(name);
+  // SQLite's trim() drops spaces only, as TrimSpaces does. A pincode has at most a few dozen
   // offices, all reached through the (pincode, name) index; the exact name sorts first.
   std::vector<std::pair<std::int64_t, bool>> twins;  // id, exactly `name`
   {

@@ -13,6 +13,7 @@
 #include "guard.hpp"
 #include "pintag/codec/key_allocation.hpp"
 #include "pintag/db/database.hpp"
+#include "pintag/db/text.hpp"
 #include "sort_plan_internal.hpp"
 
 namespace pintag::db {
@@ -84,10 +85,7 @@ std::string Unescape(std::string_view text) {
 // of some names ("New Delhi "). The importer trims India Post's fields the same way, so an office
 // it imports matches the seeded one instead of being added beside it. Inner spaces are kept.
 std::string Stored(std::string_view text) {
-  std::string out = Unescape(text);
-  const std::size_t first = out.find_first_not_of(' ');
-  if (first == std::string::npos) return {};
-  return out.substr(first, out.find_last_not_of(' ') - first + 1);
+  return std::string(TrimSpaces(Unescape(text)));
 }
 
 /// Reads lines and tab-separated fields from the inflated text.

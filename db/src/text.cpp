@@ -6,6 +6,12 @@
 
 namespace pintag::db {
 
+std::string_view TrimSpaces(std::string_view text) {
+  const std::size_t first = text.find_first_not_of(' ');
+  if (first == std::string_view::npos) return {};
+  return text.substr(first, text.find_last_not_of(' ') - first + 1);
+}
+
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty) {
   const auto invalid = [&](const std::string& why) {

@@ -17,6 +17,7 @@
 #include "pintag/codec/png_io.hpp"
 #include "pintag/codec/tag_raster.hpp"
 #include "pintag/codec/tag_svg.hpp"
+#include "pintag/db/text.hpp"
 
 namespace pintag::app {
 namespace {
@@ -26,17 +27,11 @@ constexpr double kDefaultTagMm = 50;
 constexpr double kMinTagMm = 5;
 constexpr double kMaxTagMm = 500;
 
-std::string_view TrimmedSpaces(std::string_view text) {
-  while (!text.empty() && text.front() == ' ') text.remove_prefix(1);
-  while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
-  return text;
-}
-
 /// Names as a clerk types them: ASCII case and spaces at either end do not count (the
 /// directory has names such as "New Delhi ").
 bool SameName(std::string_view a, std::string_view b) {
-  a = TrimmedSpaces(a);
-  b = TrimmedSpaces(b);
+  a = db::TrimSpaces(a);
+  b = db::TrimSpaces(b);
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
            return std::tolower(static_cast<unsigned char>(x)) ==
                   std::tolower(static_cast<unsigned char>(y));
@@ -47,7 +42,7 @@ bool SameName(std::string_view a, std::string_view b) {
 /// addressee's is the one a person reads), else the main one.
 const db::PostOffice* ChosenOffice(const db::PincodeRecord& record,
                                    const std::optional<std::string>& name) {
-  if (!name || TrimmedSpaces(*name).empty()) return MainOffice(record);
+  if (!name || db::TrimSpaces(*name).empty()) return MainOffice(record);
   for (const db::PostOffice& office : record.offices) {
     if (SameName(office.name, *name)) return &office;
   }

@@ -16,6 +16,10 @@ inline constexpr std::size_t kMaxLabelBytes = 200;     ///< token labels, plan d
 inline constexpr std::size_t kMaxBinBytes = 64;        ///< sort plan and bin names
 inline constexpr std::size_t kMaxJsonBytes = 1 << 20;  ///< a scan log entry's JSON text
 
+/// `text` without the spaces at either end (tabs and inner spaces kept): how names are compared
+/// and, from the seed and imports, stored ("New Delhi " and "New Delhi" are one office).
+std::string_view TrimSpaces(std::string_view text);
+
 /// Nothing when `value` is acceptable for `field`; else the kInvalid error saying why.
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty = false);
