@@ -27,8 +27,8 @@ constexpr double kDefaultTagMm = 50;
 constexpr double kMinTagMm = 5;
 constexpr double kMaxTagMm = 500;
 
-/// Names as a clerk types them: ASCII case and spaces at either end do not count (the
-/// directory has names such as "New Delhi ").
+/// Names as a clerk types them: ASCII case and spaces at either end do not count (a clerk's
+/// stray space; and offices added through the API keep their names as sent).
 bool SameName(std::string_view a, std::string_view b) {
   a = db::TrimSpaces(a);
   b = db::TrimSpaces(b);
