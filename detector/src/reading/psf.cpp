@@ -10,14 +10,18 @@ namespace {
 constexpr int kSide = 2 * kMaxKernelRadius + 2;  // dense kernels: offsets −R … R + 1
 constexpr double kDropBelow = 1.5e-3;            // taps this small (of the peak) are left out
 
+constexpr int kDenseTaps = kSide * kSide;
+
+// Where offset (dx, dy) sits in a dense kernel's row-major taps.
+std::size_t DenseIndex(int dx, int dy) {
+  const int i = (dy + kMaxKernelRadius) * kSide + dx + kMaxKernelRadius;
+  return static_cast<std::size_t>(i);
+}
+
 struct Dense {
-  std::vector<double> w = std::vector<double>(static_cast<std::size_t>(kSide * kSide), 0.0);
-  double& at(int dx, int dy) {
-    return w[static_cast<std::size_t>((dy + kMaxKernelRadius) * kSide + dx + kMaxKernelRadius)];
-  }
-  double at(int dx, int dy) const {
-    return w[static_cast<std::size_t>((dy + kMaxKernelRadius) * kSide + dx + kMaxKernelRadius)];
-  }
+  std::vector<double> w = std::vector<double>(static_cast<std::size_t>(kDenseTaps), 0.0);
+  double& at(int dx, int dy) { return w[DenseIndex(dx, dy)]; }
+  double at(int dx, int dy) const { return w[DenseIndex(dx, dy)]; }
 };
 
 // A round Gaussian of `minor` swept evenly along a line so that the spread along it is `major`
@@ -51,20 +55,26 @@ Dense Smear(double major, double minor, double angle_deg, double cx, double cy) 
 // `d` blurred by a round Gaussian of `sigma` (separably, within the dense window).
 Dense Blurred(const Dense& d, double sigma) {
   const int reach = std::min(kMaxKernelRadius, static_cast<int>(std::ceil(3 * sigma)));
-  std::vector<double> g(static_cast<std::size_t>(2 * reach + 1));
+  const int taps = 2 * reach + 1;
+  std::vector<double> g(static_cast<std::size_t>(taps));
   double total = 0;
-  for (int i = -reach; i <= reach; ++i) {
-    g[static_cast<std::size_t>(i + reach)] = std::exp(-0.5 * i * i / (sigma * sigma));
-    total += g[static_cast<std::size_t>(i + reach)];
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    const double i = static_cast<double>(k) - reach;
+    g[k] = std::exp(-0.5 * i * i / (sigma * sigma));
+    total += g[k];
   }
   for (double& v : g) v /= total;
+  const auto weight = [&](int i) {  // the tap at offset i, −reach … reach
+    const int k = i + reach;
+    return g[static_cast<std::size_t>(k)];
+  };
   Dense rows, out;
   const auto inside = [](int v) { return v >= -kMaxKernelRadius && v <= kMaxKernelRadius + 1; };
   for (int dy = -kMaxKernelRadius; dy <= kMaxKernelRadius + 1; ++dy) {
     for (int dx = -kMaxKernelRadius; dx <= kMaxKernelRadius + 1; ++dx) {
       double sum = 0;
       for (int i = -reach; i <= reach; ++i) {
-        if (inside(dx - i)) sum += g[static_cast<std::size_t>(i + reach)] * d.at(dx - i, dy);
+        if (inside(dx - i)) sum += weight(i) * d.at(dx - i, dy);
       }
       rows.at(dx, dy) = sum;
     }
@@ -73,7 +83,7 @@ Dense Blurred(const Dense& d, double sigma) {
     for (int dx = -kMaxKernelRadius; dx <= kMaxKernelRadius + 1; ++dx) {
       double sum = 0;
       for (int i = -reach; i <= reach; ++i) {
-        if (inside(dy - i)) sum += g[static_cast<std::size_t>(i + reach)] * rows.at(dx, dy - i);
+        if (inside(dy - i)) sum += weight(i) * rows.at(dx, dy - i);
       }
       out.at(dx, dy) = sum;
     }

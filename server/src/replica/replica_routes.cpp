@@ -5,7 +5,6 @@
 namespace pintag::replica {
 
 using server::HttpRequest;
-using server::HttpResponse;
 
 bool ChangesRegistry(const server::Route& route) {
   return route.access == server::Access::kAdmin && route.method != "GET";
