@@ -60,11 +60,12 @@ namespace {
 TEST(RedBlobs, ElementsHaveTheirRingRedMarksOnPaperDoNot) {
   const TagRaster raster = RenderTagRaster(TagKey(77), {120, 4});
   cv::Mat bgr(raster.image.height, raster.image.width, CV_8UC3);
-  for (int y = 0; y < bgr.rows; ++y)
+  for (int y = 0; y < bgr.rows; ++y) {
     for (int x = 0; x < bgr.cols; ++x) {
       const Rgb8 c = raster.image.at(x, y);
       bgr.at<cv::Vec3b>(y, x) = {c.b, c.g, c.r};
     }
+  }
   const auto elements = FindRedBlobs(RednessMask(bgr, {}), {});
   ASSERT_EQ(elements.size(), 4u);
   for (const RedBlob& b : elements) EXPECT_TRUE(HasRing(bgr, b));

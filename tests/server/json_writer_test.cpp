@@ -45,8 +45,9 @@ TEST(JsonWriter, EveryAsciiAndControlCharacterRoundTrips) {
 }
 
 TEST(JsonWriter, BytesThatAreNotUtf8BecomeReplacementCharacters) {
+  // "a\xC0\xAF" "b" is one string, split so that the hex escape does not take in the b.
   const std::string bad[] = {"\xFF",
-                             "a\xC0\xAF"
+                             "a\xC0\xAF"  // NOLINT(bugprone-suspicious-missing-comma)
                              "b",
                              "\xED\xA0\x80",
                              "\xF4\x90\x80\x80",

@@ -58,6 +58,7 @@ TEST(Metrics, EscapesLabelValues) {
 TEST(Metrics, IsThreadSafe) {
   Metrics m;
   std::vector<std::thread> threads;
+  threads.reserve(4);
   for (int t = 0; t < 4; ++t) {
     threads.emplace_back([&m] {
       for (int i = 0; i < 1000; ++i) {

@@ -49,11 +49,11 @@ LinearTexture PrepareTexture(const MarkerTexture& texture, const std::vector<Occ
   for (int y = 0; y < bgr.rows; ++y) {
     const auto* src = bgr.ptr<std::uint8_t>(y);
     auto* dst = result.base.ptr<float>(y);
-    for (int x = 0; x < bgr.cols; ++x) {
-      dst[4 * x] = to_linear[src[3 * x]];
-      dst[4 * x + 1] = to_linear[src[3 * x + 1]];
-      dst[4 * x + 2] = to_linear[src[3 * x + 2]];
-      dst[4 * x + 3] = 1.0f;
+    for (int x = 0; x < bgr.cols; ++x, src += 3, dst += 4) {
+      dst[0] = to_linear[src[0]];
+      dst[1] = to_linear[src[1]];
+      dst[2] = to_linear[src[2]];
+      dst[3] = 1.0f;
     }
   }
   return result;
@@ -113,7 +113,7 @@ bool CompositeMarker(cv::Mat& frame, const LinearTexture& texture,
   const std::uint8_t* to_srgb = LinearToSrgbTable();
   for (int y = 0; y < box.height; ++y) {
     const float* src = area.ptr<float>(y);
-    std::uint8_t* out = frame.ptr<std::uint8_t>(y + y0) + 3 * x0;
+    std::uint8_t* out = frame.ptr<std::uint8_t>(y + y0, x0);
     for (int x = 0; x < box.width; ++x, src += 4, out += 3) {
       const float coverage = src[3];
       if (coverage <= 0.0f) continue;

@@ -43,7 +43,10 @@ void LinearToSrgb8(const float* linear, std::uint8_t* srgb, int count) {
   for (int i = 0; i < count; ++i) {
     // Branch-free clamp (NaN goes to 0 through the max) so the index arithmetic vectorises.
     const float v = std::min(std::max(0.0f, linear[i]), 1.0f);
-    srgb[i] = table[static_cast<int>(v * kLinearSteps + 0.5f)];
+    // v is clamped to [0, 1], so adding a half and truncating rounds to nearest; it vectorises
+    // where lround does not, and every rendered frame depends on these exact indices.
+    srgb[i] =
+        table[static_cast<int>(v * kLinearSteps + 0.5f)];  // NOLINT(bugprone-incorrect-roundings)
   }
 }
 
