@@ -136,7 +136,8 @@ bool WritePlot(const PlotSpec& spec, const std::string& path, std::string* error
     };
     // Grid and ticks.
     cairo_set_line_width(cr, 1);
-    for (double v = spec.y_min; v <= spec.y_max + 1e-9; v += 10) {
+    for (int step = 0; spec.y_min + 10.0 * step <= spec.y_max + 1e-9; ++step) {
+      const double v = spec.y_min + 10.0 * step;
       const bool major = std::fmod(v - spec.y_min, 20) < 1e-9;
       cairo_set_source_rgb(cr, major ? 0.85 : 0.93, major ? 0.85 : 0.93, major ? 0.85 : 0.93);
       cairo_move_to(cr, left, std::round(py(v)) + 0.5);

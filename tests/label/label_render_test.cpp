@@ -53,6 +53,7 @@ TEST(LabelPdf, PageIsExactlyTheLabelSizeInPoints) {
 TEST(LabelPdf, PdfinfoReadsSizeAndPagesOfABatch) {
   if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
   std::vector<LabelContent> labels;
+  labels.reserve(50);
   for (int i = 0; i < 50; ++i) {
     labels.push_back(test::SampleLabel(110001 + static_cast<std::uint32_t>(i),
                                        static_cast<std::uint16_t>(1000 + 7 * i)));

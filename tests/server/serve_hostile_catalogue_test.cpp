@@ -137,7 +137,7 @@ Answer Send(int port, const std::string& request, int quiet_s = 10) {
 /// otherwise: "" leaves it out).
 std::string Request(const std::string& method, const std::string& target,
                     const std::vector<std::string>& headers, const std::string& body = {},
-                    std::optional<std::string> length = std::nullopt) {
+                    const std::optional<std::string>& length = std::nullopt) {
   std::string out = method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n";
   for (const std::string& h : headers) out += h + "\r\n";
   const std::string declared = length.value_or(std::to_string(body.size()));
@@ -363,7 +363,7 @@ TEST_F(HostileCatalogue, NegativeContentLength) {
 TEST_F(HostileCatalogue, ChunkedBodyOverTheLimit) {
   startServer({"--max-body-mb", "0.05"});
   std::string chunked;
-  const std::string chunk(16 * 1024, 'x');
+  const std::string chunk(std::size_t{16} * 1024, 'x');
   for (int i = 0; i < 8; ++i) chunked += "4000\r\n" + chunk + "\r\n";
   chunked += "0\r\n\r\n";
   expectRefused(Request("POST", "/api/v1/detect",
@@ -373,7 +373,7 @@ TEST_F(HostileCatalogue, ChunkedBodyOverTheLimit) {
 }
 TEST_F(HostileCatalogue, OversizedMultipartPart) {
   startServer({"--max-body-mb", "0.05"});
-  const std::string body = Multipart("b0undary", "image", std::string(80 * 1024, 'j'));
+  const std::string body = Multipart("b0undary", "image", std::string(std::size_t{80} * 1024, 'j'));
   expectRefused(
       Request("POST", "/api/v1/detect",
               {scannerAuth(), "Content-Type: multipart/form-data; boundary=b0undary"}, body),
@@ -488,13 +488,15 @@ TEST_F(HostileCatalogue, SlowlorisHeadersAreCutOffByTheReadTimeout) {
 }
 TEST_F(HostileCatalogue, HeaderFloodOfManyHeaders) {
   std::vector<std::string> headers;
+  headers.reserve(5000);
   for (int i = 0; i < 5000; ++i)
     headers.push_back("X-Flood-" + std::to_string(i) + ": " + std::string(40, 'f'));
   expectRefused(Request("GET", "/api/v1/pincodes/110001", headers), 431);
 }
 TEST_F(HostileCatalogue, OneHeaderLongerThanAllowed) {
-  const Answer answer = Send(server_->port(), Request("GET", "/api/v1/pincodes/110001",
-                                                      {"X-Long: " + std::string(64 * 1024, 'l')}));
+  const Answer answer =
+      Send(server_->port(), Request("GET", "/api/v1/pincodes/110001",
+                                    {"X-Long: " + std::string(std::size_t{64} * 1024, 'l')}));
   EXPECT_EQ(answer.status, 400) << answer.head;
   expectHealthy();
 }
@@ -507,7 +509,9 @@ TEST_F(HostileCatalogue, RequestLineLongerThanAllowed) {
 }
 TEST_F(HostileCatalogue, GarbageInsteadOfARequestLine) {
   const Answer answer =
-      Send(server_->port(), "\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03\r\n\r\n");
+      // A TLS ClientHello's first bytes, NULs included (a literal would stop at the first).
+      Send(server_->port(),
+           std::string("\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03\r\n\r\n", 15));
   EXPECT_TRUE(answer.status == 400 || answer.status == 0) << answer.head;
   expectHealthy();
 }

@@ -60,7 +60,7 @@ double ViewTiltDeg(const Pose& pose) {
   return std::acos(c) / kDegToRad;
 }
 
-cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, cv::Vec3d model_point_m) {
+cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, const cv::Vec3d& model_point_m) {
   const cv::Vec3d p = pose.rotation * model_point_m + pose.translation;
   return {camera.fx * p[0] / p[2] + camera.cx, camera.fy * p[1] / p[2] + camera.cy};
 }

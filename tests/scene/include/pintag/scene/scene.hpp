@@ -67,7 +67,7 @@ double DistanceForSquarePx(const Camera& camera, double square_px, double side_m
 double ViewTiltDeg(const Pose& pose);
 
 /// Projects a point given in the square's model frame (metres) to image pixels.
-cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, cv::Vec3d model_point_m);
+cv::Point2d ProjectPoint(const Camera& camera, const Pose& pose, const cv::Vec3d& model_point_m);
 
 /// Which side of the benchmark a scene belongs to. Detector work is tuned on kTuning scenes only;
 /// kHeldOut scenes check it on what it never saw: other photographs, and a second rendering path
