@@ -86,8 +86,22 @@ TEST_F(ServeTest, SortPlansReadAndWrite) {
       client().Put("/api/v1/sortplans/bad", admin(), "prefix,bin\n*,m\n11,a\n11,b\n", "text/csv"),
       400);
   ExpectProblem(client().Put("/api/v1/sortplans/bad", admin(), "{", "application/json"), 400);
-  ExpectProblem(
-      client().Put("/api/v1/sortplans/bad", admin(), R"({"rules": []})", "application/json"), 400);
+  // A JSON plan's faults are named like a CSV's, a misspelt field among them (it would otherwise
+  // be saved without what it was meant to say).
+  for (const auto& [body, named] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"rules": []})", "'fallback_bin' is required"},
+           {R"({"fallback_bin": 7, "rules": []})", "'fallback_bin' must be a string"},
+           {R"({"fallback_bin": "m", "rule": []})", "unknown field 'rule'"},
+           {R"({"fallback_bin": "m", "rules": [{"prefix": "1", "bni": "a"}]})",
+            "rules[0]: unknown field 'bni'"},
+           {R"({"fallback_bin": "m", "rules": [{"bin": "a"}]})", "rules[0]: 'prefix' is required"},
+           {R"({"fallback_bin": "m", "rules": [{"prefix": "1x", "bin": "a"}]})", "1x"}}) {
+    const json problem = ExpectProblem(
+        client().Put("/api/v1/sortplans/bad", admin(), body, "application/json"), 400);
+    EXPECT_EQ(problem["title"], "Bad Sort Plan") << body;
+    EXPECT_NE(problem["detail"].get<std::string>().find(named), std::string::npos)
+        << body << " -> " << problem.dump();
+  }
   EXPECT_EQ(ExpectJson(client().Get("/api/v1/sortplans"))["plans"].size(), 2U);
 }
 

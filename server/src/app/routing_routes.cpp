@@ -1,6 +1,8 @@
 // Routing routes: the bin for a pincode under a sort plan, and the plans themselves (read by
 // anyone, written by admins as CSV or JSON).
 
+#include <algorithm>
+
 #include "app/db_problems.hpp"
 #include "app/params.hpp"
 #include "app/routes.hpp"
@@ -29,32 +31,49 @@ bool WantsCsv(const HttpRequest& request) {
          accept.find("application/json") == std::string::npos;
 }
 
+HttpError BadPlan(std::string detail) {
+  return HttpError(400, std::move(detail), "Bad Sort Plan");
+}
+
+/// Refuses a field `object` has that `known` does not list: a misspelt field would otherwise be
+/// dropped without a word, and the plan saved without what it was meant to say.
+void RefuseUnknownFields(const json& object, std::initializer_list<std::string_view> known,
+                         const std::string& where) {
+  for (const auto& [field, value] : object.items()) {
+    if (std::find(known.begin(), known.end(), field) == known.end()) {
+      throw BadPlan(where + "unknown field '" + field.substr(0, 40) + "'");
+    }
+  }
+}
+
 db::SortPlan PlanFromJson(const std::string& name, const json& body) {
   if (!body.is_object()) {
-    throw HttpError(400,
-                    R"(expected {"fallback_bin": "…", "rules": [{"prefix": "11", "bin": "…"}]})");
+    throw BadPlan(R"(expected {"fallback_bin": "…", "rules": [{"prefix": "11", "bin": "…"}]})");
   }
-  const auto text = [&](const json& object, const char* field, bool required) -> std::string {
+  const auto text = [&](const json& object, const char* field, bool required,
+                        const std::string& where = {}) -> std::string {
     if (!object.contains(field)) {
-      if (required) throw HttpError(400, std::string("'") + field + "' is required");
+      if (required) throw BadPlan(where + "'" + field + "' is required");
       return {};
     }
-    if (!object[field].is_string())
-      throw HttpError(400, std::string("'") + field + "' must be a string");
+    if (!object[field].is_string()) throw BadPlan(where + "'" + field + "' must be a string");
     return object[field].get<std::string>();
   };
+  RefuseUnknownFields(body, {"name", "fallback_bin", "description", "rules"}, "");
   db::SortPlan plan;
   plan.name = name;
   if (body.contains("name") && body["name"] != name) {
-    throw HttpError(400, "the body's name differs from the one in the path");
+    throw BadPlan("the body's name differs from the one in the path");
   }
   plan.fallback_bin = text(body, "fallback_bin", true);
   plan.description = text(body, "description", false);
-  if (!body.contains("rules") || !body["rules"].is_array())
-    throw HttpError(400, "'rules' must be a list");
-  for (const json& rule : body["rules"]) {
-    if (!rule.is_object()) throw HttpError(400, "each rule must be {\"prefix\": …, \"bin\": …}");
-    plan.rules.push_back({text(rule, "prefix", true), text(rule, "bin", true)});
+  if (!body.contains("rules") || !body["rules"].is_array()) throw BadPlan("'rules' must be a list");
+  for (std::size_t i = 0; i < body["rules"].size(); ++i) {
+    const json& rule = body["rules"][i];
+    const std::string where = "rules[" + std::to_string(i) + "]: ";
+    if (!rule.is_object()) throw BadPlan(where + R"(expected {"prefix": …, "bin": …})");
+    RefuseUnknownFields(rule, {"prefix", "bin"}, where);
+    plan.rules.push_back({text(rule, "prefix", true, where), text(rule, "bin", true, where)});
   }
   return plan;
 }
