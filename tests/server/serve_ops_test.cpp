@@ -188,6 +188,21 @@ TEST_F(ServeTest, ReadyzFailsWhenTheDatabaseIsUnreachable) {
   ExpectJson(client().Get("/readyz"));
 }
 
+TEST_F(ServeTest, ATokenThatCannotBeCheckedIsUnavailableNotInvalid) {
+  // A new process has no database connection open until a request needs one; with the file
+  // moved away that first one cannot open, and the token is not at fault: 503, not 401 (a client
+  // told its token is invalid may throw a good token away over an outage).
+  startServer();
+  std::filesystem::rename(db_path_, db_path_ + ".away");
+  const auto refused = client().Get("/api/v1/labels/110001.svg", counter());
+  ExpectProblem(refused, 503);
+  EXPECT_FALSE(refused->has_header("WWW-Authenticate"));
+  std::filesystem::rename(db_path_ + ".away", db_path_);
+  const auto served = client().Get("/api/v1/labels/110001.svg", counter());
+  ASSERT_TRUE(served);
+  EXPECT_EQ(served->status, 200);
+}
+
 TEST_F(ServeTest, MetricsCountWhatTheTestDid) {
   for (int i = 0; i < 3; ++i) ExpectJson(client().Get("/api/v1/pincodes/110001"));
   for (int i = 0; i < 2; ++i) ExpectProblem(client().Get("/api/v1/pincodes/999999"), 404);

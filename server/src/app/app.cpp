@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include "app/context.hpp"
+#include "app/db_problems.hpp"
 #include "app/route_table.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/snapshot.hpp"
@@ -27,15 +28,17 @@ server::Access Granted(db::Role role) {
 }
 
 server::TokenVerifier RegistryTokenVerifier(const std::shared_ptr<ConnectionPool>& pool) {
+  // A token that cannot be checked is not a wrong token: a busy or unreachable database answers
+  // 503 (acquire() and ThrowDbError throw it), so a client does not drop a good token over an
+  // outage.
   return [pool](std::string_view secret) -> std::optional<server::Principal> {
-    try {
-      auto connection = pool->acquire();
-      auto token = db::VerifyToken(*connection, secret);
-      if (!token) return std::nullopt;
-      return server::Principal{std::to_string(token->id), Granted(token->role)};
-    } catch (const std::exception&) {
-      return std::nullopt;  // database unreachable: no one is admitted
+    auto connection = pool->acquire();
+    auto token = db::VerifyToken(*connection, secret);
+    if (!token) {
+      if (token.error().code == db::ErrorCode::kUnauthorized) return std::nullopt;
+      ThrowDbError(token.error());
     }
+    return server::Principal{std::to_string(token->id), Granted(token->role)};
   };
 }
 

@@ -148,8 +148,13 @@ Admission Api::admit(std::string_view method, std::string_view path,
     }
     const std::string_view token = Trim(value.substr(space + 1));
     std::optional<Principal> principal;
-    if (!token.empty() && token.size() <= kMaxTokenLength && verifier_)
-      principal = verifier_(token);
+    try {
+      if (!token.empty() && token.size() <= kMaxTokenLength && verifier_)
+        principal = verifier_(token);
+    } catch (const HttpError& e) {
+      admission.rejection = ProblemResponse(e.problem());
+      return admission;
+    }
     if (!principal) {
       admission.rejection = Unauthorized("the bearer token is not valid", true);
       return admission;

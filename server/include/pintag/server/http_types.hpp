@@ -81,7 +81,9 @@ struct HttpResponse {
 using Handler = std::function<HttpResponse(const HttpRequest&)>;
 
 /// Checks a bearer token; the registry supplies it (tokens table). Nothing for an unknown,
-/// revoked or malformed token. Must be thread-safe: it runs on the worker threads.
+/// revoked or malformed token; throws HttpError (answered as it says) when the token cannot be
+/// checked, e.g. 503 with the database unreachable. Must be thread-safe: it runs on the worker
+/// threads.
 using TokenVerifier = std::function<std::optional<Principal>(std::string_view token)>;
 
 }  // namespace pintag::server
