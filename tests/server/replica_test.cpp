@@ -15,6 +15,7 @@
 #include "pintag/db/registry.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "pintag/test/loopback_socket.hpp"
 #include "replica_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -108,6 +109,13 @@ TEST_F(ReplicaSetTest, AFollowerServesReadsAndRefusesWritesNamingThePrimary) {
       EXPECT_NE(problem.value("detail", "").find(primaryUrl()), std::string::npos) << r->body;
     }
   }
+  // Refused before the body is read: announced and never sent, it is not waited for.
+  const std::string unsent =
+      "POST /api/v1/pincodes HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: multipart/form-data; "
+      "boundary=x\r\nContent-Length: 20000000\r\n\r\n";
+  const std::string answer = test::SendRaw(replica.port(), unsent, 30);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 403", 0), 0U) << answer.substr(0, 300);
+  EXPECT_NE(answer.find("Read-Only Replica"), std::string::npos) << answer.substr(0, 300);
   // The primary was not changed by any of them.
   httplib::Client primary("127.0.0.1", primary_->port());
   primary.set_read_timeout(30, 0);

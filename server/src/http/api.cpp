@@ -130,6 +130,14 @@ Admission Api::admit(std::string_view method, std::string_view path,
     return admission;
   }
   admission.route_label = route->pattern;
+  if (route->answers_before_body) {
+    HttpRequest bare;
+    bare.method = std::string(method);
+    bare.path = std::string(path);
+    bare.path_params = admission.match.params;
+    admission.rejection = InvokeHandler(route->handler, bare);
+    return admission;
+  }
 
   // Bearer auth, before a byte of the body is read.
   if (route->access != Access::kOpen) {

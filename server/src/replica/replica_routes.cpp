@@ -16,6 +16,9 @@ server::Router ReadOnlyRouter(const server::Router& router, const std::string& p
     if (ChangesRegistry(route)) {
       route.access = server::Access::kOpen;
       route.consumes.clear();
+      // Refused before the body is read: a replica has no use for it, and reading it (up to
+      // the body limit, from anyone, since no token is asked for) would only cost memory.
+      route.answers_before_body = true;
       route.handler = [primary_url](const HttpRequest& request) {
         return server::ProblemResponse(
             {403, "Read-Only Replica",

@@ -32,6 +32,9 @@ struct Route {
   std::vector<std::string> consumes;  ///< request body media types; empty = no body
   std::string tag = "api";            ///< OpenAPI tag grouping the route
   bool hidden = false;                ///< left out of OpenAPI (static files)
+  /// The handler answers from the method and path alone, at admission: before a token is asked
+  /// for or a byte of the body is read (a replica's refusal of a write, whatever it carries).
+  bool answers_before_body = false;
 };
 
 /// A route with the fields every route sets; set produces, query and consumes on the result.
