@@ -9,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
+#include "pintag/db/database.hpp"
+#include "pintag/db/scan_log.hpp"
 #include "pintag/test/loopback_socket.hpp"
 #include "serve_fixture.hpp"
 
@@ -300,6 +302,32 @@ TEST_F(HostileCatalogue, PdfAsAPhoto) {
   expectRefused(detect("%PDF-1.4\n%\xe2\xe3\n1 0 obj<<>>endobj\n", "image/jpeg"), 415);
 }
 
+TEST_F(HostileCatalogue, QueryBytesThatAreNotUtf8AreQuotedBackWithA4xx) {
+  // The problem quotes what was asked for; the scan log records the failed upload as well.
+  const std::string photo = Encoded(".jpg");
+  const auto upload = [&](const std::string& query) {
+    return Request("POST", "/api/v1/detect?" + query, {scannerAuth(), "Content-Type: image/jpeg"},
+                   photo);
+  };
+  expectRefused(upload("plan=%FF"), 404, "Unknown Sort Plan");
+  expectRefused(upload("plan=%E0%A4"), 404, "Unknown Sort Plan");  // a letter cut in half
+  expectRefused(upload("tag_size_mm=%FF"), 400);
+  expectRefused(upload("fx=%C3"), 400);
+  expectRefused(Request("GET", "/api/v1/route/110001?plan=%FF", {}), 404);
+
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  const auto scans = db::RecentScans(opened.value().connection, 4);
+  ASSERT_TRUE(scans);
+  ASSERT_EQ(scans->size(), 4U);
+  const std::vector<int> statuses = {400, 400, 404, 404};  // newest first
+  for (std::size_t i = 0; i < statuses.size(); ++i) {
+    const json logged = json::parse((*scans)[i].result_json, nullptr, false);
+    EXPECT_EQ(logged["error"].value("status", 0), statuses[i]) << (*scans)[i].result_json;
+    EXPECT_EQ((*scans)[i].image_bytes, static_cast<std::int64_t>(photo.size()));
+  }
+}
+
 // --- Content types ----------------------------------------------------------------------------
 
 TEST_F(HostileCatalogue, PhotoAsTextPlain) {
@@ -378,6 +406,26 @@ TEST_F(HostileCatalogue, OversizedMultipartPart) {
       Request("POST", "/api/v1/detect",
               {scannerAuth(), "Content-Type: multipart/form-data; boundary=b0undary"}, body),
       413);
+}
+TEST_F(HostileCatalogue, MultipartMediaTypeInCapitalsIsReadAsMultipart) {
+  // Media types are case-insensitive (RFC 9110, 8.3.1): the photo in the part is read.
+  const std::string request = Request(
+      "POST", "/api/v1/detect", {scannerAuth(), "Content-Type: Multipart/Form-Data; boundary=caps"},
+      Multipart("caps", "image", Encoded(".jpg")));
+  const Answer answer = Send(server_->port(), request);
+  EXPECT_EQ(answer.status, 200) << answer.body.substr(0, 300);
+  EXPECT_EQ(json::parse(answer.body, nullptr, false).value("tag_count", -1), 0) << answer.body;
+}
+TEST_F(HostileCatalogue, MultipartOfManyEmptyPartsIsRefused) {
+  // Each part costs the server a record however short it is, so parts are counted, and their
+  // headers count toward the body limit.
+  std::string body;
+  for (int i = 0; i < 2000; ++i)
+    body += "--many\r\nContent-Disposition: form-data; name=\"x\"\r\n\r\n\r\n";
+  body += "--many--\r\n";
+  expectRefused(Request("POST", "/api/v1/detect",
+                        {scannerAuth(), "Content-Type: multipart/form-data; boundary=many"}, body),
+                413);
 }
 TEST_F(HostileCatalogue, MultipartWithoutBoundary) {
   expectRefused(
@@ -628,10 +676,22 @@ TEST_F(HostileCatalogue, LabelDpiAbsurd) {
 
 TEST_F(HostileCatalogue, HugeBatchList) {
   json pins = json::array();
-  for (int i = 0; i < 100000; ++i) pins.push_back("110001");
-  expectRefused(Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"},
-                        json{{"pincodes", pins}}.dump()),
-                413);
+  for (int i = 0; i < 1000; ++i) pins.push_back("110001");
+  const std::string request =
+      Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"},
+              json{{"pincodes", pins}}.dump());
+  EXPECT_NE(Send(server_->port(), request).body.find("at most 100 labels"), std::string::npos);
+  expectRefused(request, 413);
+}
+TEST_F(HostileCatalogue, JsonBodyOfManyTinyItemsIsRefusedBeforeParsing) {
+  // 3 bytes an item in the body, tens of bytes each once parsed: counted before parsing.
+  std::string items = "[{}";
+  for (int i = 0; i < 150000; ++i) items += ",{}";
+  items += "]";
+  const std::string request =
+      Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"}, items);
+  EXPECT_NE(Send(server_->port(), request).body.find("items; at most 100000"), std::string::npos);
+  expectRefused(request, 413);
 }
 TEST_F(HostileCatalogue, MissingToken) {
   expectRefused(Request("GET", "/api/v1/labels/110001.pdf", {}), 401);

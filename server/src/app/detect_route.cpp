@@ -278,8 +278,10 @@ HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
     Log(context, request, bytes.size(), outcome);
     return response;
   } catch (const HttpError& e) {
+    // The detail may quote the request's own bytes (a plan name, a parameter): not always UTF-8.
     outcome.result_json =
-        json{{"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}}.dump();
+        json{{"error", {{"status", e.problem().status}, {"detail", e.problem().detail}}}}.dump(
+            -1, ' ', false, json::error_handler_t::replace);
     Log(context, request, bytes.size(), outcome);
     throw;
   } catch (const std::exception& e) {

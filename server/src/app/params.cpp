@@ -136,11 +136,16 @@ long long IntegerQuery(const HttpRequest& request, std::string_view name, long l
 
 namespace {
 
-/// How deeply arrays and objects nest in `text`, counting only brackets outside strings. Exact for
-/// valid JSON; for invalid JSON it is only a bound the parser then refuses anyway.
-std::size_t NestingDepth(std::string_view text) {
+/// How deeply arrays and objects nest in a JSON text, and how many items it holds, counting only
+/// brackets and commas outside strings. Bounds for invalid JSON, which the parser then refuses.
+struct JsonShape {
+  std::size_t depth = 0;  ///< deepest nesting of arrays and objects
+  std::size_t items = 0;  ///< an upper bound on the values: commas and opening brackets, plus one
+};
+
+JsonShape ShapeOf(std::string_view text) {
+  JsonShape shape{0, 1};
   std::size_t depth = 0;
-  std::size_t deepest = 0;
   bool in_string = false;
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -153,12 +158,15 @@ std::size_t NestingDepth(std::string_view text) {
     } else if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
-      deepest = std::max(deepest, ++depth);
+      shape.depth = std::max(shape.depth, ++depth);
+      ++shape.items;
+    } else if (c == ',') {
+      ++shape.items;
     } else if ((c == ']' || c == '}') && depth > 0) {
       --depth;
     }
   }
-  return deepest;
+  return shape;
 }
 
 }  // namespace
@@ -167,11 +175,17 @@ nlohmann::json JsonBody(const HttpRequest& request) {
   // nlohmann::json handles deep nesting with recursion somewhere on its way (a 4 MB body of
   // brackets overflowed a worker's stack and took the server down; found by the ASan suite), and no
   // body PinTag takes nests beyond a few levels.
-  if (const std::size_t depth = NestingDepth(request.body); depth > kMaxJsonDepth) {
+  const JsonShape shape = ShapeOf(request.body);
+  if (shape.depth > kMaxJsonDepth) {
     throw HttpError(400,
-                    "the JSON body nests " + std::to_string(depth) + " levels deep; at most " +
-                        std::to_string(kMaxJsonDepth) + " allowed",
+                    "the JSON body nests " + std::to_string(shape.depth) +
+                        " levels deep; at most " + std::to_string(kMaxJsonDepth) + " allowed",
                     "Malformed JSON");
+  }
+  // Parsed, each item costs far more than its bytes: refused before parsing, not after.
+  if (shape.items > kMaxJsonItems) {
+    throw HttpError(413, "the JSON body holds about " + std::to_string(shape.items) +
+                             " items; at most " + std::to_string(kMaxJsonItems) + " are read");
   }
   nlohmann::json body = nlohmann::json::parse(request.body, nullptr, false);
   if (body.is_discarded()) throw HttpError(400, "the body is not valid JSON", "Malformed JSON");

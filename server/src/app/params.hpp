@@ -55,8 +55,12 @@ long long IntegerQuery(const server::HttpRequest& request, std::string_view name
 
 /// How deeply a JSON body's arrays and objects may nest (PinTag's own bodies use at most 4).
 inline constexpr std::size_t kMaxJsonDepth = 32;
+/// Items (values, counted from the commas and brackets) a JSON body may hold; more answer 413
+/// before parsing. A parsed item costs 16–80 bytes, so `[{},{},…]` would grow a 25 MiB body to
+/// about a gigabyte; the largest body PinTag takes (a pincode with 1,000 offices) has ~15,000.
+inline constexpr std::size_t kMaxJsonItems = 100'000;
 /// The body parsed as JSON; 400 "Malformed JSON" when it is not, or nests deeper than
-/// kMaxJsonDepth.
+/// kMaxJsonDepth; 413 when it holds more than kMaxJsonItems.
 nlohmann::json JsonBody(const server::HttpRequest& request);
 /// A pincode given as a JSON string or number; `where` names it in the problem ("pincodes[3]").
 Pincode PincodeValue(const nlohmann::json& value, std::string_view where);

@@ -23,6 +23,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <thread>
 
 #include "pintag/server/log.hpp"
@@ -128,6 +129,40 @@ bool UnknownMethod(const httplib::Request& req) {
          std::find(kParsed.begin(), kParsed.end(), req.method) == kParsed.end();
 }
 
+/// The multipart Content-Type as cpp-httplib 0.11.4 looks for it, or nothing when `value` is not
+/// multipart/form-data. It matches "multipart/form-data" and "boundary=" case-sensitively, where
+/// media types and parameter names are case-insensitive (RFC 9110, 8.3.1): "Multipart/Form-Data;
+/// Boundary=x" becomes "multipart/form-data; boundary=x" (the boundary's value is left as sent).
+std::optional<std::string> MultipartContentType(std::string_view value) {
+  const auto lower = [](std::string_view text) {
+    std::string out(text);
+    std::transform(out.begin(), out.end(), out.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return out;
+  };
+  const auto trim = [](std::string_view text) {
+    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+    while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+    return text;
+  };
+  std::size_t semicolon = value.find(';');
+  if (lower(trim(value.substr(0, semicolon))) != "multipart/form-data") return std::nullopt;
+  std::string out = "multipart/form-data";
+  while (semicolon != std::string_view::npos) {
+    value.remove_prefix(semicolon + 1);
+    semicolon = value.find(';');
+    const std::string_view parameter = trim(value.substr(0, semicolon));
+    const std::size_t equals = parameter.find('=');
+    out += "; ";
+    out += lower(trim(parameter.substr(0, equals)));
+    if (equals != std::string_view::npos) {
+      out += '=';
+      out += trim(parameter.substr(equals + 1));
+    }
+  }
+  return out;
+}
+
 /// The method as the problem quotes it: printable ASCII, at most 40 characters.
 std::string QuotedMethod(const std::string& method) {
   std::string out;
@@ -159,6 +194,11 @@ struct HttpServer::Impl {
     // Every answer is whole: cpp-httplib 0.11.4 cut API answers to a Range with status 200, and
     // answered an unsatisfiable one without a body. Ignoring Range is allowed (RFC 9110, 14.2).
     const_cast<httplib::Request&>(req).ranges.clear();  // cpp-httplib's own object, not const
+    if (const auto type = req.headers.find("Content-Type"); type != req.headers.end()) {
+      if (auto multipart = MultipartContentType(type->second)) {
+        const_cast<std::string&>(type->second) = std::move(*multipart);
+      }
+    }
     t_state.admission = api->admit(req.method, req.path, Headers(req));
     if (!t_state.admission.rejection && AmbiguousLength(req)) {
       // Two lengths (or a length and chunked coding) let a proxy and this server split the
@@ -203,9 +243,21 @@ struct HttpServer::Impl {
       return !too_large;
     };
     bool ok = false;
+    bool too_many_parts = false;
     if (req.is_multipart_form_data()) {
       ok = reader(
           [&](const httplib::MultipartFormData& part) {
+            // A part's headers and boundary count toward the limit as well as its content: a
+            // body of empty parts would otherwise cost a record each and never reach it.
+            constexpr std::size_t kPartFraming = 64;
+            if (request.parts.size() == kMaxFormParts) {
+              too_many_parts = true;
+              return false;
+            }
+            if (!count(kPartFraming + part.name.size() + part.filename.size() +
+                       part.content_type.size())) {
+              return false;
+            }
             request.parts.push_back({part.name, part.filename, part.content_type, {}});
             return true;
           },
@@ -228,6 +280,13 @@ struct HttpServer::Impl {
         request.body.append(data, n);
         return true;
       });
+    }
+    if (too_many_parts) {
+      Apply(ProblemResponse(413, "a multipart body may have at most " +
+                                     std::to_string(kMaxFormParts) + " parts"),
+            res);
+      res.set_header("Connection", "close");
+      return;
     }
     if (too_large) {
       Apply(tooLarge(), res);

@@ -23,6 +23,8 @@ namespace pintag::server {
 using HealthCheck = std::function<std::optional<std::string>()>;
 
 inline constexpr std::size_t kDefaultMaxBodyBytes = std::size_t{25} * 1024 * 1024;
+/// Parts of a multipart/form-data body; more answer 413. A photo upload needs one.
+inline constexpr std::size_t kMaxFormParts = 16;
 
 struct ApiOptions {
   std::size_t max_body_bytes = kDefaultMaxBodyBytes;  ///< larger bodies answer 413
