@@ -13,10 +13,14 @@ export class ApiError extends Error {
   }
 }
 
+// Titles for answers without a problem body (over HTTP/2 statusText is empty): ours, and what a
+// proxy in front (docs/SCALING.md) may answer on its own.
 const kReasons = {
   400: 'Bad Request', 401: 'Unauthorized', 403: 'Forbidden', 404: 'Not Found', 405: 'Method Not Allowed',
-  409: 'Conflict', 410: 'Gone', 413: 'Content Too Large', 415: 'Unsupported Media Type',
-  500: 'Internal Server Error', 503: 'Service Unavailable', 507: 'Insufficient Storage',
+  408: 'Request Timeout', 409: 'Conflict', 410: 'Gone', 413: 'Content Too Large', 415: 'Unsupported Media Type',
+  429: 'Too Many Requests', 431: 'Request Header Fields Too Large',
+  500: 'Internal Server Error', 502: 'Bad Gateway', 503: 'Service Unavailable', 504: 'Gateway Timeout',
+  507: 'Insufficient Storage',
 };
 
 async function problemFrom(response) {
@@ -30,8 +34,11 @@ async function problemFrom(response) {
         if (problem.title) title = String(problem.title);
         if (problem.detail) detail = String(problem.detail);
       }
-    } else {
+    } else if (type.includes('text/plain')) {
       detail = (await response.text()).trim().slice(0, 300);
+    } else {
+      // An HTML error page (a proxy's, a captive portal's) shown as text would be markup.
+      detail = 'The answer did not come from PinTag (a proxy or gateway between may have sent it).';
     }
   } catch {
     // An unreadable body: the status line is all there is.
@@ -66,7 +73,13 @@ export async function api(path, { method = 'GET', token = '', json, body, header
   if (!response.ok) throw await problemFrom(response);
   if (as === 'blob') return response.blob();
   if (as === 'response') return response;
-  return response.json();
+  try {
+    return await response.json();
+  } catch {
+    // A 200 that is not JSON is not PinTag's answer (a login portal, a proxy's page).
+    throw new ApiError(response.status, 'Unexpected answer',
+      'The answer was not PinTag\'s JSON; a proxy or portal between may have sent it.');
+  }
 }
 
 /** Query string from an object, leaving out empty values. */
@@ -108,12 +121,16 @@ const kAuthHints = {
   403: 'This token is valid but its role may not do this.',
 };
 
+const kReplicaHint = 'This server is a read-only copy of the registry: make the change on the primary server named above.';
+
 /** An alert box for an error: the problem's title, HTTP status and detail, plus a hint for auth errors. */
 export function problemBox(error, { hint } = {}) {
   const title = error instanceof ApiError ? error.title : 'Something went wrong';
   const detail = error instanceof ApiError ? error.detail : String(error && error.message ? error.message : error);
   const status = error instanceof ApiError && error.status ? el('span', { class: 'code' }, `HTTP ${error.status}`) : null;
-  const extra = hint || (error instanceof ApiError ? kAuthHints[error.status] : '');
+  // A replica refuses a change before it looks at the token: the role hint would mislead.
+  const replica = error instanceof ApiError && error.title === 'Read-Only Replica';
+  const extra = hint || (replica ? kReplicaHint : error instanceof ApiError ? kAuthHints[error.status] : '');
   return el('div', { class: 'alert alert-error', role: 'alert' },
     el('strong', { class: 'problem-title' }, title), status,
     detail ? el('p', { class: 'problem-detail' }, detail) : null,

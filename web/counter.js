@@ -50,14 +50,19 @@ function printable() {
   return rows.filter((r) => r.include && r.record && r.record.status === 'active');
 }
 
+// A button stays disabled while its request runs (aria-busy), whatever the rows do meanwhile.
 function updateButtons() {
   const count = printable().length;
   const batch = $('batch-pdf');
-  batch.disabled = count === 0;
+  batch.disabled = count === 0 || batch.hasAttribute('aria-busy');
   batch.textContent = count === 1 ? 'Batch PDF (1 label)' : `Batch PDF (${count} labels)`;
   const ok = selected !== null;
-  $('download-pdf').disabled = !ok;
-  $('print-pdf').disabled = !ok;
+  for (const id of ['download-pdf', 'print-pdf']) $(id).disabled = !ok || $(id).hasAttribute('aria-busy');
+}
+
+/** busy() for the print buttons: when the request ends, each button follows the rows again. */
+function printing(button, work) {
+  return busy(button, work).finally(updateButtons);
 }
 
 // Only the registry's own 404 says a pincode does not exist; a server that could not be asked
@@ -203,9 +208,9 @@ async function refreshPreview() {
   }
 }
 
-async function labelPdf() {
-  return api(`/api/v1/labels/${selected}.pdf${labelQuery({ office: rows[selectedRow].office })}`,
-    { token: token(), as: 'blob' });
+// The pincode is taken when the request starts: the clerk may pick another row before it ends.
+async function labelPdf(pincode, office) {
+  return api(`/api/v1/labels/${pincode}.pdf${labelQuery({ office })}`, { token: token(), as: 'blob' });
 }
 
 function needToken() {
@@ -226,28 +231,40 @@ $('pins').addEventListener('keydown', (event) => {
   }
 });
 
-$('download-pdf').addEventListener('click', (event) => busy(event.currentTarget, async () => {
-  if (needToken()) return;
+$('download-pdf').addEventListener('click', (event) => printing(event.currentTarget, async () => {
+  if (needToken() || selected === null) return;
+  const pincode = selected;
   show($('print-msg'));
   try {
-    downloadBlob(await labelPdf(), `label-${selected}.pdf`);
-    show($('print-msg'), messageBox('ok', `Label for ${selected} downloaded (label-${selected}.pdf).`));
+    downloadBlob(await labelPdf(pincode, rows[selectedRow].office), `label-${pincode}.pdf`);
+    show($('print-msg'), messageBox('ok', `Label for ${pincode} downloaded (label-${pincode}.pdf).`));
   } catch (error) {
     show($('print-msg'), problemBox(error));
   }
 }));
 
 $('print-pdf').addEventListener('click', (event) => {
-  if (needToken()) return;
+  if (needToken() || selected === null) return;
+  const pincode = selected;
+  const office = rows[selectedRow].office;
   // Opened before the request so that pop-up blockers see a click; filled in when the PDF arrives.
   const win = window.open('', '_blank');
-  busy(event.currentTarget, async () => {
+  printing(event.currentTarget, async () => {
     show($('print-msg'));
     try {
-      const url = URL.createObjectURL(await labelPdf());
-      if (win) win.location.href = url;
-      else window.location.href = url;
-      show($('print-msg'), messageBox('ok', 'The PDF opened in a new tab: print it from there at 100 % (actual size).'));
+      const blob = await labelPdf(pincode, office);
+      if (!win) {
+        // Blocked: navigating this page to the PDF would lose the clerk's list, so save it instead.
+        downloadBlob(blob, `label-${pincode}.pdf`);
+        show($('print-msg'), messageBox('info',
+          `The browser blocked the new tab, so the label for ${pincode} was downloaded (label-${pincode}.pdf): print it at 100 % (actual size).`));
+        return;
+      }
+      const url = URL.createObjectURL(blob);
+      win.location.href = url;
+      // The tab has loaded it by then; keeping the URL would hold every printed PDF until reload.
+      setTimeout(() => URL.revokeObjectURL(url), 60_000);
+      show($('print-msg'), messageBox('ok', `The label for ${pincode} opened in a new tab: print it from there at 100 % (actual size).`));
     } catch (error) {
       if (win) win.close();
       show($('print-msg'), problemBox(error));
@@ -255,7 +272,7 @@ $('print-pdf').addEventListener('click', (event) => {
   });
 });
 
-$('batch-pdf').addEventListener('click', (event) => busy(event.currentTarget, async () => {
+$('batch-pdf').addEventListener('click', (event) => printing(event.currentTarget, async () => {
   if (needToken()) return;
   const chosen = printable();
   const pins = chosen.map((r) => r.text);

@@ -127,7 +127,8 @@ $('key-form').addEventListener('submit', (event) => {
     try {
       const record = await api(`/api/v1/keys/${encodeURIComponent(key)}`);
       showRecord(record);
-      show($('key-msg'), messageBox('ok', `Key ${key} belongs to ${record.pincode} (${record.office || record.district}).`));
+      const where = record.office || record.district;
+      show($('key-msg'), messageBox('ok', `Key ${key} belongs to ${record.pincode}${where ? ` (${where})` : ''}.`));
     } catch (error) {
       show($('key-msg'), problemBox(error));
     }
@@ -178,19 +179,24 @@ $('retire-form').addEventListener('submit', (event) => {
       return;
     }
     const confirm = el('button', { type: 'button', class: 'danger', id: 'retire-yes' }, `Retire ${pin}`);
-    const cancel = el('button', { type: 'button', class: 'secondary', onclick: () => show($('retire-confirm')) }, 'Cancel');
+    // The buttons go with the box: focus goes back to the pincode field, not to the page's top.
+    const cancel = el('button', {
+      type: 'button', class: 'secondary',
+      onclick: () => { show($('retire-confirm')); $('r-pin').focus(); },
+    }, 'Cancel');
     confirm.addEventListener('click', () => busy(confirm, async () => {
       try {
         const retired = await api(`/api/v1/pincodes/${pin}/retire`, { method: 'POST', token: token() });
         show($('retire-confirm'));
         show($('retire-msg'), messageBox('ok', `${pin} is retired. It keeps key ${retired.key}.`));
         showRecord(retired);
+        $('r-pin').focus();
       } catch (error) {
         show($('retire-msg'), problemBox(error));
       }
     }));
     show($('retire-confirm'), el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': 'Confirm retiring' },
-      el('p', {}, `Retire ${pin} (${record.office || record.district}, key ${record.key})? No new labels will be issued for it.`),
+      el('p', {}, `Retire ${pin} (${[record.office || record.district, `key ${record.key}`].filter(Boolean).join(', ')})? No new labels will be issued for it.`),
       el('div', { class: 'actions' }, confirm, cancel)));
     confirm.focus();
   });

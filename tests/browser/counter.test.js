@@ -74,6 +74,33 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   assert.deepEqual(page.problems, []);
 });
 
+test('a PDF still on its way when the clerk picks another row is saved under its own pincode', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#preview figcaption').filter({ hasText: '110001' }).waitFor();
+  // The real server answers; its answer for 110001's PDF is only held back until the clerk has
+  // picked 560001.
+  let release;
+  const held = new Promise((resolveHeld) => { release = resolveHeld; });
+  await page.route('**/api/v1/labels/110001.pdf*', async (route) => { await held; await route.continue(); });
+  const download = page.getByRole('button', { name: 'Download PDF' });
+  const saved = page.waitForEvent('download');
+  await download.click();
+  await page.getByRole('button', { name: 'Preview the label for 560001' }).click();
+  await page.locator('#preview figcaption').filter({ hasText: '560001' }).waitFor();
+  assert.equal(await download.isDisabled(), true, 'busy while its request runs, whatever was picked');
+  release();
+  const file = await saved;
+  assert.equal(file.suggestedFilename(), 'label-110001.pdf');
+  assert.ok(pdfLines(await file.path()).includes('110 001'), pdfLines(await file.path()).join(' | '));
+  await page.getByText('Label for 110001 downloaded (label-110001.pdf).').waitFor();
+  assert.equal(await download.isDisabled(), false, 'free again for the row now picked');
+  assert.deepEqual(page.problems, []);
+});
+
 test('a clerk picks the office a label prints, row by row', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);

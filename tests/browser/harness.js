@@ -26,14 +26,12 @@ function pintagBinary() {
 }
 
 /**
- * Starts `pintag serve --port 0` on a fresh database; resolves once it printed its URL and the
- * first-start admin token. Returns {url, adminToken, stop(), stderr()}.
+ * Spawns `pintag <args>` and resolves once it printed its URL (and, when `token` is set, the
+ * first-start admin token). Returns {url, adminToken, stop(), stderr()}; stop() also removes
+ * `dir` when given.
  */
-export async function startServer({ timeoutMs = 30_000 } = {}) {
-  const dir = await mkdtemp(join(tmpdir(), 'pintag-browser-'));
-  const child = spawn(pintagBinary(),
-    ['serve', '--db', join(dir, 'pintag.db'), '--port', '0', '--bind', '127.0.0.1', '--web', webDir],
-    { stdio: ['ignore', 'pipe', 'pipe'] });
+async function spawnServer(args, { token, dir, timeoutMs }) {
+  const child = spawn(pintagBinary(), args, { stdio: ['ignore', 'pipe', 'pipe'] });
   let stdout = '';
   let stderr = '';
   child.stderr.on('data', (chunk) => { stderr += chunk; });
@@ -44,10 +42,10 @@ export async function startServer({ timeoutMs = 30_000 } = {}) {
     child.stdout.on('data', (chunk) => {
       stdout += chunk;
       const url = stdout.match(/PinTag serving (http:\/\/127\.0\.0\.1:\d+)\//);
-      const token = stdout.match(/^\s+(pt_\d+_[A-Za-z0-9_-]+)\s*$/m);
-      if (url && token) {
+      const secret = stdout.match(/^\s+(pt_\d+_[A-Za-z0-9_-]+)\s*$/m);
+      if (url && (secret || !token)) {
         clearTimeout(timer);
-        resolveStart({ url: url[1], adminToken: token[1] });
+        resolveStart({ url: url[1], adminToken: secret ? secret[1] : undefined });
       }
     });
     child.on('exit', (code, signal) => {
@@ -66,9 +64,39 @@ export async function startServer({ timeoutMs = 30_000 } = {}) {
         await exited;
         clearTimeout(killer);
       }
-      await rm(dir, { recursive: true, force: true });
+      if (dir) await rm(dir, { recursive: true, force: true });
     },
   };
+}
+
+/**
+ * Starts `pintag serve --port 0` on a fresh database; resolves once it printed its URL and the
+ * first-start admin token. Returns {url, adminToken, db, stop(), stderr()}.
+ */
+export async function startServer({ timeoutMs = 30_000 } = {}) {
+  const dir = await mkdtemp(join(tmpdir(), 'pintag-browser-'));
+  const db = join(dir, 'pintag.db');
+  const server = await spawnServer(
+    ['serve', '--db', db, '--port', '0', '--bind', '127.0.0.1', '--web', webDir],
+    { token: true, dir, timeoutMs });
+  return { ...server, db };
+}
+
+/**
+ * A read-only replica of `primary` (docs/SCALING.md): a snapshot of its database taken now,
+ * served with `--read-only`. Returns {url, stop(), stderr()}.
+ */
+export async function startReplica(primary, { timeoutMs = 30_000 } = {}) {
+  const dir = await mkdtemp(join(tmpdir(), 'pintag-browser-replica-'));
+  const snapshot = join(dir, 'snapshot.db');
+  await new Promise((done, fail) => {
+    const child = spawn(pintagBinary(), ['snapshot', '--db', primary.db, '--out', snapshot], { stdio: 'ignore' });
+    child.on('exit', (code) => (code === 0 ? done() : fail(new Error(`pintag snapshot exited ${code}`))));
+  });
+  return spawnServer(
+    ['serve', '--read-only', '--db', snapshot, '--primary', primary.url, '--scan-log', join(dir, 'scans.db'),
+      '--port', '0', '--bind', '127.0.0.1', '--web', webDir],
+    { token: false, dir, timeoutMs });
 }
 
 /** Makes a token of `role` through the API with the admin token; returns its secret. */

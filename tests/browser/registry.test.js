@@ -1,7 +1,7 @@
 // Registry: search with paging, key lookup, admin add and retire, and an error from the server.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+import { launchBrowser, newPage, screenshot, startReplica, startServer } from './harness.js';
 
 let server;
 let browser;
@@ -105,6 +105,8 @@ test('admin adds a pincode, gets its key, then retires it', async () => {
   await page.locator('#retire-msg').filter({ hasText: `999001 is retired. It keeps key ${added}.` }).waitFor();
   const retired = await (await fetch(`${server.url}/api/v1/pincodes/999001`)).json();
   assert.equal(retired.status, 'retired');
+  // The confirming button went with its box: the keyboard carries on from the pincode field.
+  assert.equal(await page.evaluate(() => document.activeElement?.id), 'r-pin');
   await screenshot(page, 'registry-admin');
   assert.deepEqual(page.problems, []);
 });
@@ -132,4 +134,32 @@ test('adding without an admin token shows the 401 problem', async () => {
   const alert = page.locator('#add-msg [role="alert"]');
   await alert.waitFor();
   assert.match(await alert.textContent(), /HTTP 401/);
+});
+
+test('on a read-only replica a change is refused with the way to make it, not a token hint', async () => {
+  const replica = await startReplica(server);
+  try {
+    const page = await newPage(browser);
+    await page.goto(`${replica.url}/registry.html`);
+    // Reads are served here: the search finds the seeded offices.
+    await page.getByLabel('District').first().fill('Central Delhi');
+    await page.getByRole('button', { name: 'Search', exact: true }).click();
+    await page.locator('#results-caption').filter({ hasText: /Offices 1–\d+ of \d+/ }).waitFor();
+    await page.locator('#token').fill(server.adminToken);
+    await page.locator('#a-pin').fill('999003');
+    await page.getByRole('button', { name: 'Add pincode' }).click();
+    const alert = page.locator('#add-msg [role="alert"]');
+    await alert.filter({ hasText: 'Read-Only Replica' }).waitFor();
+    const text = await alert.textContent();
+    assert.match(text, /HTTP 403/);
+    assert.ok(text.includes(server.url), `the primary is named: ${text}`);
+    assert.match(text, /make the change on the primary/);
+    assert.doesNotMatch(text, /role may not/);
+    await screenshot(page, 'registry-replica-refusal');
+    const lookup = await fetch(`${server.url}/api/v1/pincodes/999003`);
+    assert.equal(lookup.status, 404);
+    assert.deepEqual(page.problems, []);
+  } finally {
+    await replica.stop();
+  }
 });
