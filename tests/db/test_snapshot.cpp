@@ -289,6 +289,17 @@ TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSourceOrItself) {
   EXPECT_FALSE(std::filesystem::exists(missing));  // never created and seeded
   EXPECT_FALSE(std::filesystem::exists(dir.file("x.db")));
 
+  // An empty file is not a registry to publish, and taking a snapshot never writes its source
+  // (it once seeded an empty file with the bundled registry and published that).
+  const std::string empty = test::WriteFile(dir.file("empty.db"), "");
+  const auto of_empty = test::RunCommand(test::PintagExe() + " snapshot --db " + empty + " --out " +
+                                         dir.file("y.db") + " 2>&1");
+  EXPECT_EQ(of_empty.exit_code, 1);
+  EXPECT_NE(of_empty.out.find("is empty: not a PinTag database"), std::string::npos)
+      << of_empty.out;
+  EXPECT_EQ(std::filesystem::file_size(empty), 0U);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("y.db")));
+
   const auto over_itself =
       test::RunCommand(test::PintagExe() + " snapshot --db " + live + " --out " + live + " 2>&1");
   EXPECT_EQ(over_itself.exit_code, 1);

@@ -133,6 +133,15 @@ TEST_F(Tokens, CommandLineCreateListRevoke) {
   EXPECT_EQ(verified->role, Role::kCounter);
   const auto listed = test::RunCommand(test::PintagExe() + " token list --db " + db);
   EXPECT_NE(listed.out.find(",counter,desk,"), std::string::npos) << listed.out;
+  // A label with a comma and quotes stays one CSV field.
+  ASSERT_EQ(
+      test::RunCommand(test::PintagExe() +
+                       " token create --role scanner --label 'Counter 3, Hall \"B\"' --db " + db)
+          .exit_code,
+      0);
+  const auto quoted = test::RunCommand(test::PintagExe() + " token list --db " + db);
+  EXPECT_NE(quoted.out.find(",scanner,\"Counter 3, Hall \"\"B\"\"\","), std::string::npos)
+      << quoted.out;
   EXPECT_EQ(listed.out.find(secret), std::string::npos);  // never shown again
   const auto revoked = test::RunCommand(test::PintagExe() + " token revoke " +
                                         std::to_string(verified->id) + " --db " + db);

@@ -82,6 +82,29 @@ TEST(CliDetect, DistanceScalesWithTheGivenTagSize) {
   EXPECT_NEAR(tag["pose"]["distance_m"].get<double>(), truth_m, 0.02 * truth_m);
 }
 
+TEST(CliDetect, DistortionTakesTheCountsOpenCvReadsAndNeedsTheFocalLengths) {
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  const std::string intrinsics = " --fx 1000 --fy 1000";
+  // 6 or 7 coefficients made OpenCV's pose solver return nothing, reported as a zero pose.
+  for (const std::string& options :
+       {intrinsics + " --distortion 0 0 0 0 0 0", intrinsics + " --distortion 0 0 0 0 0 0 0",
+        std::string(" --distortion 0 0 0 0"), intrinsics + " --distortion 0 0 nan 0"}) {
+    const CommandResult refused = RunPintag("detect " + photo.path + options);
+    EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
+  }
+  for (const std::string& options :
+       {intrinsics + " --distortion 0 0 0 0", intrinsics + " --distortion 0 0 0 0 0",
+        intrinsics + " --distortion 0 0 0 0 0 0 0 0"}) {
+    const CommandResult read = RunPintag("detect --json " + photo.path + options);
+    EXPECT_EQ(read.status, 0) << options << ": " << read.out;
+    const json answer = json::parse(read.out, nullptr, false);
+    ASSERT_FALSE(answer.is_discarded()) << read.out;
+    ASSERT_EQ(answer["detections"].size(), 1U) << options;
+    EXPECT_GT(answer["detections"][0]["pose"]["distance_m"].get<double>(), 0.01) << options;
+  }
+}
+
 TEST(CliDetect, RefusesWhatIsNotAPhotoWithAClearMessage) {
   const test::TempDir dir;
   const std::string text = (dir.path() / "notes.txt").string();

@@ -59,6 +59,23 @@ TEST(CliKeys, RenderSaysWhyASizeInMillimetresIsRefusedInTheUsersNumbers) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
 }
 
+TEST(CliKeys, NumbersThatAreNotFiniteAreRefusedLikeAnyOutOfRange) {
+  // CLI11's ranges compare with < and >, which NaN passes: a render of "nan mm" once succeeded.
+  const TempDir dir;
+  for (const std::string& command :
+       {"render --key 5 --size-mm nan -o " + dir.file("tag.svg"),
+        "render --key 5 --size-px 200 --dpi inf -o " + dir.file("tag.png"),
+        "serve --max-body-mb nan --port 0 --db " + dir.file("never.db")}) {
+    const CommandResult refused = RunPintag(command);
+    EXPECT_EQ(refused.status, 2) << command << ": " << refused.out;
+    EXPECT_NE(refused.out.find("must be a finite number"), std::string::npos)
+        << command << ": " << refused.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("tag.svg")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));
+}
+
 TEST(CliKeys, ExitStatusTellsAWrongCommandLineFromAFailedJob) {
   // 2: the command line is wrong, whether CLI11 or the command found it; 1: the job failed.
   const TempDir dir;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "commands/option_checks.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
@@ -77,6 +78,13 @@ void Run(const DetectArgs& args) {
   options.return_rejected = args.rejected;
   const int given = args.fx.has_value() + args.fy.has_value();
   if (given == 1) throw UsageError("give both --fx and --fy, or neither");
+  // OpenCV reads 4, 5, 8, 12 or 14 coefficients; with 6 or 7 its pose solver returns nothing.
+  const std::size_t coefficients = args.distortion.size();
+  if (coefficients != 0 && coefficients != 4 && coefficients != 5 && coefficients != 8) {
+    throw UsageError("--distortion takes 4, 5 or 8 numbers (k1 k2 p1 p2 [k3 [k4 k5 k6]]), got " +
+                     std::to_string(coefficients));
+  }
+  if (coefficients != 0 && given != 2) throw UsageError("--distortion needs --fx and --fy");
   if (given == 2) {
     const cv::Mat& img = loaded.image->bgr;
     options.intrinsics =
@@ -127,15 +135,23 @@ void AddDetectCommand(CLI::App& app) {
   cmd->add_option("photo", args->photo, "JPEG, PNG, TIFF or WebP photo")->required();
   cmd->add_option("--tag-size-mm", args->tag_size_mm,
                   "side of the black square, millimetres (default: the tag of a 100x150mm label)")
+      ->check(FiniteNumber())
       ->check(CLI::Range(1.0, 10000.0))
       ->capture_default_str();
   cmd->add_option("--fx", args->fx, "focal length x, pixels (with --fy: intrinsics given)")
+      ->check(FiniteNumber())
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--fy", args->fy, "focal length y, pixels")->check(CLI::PositiveNumber);
-  cmd->add_option("--cx", args->cx, "principal point x, pixels (default: image centre)");
-  cmd->add_option("--cy", args->cy, "principal point y, pixels (default: image centre)");
-  cmd->add_option("--distortion", args->distortion, "k1 k2 p1 p2 [k3], OpenCV order")
-      ->expected(4, 8);
+  cmd->add_option("--fy", args->fy, "focal length y, pixels")
+      ->check(FiniteNumber())
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--cx", args->cx, "principal point x, pixels (default: image centre)")
+      ->check(FiniteNumber());
+  cmd->add_option("--cy", args->cy, "principal point y, pixels (default: image centre)")
+      ->check(FiniteNumber());
+  cmd->add_option("--distortion", args->distortion,
+                  "k1 k2 p1 p2 [k3 [k4 k5 k6]], OpenCV order: 4, 5 or 8 numbers")
+      ->expected(4, 8)
+      ->check(FiniteNumber());
   cmd->add_flag("--json", args->json, "print JSON");
   cmd->add_option("--overlay", args->overlay, "write the photo with outlines, keys and axes");
   cmd->add_option("--debug-dir", args->debug_dir, "write each pipeline stage's image here");

@@ -3,11 +3,27 @@
 // API accept the same values and say the same about the rest.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "pintag/codec/tag_key.hpp"
 
 namespace pintag::cli {
+
+/// A number that is finite: CLI11's ranges compare with < and >, which NaN passes ("nan" would
+/// reach a render as a size of nan mm, or turn the server's body limit off). Put it before them.
+inline CLI::Validator FiniteNumber() {
+  return {[](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0' || !std::isfinite(value)) {
+              return "must be a finite number, got '" + text + "'";
+            }
+            return {};
+          },
+          "NUMBER"};
+}
 
 /// A tag key as ParseTagKey reads it (the routes' {key}): 0 to 32767.
 inline CLI::Validator TagKeyCheck() {

@@ -81,8 +81,10 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--size-px", args->size_px, "black square side in pixels (quiet zone added)")
       ->check(CLI::Range(kMinTagSquarePx, kMaxSquarePx));
   cmd->add_option("--size-mm", args->size_mm, "black square side in millimetres (quiet zone added)")
+      ->check(FiniteNumber())
       ->check(CLI::Range(1.0, kMaxSquareMm));
   cmd->add_option("--dpi", args->dpi, "print resolution, recorded in PNGs and used with --size-mm")
+      ->check(FiniteNumber())
       ->check(CLI::Range(50.0, 4800.0))
       ->capture_default_str();
   cmd->add_option("-o,--output", args->output, "output file, .png or .svg")->required();

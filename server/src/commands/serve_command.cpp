@@ -19,6 +19,7 @@
 #include "app/app.hpp"
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "commands/option_checks.hpp"
 #include "commands/serve_replication.hpp"
 #include "commands/serve_signals.hpp"
 #include "pintag/db/database.hpp"
@@ -201,6 +202,7 @@ void AddServeCommand(CLI::App& app) {
   cmd->add_option("--web", args->web, "serve static files from this directory (default: none)")
       ->envname("PINTAG_WEB");
   cmd->add_option("--max-body-mb", args->max_body_mb, "largest request body, MiB (413 above)")
+      ->check(FiniteNumber())
       ->check(CLI::Range(0.001, 1024.0))
       ->capture_default_str()
       ->envname("PINTAG_MAX_BODY_MB");

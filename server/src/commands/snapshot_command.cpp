@@ -2,6 +2,7 @@
 // replicas (`pintag serve --read-only`), renamed into place atomically; prints the registry
 // version it holds. `pintag snapshot --verify FILE` checks a snapshot and prints its version.
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -33,7 +34,13 @@ void Run(const SnapshotArgs& args) {
     return;
   }
   // Never created here: a snapshot of a database that does not exist is a mistake.
-  auto opened = db::OpenDatabase(args.db, {.create = false});
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(args.db, ec) &&
+      std::filesystem::file_size(args.db, ec) == 0) {
+    throw std::runtime_error(args.db + " is empty: not a PinTag database");
+  }
+  // Read only: a snapshot never changes its source (no migration, no seeding of an empty file).
+  auto opened = db::OpenDatabase(args.db, {.create = false, .seed = false, .read_only = true});
   if (!opened) throw std::runtime_error(opened.error().message);
   auto info = db::WriteSnapshot(opened.value().connection, args.out);
   if (!info) throw std::runtime_error(info.error().message);

@@ -6,6 +6,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "pintag/db/csv.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 
@@ -36,8 +37,8 @@ void List(const TokenArgs& args) {
   if (!tokens) throw std::runtime_error(tokens.error().message);
   std::cout << "id,role,label,created_at,revoked_at\n";
   for (const db::TokenInfo& t : *tokens) {
-    std::cout << t.id << "," << db::ToString(t.role) << "," << t.label << "," << t.created_at << ","
-              << t.revoked_at.value_or("") << "\n";
+    std::cout << t.id << "," << db::ToString(t.role) << "," << db::CsvField(t.label) << ","
+              << t.created_at << "," << t.revoked_at.value_or("") << "\n";
   }
 }
 
