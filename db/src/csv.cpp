@@ -59,7 +59,8 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
       field += c;
     }
   }
-  if (quoted) fail("unterminated quoted field");
+  // Overrides an earlier fault of the record: the rest of the file has gone into this field.
+  if (quoted) *error = kUnterminatedQuote;
   record.fields.push_back(std::move(field));
   return record;
 }

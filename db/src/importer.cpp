@@ -146,6 +146,13 @@ struct ParsedRow {
   PostOffice office;
 };
 
+bool SameOffice(const PostOffice& a, const PostOffice& b) {
+  return a.name == b.name && a.branch_type == b.branch_type && a.delivery == b.delivery &&
+         a.division == b.division && a.region == b.region && a.circle == b.circle &&
+         a.district == b.district && a.state == b.state && a.taluk == b.taluk &&
+         a.latitude == b.latitude && a.longitude == b.longitude;
+}
+
 /// One data record into a row, or the reason it is bad.
 Result<ParsedRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   if (record.fields.size() != mapping.width) {
@@ -217,8 +224,20 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
   report.layout = mapping->layout;
   std::vector<ParsedRow> rows;
   constexpr std::int64_t kProgressEvery = 4096;
+  // An office twice in one file: the first is kept. The same row again is only counted; one
+  // with other details is a bad row (applying both would leave the last one, and each
+  // re-import would change the office twice without settling).
+  std::map<std::pair<std::uint32_t, std::string>, std::size_t> first_of;
   while (const auto record = reader.next(&error)) {
     ++report.rows;
+    if (error == kUnterminatedQuote) {
+      // The reader ran to the end of the file inside the quote: every line after it is lost
+      // in one field, and which of them were rows cannot be told.
+      return Error{ErrorCode::kInvalid,
+                   "line " + std::to_string(record->line) +
+                       ": a quoted field opens here and is never closed, so the rest of the "
+                       "file cannot be read as rows; nothing was imported"};
+    }
     if (!error.empty()) {
       report.problems.push_back({record->line, error});
       continue;
@@ -226,6 +245,20 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
     Result<ParsedRow> row = ParseRow(*mapping, *record);
     if (!row) {
       report.problems.push_back({record->line, row.error().message});
+      continue;
+    }
+    const auto [first, inserted] =
+        first_of.try_emplace({row->pincode.value(), row->office.name}, rows.size());
+    if (!inserted) {
+      const ParsedRow& kept = rows[first->second];
+      if (SameOffice(kept.office, row->office)) {
+        ++report.repeated_rows;
+      } else {
+        report.problems.push_back({record->line, "office '" + row->office.name + "' of " +
+                                                     row->pincode.str() + " is on line " +
+                                                     std::to_string(kept.line) +
+                                                     " too, with other details; that one is kept"});
+      }
       continue;
     }
     rows.push_back(std::move(row).value());

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "db_test_util.hpp"
 #include "pintag/codec/key_allocation.hpp"
 #include "pintag/db/importer.hpp"
@@ -259,6 +261,52 @@ TEST_F(Importer, RefusesAnUnknownHeader) {
             ErrorCode::kNotFound);
 }
 
+TEST_F(Importer, AQuoteNeverClosedRefusesTheWholeFile) {
+  // The reader runs to the end of the file inside the quote: the rows after it are not rows.
+  const std::string csv =
+      "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+      "Districtname,statename\n"
+      "Alpha B.O,999041,BO,Delivery,APS,APS,APS,T,APS,APS\n"
+      "\"Beta B.O,999042,BO,Delivery,APS,APS,APS,T,APS,APS\n"
+      "Gamma B.O,999043,BO,Delivery,APS,APS,APS,T,APS,APS\n"
+      "Delta B.O,999044,BO,Delivery,APS,APS,APS,T,APS,APS\n";
+  const std::int64_t changes = db_.queryInt64("SELECT total_changes()");
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_FALSE(report.ok());
+  EXPECT_EQ(report.error().code, ErrorCode::kInvalid);
+  EXPECT_NE(report.error().message.find("line 3: a quoted field opens here and is never closed"),
+            std::string::npos)
+      << report.error().message;
+  EXPECT_EQ(db_.queryInt64("SELECT total_changes()"), changes);
+  EXPECT_EQ(LookupPincode(db_, Pincode(999041)).error().code, ErrorCode::kNotFound);
+}
+
+TEST_F(Importer, AnOfficeTwiceInAFileKeepsTheFirstAndAReimportSettles) {
+  const std::string header =
+      "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+      "Districtname,statename\n";
+  const std::string first = "Alpha B.O,999051,BO,Delivery,APS,APS,APS,T,Firstpur,APS\n";
+  const std::string other = "Alpha B.O,999051,BO,Delivery,APS,APS,APS,T,Otherpur,APS\n";
+  const std::string csv = header + first + first + other;
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->rows, 3);
+  EXPECT_EQ(report->offices_added, 1);
+  EXPECT_EQ(report->repeated_rows, 1);  // the same row again: counted, not a fault
+  ASSERT_EQ(report->problems.size(), 1u);
+  EXPECT_EQ(report->problems[0].line, 4);
+  EXPECT_NE(report->problems[0].message.find("is on line 2 too, with other details"),
+            std::string::npos)
+      << report->problems[0].message;
+  EXPECT_EQ(LookupPincode(db_, Pincode(999051)).value().district, "Firstpur");
+  // Imported again, nothing changes: the office is not rewritten back and forth.
+  const auto again = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->offices_updated, 0);
+  EXPECT_EQ(again->offices_unchanged, 1);
+  EXPECT_EQ(LookupPincode(db_, Pincode(999051)).value().district, "Firstpur");
+}
+
 TEST_F(Importer, NewPincodesProbePastRetiredKeys) {
   // Retire a pincode, then import one whose start slot is that retired key: it must probe on.
   const auto rows = keys();
@@ -321,6 +369,32 @@ TEST_F(Importer, CommandLineImportCreatesTheDatabaseAndLooksUp) {
       << lenient.out;
   EXPECT_NE(lenient.out.find("5 bad rows skipped"), std::string::npos) << lenient.out;
   EXPECT_TRUE(LookupPincode(fresh, Pincode(999031)).ok());
+
+  // A file none of whose rows can be imported is a failed job, not a success with warnings.
+  const std::string all_bad = test::WriteFile(
+      dir_.file("all-bad.csv"),
+      "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+      "Districtname,statename\nAlpha B.O,99901,BO,Delivery,APS,APS,APS,T,APS,APS\n");
+  const auto none =
+      test::RunCommand(test::PintagExe() + " import " + all_bad + " --db " + db + " 2>&1");
+  EXPECT_NE(none.exit_code, 0) << none.out;
+  EXPECT_NE(none.out.find("none of its 1 rows could be imported"), std::string::npos) << none.out;
+}
+
+// A file that cannot be read leaves no database behind, and says why it cannot be read.
+TEST_F(Importer, CommandLineImportOfAMissingFileCreatesNoDatabase) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  const std::string db = dir_.file("never.db");
+  const auto missing = test::RunCommand(test::PintagExe() + " import " + dir_.file("nosuch.csv") +
+                                        " --db " + db + " 2>&1");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.out.find("nosuch.csv: No such file or directory"), std::string::npos)
+      << missing.out;
+  const auto directory = test::RunCommand(test::PintagExe() + " import " + dir_.path().string() +
+                                          " --db " + db + " 2>&1");
+  EXPECT_NE(directory.exit_code, 0);
+  EXPECT_NE(directory.out.find("is a directory"), std::string::npos) << directory.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
 }
 
 }  // namespace

@@ -2,9 +2,14 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "commands/commands.hpp"
@@ -47,7 +52,23 @@ class ProgressBar {
   bool drawn_ = false;
 };
 
+/// The whole file, or a message that says why not (a directory, a missing file, its errno).
+std::string ReadCsvFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw std::runtime_error(path + " is a directory; give the CSV file itself");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw std::runtime_error("error reading " + path + ": " + std::strerror(errno));
+  return std::move(text).str();
+}
+
 void Run(const ImportArgs& args) {
+  // Read before the database is opened: a missing file must not leave a new, seeded database.
+  const std::string csv = ReadCsvFile(args.file);
   db::Connection connection = OpenDb(args.db);
   db::ImportOptions options;
   options.strict = args.strict;
@@ -57,10 +78,10 @@ void Run(const ImportArgs& args) {
       (*bar)(phase, done, total);
     };
   }
-  auto result = db::ImportDirectoryCsvFile(connection, args.file, options);
+  auto result = db::ImportDirectoryCsv(connection, csv, options);
   bar.reset();
   options.progress = nullptr;
-  if (!result) throw std::runtime_error(result.error().message);
+  if (!result) throw std::runtime_error(args.file + ": " + result.error().message);
   const db::ImportReport& report = *result;
   for (std::size_t i = 0; i < report.problems.size() && i < kProblemsShown; ++i) {
     std::cerr << args.file << ":" << report.problems[i].line << ": " << report.problems[i].message
@@ -73,11 +94,19 @@ void Run(const ImportArgs& args) {
     throw std::runtime_error("--strict: " + std::to_string(report.problems.size()) +
                              " bad rows, nothing imported");
   }
+  const std::int64_t read =
+      report.offices_added + report.offices_updated + report.offices_unchanged;
+  if (read == 0 && !report.problems.empty()) {
+    throw std::runtime_error(args.file + ": none of its " + std::to_string(report.rows) +
+                             " rows could be imported");
+  }
   std::cout << "imported " << args.file << " (" << db::ToString(report.layout)
             << " layout): " << report.rows << " rows, " << report.offices_added
             << " offices added, " << report.offices_updated << " updated, "
             << report.offices_unchanged << " unchanged, " << report.pincodes_added.size()
-            << " new pincodes, " << report.problems.size() << " bad rows skipped\n";
+            << " new pincodes, " << report.problems.size() << " bad rows skipped";
+  if (report.repeated_rows > 0) std::cout << ", " << report.repeated_rows << " repeated rows";
+  std::cout << "\n";
   constexpr std::size_t kNewKeysShown = 20;
   for (std::size_t i = 0; i < report.pincodes_added.size() && i < kNewKeysShown; ++i) {
     const auto& [pincode, key] = report.pincodes_added[i];

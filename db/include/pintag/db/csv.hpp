@@ -17,6 +17,9 @@ struct CsvRecord {
   std::vector<std::string> fields;
 };
 
+/// The error of a record whose quoted field is never closed: it has read to the end of the text.
+inline constexpr std::string_view kUnterminatedQuote = "unterminated quoted field";
+
 class CsvReader {
  public:
   explicit CsvReader(std::string_view text);

@@ -52,12 +52,15 @@ struct ImportReport {
   std::int64_t offices_added = 0;
   std::int64_t offices_updated = 0;
   std::int64_t offices_unchanged = 0;
+  std::int64_t repeated_rows = 0;  ///< rows the same as an earlier one of the file, skipped
   std::vector<std::pair<Pincode, TagKey>> pincodes_added;  ///< with their new keys
   std::vector<RowProblem> problems;                        ///< bad rows, skipped or refusing
 };
 
-/// Imports CSV text. Errors (nothing applied): kInvalid for an unrecognised header, kFull when
-/// the keys run out, kBusy/kStorage from SQLite. Bad rows are reported in the report instead.
+/// Imports CSV text. Errors (nothing applied): kInvalid for an unrecognised header or a quoted
+/// field never closed (the rest of the file is then one field), kFull when the keys run out,
+/// kBusy/kStorage from SQLite. Bad rows are reported in the report instead; an office (pincode
+/// and name) a second time is a bad row unless the row is the same as the first, which is kept.
 Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
                                         const ImportOptions& options = {});
 /// Reads the file and imports it; kNotFound when it cannot be read.
