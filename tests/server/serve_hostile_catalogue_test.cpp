@@ -5,8 +5,10 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <regex>
 #include <thread>
 
 #include "pintag/db/database.hpp"
@@ -540,6 +542,50 @@ TEST_F(HostileCatalogue, HeaderFloodOfManyHeaders) {
   for (int i = 0; i < 5000; ++i)
     headers.push_back("X-Flood-" + std::to_string(i) + ": " + std::string(40, 'f'));
   expectRefused(Request("GET", "/api/v1/pincodes/110001", headers), 431);
+}
+TEST_F(HostileCatalogue, HeaderLinesWithoutEndAreCutOffNotStored) {
+  // cpp-httplib stores every header line until the blank one: a client that never sent it grew
+  // the server by about 4.5 bytes for each byte it sent, with no token and one connection.
+  const auto rss_mb = [this] {
+    std::ifstream status("/proc/" + std::to_string(server_->pid()) + "/status");
+    for (std::string line; std::getline(status, line);) {
+      if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6)) / 1024;
+    }
+    return -1L;
+  };
+  const auto refused_431 = [this] {
+    const std::string metrics = client().Get("/metrics")->body;
+    const std::regex line(R"(pintag_http_requests_total\{[^}]*status="431"[^}]*\} (\d+))");
+    long total = 0;
+    for (auto it = std::sregex_iterator(metrics.begin(), metrics.end(), line);
+         it != std::sregex_iterator(); ++it) {
+      total += std::stol((*it)[1].str());
+    }
+    return total;
+  };
+  const long before = refused_431();
+  const long rss_before = rss_mb();
+  const int fd = test::ConnectLoopback(server_->port());
+  ASSERT_GE(fd, 0);
+  std::string lines;
+  for (int i = 0; i < 1024; ++i) lines += "X-Flood: " + std::string(54, 'f') + "\r\n";  // 64 KiB
+  std::size_t sent = 0;
+  bool refused = !test::SendAll(fd, "GET /livez HTTP/1.1\r\nHost: x\r\n");
+  // 40 MiB is more than loopback's socket buffers hold: the server has stopped reading long
+  // before, or it is storing the lines.
+  while (!refused && sent < (std::size_t{40} << 20)) {
+    refused = !test::SendAll(fd, lines);
+    sent += lines.size();
+  }
+  EXPECT_TRUE(refused) << "the server took " << sent << " bytes of headers";
+  const std::string answer = test::ReceiveUntil(fd, 5);
+  if (!answer.empty()) {
+    EXPECT_EQ(answer.rfind("HTTP/1.1 431", 0), 0U) << answer.substr(0, 200);
+  }
+  ::close(fd);
+  EXPECT_EQ(refused_431(), before + 1);
+  EXPECT_LT(rss_mb() - rss_before, 32) << "resident MB before " << rss_before;
+  expectHealthy();
 }
 TEST_F(HostileCatalogue, OneHeaderLongerThanAllowed) {
   const Answer answer =

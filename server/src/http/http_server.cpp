@@ -1,4 +1,8 @@
-// The only file that includes httplib.h: adapts cpp-httplib 0.11.4 to Api.
+// Adapts cpp-httplib 0.11.4 to Api; with connection_stream.cpp, the only files that include
+// httplib.h.
+//
+// Connections: cpp-httplib's own loop over a connection's requests is replaced by one that reads
+// through ConnectionStream, which stops reading a request whose head does not end (431).
 //
 // Order of a request in cpp-httplib: headers are read, the pre-routing handler runs (here: route,
 // auth, declared length and type, via Api::admit; a request with no body is answered there),
@@ -16,16 +20,20 @@
 #include <httplib.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
 #include <optional>
 #include <thread>
 
+#include "connection_stream.hpp"
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
@@ -62,10 +70,79 @@ HttpRequest ToRequest(const httplib::Request& req) {
   return request;
 }
 
-/// cpp-httplib's server with its one-request entry point opened, for answerRaw.
+/// Bytes of a request's line and headers read before the server stops reading and answers 431.
+/// Above what Api::admit takes (100 headers, 64 KiB; a request line of 8 KiB), so a head that
+/// ends gets admit's own answer, and one that does not end costs at most this much.
+constexpr std::size_t kMaxRequestHeadBytes = std::size_t{96} * 1024;
+
+/// The stream of the request this worker is reading, for the pre-routing and error handlers.
+thread_local ConnectionStream* t_connection = nullptr;
+
+std::chrono::microseconds Microseconds(time_t seconds, time_t microseconds) {
+  return std::chrono::seconds(seconds) + std::chrono::microseconds(microseconds);
+}
+
+/// cpp-httplib's server with its one-request entry point opened (answerRaw), and its connection
+/// loop replaced by the same loop reading through ConnectionStream (the head budget).
 class Server : public httplib::Server {
  public:
   using httplib::Server::process_request;
+
+ private:
+  /// As cpp-httplib 0.11.4's: up to keep_alive_max_count_ requests, each waited for at most
+  /// keep_alive_timeout_sec_, each read through a new stream; then the socket is shut and closed.
+  bool process_and_close_socket(socket_t sock) override {
+    bool ok = false;
+    for (std::size_t left = keep_alive_max_count_; left > 0 && requestArrives(sock); --left) {
+      ConnectionStream stream(sock, Microseconds(read_timeout_sec_, read_timeout_usec_),
+                              Microseconds(write_timeout_sec_, write_timeout_usec_),
+                              kMaxRequestHeadBytes);
+      t_connection = &stream;
+      bool closed = false;
+      ok = process_request(stream, left == 1, closed, nullptr);
+      t_connection = nullptr;
+      if (stream.overBudget()) {
+        LingerBeforeClosing(sock);
+        break;
+      }
+      if (!ok || closed) break;
+    }
+    ::shutdown(sock, SHUT_RDWR);
+    ::close(sock);
+    return ok;
+  }
+
+  /// Closing a socket with unread bytes resets the connection, and a reset may reach the client
+  /// before it has read the answer (431) it was sent. So: no more writes, then what the client
+  /// is still sending is read and dropped, up to 1 MiB or 1 s, before the close.
+  static void LingerBeforeClosing(socket_t sock) {
+    ::shutdown(sock, SHUT_WR);
+    std::array<char, 16384> sink{};
+    std::size_t dropped = 0;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    while (dropped < (std::size_t{1} << 20) && std::chrono::steady_clock::now() < deadline) {
+      pollfd entry{sock, POLLIN, 0};
+      if (::poll(&entry, 1, 100) <= 0) continue;
+      const ssize_t n = ::recv(sock, sink.data(), sink.size(), 0);
+      if (n <= 0) return;
+      dropped += static_cast<std::size_t>(n);
+    }
+  }
+
+  /// Waits for the next request's first byte, in 10 ms steps so that stop() is not held up by an
+  /// idle kept-alive connection.
+  bool requestArrives(socket_t sock) const {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::seconds(keep_alive_timeout_sec_);
+    while (svr_sock_ != INVALID_SOCKET) {
+      pollfd entry{sock, POLLIN, 0};
+      const int ready = ::poll(&entry, 1, 10);
+      if (ready > 0) return true;
+      if (ready < 0 && errno != EINTR) return false;
+      if (std::chrono::steady_clock::now() > deadline) return false;
+    }
+    return false;
+  }
 };
 
 /// A connection whose client sent `in` and then waits: reads drain `in`, writes fill `out`.
@@ -186,6 +263,7 @@ struct HttpServer::Impl {
   }
 
   httplib::Server::HandlerResponse preRoute(const httplib::Request& req, httplib::Response& res) {
+    if (t_connection != nullptr) t_connection->headRead();
     t_state = RequestState{true, std::chrono::steady_clock::now(), {}, {}};
     t_state.request_id = RequestIdFrom(req.has_header("X-Request-Id")
                                            ? std::optional(req.get_header_value("X-Request-Id"))
@@ -307,6 +385,16 @@ struct HttpServer::Impl {
     if (!t_state.active) {
       t_state.request_id = RequestIdFrom(std::nullopt);
       res.set_header("X-Request-Id", t_state.request_id);
+    }
+    if (t_connection != nullptr && t_connection->overBudget()) {
+      // A head that did not end within the budget: cpp-httplib saw a failed read (400).
+      res.status = 431;
+      Apply(ProblemResponse(431, "the request line and headers ran past " +
+                                     std::to_string(kMaxRequestHeadBytes) +
+                                     " bytes; at most 100 headers of 64 KiB in all are read"),
+            res);
+      res.set_header("Connection", "close");
+      return httplib::Server::HandlerResponse::Handled;
     }
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     if (res.status == 400 && UnknownMethod(req)) {

@@ -1,0 +1,134 @@
+#include "connection_stream.hpp"
+
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+namespace pintag::server {
+namespace {
+
+int Milliseconds(std::chrono::microseconds timeout) {
+  // Rounded up: a timeout of 500 µs must still wait, not poll once and give up.
+  const auto ms = std::chrono::ceil<std::chrono::milliseconds>(timeout).count();
+  return static_cast<int>(std::clamp<long long>(ms, 0, 24LL * 3600 * 1000));
+}
+
+/// poll() for `events` on `fd`, retried after a signal: > 0 ready, 0 timed out, < 0 failed.
+int Wait(int fd, short events, int timeout_ms) {
+  pollfd entry{fd, events, 0};
+  int ready = 0;
+  do {
+    ready = ::poll(&entry, 1, timeout_ms);
+  } while (ready < 0 && errno == EINTR);
+  return ready;
+}
+
+/// The peer is still there: nothing to read, or something to read that is not the end of the
+/// stream (a closed or reset connection reads as 0 or an error).
+bool PeerStillThere(int fd) {
+  const int ready = Wait(fd, POLLIN, 0);
+  if (ready == 0) return true;
+  if (ready < 0) return false;
+  char byte = 0;
+  ssize_t n = 0;
+  do {
+    n = ::recv(fd, &byte, 1, MSG_PEEK);
+  } while (n < 0 && errno == EINTR);
+  return n > 0;
+}
+
+void NameAndPort(const sockaddr_storage& address, socklen_t length, std::string& ip, int& port) {
+  char host[NI_MAXHOST] = {};
+  char service[NI_MAXSERV] = {};
+  if (::getnameinfo(reinterpret_cast<const sockaddr*>(&address), length, host, sizeof host, service,
+                    sizeof service, NI_NUMERICHOST | NI_NUMERICSERV) == 0) {
+    ip = host;
+    port = std::atoi(service);
+  }
+}
+
+}  // namespace
+
+ConnectionStream::ConnectionStream(int fd, std::chrono::microseconds read_timeout,
+                                   std::chrono::microseconds write_timeout, std::size_t head_budget)
+    : fd_(fd),
+      read_timeout_ms_(Milliseconds(read_timeout)),
+      write_timeout_ms_(Milliseconds(write_timeout)),
+      head_budget_(head_budget) {}
+
+bool ConnectionStream::is_readable() const {
+  return buffered_begin_ < buffered_end_ || Wait(fd_, POLLIN, read_timeout_ms_) > 0;
+}
+
+bool ConnectionStream::is_writable() const {
+  return Wait(fd_, POLLOUT, write_timeout_ms_) > 0 && PeerStillThere(fd_);
+}
+
+ssize_t ConnectionStream::read(char* ptr, size_t size) {
+  if (!head_read_) {
+    if (handed_out_ >= head_budget_) {
+      over_budget_ = true;
+      return -1;
+    }
+    size = std::min(size, head_budget_ - handed_out_);
+  }
+  if (size == 0) return 0;
+  std::size_t n = 0;
+  if (buffered_begin_ < buffered_end_) {
+    n = std::min(size, buffered_end_ - buffered_begin_);
+    std::memcpy(ptr, buffer_.data() + buffered_begin_, n);
+    buffered_begin_ += n;
+  } else {
+    if (Wait(fd_, POLLIN, read_timeout_ms_) <= 0) return -1;
+    // Large reads (a body) go straight to the caller; small ones (a head, byte by byte) are
+    // served from one recv into the buffer.
+    const bool direct = size >= buffer_.size();
+    char* into = direct ? ptr : buffer_.data();
+    ssize_t got = 0;
+    do {
+      got = ::recv(fd_, into, direct ? size : buffer_.size(), 0);
+    } while (got < 0 && errno == EINTR);
+    if (got <= 0) return got;
+    if (direct) {
+      n = static_cast<std::size_t>(got);
+    } else {
+      n = std::min(size, static_cast<std::size_t>(got));
+      std::memcpy(ptr, buffer_.data(), n);
+      buffered_begin_ = n;
+      buffered_end_ = static_cast<std::size_t>(got);
+    }
+  }
+  if (!head_read_) handed_out_ += n;
+  return static_cast<ssize_t>(n);
+}
+
+ssize_t ConnectionStream::write(const char* ptr, size_t size) {
+  if (!is_writable()) return -1;
+  ssize_t sent = 0;
+  do {
+    sent = ::send(fd_, ptr, size, MSG_NOSIGNAL);
+  } while (sent < 0 && errno == EINTR);
+  return sent;
+}
+
+void ConnectionStream::get_remote_ip_and_port(std::string& ip, int& port) const {
+  sockaddr_storage address{};
+  socklen_t length = sizeof address;
+  if (::getpeername(fd_, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
+    NameAndPort(address, length, ip, port);
+  }
+}
+
+void ConnectionStream::get_local_ip_and_port(std::string& ip, int& port) const {
+  sockaddr_storage address{};
+  socklen_t length = sizeof address;
+  if (::getsockname(fd_, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
+    NameAndPort(address, length, ip, port);
+  }
+}
+
+}  // namespace pintag::server

@@ -1,0 +1,54 @@
+#pragma once
+// One request's view of a client connection, as cpp-httplib 0.11.4 reads and writes it: the
+// library's own socket stream, with one thing added. cpp-httplib bounds each header line but
+// stores every line until the blank one, so a client that never ends its headers grew the
+// worker's memory as fast as it sent (measured: 158 MiB sent in 12 s, the server's resident
+// memory 127 → 712 MB, from one connection and no token). This stream hands out at most
+// `head_budget` bytes until the request's head has been read (`headRead`), then fails the read,
+// which ends the request; `overBudget` then says why, so the server can answer 431 and close.
+//
+// Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; bytes are
+// read through a 4 KiB buffer (cpp-httplib reads a head one byte at a time); a write first checks
+// that the peer has not gone; the buffer lives as long as the stream, one request.
+
+#include <httplib.h>
+
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+namespace pintag::server {
+
+class ConnectionStream final : public httplib::Stream {
+ public:
+  ConnectionStream(int fd, std::chrono::microseconds read_timeout,
+                   std::chrono::microseconds write_timeout, std::size_t head_budget);
+
+  bool is_readable() const override;
+  bool is_writable() const override;
+  ssize_t read(char* ptr, size_t size) override;
+  ssize_t write(const char* ptr, size_t size) override;
+  void get_remote_ip_and_port(std::string& ip, int& port) const override;
+  void get_local_ip_and_port(std::string& ip, int& port) const override;
+  socket_t socket() const override { return fd_; }
+
+  /// The request line and headers are in: the body, if any, is not counted.
+  void headRead() { head_read_ = true; }
+  /// True once a read was refused because the head ran past `head_budget`.
+  bool overBudget() const { return over_budget_; }
+
+ private:
+  int fd_;
+  int read_timeout_ms_;
+  int write_timeout_ms_;
+  std::size_t head_budget_;
+  std::size_t handed_out_ = 0;  ///< bytes read() has returned while the head was being read
+  bool head_read_ = false;
+  bool over_budget_ = false;
+  std::array<char, 4096> buffer_{};
+  std::size_t buffered_begin_ = 0;
+  std::size_t buffered_end_ = 0;
+};
+
+}  // namespace pintag::server
