@@ -146,11 +146,31 @@ struct ParsedRow {
   PostOffice office;
 };
 
-bool SameOffice(const PostOffice& a, const PostOffice& b) {
-  return a.name == b.name && a.branch_type == b.branch_type && a.delivery == b.delivery &&
-         a.division == b.division && a.region == b.region && a.circle == b.circle &&
-         a.district == b.district && a.state == b.state && a.taluk == b.taluk &&
-         a.latitude == b.latitude && a.longitude == b.longitude;
+/// An optional detail the two rows agree on, or that only one of them knows.
+template <typename T>
+bool Agree(const std::optional<T>& a, const std::optional<T>& b) {
+  return !a || !b || *a == *b;
+}
+
+/// `later` says nothing against `kept` (its known details are the same, or `kept` lacked them):
+/// then what only `later` knows is added to `kept`, as a second import of it would add.
+bool MergeRepeat(PostOffice& kept, const PostOffice& later) {
+  const bool same = kept.name == later.name && kept.division == later.division &&
+                    kept.region == later.region && kept.circle == later.circle &&
+                    kept.district == later.district && kept.state == later.state &&
+                    Agree(kept.branch_type, later.branch_type) &&
+                    Agree(kept.delivery, later.delivery) && Agree(kept.taluk, later.taluk) &&
+                    Agree(kept.latitude, later.latitude) && Agree(kept.longitude, later.longitude);
+  if (!same) return false;
+  const auto fill = [](auto& into, const auto& from) {
+    if (!into) into = from;
+  };
+  fill(kept.branch_type, later.branch_type);
+  fill(kept.delivery, later.delivery);
+  fill(kept.taluk, later.taluk);
+  fill(kept.latitude, later.latitude);
+  fill(kept.longitude, later.longitude);
+  return true;
 }
 
 /// One data record into a row, or the reason it is bad.
@@ -224,9 +244,9 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
   report.layout = mapping->layout;
   std::vector<ParsedRow> rows;
   constexpr std::int64_t kProgressEvery = 4096;
-  // An office twice in one file: the first is kept. The same row again is only counted; one
-  // with other details is a bad row (applying both would leave the last one, and each
-  // re-import would change the office twice without settling).
+  // An office twice in one file: the first is kept. A row that repeats it (or adds only details
+  // it lacked, which are then taken) is counted; one that contradicts it is a bad row (applying
+  // both would leave the last one, and each re-import would change the office twice).
   std::map<std::pair<std::uint32_t, std::string>, std::size_t> first_of;
   while (const auto record = reader.next(&error)) {
     ++report.rows;
@@ -250,8 +270,8 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
     const auto [first, inserted] =
         first_of.try_emplace({row->pincode.value(), row->office.name}, rows.size());
     if (!inserted) {
-      const ParsedRow& kept = rows[first->second];
-      if (SameOffice(kept.office, row->office)) {
+      ParsedRow& kept = rows[first->second];
+      if (MergeRepeat(kept.office, row->office)) {
         ++report.repeated_rows;
       } else {
         report.problems.push_back({record->line, "office '" + row->office.name + "' of " +

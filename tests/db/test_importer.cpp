@@ -285,20 +285,25 @@ TEST_F(Importer, AnOfficeTwiceInAFileKeepsTheFirstAndAReimportSettles) {
   const std::string header =
       "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
       "Districtname,statename\n";
-  const std::string first = "Alpha B.O,999051,BO,Delivery,APS,APS,APS,T,Firstpur,APS\n";
+  const std::string first = "Alpha B.O,999051,BO,NA,APS,APS,APS,T,Firstpur,APS\n";
+  const std::string more = "Alpha B.O,999051,BO,Delivery,APS,APS,APS,T,Firstpur,APS\n";
   const std::string other = "Alpha B.O,999051,BO,Delivery,APS,APS,APS,T,Otherpur,APS\n";
-  const std::string csv = header + first + first + other;
+  const std::string csv = header + first + first + more + other;
   const auto report = ImportDirectoryCsv(db_, csv);
   ASSERT_TRUE(report.ok()) << report.error().message;
-  EXPECT_EQ(report->rows, 3);
+  EXPECT_EQ(report->rows, 4);
   EXPECT_EQ(report->offices_added, 1);
-  EXPECT_EQ(report->repeated_rows, 1);  // the same row again: counted, not a fault
+  // The same row again, and one that only adds what the first lacked: counted, not faults.
+  EXPECT_EQ(report->repeated_rows, 2);
   ASSERT_EQ(report->problems.size(), 1u);
-  EXPECT_EQ(report->problems[0].line, 4);
+  EXPECT_EQ(report->problems[0].line, 5);
   EXPECT_NE(report->problems[0].message.find("is on line 2 too, with other details"),
             std::string::npos)
       << report->problems[0].message;
-  EXPECT_EQ(LookupPincode(db_, Pincode(999051)).value().district, "Firstpur");
+  const PincodeRecord stored = LookupPincode(db_, Pincode(999051)).value();
+  EXPECT_EQ(stored.district, "Firstpur");
+  ASSERT_EQ(stored.offices.size(), 1u);
+  EXPECT_EQ(stored.offices[0].delivery, "Delivery");  // taken from the row that knew it
   // Imported again, nothing changes: the office is not rewritten back and forth.
   const auto again = ImportDirectoryCsv(db_, csv);
   ASSERT_TRUE(again.ok());
