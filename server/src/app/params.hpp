@@ -57,8 +57,9 @@ long long IntegerQuery(const server::HttpRequest& request, std::string_view name
 inline constexpr std::size_t kMaxJsonDepth = 32;
 /// Items (values, counted from the commas and brackets) a JSON body may hold; more answer 413
 /// before parsing. A parsed item costs 16–80 bytes, so `[{},{},…]` would grow a 25 MiB body to
-/// about a gigabyte; the largest body PinTag takes (a pincode with 1,000 offices) has ~15,000.
-inline constexpr std::size_t kMaxJsonItems = 100'000;
+/// about a gigabyte, and this many to at most ~20 MB. A pincode with 1,000 offices has ~15,000; a
+/// sort plan 3 a rule, so up to ~83,000 rules (a plan for every pincode has ~19,000).
+inline constexpr std::size_t kMaxJsonItems = 250'000;
 /// The body parsed as JSON; 400 "Malformed JSON" when it is not, or nests deeper than
 /// kMaxJsonDepth; 413 when it holds more than kMaxJsonItems.
 nlohmann::json JsonBody(const server::HttpRequest& request);

@@ -38,6 +38,14 @@ class ConnectionStream final : public httplib::Stream {
   /// True once a read was refused because the head ran past `head_budget`.
   bool overBudget() const { return over_budget_; }
 
+  /// An answer was written (the logger saw it), and whether it asked to close the connection.
+  void answered(bool close) {
+    answered_ = true;
+    close_ = close_ || close;
+  }
+  bool wasAnswered() const { return answered_; }
+  bool closeAfterAnswer() const { return close_; }
+
  private:
   int fd_;
   int read_timeout_ms_;
@@ -46,6 +54,8 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t handed_out_ = 0;  ///< bytes read() has returned while the head was being read
   bool head_read_ = false;
   bool over_budget_ = false;
+  bool answered_ = false;
+  bool close_ = false;
   std::array<char, 4096> buffer_{};
   std::size_t buffered_begin_ = 0;
   std::size_t buffered_end_ = 0;

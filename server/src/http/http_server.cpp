@@ -30,6 +30,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <thread>
 
@@ -45,6 +46,7 @@ struct RequestState {
   std::chrono::steady_clock::time_point start;
   Admission admission;
   std::string request_id;
+  bool admitted_before_continue = false;  ///< preRoute ran from the Expect: 100-continue handler
 };
 thread_local RequestState t_state;
 
@@ -78,6 +80,12 @@ constexpr std::size_t kMaxRequestHeadBytes = std::size_t{96} * 1024;
 /// The stream of the request this worker is reading, for the pre-routing and error handlers.
 thread_local ConnectionStream* t_connection = nullptr;
 
+HttpResponse HeadTooLarge() {
+  return ProblemResponse(431, "the request line and headers ran past " +
+                                  std::to_string(kMaxRequestHeadBytes) +
+                                  " bytes; at most 100 headers of 64 KiB in all are read");
+}
+
 std::chrono::microseconds Microseconds(time_t seconds, time_t microseconds) {
   return std::chrono::seconds(seconds) + std::chrono::microseconds(microseconds);
 }
@@ -87,6 +95,10 @@ std::chrono::microseconds Microseconds(time_t seconds, time_t microseconds) {
 class Server : public httplib::Server {
  public:
   using httplib::Server::process_request;
+
+  /// Answers a request whose head ran past the budget before cpp-httplib could answer it (its
+  /// request line was still coming): cpp-httplib then writes nothing.
+  std::function<void(ConnectionStream&)> answer_unended_head;
 
  private:
   /// As cpp-httplib 0.11.4's: up to keep_alive_max_count_ requests, each waited for at most
@@ -98,10 +110,16 @@ class Server : public httplib::Server {
                               Microseconds(write_timeout_sec_, write_timeout_usec_),
                               kMaxRequestHeadBytes);
       t_connection = &stream;
+      t_state = RequestState{};  // nothing of the previous request carries over
       bool closed = false;
       ok = process_request(stream, left == 1, closed, nullptr);
       t_connection = nullptr;
-      if (stream.overBudget()) {
+      if (stream.overBudget() && !stream.wasAnswered() && answer_unended_head) {
+        answer_unended_head(stream);
+      }
+      // An answer that asked to close (a refusal that left a body unread, the head budget):
+      // cpp-httplib would have read on, taking the unread bytes for the next request.
+      if (stream.overBudget() || stream.closeAfterAnswer()) {
         LingerBeforeClosing(sock);
         break;
       }
@@ -210,6 +228,7 @@ bool UnknownMethod(const httplib::Request& req) {
 /// multipart/form-data. It matches "multipart/form-data" and "boundary=" case-sensitively, where
 /// media types and parameter names are case-insensitive (RFC 9110, 8.3.1): "Multipart/Form-Data;
 /// Boundary=x" becomes "multipart/form-data; boundary=x" (the boundary's value is left as sent).
+/// It also takes all that follows "boundary=" as the boundary, so the boundary is put last.
 std::optional<std::string> MultipartContentType(std::string_view value) {
   const auto lower = [](std::string_view text) {
     std::string out(text);
@@ -225,19 +244,26 @@ std::optional<std::string> MultipartContentType(std::string_view value) {
   std::size_t semicolon = value.find(';');
   if (lower(trim(value.substr(0, semicolon))) != "multipart/form-data") return std::nullopt;
   std::string out = "multipart/form-data";
+  std::string boundary;  // last: cpp-httplib takes all that follows "boundary=" as the boundary
   while (semicolon != std::string_view::npos) {
     value.remove_prefix(semicolon + 1);
     semicolon = value.find(';');
     const std::string_view parameter = trim(value.substr(0, semicolon));
+    if (parameter.empty()) continue;
     const std::size_t equals = parameter.find('=');
-    out += "; ";
-    out += lower(trim(parameter.substr(0, equals)));
+    std::string name = lower(trim(parameter.substr(0, equals)));
+    std::string written = "; " + name;
     if (equals != std::string_view::npos) {
-      out += '=';
-      out += trim(parameter.substr(equals + 1));
+      written += '=';
+      written += trim(parameter.substr(equals + 1));
+    }
+    if (name == "boundary") {
+      boundary = std::move(written);
+    } else {
+      out += written;
     }
   }
-  return out;
+  return out + boundary;
 }
 
 /// The method as the problem quotes it: printable ASCII, at most 40 characters.
@@ -262,9 +288,23 @@ struct HttpServer::Impl {
                                     std::to_string(api->options().max_body_bytes) + " bytes");
   }
 
+  /// Expect: 100-continue is answered before routing: admit the request first, so a refusal
+  /// (no token, a replica's write, a body over the limit) is sent instead of "100 Continue" and
+  /// the client never sends its body.
+  int expectContinue(const httplib::Request& req, httplib::Response& res) {
+    if (preRoute(req, res) == httplib::Server::HandlerResponse::Handled) return res.status;
+    t_state.admitted_before_continue = true;
+    return 100;
+  }
+
   httplib::Server::HandlerResponse preRoute(const httplib::Request& req, httplib::Response& res) {
+    if (t_state.admitted_before_continue) {
+      // Admitted by expectContinue for this very request (t_state is reset before each one).
+      t_state.admitted_before_continue = false;
+      return httplib::Server::HandlerResponse::Unhandled;
+    }
     if (t_connection != nullptr) t_connection->headRead();
-    t_state = RequestState{true, std::chrono::steady_clock::now(), {}, {}};
+    t_state = RequestState{true, std::chrono::steady_clock::now(), {}, {}, false};
     t_state.request_id = RequestIdFrom(req.has_header("X-Request-Id")
                                            ? std::optional(req.get_header_value("X-Request-Id"))
                                            : std::nullopt);
@@ -388,11 +428,7 @@ struct HttpServer::Impl {
     }
     if (t_connection != nullptr && t_connection->overBudget()) {
       // A head that did not end within the budget: cpp-httplib saw a failed read (400).
-      res.status = 431;
-      Apply(ProblemResponse(431, "the request line and headers ran past " +
-                                     std::to_string(kMaxRequestHeadBytes) +
-                                     " bytes; at most 100 headers of 64 KiB in all are read"),
-            res);
+      Apply(HeadTooLarge(), res);
       res.set_header("Connection", "close");
       return httplib::Server::HandlerResponse::Handled;
     }
@@ -414,7 +450,38 @@ struct HttpServer::Impl {
     return httplib::Server::HandlerResponse::Handled;
   }
 
+  /// What cpp-httplib could not answer: a head over the budget while its request line was still
+  /// being read. Written whole here, logged and counted as the logger would.
+  void answerUnendedHead(ConnectionStream& stream) {
+    const HttpResponse problem = HeadTooLarge();
+    const std::string id = RequestIdFrom(std::nullopt);
+    const std::string answer =
+        "HTTP/1.1 431 Request Header Fields Too Large\r\nContent-Type: " + problem.content_type +
+        "\r\nContent-Length: " + std::to_string(problem.body.size()) +
+        "\r\nConnection: close\r\nX-Request-Id: " + id + "\r\n\r\n" + problem.body;
+    for (std::size_t sent = 0; sent < answer.size();) {
+      const ssize_t n = stream.write(answer.data() + sent, answer.size() - sent);
+      if (n <= 0) break;
+      sent += static_cast<std::size_t>(n);
+    }
+    std::string client;
+    int client_port = 0;
+    stream.get_remote_ip_and_port(client, client_port);
+    api->metrics().observeRequest("unmatched", "other", 431, 0);
+    LogAccess({.request_id = id,
+               .client = client,
+               .method = "",
+               .path = "",
+               .status = 431,
+               .bytes = problem.body.size(),
+               .seconds = 0,
+               .principal = ""});
+  }
+
   void log(const httplib::Request& req, const httplib::Response& res) {
+    if (t_connection != nullptr) {
+      t_connection->answered(res.get_header_value("Connection") == "close");
+    }
     double seconds = 0;
     std::string label = "unmatched";
     if (t_state.active) {
@@ -487,6 +554,12 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
       });
   s.set_logger(
       [impl](const httplib::Request& req, const httplib::Response& res) { impl->log(req, res); });
+  s.set_expect_100_continue_handler([impl](const httplib::Request& req, httplib::Response& res) {
+    return impl->expectContinue(req, res);
+  });
+  impl->server.answer_unended_head = [impl](ConnectionStream& stream) {
+    impl->answerUnendedHead(stream);
+  };
 
   const auto plain = [impl](const httplib::Request& req, httplib::Response& res) {
     impl->handle(req, res);
@@ -559,6 +632,7 @@ int HttpServer::port() const {
 
 std::string HttpServer::answerRaw(std::string_view request) {
   MemoryStream stream(request);
+  t_state = RequestState{};  // as the connection loop does before each request
   bool closed = false;
   impl_->server.process_request(stream, /*close_connection=*/true, closed, nullptr);
   return stream.take();
