@@ -5,6 +5,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 
+#include "header_text.hpp"
 #include "pintag/server/problem.hpp"
 #include "process_metrics.hpp"
 
@@ -15,24 +16,6 @@ constexpr std::size_t kMaxTokenLength = 4096;
 // cpp-httplib 0.11.4 bounds each header line (8 KiB) but not how many come: past these, 431.
 constexpr std::size_t kMaxHeaderCount = 100;
 constexpr std::size_t kMaxHeaderBytes = std::size_t{64} * 1024;
-
-std::string Lower(std::string_view text) {
-  std::string out(text);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
-
-std::string_view Trim(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  return text;
-}
-
-/// "image/PNG; q=1" -> "image/png".
-std::string MediaType(std::string_view content_type) {
-  return Lower(Trim(content_type.substr(0, content_type.find(';'))));
-}
 
 std::optional<std::string> FirstHeader(const HeaderMap& headers, std::string_view name) {
   const auto it = headers.find(name);

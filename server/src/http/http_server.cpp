@@ -35,6 +35,7 @@
 #include <thread>
 
 #include "connection_stream.hpp"
+#include "header_text.hpp"
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
@@ -230,32 +231,21 @@ bool UnknownMethod(const httplib::Request& req) {
 /// Boundary=x" becomes "multipart/form-data; boundary=x" (the boundary's value is left as sent).
 /// It also takes all that follows "boundary=" as the boundary, so the boundary is put last.
 std::optional<std::string> MultipartContentType(std::string_view value) {
-  const auto lower = [](std::string_view text) {
-    std::string out(text);
-    std::transform(out.begin(), out.end(), out.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return out;
-  };
-  const auto trim = [](std::string_view text) {
-    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-    while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-    return text;
-  };
+  if (MediaType(value) != "multipart/form-data") return std::nullopt;
   std::size_t semicolon = value.find(';');
-  if (lower(trim(value.substr(0, semicolon))) != "multipart/form-data") return std::nullopt;
   std::string out = "multipart/form-data";
   std::string boundary;  // last: cpp-httplib takes all that follows "boundary=" as the boundary
   while (semicolon != std::string_view::npos) {
     value.remove_prefix(semicolon + 1);
     semicolon = value.find(';');
-    const std::string_view parameter = trim(value.substr(0, semicolon));
+    const std::string_view parameter = Trim(value.substr(0, semicolon));
     if (parameter.empty()) continue;
     const std::size_t equals = parameter.find('=');
-    std::string name = lower(trim(parameter.substr(0, equals)));
+    std::string name = Lower(Trim(parameter.substr(0, equals)));
     std::string written = "; " + name;
     if (equals != std::string_view::npos) {
       written += '=';
-      written += trim(parameter.substr(equals + 1));
+      written += Trim(parameter.substr(equals + 1));
     }
     if (name == "boundary") {
       boundary = std::move(written);
