@@ -131,4 +131,31 @@ void ConnectionStream::get_local_ip_and_port(std::string& ip, int& port) const {
   }
 }
 
+bool NextRequestArrives(int fd, std::chrono::seconds keep_alive,
+                        const std::atomic<int>& listening) {
+  const auto deadline = std::chrono::steady_clock::now() + keep_alive;
+  while (listening != -1) {
+    const int ready = Wait(fd, POLLIN, 10);
+    if (ready > 0) return true;
+    if (ready < 0 || std::chrono::steady_clock::now() > deadline) return false;
+  }
+  return false;
+}
+
+void LingerBeforeClosing(int fd) {
+  ::shutdown(fd, SHUT_WR);
+  std::array<char, 16384> sink{};
+  std::size_t dropped = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+  while (dropped < (std::size_t{1} << 20) && std::chrono::steady_clock::now() < deadline) {
+    if (Wait(fd, POLLIN, 100) <= 0) continue;
+    ssize_t n = 0;
+    do {
+      n = ::recv(fd, sink.data(), sink.size(), 0);
+    } while (n < 0 && errno == EINTR);
+    if (n <= 0) return;
+    dropped += static_cast<std::size_t>(n);
+  }
+}
+
 }  // namespace pintag::server

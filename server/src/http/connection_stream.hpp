@@ -14,6 +14,7 @@
 #include <httplib.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <string>
@@ -60,5 +61,15 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t buffered_begin_ = 0;
   std::size_t buffered_end_ = 0;
 };
+
+/// Waits for a kept-alive connection's next request: true once a byte has arrived; false when
+/// `keep_alive` passes, the connection fails, or `listening` is closed (the server stops). Looks
+/// every 10 ms, so that a stop is not held up by an idle connection.
+bool NextRequestArrives(int fd, std::chrono::seconds keep_alive, const std::atomic<int>& listening);
+
+/// Closing a socket with unread bytes resets the connection, and a reset may reach the client
+/// before it has read the answer it was sent. So: no more writes, then what the client is still
+/// sending is read and dropped, up to 1 MiB or 1 s. The caller closes the socket after.
+void LingerBeforeClosing(int fd);
 
 }  // namespace pintag::server

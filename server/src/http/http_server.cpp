@@ -20,14 +20,12 @@
 #include <httplib.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
-#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cerrno>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -106,7 +104,10 @@ class Server : public httplib::Server {
   /// keep_alive_timeout_sec_, each read through a new stream; then the socket is shut and closed.
   bool process_and_close_socket(socket_t sock) override {
     bool ok = false;
-    for (std::size_t left = keep_alive_max_count_; left > 0 && requestArrives(sock); --left) {
+    for (std::size_t left = keep_alive_max_count_;
+         left > 0 &&
+         NextRequestArrives(sock, std::chrono::seconds(keep_alive_timeout_sec_), svr_sock_);
+         --left) {
       ConnectionStream stream(sock, Microseconds(read_timeout_sec_, read_timeout_usec_),
                               Microseconds(write_timeout_sec_, write_timeout_usec_),
                               kMaxRequestHeadBytes);
@@ -129,38 +130,6 @@ class Server : public httplib::Server {
     ::shutdown(sock, SHUT_RDWR);
     ::close(sock);
     return ok;
-  }
-
-  /// Closing a socket with unread bytes resets the connection, and a reset may reach the client
-  /// before it has read the answer (431) it was sent. So: no more writes, then what the client
-  /// is still sending is read and dropped, up to 1 MiB or 1 s, before the close.
-  static void LingerBeforeClosing(socket_t sock) {
-    ::shutdown(sock, SHUT_WR);
-    std::array<char, 16384> sink{};
-    std::size_t dropped = 0;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-    while (dropped < (std::size_t{1} << 20) && std::chrono::steady_clock::now() < deadline) {
-      pollfd entry{sock, POLLIN, 0};
-      if (::poll(&entry, 1, 100) <= 0) continue;
-      const ssize_t n = ::recv(sock, sink.data(), sink.size(), 0);
-      if (n <= 0) return;
-      dropped += static_cast<std::size_t>(n);
-    }
-  }
-
-  /// Waits for the next request's first byte, in 10 ms steps so that stop() is not held up by an
-  /// idle kept-alive connection.
-  bool requestArrives(socket_t sock) const {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::seconds(keep_alive_timeout_sec_);
-    while (svr_sock_ != INVALID_SOCKET) {
-      pollfd entry{sock, POLLIN, 0};
-      const int ready = ::poll(&entry, 1, 10);
-      if (ready > 0) return true;
-      if (ready < 0 && errno != EINTR) return false;
-      if (std::chrono::steady_clock::now() > deadline) return false;
-    }
-    return false;
   }
 };
 
