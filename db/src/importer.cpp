@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -332,14 +335,26 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
   });
 }
 
-Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
-                                            const ImportOptions& options) {
+Result<std::string> ReadImportFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return Error{ErrorCode::kInvalid, path + " is a directory; give the CSV file itself"};
+  }
   std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{ErrorCode::kNotFound, "cannot read " + path};
+  if (!in) return Error{ErrorCode::kNotFound, "cannot read " + path + ": " + std::strerror(errno)};
   std::ostringstream text;
   text << in.rdbuf();
-  if (in.bad()) return Error{ErrorCode::kStorage, "error reading " + path};
-  return ImportDirectoryCsv(connection, text.str(), options);
+  if (in.bad()) {
+    return Error{ErrorCode::kStorage, "error reading " + path + ": " + std::strerror(errno)};
+  }
+  return std::move(text).str();
+}
+
+Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
+                                            const ImportOptions& options) {
+  Result<std::string> text = ReadImportFile(path);
+  if (!text) return text.error();
+  return ImportDirectoryCsv(connection, *text, options);
 }
 
 }  // namespace pintag::db

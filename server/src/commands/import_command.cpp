@@ -2,14 +2,9 @@
 
 #include <unistd.h>
 
-#include <cerrno>
 #include <chrono>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <string>
 
 #include "commands/commands.hpp"
@@ -52,23 +47,10 @@ class ProgressBar {
   bool drawn_ = false;
 };
 
-/// The whole file, or a message that says why not (a directory, a missing file, its errno).
-std::string ReadCsvFile(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw std::runtime_error(path + " is a directory; give the CSV file itself");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + path + ": " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw std::runtime_error("error reading " + path + ": " + std::strerror(errno));
-  return std::move(text).str();
-}
-
 void Run(const ImportArgs& args) {
   // Read before the database is opened: a missing file must not leave a new, seeded database.
-  const std::string csv = ReadCsvFile(args.file);
+  const db::Result<std::string> csv = db::ReadImportFile(args.file);
+  if (!csv) throw std::runtime_error(csv.error().message);
   db::Connection connection = OpenDb(args.db);
   db::ImportOptions options;
   options.strict = args.strict;
@@ -78,7 +60,7 @@ void Run(const ImportArgs& args) {
       (*bar)(phase, done, total);
     };
   }
-  auto result = db::ImportDirectoryCsv(connection, csv, options);
+  auto result = db::ImportDirectoryCsv(connection, *csv, options);
   bar.reset();
   options.progress = nullptr;
   if (!result) throw std::runtime_error(args.file + ": " + result.error().message);

@@ -63,7 +63,10 @@ struct ImportReport {
 /// and name) a second time is a bad row unless the row is the same as the first, which is kept.
 Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
                                         const ImportOptions& options = {});
-/// Reads the file and imports it; kNotFound when it cannot be read.
+/// The whole file, read before any database is opened; kNotFound when it cannot be read,
+/// kInvalid for a directory, kStorage for a read error (the message gives the system's reason).
+Result<std::string> ReadImportFile(const std::string& path);
+/// Reads the file (ReadImportFile) and imports it.
 Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
                                             const ImportOptions& options = {});
 
