@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
+#include <sstream>
 #include <thread>
 
 #include "pintag/db/database.hpp"
@@ -113,6 +114,18 @@ std::string WebpClaiming(std::uint32_t width, std::uint32_t height) {
   const std::uint32_t size = static_cast<std::uint32_t>(4 + chunk.size());
   for (int shift : {0, 8, 16, 24}) webp += static_cast<char>((size >> shift) & 0xFF);
   return webp + "WEBP" + chunk;
+}
+
+/// The longest line of a chunked body the server reads (docs/HTTP.md).
+constexpr std::size_t kChunkLineLimit = std::size_t{8} * 1024;
+
+/// The process's resident memory in MiB, from /proc; -1 when it cannot be read.
+long ResidentMegabytes(pid_t pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6)) / 1024;
+  }
+  return -1L;
 }
 
 // --- Requests --------------------------------------------------------------------------------
@@ -550,13 +563,7 @@ TEST_F(HostileCatalogue, HeaderFloodOfManyHeaders) {
 TEST_F(HostileCatalogue, HeaderLinesWithoutEndAreCutOffNotStored) {
   // cpp-httplib stores every header line until the blank one: a client that never sent it grew
   // the server by about 4.5 bytes for each byte it sent, with no token and one connection.
-  const auto rss_mb = [this] {
-    std::ifstream status("/proc/" + std::to_string(server_->pid()) + "/status");
-    for (std::string line; std::getline(status, line);) {
-      if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6)) / 1024;
-    }
-    return -1L;
-  };
+  const auto rss_mb = [this] { return ResidentMegabytes(server_->pid()); };
   const auto refused_431 = [this] {
     const std::string metrics = client().Get("/metrics")->body;
     const std::regex line(R"(pintag_http_requests_total\{[^}]*status="431"[^}]*\} (\d+))");
@@ -590,6 +597,68 @@ TEST_F(HostileCatalogue, HeaderLinesWithoutEndAreCutOffNotStored) {
   EXPECT_EQ(refused_431(), before + 1);
   EXPECT_LT(rss_mb() - rss_before, 32) << "resident MB before " << rss_before;
   expectHealthy();
+}
+TEST_F(HostileCatalogue, ChunkSizeLineWithoutEndIsCutOffNotStored) {
+  // cpp-httplib reads a chunk-size line until its end, however long: one without end, from a
+  // client with a token, grew the server's memory as fast as it was sent.
+  const long rss_before = ResidentMegabytes(server_->pid());
+  const int fd = test::ConnectLoopback(server_->port());
+  ASSERT_GE(fd, 0);
+  bool refused = !test::SendAll(fd, Request("POST", "/api/v1/detect",
+                                            {scannerAuth(), "Content-Type: image/jpeg",
+                                             "Transfer-Encoding: chunked"},
+                                            "", "") +
+                                        "400;ext=");
+  const std::string extension(std::size_t{64} * 1024, 'e');
+  std::size_t sent = 0;
+  while (!refused && sent < (std::size_t{40} << 20)) {  // more than loopback's buffers hold
+    refused = !test::SendAll(fd, extension);
+    sent += extension.size();
+  }
+  EXPECT_TRUE(refused) << "the server took " << sent << " bytes of one chunk-size line";
+  // Measured with the connection still open: what the server stored is freed when it closes.
+  const long rss_after = ResidentMegabytes(server_->pid());
+  const Answer answer = Parse(test::ReceiveUntil(fd, 5));
+  ::close(fd);
+  if (answer.status != 0) {  // the answer may be lost to the reset of a client still sending
+    EXPECT_EQ(answer.status, 400) << answer.head;
+    EXPECT_NE(json::parse(answer.body, nullptr, false).value("detail", "").find("chunk size"),
+              std::string::npos)
+        << answer.body;
+  }
+  EXPECT_LT(rss_after - rss_before, 32) << "resident MB before " << rss_before;
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, ChunkSizeLineOverTheLimitIsAnswered400) {
+  // A line over the limit, and then the client waits: the answer names the limit.
+  const std::string line = "10;" + std::string(kChunkLineLimit, 'e') + "\r\n";
+  const Answer answer =
+      Send(server_->port(), Request("POST", "/api/v1/detect",
+                                    {scannerAuth(), "Content-Type: image/jpeg",
+                                     "Transfer-Encoding: chunked"},
+                                    "", "") +
+                                line);
+  EXPECT_EQ(answer.status, 400) << answer.head;
+  const json problem = json::parse(answer.body, nullptr, false);
+  EXPECT_NE(problem.value("detail", "").find("chunk size"), std::string::npos) << answer.body;
+  EXPECT_NE(problem.value("detail", "").find(std::to_string(kChunkLineLimit)), std::string::npos)
+      << answer.body;
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, ChunkExtensionsWithinTheLimitAreRead) {
+  // Chunk extensions are allowed (RFC 9112, 7.1.1) and ignored: the photo is read whole.
+  const std::string photo = Encoded(".jpg");
+  std::ostringstream body;
+  body << std::hex << photo.size() << ";name=\"" << std::string(kChunkLineLimit - 100, 'v') << "\"\r\n"
+       << photo << "\r\n0\r\n\r\n";
+  const Answer answer =
+      Send(server_->port(), Request("POST", "/api/v1/detect",
+                                    {scannerAuth(), "Content-Type: image/jpeg",
+                                     "Transfer-Encoding: chunked"},
+                                    "", "") +
+                                body.str());
+  EXPECT_EQ(answer.status, 200) << answer.head << "\n" << answer.body.substr(0, 300);
+  EXPECT_TRUE(json::parse(answer.body, nullptr, false).contains("tags")) << answer.body;
 }
 TEST_F(HostileCatalogue, RequestLineWithoutEndIsAnswered431) {
   // cpp-httplib writes nothing when the read of a request line fails: the server answers itself.

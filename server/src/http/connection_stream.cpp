@@ -75,6 +75,9 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
       return -1;
     }
     size = std::min(size, head_budget_ - handed_out_);
+  } else if (size == 1 && body_line_bytes_ >= kMaxBodyLineBytes) {
+    body_line_too_long_ = true;
+    return -1;
   }
   if (size == 0) return 0;
   std::size_t n = 0;
@@ -102,7 +105,13 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
       buffered_end_ = static_cast<std::size_t>(got);
     }
   }
-  if (!head_read_) handed_out_ += n;
+  if (!head_read_) {
+    handed_out_ += n;
+  } else if (size == 1 && *ptr != '\n') {
+    ++body_line_bytes_;  // a line being read byte by byte; a larger read is content, not a line
+  } else {
+    body_line_bytes_ = 0;
+  }
   return static_cast<ssize_t>(n);
 }
 

@@ -370,6 +370,15 @@ struct HttpServer::Impl {
       res.set_header("Connection", "close");
       return;
     }
+    if (!ok && t_connection != nullptr && t_connection->bodyLineTooLong()) {
+      Apply(ProblemResponse(400,
+                            "a line of the chunked body (a chunk size, with any extensions) "
+                            "ran past " +
+                                std::to_string(ConnectionStream::kMaxBodyLineBytes) + " bytes"),
+            res);
+      res.set_header("Connection", "close");
+      return;
+    }
     if (!ok) {
       Apply(ProblemResponse(400, "the request body could not be read"), res);
       res.set_header("Connection", "close");
