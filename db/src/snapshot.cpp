@@ -3,11 +3,15 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -31,7 +35,47 @@ void Sync(const std::string& path, bool directory) {
   if (!synced) throw std::runtime_error(error);
 }
 
-/// A fresh empty file beside `target`, removed (with any SQLite side files) unless kept.
+/// A temporary file and the side files SQLite may keep beside it while it is written.
+constexpr std::array<const char*, 4> kSideSuffixes = {"", "-journal", "-wal", "-shm"};
+
+/// The temporary files being written, as RemoveSnapshotTemporariesOnSignal reads them. A slot's
+/// paths are written before it is marked in use and it is unmarked before they change, so a
+/// handler that interrupts either step never reads half a path.
+struct PendingTemporary {
+  static constexpr std::size_t kMaxPath = 4096;
+  std::atomic<bool> in_use{false};
+  std::array<std::array<char, kMaxPath>, kSideSuffixes.size()> files{};
+};
+std::array<PendingTemporary, 4> g_pending;
+std::mutex g_pending_claims;  // between threads only: a signal handler never takes it
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+/// A slot holding `path`, or nullptr when all are taken or the path is too long (the file is
+/// then only removed by TemporaryBeside, as before).
+PendingTemporary* Register(const std::string& path) {
+  if (path.size() + std::strlen("-journal") >= PendingTemporary::kMaxPath) return nullptr;
+  const std::lock_guard lock(g_pending_claims);
+  for (PendingTemporary& slot : g_pending) {
+    if (slot.in_use.load(std::memory_order_acquire)) continue;
+    for (std::size_t i = 0; i < kSideSuffixes.size(); ++i) {
+      const std::string file = path + kSideSuffixes[i];
+      std::copy(file.begin(), file.end(), slot.files[i].begin());
+      slot.files[i][file.size()] = '\0';
+    }
+    slot.in_use.store(true, std::memory_order_release);
+    return &slot;
+  }
+  return nullptr;
+}
+
+void Unregister(PendingTemporary* slot) {
+  if (slot == nullptr) return;
+  const std::lock_guard lock(g_pending_claims);
+  slot->in_use.store(false, std::memory_order_release);
+}
+
+/// A fresh empty file beside `target`, removed (with any SQLite side files) unless kept, and
+/// removed by RemoveSnapshotTemporariesOnSignal while it exists.
 class TemporaryBeside {
  public:
   explicit TemporaryBeside(const std::string& target) {
@@ -44,19 +88,27 @@ class TemporaryBeside {
     }
     ::close(fd);
     path_ = buffer.data();
+    pending_ = Register(path_);
   }
   TemporaryBeside(const TemporaryBeside&) = delete;
   TemporaryBeside& operator=(const TemporaryBeside&) = delete;
   ~TemporaryBeside() {
     for (const char* suffix : {"-journal", "-wal", "-shm"}) ::unlink((path_ + suffix).c_str());
     if (!kept_) ::unlink(path_.c_str());
+    Unregister(pending_);
   }
   const std::string& path() const { return path_; }
-  void keep() { kept_ = true; }
+  /// Renamed into place: nothing to remove any more.
+  void keep() {
+    kept_ = true;
+    Unregister(pending_);
+    pending_ = nullptr;
+  }
 
  private:
   std::string path_;
   bool kept_ = false;
+  PendingTemporary* pending_ = nullptr;
 };
 
 std::string Directory(const std::string& path) {
@@ -155,6 +207,13 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
     return info;
   } catch (const std::exception& e) {
     return Error{ErrorCode::kStorage, e.what()};
+  }
+}
+
+void RemoveSnapshotTemporariesOnSignal() noexcept {
+  for (PendingTemporary& slot : g_pending) {
+    if (!slot.in_use.load(std::memory_order_acquire)) continue;
+    for (const auto& file : slot.files) ::unlink(file.data());
   }
 }
 

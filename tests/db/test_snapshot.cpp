@@ -3,10 +3,14 @@
 // its target atomically.
 
 #include <gtest/gtest.h>
+#include <spawn.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <thread>
 #include <vector>
@@ -305,6 +309,54 @@ TEST(Snapshot, CommandLineWritesVerifiesAndRefusesAMissingSourceOrItself) {
   EXPECT_EQ(over_itself.exit_code, 1);
   EXPECT_NE(over_itself.out.find("would replace the database it is taken from"), std::string::npos)
       << over_itself.out;
+}
+
+TEST(Snapshot, CommandLineInterruptedLeavesNoTemporaryFileBehind) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  TempDir dir;
+  const std::string live = test::CopyOfSeeded(dir);
+  {
+    // About 100 MB of scan log, which the snapshot copies, then deletes and vacuums away: the
+    // temporary file exists for long enough to be interrupted.
+    Connection connection = test::OpenExisting(live);
+    connection.execute(
+        "WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 200000) "
+        "INSERT INTO scan_log (scanned_at, image_bytes, result_json) "
+        "SELECT '2026-12-05T00:00:00Z', 1, '\"' || hex(randomblob(250)) || '\"' FROM n");
+  }
+  const std::string out = dir.file("published.db");
+  const auto temporaries = [&] {
+    std::vector<std::string> found;
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind("published.db", 0) == 0) found.push_back(name);
+    }
+    return found;
+  };
+  for (const int signal : {SIGINT, SIGTERM}) {
+    const std::string exe = test::PintagExe();
+    std::vector<std::string> args = {exe, "snapshot", "--db", live, "--out", out};
+    std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
+    for (std::string& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    ASSERT_EQ(::posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ), 0);
+    // Interrupted once its temporary copy exists (polled every millisecond).
+    bool copying = false;
+    int status = 0;
+    while (!copying && ::waitpid(pid, &status, WNOHANG) == 0) {
+      copying = !temporaries().empty();
+      if (!copying) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ASSERT_TRUE(copying) << "the snapshot ended before its temporary file was seen";
+    ::kill(pid, signal);
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "the snapshot finished before the signal ended it: exit "
+                                     << (WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    EXPECT_EQ(WTERMSIG(status), signal);  // ended as the signal ends it, for the shell to see
+    EXPECT_TRUE(temporaries().empty()) << temporaries().front() << " is left behind";
+  }
 }
 
 TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {

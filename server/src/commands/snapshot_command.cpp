@@ -2,6 +2,8 @@
 // replicas (`pintag serve --read-only`), renamed into place atomically; prints the registry
 // version it holds. `pintag snapshot --verify FILE` checks a snapshot and prints its version.
 
+#include <array>
+#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -18,6 +20,39 @@ struct SnapshotArgs {
   std::string db = "pintag.db";
   std::string out;
   std::string verify;
+};
+
+/// Ends the process as `signal` would have, once the snapshot's temporary file is removed:
+/// SA_RESETHAND has put the default action back, and the raised signal waits until this returns.
+void RemoveTemporariesAndEnd(int signal) {
+  db::RemoveSnapshotTemporariesOnSignal();
+  ::raise(signal);
+}
+
+/// While alive, an interrupted or stopped snapshot leaves no temporary copy beside its output
+/// (the copy of a large registry takes seconds). SIGKILL still can.
+class TemporariesRemovedOnSignals {
+ public:
+  TemporariesRemovedOnSignals() {
+    struct sigaction action {};
+    action.sa_handler = RemoveTemporariesAndEnd;
+    action.sa_flags = SA_RESETHAND;
+    ::sigemptyset(&action.sa_mask);
+    for (std::size_t i = 0; i < kSignals.size(); ++i) {
+      ::sigaction(kSignals[i], &action, &previous_[i]);
+    }
+  }
+  TemporariesRemovedOnSignals(const TemporariesRemovedOnSignals&) = delete;
+  TemporariesRemovedOnSignals& operator=(const TemporariesRemovedOnSignals&) = delete;
+  ~TemporariesRemovedOnSignals() {
+    for (std::size_t i = 0; i < kSignals.size(); ++i) {
+      ::sigaction(kSignals[i], &previous_[i], nullptr);
+    }
+  }
+
+ private:
+  static constexpr std::array<int, 4> kSignals = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+  std::array<struct sigaction, kSignals.size()> previous_{};
 };
 
 void Print(const db::SnapshotInfo& info) {
@@ -42,6 +77,7 @@ void Run(const SnapshotArgs& args) {
   // Read only: a snapshot never changes its source (no migration, no seeding of an empty file).
   auto opened = db::OpenDatabase(args.db, {.create = false, .seed = false, .read_only = true});
   if (!opened) throw std::runtime_error(opened.error().message);
+  const TemporariesRemovedOnSignals removed_on_signals;
   auto info = db::WriteSnapshot(opened.value().connection, args.out);
   if (!info) throw std::runtime_error(info.error().message);
   Print(*info);

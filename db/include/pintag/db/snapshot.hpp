@@ -38,6 +38,12 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
 /// VerifySnapshot's error and `path` is left as it was.
 Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path);
 
+/// Removes the temporary files that WriteSnapshot and InstallSnapshot are writing at this moment.
+/// For a signal handler about to end the process, which would otherwise leave them beside their
+/// target (`pintag snapshot` on Ctrl-C): async-signal-safe, it only reads atomics and calls
+/// unlink(). A temporary file whose path is longer than 4 KiB is not covered.
+void RemoveSnapshotTemporariesOnSignal() noexcept;
+
 /// Opens `path` read-only and checks it is a whole PinTag database of the current schema
 /// (PRAGMA quick_check); its version and size. kStorage for a damaged or foreign file, kConflict
 /// for another schema version, kNotFound when it does not exist.
