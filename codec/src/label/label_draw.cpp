@@ -4,6 +4,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "label/label_text.hpp"
@@ -107,8 +108,8 @@ void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
   const double width = box.w - 2 * kPadMm;
   const double office_size = std::min(box.h * 0.36, 7.0);
   const double line2_size = std::min(box.h * 0.24, 4.6);
-  const double two_line_size =
-      std::min(0.75 * office_size, (box.h - 1.2 * line2_size - 2 * kPadMm) / 2.4);
+  const double two_line_size = std::max(
+      kMinNameMm, std::min(0.75 * office_size, (box.h - 1.2 * line2_size - 2 * kPadMm) / 2.4));
 
   std::vector<TextLine> lines;
   const std::string office = SanitizeUtf8(label.office);
@@ -133,32 +134,71 @@ void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
   }
 }
 
-// The bin on one line when it fits at 3 mm or more, else on two of one size, broken at the space
-// that makes the longer line shortest: the end of a bin name ("… chute 12") is as much the answer
-// as its start, so it is not cut off while a break can show it.
+// Where a bin's name may go onto a second line: the first line is [0, first_end), the second
+// starts at second_begin.
+struct LineBreak {
+  std::size_t first_end;
+  std::size_t second_begin;
+};
+
+// At its spaces (dropped) when it has any; else after a '-', '_', '/', '.' or ':'; else between
+// any two code points ("CHUTE12" must still show its number).
+std::vector<LineBreak> BinBreaks(const std::string& bin) {
+  std::vector<LineBreak> breaks;
+  for (std::size_t i = bin.find(' '); i != std::string::npos; i = bin.find(' ', i + 1)) {
+    breaks.push_back({i, i + 1});
+  }
+  if (!breaks.empty()) return breaks;
+  for (std::size_t i = 0; i + 1 < bin.size(); ++i) {
+    if (std::string_view("-_/.:").find(bin[i]) != std::string_view::npos) {
+      breaks.push_back({i + 1, i + 1});
+    }
+  }
+  if (!breaks.empty()) return breaks;
+  for (std::size_t i = 1; i < bin.size(); ++i) {
+    if ((static_cast<unsigned char>(bin[i]) & 0xC0) != 0x80) breaks.push_back({i, i});
+  }
+  return breaks;
+}
+
+// The bin on one line when it fits at 3 mm or more, else on two of one size, broken where the
+// longer line is shortest: the end of a bin name ("… chute 12") is as much the answer as its
+// start, so it is not cut off while a break can show it. When even that does not fit at the
+// 2.2 mm floor, the second line keeps the longest end that fits and the first is ellipsized:
+// two bins that differ in their number never print alike.
 void DrawBinValue(cairo_t* cr, const std::string& bin, double x, double width, double baseline,
                   double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
-  if (AdvancePerSize(cr, bin, true) * kOneLineMinMm <= width ||
-      bin.find(' ') == std::string::npos) {
-    DrawLine(cr, bin, x, width, baseline, {.bold = true, .size = size, .min_size = kOneLineMinMm});
+  const std::vector<LineBreak> breaks = BinBreaks(bin);
+  if (AdvancePerSize(cr, bin, true) * kOneLineMinMm <= width || breaks.empty()) {
+    DrawLine(cr, bin, x, width, baseline, {.bold = true, .size = size, .min_size = kMinNameMm});
     return;
   }
-  std::size_t cut = 0;
+  LineBreak cut = breaks.front();
   double longer = std::numeric_limits<double>::infinity();
-  for (std::size_t space = bin.find(' '); space != std::string::npos;
-       space = bin.find(' ', space + 1)) {
-    const double advance = std::max(AdvancePerSize(cr, bin.substr(0, space), true),
-                                    AdvancePerSize(cr, bin.substr(space + 1), true));
+  for (const LineBreak& at : breaks) {
+    const double advance = std::max(AdvancePerSize(cr, bin.substr(0, at.first_end), true),
+                                    AdvancePerSize(cr, bin.substr(at.second_begin), true));
     if (advance < longer) {
       longer = advance;
-      cut = space;
+      cut = at;
     }
+  }
+  if (longer * kMinNameMm > width) {
+    // The longest end that fits on the second line, at a code point boundary.
+    for (std::size_t i = 1; i < bin.size(); ++i) {
+      if ((static_cast<unsigned char>(bin[i]) & 0xC0) == 0x80) continue;
+      if (AdvancePerSize(cr, bin.substr(i), true) * kMinNameMm <= width) {
+        cut = {i, i};
+        break;
+      }
+    }
+    longer = width / kMinNameMm;
   }
   const double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
   const LineStyle style{.bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm};
-  DrawLine(cr, bin.substr(0, cut), x, width, baseline - style.size * 1.12, style);
-  DrawLine(cr, bin.substr(cut + 1), x, width, baseline, style);
+  DrawLine(cr, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style);
+  DrawLine(cr, bin.substr(cut.second_begin), x, width, baseline, style);
 }
 
 void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
