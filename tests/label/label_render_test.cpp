@@ -187,6 +187,123 @@ TEST(LabelText, ALongBinIsPrintedWholeOnTwoLines) {
   EXPECT_TRUE(RenderLabelPdf(label));
 }
 
+/// A word pdftotext found on a page, in points from the top-left corner. pdftotext's box runs
+/// from the font's ascent to its descent; `top` and `bottom` are where the ink of capitals,
+/// digits and short descenders lies (DejaVu Sans: ascent 0.928, descent 0.236, capitals 0.729 of
+/// the size), which lines set close together must keep apart.
+struct Word {
+  std::string text;
+  double x0, y0, x1, y1;
+  double size() const { return (y1 - y0) / (0.928 + 0.236); }
+  double baseline() const { return y1 - 0.236 * size(); }
+  double top() const { return baseline() - 0.729 * size(); }
+  double bottom() const { return baseline() + 0.12 * size(); }
+};
+
+/// The words of a one-page PDF with their boxes (`pdftotext -bbox`).
+std::vector<Word> WordsOf(const RenderedLabel& pdf) {
+  test::TempDir dir;
+  const auto path = dir.path() / "label.pdf";
+  test::WriteFile(path, pdf.bytes);
+  const auto html = test::Run("pdftotext -bbox '" + path.string() + "' -");
+  EXPECT_TRUE(html.has_value());
+  static const std::regex kWord(
+      R"re(<word xMin="([0-9.]+)" yMin="([0-9.]+)" xMax="([0-9.]+)" yMax="([0-9.]+)">([^<]*)</word>)re");
+  std::vector<Word> words;
+  if (!html) return words;
+  for (auto it = std::sregex_iterator(html->begin(), html->end(), kWord);
+       it != std::sregex_iterator(); ++it) {
+    words.push_back({(*it)[5].str(), std::stod((*it)[1]), std::stod((*it)[2]), std::stod((*it)[3]),
+                     std::stod((*it)[4])});
+  }
+  return words;
+}
+
+/// All text, whitespace removed: what a bin reads as, whichever lines it was broken onto.
+std::string JoinedText(const std::vector<Word>& words) {
+  std::string out;
+  for (const Word& word : words) out += word.text;
+  return out;
+}
+
+TEST(LabelLayout, TextStaysApartLegibleAndOffTheTagAtEverySize) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // Long names everywhere, on the smallest sizes each layout allows and the usual ones. Before,
+  // labels under about 93 mm tall ran their rows together (50 x 50 mm printed the bin upside
+  // down across the frame) and shrank a wrapped office to 0.7 mm.
+  LabelContent label = test::SampleLabel();
+  label.office = "Kanchipuram Collectorate Buildings Extension S.O";
+  label.district = "Thiruvananthapuram";
+  label.state = "Andaman and Nicobar Islands";
+  label.bin = "BLR-OUTBOUND-CONVEYOR-CHUTE-12";
+  label.plan = "north-hub-night";
+  constexpr double kMinSizePt = 1.4 * kPointsPerMm;  // the small print's floor
+  for (const LabelSize& size :
+       {kLabel100x150, kLabelA6, kLabel4x6In, LabelSize{50, 75}, LabelSize{75, 75},
+        LabelSize{60, 90}, LabelSize{80, 80}, LabelSize{50, 100}, LabelSize{75, 50},
+        LabelSize{100, 50}, LabelSize{150, 300}, LabelSize{300, 150}}) {
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << ToString(size) << ": " << pdf.error;
+    const std::vector<Word> words = WordsOf(pdf);
+    ASSERT_GE(words.size(), 10U) << ToString(size);
+    const LabelTagPlacement tag = TagPlacement(size);
+    const double quiet = 0.15 * tag.square_side_mm;
+    const double tag_x0 = (tag.square_x_mm - quiet) * kPointsPerMm;
+    const double tag_y0 = (tag.square_y_mm - quiet) * kPointsPerMm;
+    const double tag_x1 = (tag.square_x_mm + tag.square_side_mm + quiet) * kPointsPerMm;
+    const double tag_y1 = (tag.square_y_mm + tag.square_side_mm + quiet) * kPointsPerMm;
+    for (std::size_t i = 0; i < words.size(); ++i) {
+      const Word& a = words[i];
+      const std::string where = ToString(size) + " '" + a.text + "'";
+      EXPECT_GT(a.x1, a.x0) << where;  // drawn left to right, not mirrored by a negative size
+      EXPECT_GE(a.size(), kMinSizePt) << where;
+      EXPECT_GE(a.x0, 3 * kPointsPerMm) << where;
+      EXPECT_LE(a.x1, (size.width_mm - 3) * kPointsPerMm) << where;
+      EXPECT_GE(a.y0, 3 * kPointsPerMm) << where;
+      EXPECT_LE(a.y1, (size.height_mm - 3) * kPointsPerMm) << where;
+      const bool on_tag = a.x1 > tag_x0 && a.x0 < tag_x1 && a.y1 > tag_y0 && a.y0 < tag_y1;
+      EXPECT_FALSE(on_tag) << where << " lies on the tag or its quiet zone";
+      for (std::size_t j = i + 1; j < words.size(); ++j) {
+        const Word& b = words[j];
+        const double across = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+        const double down = std::min(a.bottom(), b.bottom()) - std::max(a.top(), b.top());
+        EXPECT_FALSE(across > 0.2 && down > 0)
+            << where << " overlaps '" << b.text << "' by " << across << " x " << down << " pt";
+      }
+    }
+  }
+}
+
+TEST(LabelText, BinsThatDifferOnlyInTheirEndPrintDifferently) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // A bin without spaces was cut to one line at 3 mm and ellipsized: "…-CHUTE-12" and
+  // "…-CHUTE-13" both printed "BLR-OUTBOUND-CONVEYOR-…".
+  const std::vector<std::string> stems = {
+      "BLR-OUTBOUND-CONVEYOR-CHUTE-", std::string(54, 'W') + "CHUTE",    // no break at all
+      "Mumbai West Sorting Chute Level Three North Wing Chute ",         // 64 bytes with spaces
+      "Bengaluru_Outbound/Conveyor.Line:Chute_Level_3_North_Wing_Chute"  // 64 bytes, punctuation
+  };
+  for (const LabelSize& size : {kLabel100x150, LabelSize{50, 75}, LabelSize{75, 75},
+                                LabelSize{100, 50}, LabelSize{75, 50}}) {
+    for (const std::string& stem : stems) {
+      std::vector<std::string> printed;
+      for (const char* number : {"12", "13"}) {
+        LabelContent label = test::SampleLabel();
+        label.bin = (stem.size() + 2 > 64 ? stem.substr(0, 62) : stem) + number;
+        const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+        ASSERT_TRUE(pdf) << pdf.error;
+        const std::string text = JoinedText(WordsOf(pdf));
+        std::string end = label.bin->substr(label.bin->size() - 8);
+        std::erase(end, ' ');
+        EXPECT_NE(text.find(end), std::string::npos)
+            << ToString(size) << ": the end of '" << *label.bin << "' is not printed: " << text;
+        printed.push_back(text);
+      }
+      EXPECT_NE(printed[0], printed[1]) << ToString(size) << " " << stem;
+    }
+  }
+}
+
 TEST(LabelText, HostileNamesStillRender) {
   LabelContent label = test::SampleLabel();
   label.office = std::string(5000, 'W') + "\xff\xfe\x01\x02 \u202E evil";
@@ -207,11 +324,15 @@ TEST(LabelText, HostileNamesStillRender) {
 
 TEST(LabelLayout, TagIsLargeAndItsQuietZoneStaysOnTheLabel) {
   for (const LabelSize& size :
-       {kLabel100x150, kLabelA6, kLabel4x6In, LabelSize{150, 100}, LabelSize{50, 50},
-        LabelSize{150, 300}, LabelSize{300, 150}, LabelSize{100, 100}}) {
+       {kLabel100x150, kLabelA6, kLabel4x6In, LabelSize{150, 100}, LabelSize{75, 75},
+        LabelSize{50, 75}, LabelSize{150, 300}, LabelSize{300, 150}, LabelSize{100, 100}}) {
+    ASSERT_TRUE(ValidateLabelSize(size).empty()) << ValidateLabelSize(size);
     const LabelTagPlacement p = TagPlacement(size);
     const double quiet = 0.15 * p.square_side_mm;
-    EXPECT_GE(p.square_side_mm, 0.32 * std::min(size.width_mm, size.height_mm)) << ToString(size);
+    // The smallest labels give their text rows a fixed least height; the rest a third or more.
+    const double shorter = std::min(size.width_mm, size.height_mm);
+    EXPECT_GE(p.square_side_mm, shorter >= 100 ? 0.32 * shorter : kMinLabelTagSideMm)
+        << ToString(size);
     EXPECT_GE(p.square_x_mm - quiet, 3.0) << ToString(size);
     EXPECT_GE(p.square_y_mm - quiet, 3.0) << ToString(size);
     EXPECT_LE(p.square_x_mm + p.square_side_mm + quiet, size.width_mm - 3.0) << ToString(size);

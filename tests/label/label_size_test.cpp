@@ -29,8 +29,21 @@ TEST(LabelSize, ParsesTheCounterSizes) {
   ExpectSize(" 100 x 150 mm ", 100, 150);
   ExpectSize("10.5x14.8cm", 105, 148);
   ExpectSize("150x100mm", 150, 100);
-  ExpectSize("50x50mm", 50, 50);
+  ExpectSize("75x75mm", 75, 75);
+  ExpectSize("50x75mm", 50, 75);
   ExpectSize("150x300mm", 150, 300);
+}
+
+TEST(LabelSize, RefusesSizesWhoseTagWouldBeTooSmall) {
+  // A near-square label stacks its three text rows above and below the tag: at 50 x 50 mm they
+  // left it 3 mm of height.
+  ExpectError("50x50mm", "at least 20 mm");
+  ExpectError("60x60mm", "at least 20 mm");
+  ExpectError("50x65mm", "at least 20 mm");
+  for (const std::string_view fits : {"75x75mm", "50x75mm", "75x50mm", "2x3in", "50x100mm"}) {
+    const ParsedLabelSize parsed = ParseLabelSize(fits);
+    EXPECT_TRUE(parsed) << fits << ": " << parsed.error;
+  }
 }
 
 TEST(LabelSize, NamedConstantsMatchTheirText) {

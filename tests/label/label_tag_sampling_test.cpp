@@ -94,8 +94,9 @@ TEST(LabelTag, PngTagDecodesBackToItsKey) {
     double dpi = 0;
   };
   const std::array<std::uint16_t, 6> keys = {0, 1, 12345, 21845, 27306, 32767};
-  for (const Case& c : {Case{kLabel100x150, 300}, Case{kLabelA6, 150}, Case{kLabel4x6In, 203},
-                        Case{LabelSize{150, 100}, 96}, Case{LabelSize{50, 50}, 72}}) {
+  for (const Case& c :
+       {Case{kLabel100x150, 300}, Case{kLabelA6, 150}, Case{kLabel4x6In, 203},
+        Case{LabelSize{150, 100}, 96}, Case{LabelSize{75, 75}, 72}, Case{LabelSize{50, 75}, 72}}) {
     for (std::uint16_t k : keys) {
       const LabelOptions options{c.size, c.dpi};
       const RenderedLabel png = RenderLabelPng(test::SampleLabel(110001, k), options);

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <utility>
 
+#include "label/label_layout.hpp"
+
 namespace pintag {
 namespace {
 
@@ -69,6 +71,13 @@ std::string ValidateLabelSize(const LabelSize& size) {
   if (aspect > kMaxLabelAspect + 1e-9) {
     return "label aspect ratio must be at most " + Format(kMaxLabelAspect) + ":1, got " +
            Format(size.width_mm) + " x " + Format(size.height_mm) + " mm";
+  }
+  const double tag_side = label::ComputeLayout(size).placement.square_side_mm;
+  if (tag_side < kMinLabelTagSideMm - 1e-9) {
+    return "a " + Format(size.width_mm) + " x " + Format(size.height_mm) +
+           " mm label leaves its tag " + Format(std::floor(tag_side * 10) / 10) +
+           " mm across beside the text; labels must leave at least " + Format(kMinLabelTagSideMm) +
+           " mm (e.g. 50x75mm, 75x75mm or 75x50mm)";
   }
   return {};
 }

@@ -27,7 +27,7 @@ struct LabelContent {
   std::string office;               ///< main office name, e.g. "Connaught Place S.O"; UTF-8
   std::string district;             ///< UTF-8; may be empty
   std::string state;                ///< UTF-8; may be empty
-  std::optional<std::string> bin;   ///< sort bin of the chosen plan; none prints "—"
+  std::optional<std::string> bin;   ///< sort bin of the chosen plan; none prints "none"
   std::optional<std::string> plan;  ///< name of that plan, printed beside the bin
 };
 

@@ -22,6 +22,9 @@ inline constexpr LabelSize kLabel4x6In{101.6, 152.4};  ///< 4 × 6 in thermal st
 inline constexpr double kMinLabelSideMm = 50;   ///< smaller labels leave no readable tag
 inline constexpr double kMaxLabelSideMm = 300;  ///< larger than any label printer's media
 inline constexpr double kMaxLabelAspect = 2.0;  ///< long side / short side, so the layout fits
+/// The least black square a label may print: 24 px, the detector's smallest target size, to a
+/// phone camera of f = 1500 px at 1.25 m. A size whose layout leaves less is refused.
+inline constexpr double kMinLabelTagSideMm = 20;
 
 inline constexpr double kMmPerInch = 25.4;
 inline constexpr double kPointsPerInch = 72;  ///< PDF user units: 1 pt = 1/72 in
@@ -35,8 +38,8 @@ struct ParsedLabelSize {
 
 /// Accepts (case-insensitive, spaces ignored) "a6", "WxHmm", "WxHcm" or "WxHin" with W and H
 /// decimal numbers, e.g. "100x150mm", "4x6in", "10.5x14.8cm". A number without a unit is refused
-/// (mm or inches would both be plausible). Sides must be kMinLabelSideMm … kMaxLabelSideMm and the
-/// aspect ratio at most kMaxLabelAspect.
+/// (mm or inches would both be plausible). Sides must be kMinLabelSideMm … kMaxLabelSideMm, the
+/// aspect ratio at most kMaxLabelAspect, and the layout must leave the tag kMinLabelTagSideMm.
 ParsedLabelSize ParseLabelSize(std::string_view text);
 
 /// Empty when `size` is within the limits above, else why not.
