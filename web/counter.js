@@ -105,8 +105,8 @@ function renderTable() {
       el('td', {}, check),
       el('td', { class: 'mono nowrap' }, pin),
       el('td', {}, officeCell(row, index, which, retired), retired ? [' ', badge(r.status)] : null),
-      el('td', { class: 'district' }, r.district),
-      el('td', { class: 'hide-narrow' }, r.state),
+      el('td', { class: 'district' }, placeOf(row).district),
+      el('td', { class: 'state hide-narrow' }, placeOf(row).state),
       el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
   }));
   $('results').hidden = rows.length === 0;
@@ -160,6 +160,14 @@ async function select(index) {
   await refreshPreview();
 }
 
+// The district and state the label prints: the chosen office's (a pincode's offices can lie in
+// several districts), else the record's own.
+function placeOf(row) {
+  const r = row.record;
+  const chosen = row.office ? (r.offices || []).find((o) => o.name === row.office) : null;
+  return chosen ? { district: chosen.district, state: chosen.state } : { district: r.district, state: r.state };
+}
+
 // The office the label prints: a pincode with several offers them all, the record's own first.
 function officeCell(row, index, which, retired) {
   const r = row.record;
@@ -172,6 +180,10 @@ function officeCell(row, index, which, retired) {
     onchange: (event) => {
       event.target.title = event.target.value;
       row.office = event.target.value === r.office ? null : event.target.value;
+      const tr = event.target.closest('tr');
+      const place = placeOf(row);
+      tr.querySelector('td.district').textContent = place.district;
+      tr.querySelector('td.state').textContent = place.state;
       if (index === selectedRow) refreshPreview();
     },
   }, ordered.map((name) => el('option', { value: name, selected: name === (row.office || r.office) ? true : null }, name)));

@@ -63,13 +63,12 @@ Result<PincodeRecord> LoadRecord(Connection& connection, const char* where, std:
                                          " FROM offices o WHERE o.pincode = ?1 ORDER BY o.id");
   offices.bind(1, std::int64_t{record.pincode.value()});
   while (offices.step()) record.offices.push_back(ReadOffice(offices, 0));
-  if (!record.offices.empty()) {
-    const PostOffice& first = record.offices.front();
-    record.district = first.district;
-    record.state = first.state;
-    record.circle = first.circle;
-    record.region = first.region;
-    record.division = first.division;
+  if (const PostOffice* main = MainOffice(record)) {
+    record.district = main->district;
+    record.state = main->state;
+    record.circle = main->circle;
+    record.region = main->region;
+    record.division = main->division;
   }
   return record;
 }
@@ -78,6 +77,15 @@ Result<PincodeRecord> LoadRecord(Connection& connection, const char* where, std:
 
 const char* ToString(PincodeStatus status) {
   return status == PincodeStatus::kRetired ? "retired" : "active";
+}
+
+const PostOffice* MainOffice(const PincodeRecord& record) {
+  for (const char* type : {"HO", "SO"}) {
+    for (const PostOffice& office : record.offices) {
+      if (office.branch_type == type) return &office;
+    }
+  }
+  return record.offices.empty() ? nullptr : &record.offices.front();
 }
 
 Result<PincodeRecord> LookupPincode(Connection& connection, Pincode pincode) {

@@ -137,6 +137,23 @@ test('a clerk picks the office a label prints, row by row', async () => {
   assert.match(pageText(2), /Janpath/);
   assert.doesNotMatch(pageText(2), /Bengali Market/);
   await screenshot(page, 'counter-office');
+
+  // 140119's offices lie in three districts: the row shows the chosen office's district and
+  // state, as the label prints them.
+  await page.locator('#pins').fill('140119');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const row = page.locator('tr[data-pincode="140119"]');
+  await row.waitFor();
+  assert.equal((await row.locator('td.district').textContent()).trim(), 'Chandigarh');
+  await row.getByLabel('Office printed on the label for 140119').selectOption('Bajrur');
+  assert.equal((await row.locator('td.district').textContent()).trim(), 'Ropar');
+  assert.equal((await row.locator('td.state').textContent()).trim(), 'Punjab');
+  await page.waitForFunction(() => /Bajrur/.test(document.getElementById('label-preview')?.alt || ''));
+  const [bajrur] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: 'Download PDF' }).click()]);
+  const bajrurLines = pdfLines(await bajrur.path());
+  assert.ok(bajrurLines.includes('Ropar, Punjab'), bajrurLines.join(' | '));
+  await row.getByLabel('Office printed on the label for 140119').selectOption('Abiana');
+  assert.equal((await row.locator('td.district').textContent()).trim(), 'Chandigarh');
   assert.deepEqual(page.problems, []);
 });
 

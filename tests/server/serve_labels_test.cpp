@@ -121,6 +121,7 @@ TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {
   expect("/api/v1/labels/011001.pdf", 400, "Malformed Pincode");
   expect("/api/v1/labels/110001.pdf?size=100x150", 400, "needs a unit");
   expect("/api/v1/labels/110001.pdf?size=10x10mm", 400, "50 to 300 mm");
+  expect("/api/v1/labels/110001.pdf?size=60x60mm", 400, "at least 20 mm");
   expect("/api/v1/labels/110001.png?dpi=5000", 400, "'dpi'");
   expect("/api/v1/labels/110001.png?dpi=abc", 400, "'dpi'");
   expect("/api/v1/labels/110001.png?size=300x300mm&dpi=1200", 400, "megapixels");
@@ -332,6 +333,44 @@ TEST_F(ServeTest, ALabelPrintsTheOfficeAskedFor) {
     EXPECT_NE(problem["detail"].get<std::string>().find("pincodes[0]"), std::string::npos)
         << body << " " << problem.dump();
   }
+}
+
+// A pincode's offices can lie in different districts: the place printed under the office is
+// that office's, and the record's summary is its main office's (before, both were its first
+// office's, so a label could print "Beta H.O" over Alpha's district).
+TEST_F(ServeTest, ALabelPrintsThePlaceOfTheOfficeItNames) {
+  ASSERT_EQ(std::system("command -v pdftotext > /dev/null 2>&1"), 0)
+      << "pdftotext is missing: install poppler-utils (scripts/debian-packages-test.txt)";
+  const std::string body = R"({"pincode": "999003", "offices": [
+      {"name": "Alpha B.O", "branch_type": "BO", "district": "Ropar", "state": "Punjab",
+       "circle": "Punjab", "region": "Chandigarh", "division": "Ropar"},
+      {"name": "Beta H.O", "branch_type": "HO", "district": "Mohali", "state": "Haryana",
+       "circle": "Haryana", "region": "Ambala", "division": "Mohali"}]})";
+  ExpectJson(client().Post("/api/v1/pincodes", admin(), body, "application/json"), 201);
+  const json record = ExpectJson(client().Get("/api/v1/pincodes/999003"));
+  EXPECT_EQ(record["office"], "Beta H.O");
+  EXPECT_EQ(record["district"], "Mohali");
+  EXPECT_EQ(record["state"], "Haryana");
+  EXPECT_EQ(record["division"], "Mohali");
+
+  auto main_label = client().Get("/api/v1/labels/999003.pdf", counter());
+  ASSERT_TRUE(main_label);
+  ASSERT_EQ(main_label->status, 200) << main_label->body.substr(0, 300);
+  std::vector<std::string> lines = PdfLines(dir_, main_label->body, 1);
+  EXPECT_TRUE(HasLine(lines, "Beta H.O"));
+  EXPECT_TRUE(HasLine(lines, "Mohali, Haryana"));
+  auto alpha_label = client().Get("/api/v1/labels/999003.pdf?office=Alpha%20B.O", counter());
+  ASSERT_TRUE(alpha_label);
+  ASSERT_EQ(alpha_label->status, 200) << alpha_label->body.substr(0, 300);
+  lines = PdfLines(dir_, alpha_label->body, 1);
+  EXPECT_TRUE(HasLine(lines, "Alpha B.O"));
+  EXPECT_TRUE(HasLine(lines, "Ropar, Punjab"));
+  EXPECT_FALSE(HasLine(lines, "Mohali, Haryana"));
+  const json batch = {{"pincodes", {{{"pincode", "999003"}, {"office", "Alpha B.O"}}}}};
+  auto batched = client().Post("/api/v1/labels", counter(), batch.dump(), "application/json");
+  ASSERT_TRUE(batched);
+  ASSERT_EQ(batched->status, 200) << batched->body.substr(0, 300);
+  EXPECT_TRUE(HasLine(PdfLines(dir_, batched->body, 1), "Ropar, Punjab"));
 }
 
 TEST_F(ServeTest, BatchPdfOf50LabelsHas50PagesOfTheRightSize) {

@@ -43,7 +43,7 @@ struct Resolved {
 json TagJson(const Detection& d, const Resolved& r) {
   json tag = ToJson(d);
   if (r.record) {
-    const db::PostOffice* office = MainOffice(*r.record);
+    const db::PostOffice* office = db::MainOffice(*r.record);
     tag["pincode"] = r.record->pincode.str();
     tag["status"] = db::ToString(r.record->status);
     tag["office"] = office ? json(office->name) : json(nullptr);

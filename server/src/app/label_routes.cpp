@@ -42,7 +42,7 @@ bool SameName(std::string_view a, std::string_view b) {
 /// addressee's is the one a person reads), else the main one.
 const db::PostOffice* ChosenOffice(const db::PincodeRecord& record,
                                    const std::optional<std::string>& name) {
-  if (!name || db::TrimSpaces(*name).empty()) return MainOffice(record);
+  if (!name || db::TrimSpaces(*name).empty()) return db::MainOffice(record);
   for (const db::PostOffice& office : record.offices) {
     if (SameName(office.name, *name)) return &office;
   }
@@ -65,9 +65,16 @@ LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan,
   LabelContent label;
   label.pincode = record.pincode;
   label.key = record.key;
-  if (const db::PostOffice* office = ChosenOffice(record, office_name)) label.office = office->name;
-  label.district = record.district;
-  label.state = record.state;
+  // The place printed under the office is that office's: a pincode's offices can lie in
+  // several districts (1,269 of the seed's pincodes), and the record's are its first office's.
+  if (const db::PostOffice* office = ChosenOffice(record, office_name)) {
+    label.office = office->name;
+    label.district = office->district;
+    label.state = office->state;
+  } else {
+    label.district = record.district;
+    label.state = record.state;
+  }
   label.plan = plan.name;
   label.bin = db::RouteWith(plan, record.pincode).bin;
   return label;

@@ -4,15 +4,6 @@ namespace pintag::app {
 
 using server::JsonWriter;
 
-const db::PostOffice* MainOffice(const db::PincodeRecord& record) {
-  for (const char* type : {"HO", "SO"}) {
-    for (const db::PostOffice& office : record.offices) {
-      if (office.branch_type == type) return &office;
-    }
-  }
-  return record.offices.empty() ? nullptr : &record.offices.front();
-}
-
 void WriteOffice(JsonWriter& out, const db::PostOffice& office, Pincode pincode) {
   out.beginObject();
   out.key("name").value(office.name);
@@ -37,7 +28,7 @@ std::string RecordJson(const db::PincodeRecord& record) {
   out.key("pincode").value(record.pincode.str());
   out.key("key").value(record.key.value());
   out.key("status").value(db::ToString(record.status));
-  const db::PostOffice* main = MainOffice(record);
+  const db::PostOffice* main = db::MainOffice(record);
   out.key("office");
   if (main != nullptr) {
     out.value(main->name);

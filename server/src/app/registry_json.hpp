@@ -11,9 +11,6 @@
 
 namespace pintag::app {
 
-/// The office a label names: the head office, else a sub office, else the first office.
-const db::PostOffice* MainOffice(const db::PincodeRecord& record);
-
 /// One office, in the field names of api.postalpincode.in's PostOffice (snake case).
 void WriteOffice(server::JsonWriter& out, const db::PostOffice& office, Pincode pincode);
 /// A pincode as GET /api/v1/pincodes/{pin} answers it.

@@ -35,8 +35,8 @@ struct PostOffice {
   std::optional<double> longitude;   ///< degrees
 };
 
-/// A pincode with its key and offices. The summary fields (district, ...) are those of its first
-/// office (lowest id); a pincode's offices can span districts, so `offices` has the detail.
+/// A pincode with its key and offices. The summary fields (district, ...) are those of its main
+/// office (MainOffice); a pincode's offices can span districts, so `offices` has the detail.
 struct PincodeRecord {
   Pincode pincode{100000};
   TagKey key;
@@ -47,6 +47,10 @@ struct PincodeRecord {
   std::optional<std::string> retired_at;
   std::string key_allocated_at;
 };
+
+/// The office that stands for a pincode (its summary, the office a label prints by default): the
+/// head office, else a sub office, else the first (lowest id); nullptr when it has none.
+const PostOffice* MainOffice(const PincodeRecord& record);
 
 /// kNotFound when the pincode is not in the registry.
 Result<PincodeRecord> LookupPincode(Connection& connection, Pincode pincode);
