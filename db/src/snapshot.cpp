@@ -1,12 +1,14 @@
 #include "pintag/db/snapshot.hpp"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -74,6 +76,24 @@ void Unregister(PendingTemporary* slot) {
   slot->in_use.store(false, std::memory_order_release);
 }
 
+/// While alive, SIGINT, SIGTERM, SIGHUP and SIGQUIT wait in this thread (a process-directed one
+/// may still go to another thread, as it may at any time).
+class DeferredEndingSignals {
+ public:
+  DeferredEndingSignals() {
+    sigset_t ending;
+    ::sigemptyset(&ending);
+    for (const int signal : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) ::sigaddset(&ending, signal);
+    ::pthread_sigmask(SIG_BLOCK, &ending, &previous_);
+  }
+  DeferredEndingSignals(const DeferredEndingSignals&) = delete;
+  DeferredEndingSignals& operator=(const DeferredEndingSignals&) = delete;
+  ~DeferredEndingSignals() { ::pthread_sigmask(SIG_SETMASK, &previous_, nullptr); }
+
+ private:
+  sigset_t previous_{};
+};
+
 /// A fresh empty file beside `target`, removed (with any SQLite side files) unless kept, and
 /// removed by RemoveSnapshotTemporariesOnSignal while it exists.
 class TemporaryBeside {
@@ -82,13 +102,18 @@ class TemporaryBeside {
     std::string name = target + ".tmp-XXXXXX";
     std::vector<char> buffer(name.begin(), name.end());
     buffer.push_back('\0');
-    const int fd = ::mkstemp(buffer.data());
-    if (fd < 0) {
-      throw std::runtime_error(SystemError("cannot create a temporary file beside " + target));
+    {
+      // A signal between creating the file and registering it would leave it behind: the
+      // signals that end a process wait until it is registered.
+      const DeferredEndingSignals deferred;
+      const int fd = ::mkstemp(buffer.data());
+      if (fd < 0) {
+        throw std::runtime_error(SystemError("cannot create a temporary file beside " + target));
+      }
+      ::close(fd);
+      path_ = buffer.data();
+      pending_ = Register(path_);
     }
-    ::close(fd);
-    path_ = buffer.data();
-    pending_ = Register(path_);
   }
   TemporaryBeside(const TemporaryBeside&) = delete;
   TemporaryBeside& operator=(const TemporaryBeside&) = delete;

@@ -333,7 +333,7 @@ TEST(Snapshot, CommandLineInterruptedLeavesNoTemporaryFileBehind) {
     }
     return found;
   };
-  for (const int signal : {SIGINT, SIGTERM}) {
+  const auto spawn = [&] {
     const std::string exe = test::PintagExe();
     std::vector<std::string> args = {exe, "snapshot", "--db", live, "--out", out};
     std::vector<char*> argv;
@@ -341,15 +341,23 @@ TEST(Snapshot, CommandLineInterruptedLeavesNoTemporaryFileBehind) {
     for (std::string& arg : args) argv.push_back(arg.data());
     argv.push_back(nullptr);
     pid_t pid = 0;
-    ASSERT_EQ(::posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ), 0);
-    // Interrupted once its temporary copy exists (polled every millisecond).
-    bool copying = false;
-    int status = 0;
-    while (!copying && ::waitpid(pid, &status, WNOHANG) == 0) {
-      copying = !temporaries().empty();
-      if (!copying) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    return ::posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ) == 0 ? pid : -1;
+  };
+  // True once the temporary copy exists (polled every millisecond); false if the snapshot ended
+  // first (its status in `status`).
+  const auto copyingOrDone = [&](pid_t pid, int& status) {
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+      if (!temporaries().empty()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
-    ASSERT_TRUE(copying) << "the snapshot ended before its temporary file was seen";
+    return false;
+  };
+  for (const int signal : {SIGINT, SIGTERM}) {
+    const pid_t pid = spawn();
+    ASSERT_GT(pid, 0);
+    int status = 0;
+    ASSERT_TRUE(copyingOrDone(pid, status))
+        << "the snapshot ended before its temporary file was seen";
     ::kill(pid, signal);
     ASSERT_EQ(::waitpid(pid, &status, 0), pid);
     ASSERT_TRUE(WIFSIGNALED(status)) << "the snapshot finished before the signal ended it: exit "
@@ -357,6 +365,24 @@ TEST(Snapshot, CommandLineInterruptedLeavesNoTemporaryFileBehind) {
     EXPECT_EQ(WTERMSIG(status), signal);  // ended as the signal ends it, for the shell to see
     EXPECT_TRUE(temporaries().empty()) << temporaries().front() << " is left behind";
   }
+  // Started with SIGHUP ignored, as under nohup: the signal changes nothing and the snapshot is
+  // published.
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  ::sigemptyset(&ignore.sa_mask);
+  struct sigaction before {};
+  ASSERT_EQ(::sigaction(SIGHUP, &ignore, &before), 0);
+  const pid_t pid = spawn();
+  ::sigaction(SIGHUP, &before, nullptr);
+  ASSERT_GT(pid, 0);
+  int status = 0;
+  ASSERT_TRUE(copyingOrDone(pid, status));
+  ::kill(pid, SIGHUP);
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_TRUE(std::filesystem::exists(out));
+  EXPECT_EQ(temporaries(), std::vector<std::string>{"published.db"});
 }
 
 TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {

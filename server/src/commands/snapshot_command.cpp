@@ -30,7 +30,8 @@ void RemoveTemporariesAndEnd(int signal) {
 }
 
 /// While alive, an interrupted or stopped snapshot leaves no temporary copy beside its output
-/// (the copy of a large registry takes seconds). SIGKILL still can.
+/// (the copy of a large registry takes seconds). SIGKILL still can. A signal the process was
+/// started ignoring stays ignored.
 class TemporariesRemovedOnSignals {
  public:
   TemporariesRemovedOnSignals() {
@@ -39,7 +40,9 @@ class TemporariesRemovedOnSignals {
     action.sa_flags = SA_RESETHAND;
     ::sigemptyset(&action.sa_mask);
     for (std::size_t i = 0; i < kSignals.size(); ++i) {
-      ::sigaction(kSignals[i], &action, &previous_[i]);
+      ::sigaction(kSignals[i], nullptr, &previous_[i]);
+      // Ignored (nohup, a background job of a script): it stays ignored, and the copy goes on.
+      if (previous_[i].sa_handler != SIG_IGN) ::sigaction(kSignals[i], &action, nullptr);
     }
   }
   TemporariesRemovedOnSignals(const TemporariesRemovedOnSignals&) = delete;
