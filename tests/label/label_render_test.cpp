@@ -304,6 +304,22 @@ TEST(LabelText, BinsThatDifferOnlyInTheirEndPrintDifferently) {
   }
 }
 
+TEST(LabelText, ABinBreaksBetweenWordsNotInsideThem) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // With one space, punctuation was not a place to break: "A BLR-OUT" / "BOUND-CONVEYOR-…".
+  LabelContent label = test::SampleLabel();
+  label.bin = "A BLR-OUTBOUND-CONVEYOR-CHUTE-12";
+  const RenderedLabel pdf = RenderLabelPdf(label, {LabelSize{75, 75}, 300});
+  ASSERT_TRUE(pdf) << pdf.error;
+  test::TempDir dir;
+  const auto path = dir.path() / "label.pdf";
+  test::WriteFile(path, pdf.bytes);
+  const auto text = test::Run("pdftotext -layout '" + path.string() + "' -");
+  ASSERT_TRUE(text.has_value());
+  EXPECT_NE(text->find("A BLR-OUTBOUND-"), std::string::npos) << *text;
+  EXPECT_NE(text->find("CONVEYOR-CHUTE-12"), std::string::npos) << *text;
+}
+
 TEST(LabelText, HostileNamesStillRender) {
   LabelContent label = test::SampleLabel();
   label.office = std::string(5000, 'W') + "\xff\xfe\x01\x02 \u202E evil";

@@ -135,28 +135,42 @@ void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
 }
 
 // Where a bin's name may go onto a second line: the first line is [0, first_end), the second
-// starts at second_begin.
+// starts at second_begin. `penalty` (1 or more) scales the longer line's length when breaks are
+// compared, so a space wins over punctuation that balances the lines about as well.
 struct LineBreak {
   std::size_t first_end;
   std::size_t second_begin;
+  double penalty;
 };
 
-// At its spaces (dropped) when it has any; else after a '-', '_', '/', '.' or ':'; else between
-// any two code points ("CHUTE12" must still show its number).
+bool StartsCodePoint(const std::string& text, std::size_t i) {
+  return i >= text.size() || (static_cast<unsigned char>(text[i]) & 0xC0) != 0x80;
+}
+
+// U+0300–U+036F, the combining diacritics: a line must not start with one.
+bool StartsWithCombiningMark(const std::string& text, std::size_t i) {
+  if (i + 1 >= text.size()) return false;
+  const auto lead = static_cast<unsigned char>(text[i]);
+  const auto next = static_cast<unsigned char>(text[i + 1]);
+  return (lead == 0xCC && next >= 0x80) || (lead == 0xCD && next <= 0xAF);
+}
+
+// At a space (dropped) and after a '-', '_', '/', '.' or ':'; when there is neither, between any
+// two characters ("CHUTE12" must still show its number).
 std::vector<LineBreak> BinBreaks(const std::string& bin) {
+  constexpr double kPunctuationPenalty = 1.15;
   std::vector<LineBreak> breaks;
-  for (std::size_t i = bin.find(' '); i != std::string::npos; i = bin.find(' ', i + 1)) {
-    breaks.push_back({i, i + 1});
-  }
-  if (!breaks.empty()) return breaks;
   for (std::size_t i = 0; i + 1 < bin.size(); ++i) {
-    if (std::string_view("-_/.:").find(bin[i]) != std::string_view::npos) {
-      breaks.push_back({i + 1, i + 1});
+    if (bin[i] == ' ') {
+      breaks.push_back({i, i + 1, 1.0});
+    } else if (std::string_view("-_/.:").find(bin[i]) != std::string_view::npos &&
+               bin[i + 1] != ' ') {
+      breaks.push_back({i + 1, i + 1, kPunctuationPenalty});
     }
   }
   if (!breaks.empty()) return breaks;
   for (std::size_t i = 1; i < bin.size(); ++i) {
-    if ((static_cast<unsigned char>(bin[i]) & 0xC0) != 0x80) breaks.push_back({i, i});
+    if (StartsCodePoint(bin, i) && !StartsWithCombiningMark(bin, i)) breaks.push_back({i, i, 1.0});
   }
   return breaks;
 }
@@ -176,20 +190,23 @@ void DrawBinValue(cairo_t* cr, const std::string& bin, double x, double width, d
   }
   LineBreak cut = breaks.front();
   double longer = std::numeric_limits<double>::infinity();
+  double best = std::numeric_limits<double>::infinity();
   for (const LineBreak& at : breaks) {
     const double advance = std::max(AdvancePerSize(cr, bin.substr(0, at.first_end), true),
                                     AdvancePerSize(cr, bin.substr(at.second_begin), true));
-    if (advance < longer) {
+    if (advance * at.penalty < best) {
+      best = advance * at.penalty;
       longer = advance;
       cut = at;
     }
   }
   if (longer * kMinNameMm > width) {
-    // The longest end that fits on the second line, at a code point boundary.
+    // The longest end that fits on the second line, starting at a character (not a space or a
+    // combining mark).
     for (std::size_t i = 1; i < bin.size(); ++i) {
-      if ((static_cast<unsigned char>(bin[i]) & 0xC0) == 0x80) continue;
+      if (!StartsCodePoint(bin, i) || bin[i] == ' ' || StartsWithCombiningMark(bin, i)) continue;
       if (AdvancePerSize(cr, bin.substr(i), true) * kMinNameMm <= width) {
-        cut = {i, i};
+        cut = {i, i, 1.0};
         break;
       }
     }
