@@ -160,6 +160,38 @@ void DiscardDecompressor() {
 // Truncated files only warn in libjpeg (the bottom is filled in grey): refuse them. Progressive
 // files with an absurd number of scans are a known way to burn CPU: refuse those too.
 constexpr int kTurboFlags = TJFLAG_STOPONWARNING | TJFLAG_LIMITSCANS;
+/// TJFLAG_LIMITSCANS's limit, applied by us to the JPEGs OpenImageIO decodes (CMYK, YCCK).
+constexpr int kMaxJpegScans = 500;
+
+/// The start-of-scan markers in a JPEG, counted by walking its segments and skipping each scan's
+/// entropy-coded data (where 0xFF is followed by 0x00 or a restart marker), as libjpeg reads
+/// them; stops counting past `limit`.
+int CountJpegScans(std::span<const std::uint8_t> b, int limit) {
+  int scans = 0;
+  std::size_t pos = 2;  // after SOI
+  while (pos + 4 <= b.size() && scans <= limit) {
+    // Bytes that are not a marker are skipped to the next one, as libjpeg skips them.
+    if (b[pos] != 0xFF || b[pos + 1] == 0xFF || b[pos + 1] == 0x00) {
+      ++pos;
+      continue;
+    }
+    const std::uint8_t marker = b[pos + 1];
+    if (marker == 0xD9) return scans;                            // EOI
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // markers without a length
+      pos += 2;
+      continue;
+    }
+    const std::size_t length = (std::size_t{b[pos + 2]} << 8) | b[pos + 3];
+    pos += 2 + length;
+    if (marker != 0xDA) continue;
+    ++scans;
+    while (pos + 1 < b.size() &&
+           !(b[pos] == 0xFF && b[pos + 1] != 0x00 && (b[pos + 1] < 0xD0 || b[pos + 1] > 0xD7))) {
+      ++pos;
+    }
+  }
+  return scans;
+}
 
 struct JpegHeader {
   int width = 0;
@@ -238,6 +270,13 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
   }
   // CMYK and YCCK (print workflows, not phones) cannot be decoded to BGR by TurboJPEG.
   if (header->colourspace == TJCS_CMYK || header->colourspace == TJCS_YCCK) {
+    // libjpeg under OpenImageIO decodes every scan it is given: 20,000 scans of a 12 MP CMYK
+    // photo took a minute of CPU.
+    if (CountJpegScans(bytes, kMaxJpegScans) > kMaxJpegScans) {
+      return Fail(ImageError::kCorrupt,
+                  "the JPEG has more than " + std::to_string(kMaxJpegScans) + " scans",
+                  header->width, header->height);
+    }
     return LoadWithOpenImageIo(bytes, ImageFormat::kJpeg, options);
   }
   if (options.before_decode) options.before_decode(header->width, header->height);
@@ -459,6 +498,23 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   if (OverLimit(spec.width, spec.height, options.max_pixels)) {
     return Fail(ImageError::kTooLarge, TooLargeMessage(spec.width, spec.height, options.max_pixels),
                 spec.width, spec.height);
+  }
+  // A tiled TIFF is decoded a tile at a time into a buffer of the tile's size, which the pixel
+  // limit does not see: a 1 KB file of a 64 x 64 image in 16384 x 16384 tiles took 1.5 GB. A
+  // tile may exceed the image only as far as tiles are rounded (to 16, or up to 1024 a side).
+  if (spec.tile_width > 0 || spec.tile_height > 0) {
+    const auto fits = [](int tile, int side) {
+      return tile >= 0 && tile <= std::max(1024, (side + 15) / 16 * 16);
+    };
+    if (!fits(spec.tile_width, spec.width) || !fits(spec.tile_height, spec.height) ||
+        spec.tile_depth > 1) {
+      return Fail(ImageError::kTooLarge,
+                  "the image is " + std::to_string(spec.width) + " x " +
+                      std::to_string(spec.height) + " pixels in tiles of " +
+                      std::to_string(spec.tile_width) + " x " + std::to_string(spec.tile_height) +
+                      "; a tile may be at most 1024 pixels a side or the image's side",
+                  spec.width, spec.height);
+    }
   }
   // The pixel limit does not count channels, and decoding costs memory and time per channel: a
   // TIFF header of a few hundred bytes can declare a thousand.

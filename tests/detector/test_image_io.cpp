@@ -604,5 +604,79 @@ TEST(ImageIo, DegenerateSizes) {
   }
 }
 
+// A tiled TIFF is decoded a tile at a time into a buffer of the tile's size, which the pixel
+// limit did not count: a 1 KB file of a 64 x 48 image in 16384 x 16384 tiles took 1.5 GB.
+TEST(ImageIo, TilesFarLargerThanTheImageAreRefusedUndecoded) {
+  for (const int tile : {16, 64, 256}) {  // ordinary tiles, some larger than the image
+    const std::string path =
+        Write("tiled" + std::to_string(tile) + ".tif", 64, 48, [tile](OIIO::ImageSpec& spec) {
+          spec.tile_width = tile;
+          spec.tile_height = tile;
+        });
+    const LoadResult r = LoadImageBytes(ReadAll(path));
+    ASSERT_TRUE(r.image) << tile << ": " << r.error;
+    EXPECT_EQ(r.image->bgr.at<cv::Vec3b>(1, 3), cv::Vec3b(0, 1, 3)) << tile;  // (x, y, 0) as BGR
+  }
+  std::vector<std::uint8_t> tiff = {'I', 'I', 42, 0, 8, 0, 0, 0};
+  const auto put16 = [&](std::uint32_t v) {
+    tiff.push_back(static_cast<std::uint8_t>(v));
+    tiff.push_back(static_cast<std::uint8_t>(v >> 8));
+  };
+  const auto put32 = [&](std::uint32_t v) {
+    put16(v & 0xFFFFU);
+    put16(v >> 16);
+  };
+  const auto entry = [&](std::uint32_t tag, std::uint32_t type, std::uint32_t count,
+                         std::uint32_t value) {
+    put16(tag), put16(type), put32(count), put32(value);
+  };
+  constexpr std::uint32_t kEntries = 9;
+  constexpr std::uint32_t kPixels = 8 + 2 + (12 * kEntries) + 4;
+  put16(kEntries);
+  entry(256, 4, 1, 64);       // ImageWidth
+  entry(257, 4, 1, 48);       // ImageLength
+  entry(258, 3, 1, 8);        // BitsPerSample
+  entry(259, 3, 1, 1);        // Compression: none
+  entry(262, 3, 1, 1);        // PhotometricInterpretation: black is zero
+  entry(322, 4, 1, 16384);    // TileWidth
+  entry(323, 4, 1, 16384);    // TileLength
+  entry(324, 4, 1, kPixels);  // TileOffsets
+  entry(325, 4, 1, 1024);     // TileByteCounts
+  put32(0);                   // no next directory
+  tiff.resize(kPixels + 1024, 0x80);
+  int decodes = 0;
+  LoadOptions options;
+  options.before_decode = [&](int, int) { ++decodes; };
+  const LoadResult bomb = LoadImageBytes(tiff, options);
+  EXPECT_FALSE(bomb.image);
+  EXPECT_EQ(bomb.kind, ImageError::kTooLarge) << bomb.error;
+  EXPECT_NE(bomb.error.find("tiles of 16384 x 16384"), std::string::npos) << bomb.error;
+  EXPECT_EQ(decodes, 0);
+}
+
+// TurboJPEG refuses a JPEG of more than 500 scans (a known way to burn CPU); the CMYK JPEGs that
+// OpenImageIO decodes instead were read whatever their count: 20,000 scans took a minute.
+TEST(ImageIo, CmykJpegsWithMoreThan500ScansAreRefused) {
+  const std::vector<std::uint8_t> jpeg = CmykJpeg(32, 32);  // baseline: one scan
+  ASSERT_TRUE(LoadImageBytes(jpeg).image);
+  std::size_t scan = jpeg.size();
+  for (std::size_t i = 0; i + 1 < jpeg.size(); ++i) {
+    if (jpeg[i] == 0xFF && jpeg[i + 1] == 0xDA) scan = i;
+  }
+  ASSERT_LT(scan, jpeg.size());
+  ASSERT_EQ(jpeg[jpeg.size() - 2], 0xFF);
+  ASSERT_EQ(jpeg[jpeg.size() - 1], 0xD9);
+  std::vector<std::uint8_t> bomb(jpeg.begin(), jpeg.end() - 2);
+  for (int copy = 0; copy < 600; ++copy) {
+    bomb.insert(bomb.end(), jpeg.begin() + static_cast<std::ptrdiff_t>(scan), jpeg.end() - 2);
+  }
+  bomb.push_back(0xFF);
+  bomb.push_back(0xD9);
+  const LoadResult r = LoadImageBytes(bomb);
+  EXPECT_FALSE(r.image);
+  EXPECT_EQ(r.kind, ImageError::kCorrupt);
+  EXPECT_NE(r.error.find("more than 500 scans"), std::string::npos) << r.error;
+}
+
 }  // namespace
 }  // namespace pintag
