@@ -640,8 +640,24 @@ LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels) {
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) return Fail(ImageError::kUnreadable, "cannot open " + path);
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                        std::istreambuf_iterator<char>());
+  // Read up to one byte past the limit: a device or a pipe (/dev/zero) has no end to wait for.
+  // A 40 MP photo as an uncompressed float RGBA TIFF is 640 MB.
+  constexpr std::size_t kMaxFileBytes = std::size_t{1} << 30;
+  std::vector<std::uint8_t> bytes;
+  std::array<char, 1 << 16> chunk{};
+  const bool regular = std::filesystem::is_regular_file(path, error);
+  const std::uintmax_t size = regular ? std::filesystem::file_size(path, error) : 0;
+  if (regular && !error && size > kMaxFileBytes) {
+    return Fail(ImageError::kTooLarge, path + " is larger than 1 GiB, more than any photo");
+  }
+  // Grown once, not by doubling (which took reading /dev/zero to 2.2 GB).
+  bytes.reserve(regular && !error ? size : kMaxFileBytes + chunk.size());
+  while (bytes.size() <= kMaxFileBytes && in.read(chunk.data(), chunk.size()).gcount() > 0) {
+    bytes.insert(bytes.end(), chunk.data(), chunk.data() + in.gcount());
+  }
+  if (bytes.size() > kMaxFileBytes) {
+    return Fail(ImageError::kTooLarge, path + " is larger than 1 GiB, more than any photo");
+  }
   LoadResult result = LoadImageBytes(bytes, max_pixels);
   if (!result.error.empty()) result.error = path + ": " + result.error;
   return result;

@@ -43,6 +43,25 @@ TEST(CameraModel, ExifFocalLengthWithFocalPlaneResolution) {
   EXPECT_NEAR(ResolveCamera({}, &exif, 4000, 3000).intrinsics.fx, 1050, 1e-6);
 }
 
+TEST(CameraModel, FocalLengthsNoLensHasAreTakenAsAbsent) {
+  // 65535 is what some EXIF writers put for "unknown": taken at its word it put a tag 273 m away.
+  for (const double mm : {65535.0, 5000.0, 1.0}) {
+    ExifCamera exif;
+    exif.focal_length_35mm = mm;
+    EXPECT_EQ(ResolveCamera({}, &exif, 4000, 3000).source, IntrinsicsSource::kAssumed) << mm;
+  }
+  ExifCamera exif;
+  exif.focal_length_mm = 4000;  // with 100 px per mm: about 3,500 mm equivalent on this sensor
+  exif.focal_plane_x_resolution = 2540;
+  exif.focal_plane_resolution_unit = 2;
+  EXPECT_EQ(ResolveCamera({}, &exif, 4000, 3000).source, IntrinsicsSource::kAssumed);
+  for (const double mm : {13.0, 26.0, 120.0, 600.0}) {  // phones' ultra-wide to long lenses
+    exif = {};
+    exif.focal_length_35mm = mm;
+    EXPECT_EQ(ResolveCamera({}, &exif, 4000, 3000).source, IntrinsicsSource::kExif) << mm;
+  }
+}
+
 TEST(CameraModel, AssumedFieldOfViewOtherwise) {
   ExifCamera empty;
   for (const ExifCamera* exif :

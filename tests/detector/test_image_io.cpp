@@ -678,5 +678,18 @@ TEST(ImageIo, CmykJpegsWithMoreThan500ScansAreRefused) {
   EXPECT_NE(r.error.find("more than 500 scans"), std::string::npos) << r.error;
 }
 
+// `pintag detect` reads a file whole: one larger than any photo is refused from its size
+// (a sparse file, so the test writes nothing), and a device read up to the limit, not forever.
+TEST(ImageIo, AFileLargerThanAnyPhotoIsRefusedUnread) {
+  const std::string path = TempPath("huge.jpg");
+  { std::ofstream(path, std::ios::binary) << "\xFF\xD8\xFF"; }
+  std::filesystem::resize_file(path, (std::uintmax_t{1} << 30) + 1);
+  const LoadResult r = LoadImageFile(path);
+  EXPECT_FALSE(r.image);
+  EXPECT_EQ(r.kind, ImageError::kTooLarge);
+  EXPECT_NE(r.error.find("larger than 1 GiB"), std::string::npos) << r.error;
+  std::filesystem::remove(path);
+}
+
 }  // namespace
 }  // namespace pintag

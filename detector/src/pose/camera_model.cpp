@@ -8,6 +8,10 @@ namespace pintag::stage {
 namespace {
 
 const double kFullFrameDiagonalMm = std::hypot(36.0, 24.0);  // 43.27 mm
+// A 35 mm-equivalent focal length outside these is no lens a photo comes from (EXIF writers put
+// 0 or 65535 for "unknown"): such a field is taken as absent.
+constexpr double kMinEquivalentFocalMm = 2;
+constexpr double kMaxEquivalentFocalMm = 2000;
 
 std::optional<double> PixelsPerMm(double resolution, int unit) {
   if (!(resolution > 0)) return std::nullopt;
@@ -46,7 +50,11 @@ ResolvedCamera ResolveCamera(const DetectorOptions& options, const ExifCamera* e
       if (per_mm) focal_px = *exif->focal_length_mm * *per_mm;
     }
   }
-  if (focal_px && std::isfinite(*focal_px) && *focal_px > 1) {
+  const bool plausible =
+      focal_px && std::isfinite(*focal_px) &&
+      *focal_px * kFullFrameDiagonalMm / std::hypot(width, height) >= kMinEquivalentFocalMm &&
+      *focal_px * kFullFrameDiagonalMm / std::hypot(width, height) <= kMaxEquivalentFocalMm;
+  if (plausible) {
     out.source = IntrinsicsSource::kExif;
   } else {
     // Across the longer side: a portrait photo (EXIF-rotated upright) is the same lens turned, and

@@ -74,6 +74,7 @@ struct LoadResult {
 LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, const LoadOptions& options);
 LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes,
                           std::int64_t max_pixels = kDefaultMaxPixels);
+/// A file of at most 1 GiB (a larger one, or a device that gives more, is kTooLarge unread).
 LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels = kDefaultMaxPixels);
 
 /// A JPEG's planes as stored, for a reader that wants full-resolution luma and the chroma at the
