@@ -127,14 +127,18 @@ std::span<const std::uint8_t> JpegExifBlock(std::span<const std::uint8_t> b) {
   return {};
 }
 
-void TakeJpegExif(std::span<const std::uint8_t> bytes, LoadedImage* image) {
-  const std::span<const std::uint8_t> exif = JpegExifBlock(bytes);
+/// Orientation and camera fields from a TIFF-structured EXIF block, when it is one.
+void TakeExifBlock(std::span<const std::uint8_t> exif, LoadedImage* image) {
   if (exif.empty()) return;
   OIIO::ImageSpec spec;
   // A broken EXIF block loses the orientation and focal length, not the photo.
   if (OIIO::decode_exif(OIIO::cspan<std::uint8_t>(exif.data(), exif.size()), spec)) {
     TakeExif(spec, image);
   }
+}
+
+void TakeJpegExif(std::span<const std::uint8_t> bytes, LoadedImage* image) {
+  TakeExifBlock(JpegExifBlock(bytes), image);
 }
 
 struct TurboDeleter {
@@ -362,6 +366,26 @@ bool WebpIsLossy(std::span<const std::uint8_t> b) {
   return false;
 }
 
+/// A WebP's EXIF chunk (TIFF-structured, as in a JPEG's APP1 after "Exif\0\0", which some
+/// writers repeat here); empty when none. OpenImageIO 2.4 does not read it.
+std::span<const std::uint8_t> WebpExifChunk(std::span<const std::uint8_t> b) {
+  static constexpr char kExif[] = {'E', 'x', 'i', 'f', 0, 0};
+  std::size_t pos = 12;
+  while (pos + 8 <= b.size()) {
+    const std::size_t size = Le32(&b[pos + 4]);
+    if (size > b.size() - pos - 8) return {};
+    if (std::memcmp(&b[pos], "EXIF", 4) == 0) {
+      std::span<const std::uint8_t> exif = b.subspan(pos + 8, size);
+      if (exif.size() >= sizeof kExif && std::memcmp(exif.data(), kExif, sizeof kExif) == 0) {
+        exif = exif.subspan(sizeof kExif);
+      }
+      return exif;
+    }
+    pos += 8 + size + (size & 1);
+  }
+  return {};
+}
+
 /// A WebP's canvas size from its first chunk (VP8X extended, VP8L lossless, or "VP8 " lossy).
 /// OpenImageIO decodes a WebP as soon as it opens it, so the pixel limit must be checked here,
 /// before it does: a tiny file claiming 16383 × 16383 would otherwise be decoded.
@@ -553,11 +577,14 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   LoadedImage image;
   image.format = format_name;
   TakeExif(spec, &image);
+  if (format == ImageFormat::kWebp) TakeExifBlock(WebpExifChunk(bytes), &image);
   image.bgr = Reorient(bgr, image.exif_orientation);
   // libwebp's default decode interpolates a lossy image's 4:2:0 chroma as libjpeg does. The
   // other formats (and CMYK JPEG, converted by OpenImageIO) are taken as full resolution.
+  // Its blocks follow the stored axes, turned by the EXIF orientation as a JPEG's are.
   if (format == ImageFormat::kWebp && WebpIsLossy(bytes)) {
-    image.chroma_upsampling = ChromaUpsampling::kBoth;
+    image.chroma_upsampling =
+        JpegChromaUpsampling(TJSAMP_420, image.exif_orientation, spec.width, spec.height);
   }
   LoadResult result;
   result.claimed_width = spec.width;

@@ -691,5 +691,61 @@ TEST(ImageIo, AFileLargerThanAnyPhotoIsRefusedUnread) {
   std::filesystem::remove(path);
 }
 
+/// `plain` (a simple WebP) rewrapped as an extended one with an EXIF chunk whose Orientation is
+/// `orientation` (a little-endian TIFF block of one entry, as a phone's gallery writes it).
+std::vector<std::uint8_t> WebpWithOrientation(const std::vector<std::uint8_t>& plain, int width,
+                                              int height, int orientation) {
+  std::vector<std::uint8_t> out;
+  const auto put = [&](std::initializer_list<std::uint8_t> bytes) {
+    out.insert(out.end(), bytes.begin(), bytes.end());
+  };
+  const auto put32 = [&](std::uint32_t v) {
+    put({static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8),
+         static_cast<std::uint8_t>(v >> 16), static_cast<std::uint8_t>(v >> 24)});
+  };
+  const auto put24 = [&](std::uint32_t v) {
+    put({static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8),
+         static_cast<std::uint8_t>(v >> 16)});
+  };
+  put({'R', 'I', 'F', 'F', 0, 0, 0, 0, 'W', 'E', 'B', 'P', 'V', 'P', '8', 'X'});
+  put32(10);
+  put({0x08, 0, 0, 0});  // flags: EXIF present
+  put24(static_cast<std::uint32_t>(width - 1));
+  put24(static_cast<std::uint32_t>(height - 1));
+  out.insert(out.end(), plain.begin() + 12, plain.end());  // the image chunk as it was
+  const std::vector<std::uint8_t> tiff = {
+      'I',  'I',  42, 0, 8, 0, 0, 0,  // header, first directory at 8
+      1,    0,                        // one entry
+      0x12, 0x01, 3,  0, 1, 0, 0, 0, static_cast<std::uint8_t>(orientation),
+      0,    0,    0,       // Orientation
+      0,    0,    0,  0};  // no next
+  put({'E', 'X', 'I', 'F'});
+  put32(static_cast<std::uint32_t>(tiff.size()));
+  out.insert(out.end(), tiff.begin(), tiff.end());
+  const auto riff = static_cast<std::uint32_t>(out.size() - 8);
+  for (int i = 0; i < 4; ++i) out[4 + i] = static_cast<std::uint8_t>(riff >> (8 * i));
+  return out;
+}
+
+// OpenImageIO 2.4 does not read a WebP's EXIF chunk: a phone's rotated WebP was read in its
+// stored frame, and a mirrored one found no tag.
+TEST(ImageIo, WebpExifOrientationIsApplied) {
+  const std::vector<std::uint8_t> plain = ReadAll(Write("plain.webp", 64, 48));
+  const LoadResult stored = LoadImageBytes(plain);
+  ASSERT_TRUE(stored.image) << stored.error;
+  ASSERT_EQ(stored.image->bgr.size(), cv::Size(64, 48));
+  for (const int orientation : {1, 2, 6, 8}) {
+    const LoadResult r = LoadImageBytes(WebpWithOrientation(plain, 64, 48, orientation));
+    ASSERT_TRUE(r.image) << orientation << ": " << r.error;
+    EXPECT_EQ(r.image->exif_orientation, orientation);
+    cv::Mat expected = stored.image->bgr.clone();  // a new matrix: never written into `stored`
+    if (orientation == 2) cv::flip(stored.image->bgr, expected, 1);
+    if (orientation == 6) cv::rotate(stored.image->bgr, expected, cv::ROTATE_90_CLOCKWISE);
+    if (orientation == 8) cv::rotate(stored.image->bgr, expected, cv::ROTATE_90_COUNTERCLOCKWISE);
+    ASSERT_EQ(r.image->bgr.size(), expected.size()) << orientation;
+    EXPECT_EQ(cv::norm(r.image->bgr, expected, cv::NORM_INF), 0) << orientation;
+  }
+}
+
 }  // namespace
 }  // namespace pintag
