@@ -304,29 +304,38 @@ TEST(ImageIo, ImagesWithMoreThanFourChannelsAreRefusedUndecoded) {
   }
 }
 
+/// A little-endian TIFF written by hand: its header (first directory at 8), then what the test
+/// puts: 16- and 32-bit values and 12-byte directory entries.
+struct HandMadeTiff {
+  std::vector<std::uint8_t> bytes = {'I', 'I', 42, 0, 8, 0, 0, 0};
+  void put16(std::uint32_t v) {
+    bytes.push_back(static_cast<std::uint8_t>(v));
+    bytes.push_back(static_cast<std::uint8_t>(v >> 8));
+  }
+  void put32(std::uint32_t v) {
+    put16(v & 0xFFFFU);
+    put16(v >> 16);
+  }
+  void entry(std::uint32_t tag, std::uint32_t type, std::uint32_t count, std::uint32_t value) {
+    put16(tag), put16(type), put32(count), put32(value);
+  }
+};
+
 // A TIFF whose directory comes before its pixels still opens when the pixels are cut off;
 // OpenImageIO then reports the missing rows only as errors left pending, one per row.
 TEST(ImageIo, ATiffCutOffAfterItsDirectoryIsCorrupt) {
   constexpr std::uint32_t kWidth = 64, kHeight = 48;
-  std::vector<std::uint8_t> tiff = {'I', 'I', 42, 0, 8, 0, 0, 0};
-  const auto put16 = [&](std::uint32_t v) {
-    tiff.push_back(static_cast<std::uint8_t>(v));
-    tiff.push_back(static_cast<std::uint8_t>(v >> 8));
-  };
-  const auto put32 = [&](std::uint32_t v) {
-    put16(v & 0xFFFFU);
-    put16(v >> 16);
-  };
+  HandMadeTiff t;
+  std::vector<std::uint8_t>& tiff = t.bytes;
+  const auto put32 = [&](std::uint32_t v) { t.put32(v); };
+  const auto entry = [&](std::uint32_t tag, std::uint32_t type, std::uint32_t count,
+                         std::uint32_t value) { t.entry(tag, type, count, value); };
   // Grey, 8 bits, uncompressed, one row per strip: each strip's offset and size in two arrays.
   constexpr std::uint32_t kEntries = 8;
   constexpr std::uint32_t kOffsets = 8 + 2 + (12 * kEntries) + 4;
   constexpr std::uint32_t kCounts = kOffsets + (4 * kHeight);
   constexpr std::uint32_t kPixels = kCounts + (4 * kHeight);
-  const auto entry = [&](std::uint32_t tag, std::uint32_t type, std::uint32_t count,
-                         std::uint32_t value) {
-    put16(tag), put16(type), put32(count), put32(value);
-  };
-  put16(kEntries);
+  t.put16(kEntries);
   entry(256, 4, 1, kWidth);          // ImageWidth
   entry(257, 4, 1, kHeight);         // ImageLength
   entry(258, 3, 1, 8);               // BitsPerSample
@@ -617,22 +626,13 @@ TEST(ImageIo, TilesFarLargerThanTheImageAreRefusedUndecoded) {
     ASSERT_TRUE(r.image) << tile << ": " << r.error;
     EXPECT_EQ(r.image->bgr.at<cv::Vec3b>(1, 3), cv::Vec3b(0, 1, 3)) << tile;  // (x, y, 0) as BGR
   }
-  std::vector<std::uint8_t> tiff = {'I', 'I', 42, 0, 8, 0, 0, 0};
-  const auto put16 = [&](std::uint32_t v) {
-    tiff.push_back(static_cast<std::uint8_t>(v));
-    tiff.push_back(static_cast<std::uint8_t>(v >> 8));
-  };
-  const auto put32 = [&](std::uint32_t v) {
-    put16(v & 0xFFFFU);
-    put16(v >> 16);
-  };
+  HandMadeTiff t;
+  std::vector<std::uint8_t>& tiff = t.bytes;
   const auto entry = [&](std::uint32_t tag, std::uint32_t type, std::uint32_t count,
-                         std::uint32_t value) {
-    put16(tag), put16(type), put32(count), put32(value);
-  };
+                         std::uint32_t value) { t.entry(tag, type, count, value); };
   constexpr std::uint32_t kEntries = 9;
   constexpr std::uint32_t kPixels = 8 + 2 + (12 * kEntries) + 4;
-  put16(kEntries);
+  t.put16(kEntries);
   entry(256, 4, 1, 64);       // ImageWidth
   entry(257, 4, 1, 48);       // ImageLength
   entry(258, 3, 1, 8);        // BitsPerSample
@@ -642,7 +642,7 @@ TEST(ImageIo, TilesFarLargerThanTheImageAreRefusedUndecoded) {
   entry(323, 4, 1, 16384);    // TileLength
   entry(324, 4, 1, kPixels);  // TileOffsets
   entry(325, 4, 1, 1024);     // TileByteCounts
-  put32(0);                   // no next directory
+  t.put32(0);                 // no next directory
   tiff.resize(kPixels + 1024, 0x80);
   int decodes = 0;
   LoadOptions options;
