@@ -445,13 +445,6 @@ TEST(ImageIo, BeforeDecodeIsToldTheSizeOnceAndOnlyForPhotosThatAreDecoded) {
   EXPECT_TRUE(told.empty());
 }
 
-#if !defined(__SANITIZE_ADDRESS__)
-// Bytes the heap holds now, in small blocks and in mmapped large ones.
-std::size_t HeapInUse() {
-  const struct mallinfo2 m = mallinfo2();
-  return m.uordblks + m.hblkhd;
-}
-
 /// A CMYK JPEG (print workflows): TurboJPEG encodes it, OpenImageIO decodes it.
 std::vector<std::uint8_t> CmykJpeg(int width, int height) {
   std::vector<std::uint8_t> cmyk(static_cast<std::size_t>(width) * height * 4);
@@ -467,6 +460,13 @@ std::vector<std::uint8_t> CmykJpeg(int width, int height) {
   tjDestroy(tj);
   EXPECT_EQ(failed, 0);
   return bytes;
+}
+
+#if !defined(__SANITIZE_ADDRESS__)
+// Bytes the heap holds now, in small blocks and in mmapped large ones.
+std::size_t HeapInUse() {
+  const struct mallinfo2 m = mallinfo2();
+  return m.uordblks + m.hblkhd;
 }
 
 // The server waits for memory in before_decode, so no decoder may have made the photo's pixels by
