@@ -604,11 +604,11 @@ TEST_F(HostileCatalogue, ChunkSizeLineWithoutEndIsCutOffNotStored) {
   const long rss_before = ResidentMegabytes(server_->pid());
   const int fd = test::ConnectLoopback(server_->port());
   ASSERT_GE(fd, 0);
-  bool refused = !test::SendAll(fd, Request("POST", "/api/v1/detect",
-                                            {scannerAuth(), "Content-Type: image/jpeg",
-                                             "Transfer-Encoding: chunked"},
-                                            "", "") +
-                                        "400;ext=");
+  bool refused = !test::SendAll(
+      fd,
+      Request("POST", "/api/v1/detect",
+              {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "", "") +
+          "400;ext=");
   const std::string extension(std::size_t{64} * 1024, 'e');
   std::size_t sent = 0;
   while (!refused && sent < (std::size_t{40} << 20)) {  // more than loopback's buffers hold
@@ -632,12 +632,11 @@ TEST_F(HostileCatalogue, ChunkSizeLineWithoutEndIsCutOffNotStored) {
 TEST_F(HostileCatalogue, ChunkSizeLineOverTheLimitIsAnswered400) {
   // A line over the limit, and then the client waits: the answer names the limit.
   const std::string line = "10;" + std::string(kChunkLineLimit, 'e') + "\r\n";
-  const Answer answer =
-      Send(server_->port(), Request("POST", "/api/v1/detect",
-                                    {scannerAuth(), "Content-Type: image/jpeg",
-                                     "Transfer-Encoding: chunked"},
-                                    "", "") +
-                                line);
+  const Answer answer = Send(
+      server_->port(),
+      Request("POST", "/api/v1/detect",
+              {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "", "") +
+          line);
   EXPECT_EQ(answer.status, 400) << answer.head;
   const json problem = json::parse(answer.body, nullptr, false);
   EXPECT_NE(problem.value("detail", "").find("chunk size"), std::string::npos) << answer.body;
@@ -649,14 +648,14 @@ TEST_F(HostileCatalogue, ChunkExtensionsWithinTheLimitAreRead) {
   // Chunk extensions are allowed (RFC 9112, 7.1.1) and ignored: the photo is read whole.
   const std::string photo = Encoded(".jpg");
   std::ostringstream body;
-  body << std::hex << photo.size() << ";name=\"" << std::string(kChunkLineLimit - 100, 'v') << "\"\r\n"
+  body << std::hex << photo.size() << ";name=\"" << std::string(kChunkLineLimit - 100, 'v')
+       << "\"\r\n"
        << photo << "\r\n0\r\n\r\n";
-  const Answer answer =
-      Send(server_->port(), Request("POST", "/api/v1/detect",
-                                    {scannerAuth(), "Content-Type: image/jpeg",
-                                     "Transfer-Encoding: chunked"},
-                                    "", "") +
-                                body.str());
+  const Answer answer = Send(
+      server_->port(),
+      Request("POST", "/api/v1/detect",
+              {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "", "") +
+          body.str());
   EXPECT_EQ(answer.status, 200) << answer.head << "\n" << answer.body.substr(0, 300);
   EXPECT_TRUE(json::parse(answer.body, nullptr, false).contains("tags")) << answer.body;
 }
