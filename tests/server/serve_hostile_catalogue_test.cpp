@@ -176,6 +176,13 @@ class HostileCatalogue : public ServeTest {
   std::string counterAuth() const { return bearer(counter_token_); }
   std::string adminAuth() const { return bearer(admin_token_); }
 
+  /// The head of a chunked JPEG upload with the scanner's token; the chunks are the caller's.
+  std::string chunkedDetectHead() const {
+    return Request("POST", "/api/v1/detect",
+                   {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "",
+                   "");
+  }
+
   std::string detect(const std::string& body, const std::string& type = "image/jpeg") const {
     return Request("POST", "/api/v1/detect", {scannerAuth(), "Content-Type: " + type}, body);
   }
@@ -409,10 +416,7 @@ TEST_F(HostileCatalogue, ChunkedBodyOverTheLimit) {
   const std::string chunk(std::size_t{16} * 1024, 'x');
   for (int i = 0; i < 8; ++i) chunked += "4000\r\n" + chunk + "\r\n";
   chunked += "0\r\n\r\n";
-  expectRefused(Request("POST", "/api/v1/detect",
-                        {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"},
-                        chunked, ""),
-                413);
+  expectRefused(chunkedDetectHead() + chunked, 413);
 }
 TEST_F(HostileCatalogue, OversizedMultipartPart) {
   startServer({"--max-body-mb", "0.05"});
@@ -604,11 +608,7 @@ TEST_F(HostileCatalogue, ChunkSizeLineWithoutEndIsCutOffNotStored) {
   const long rss_before = ResidentMegabytes(server_->pid());
   const int fd = test::ConnectLoopback(server_->port());
   ASSERT_GE(fd, 0);
-  bool refused = !test::SendAll(
-      fd,
-      Request("POST", "/api/v1/detect",
-              {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "", "") +
-          "400;ext=");
+  bool refused = !test::SendAll(fd, chunkedDetectHead() + "400;ext=");
   const std::string extension(std::size_t{64} * 1024, 'e');
   std::size_t sent = 0;
   while (!refused && sent < (std::size_t{40} << 20)) {  // more than loopback's buffers hold
@@ -632,11 +632,7 @@ TEST_F(HostileCatalogue, ChunkSizeLineWithoutEndIsCutOffNotStored) {
 TEST_F(HostileCatalogue, ChunkSizeLineOverTheLimitIsAnswered400) {
   // A line over the limit, and then the client waits: the answer names the limit.
   const std::string line = "10;" + std::string(kChunkLineLimit, 'e') + "\r\n";
-  const Answer answer = Send(
-      server_->port(),
-      Request("POST", "/api/v1/detect",
-              {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "", "") +
-          line);
+  const Answer answer = Send(server_->port(), chunkedDetectHead() + line);
   EXPECT_EQ(answer.status, 400) << answer.head;
   const json problem = json::parse(answer.body, nullptr, false);
   EXPECT_NE(problem.value("detail", "").find("chunk size"), std::string::npos) << answer.body;
@@ -651,11 +647,7 @@ TEST_F(HostileCatalogue, ChunkExtensionsWithinTheLimitAreRead) {
   body << std::hex << photo.size() << ";name=\"" << std::string(kChunkLineLimit - 100, 'v')
        << "\"\r\n"
        << photo << "\r\n0\r\n\r\n";
-  const Answer answer = Send(
-      server_->port(),
-      Request("POST", "/api/v1/detect",
-              {scannerAuth(), "Content-Type: image/jpeg", "Transfer-Encoding: chunked"}, "", "") +
-          body.str());
+  const Answer answer = Send(server_->port(), chunkedDetectHead() + body.str());
   EXPECT_EQ(answer.status, 200) << answer.head << "\n" << answer.body.substr(0, 300);
   EXPECT_TRUE(json::parse(answer.body, nullptr, false).contains("tags")) << answer.body;
 }
