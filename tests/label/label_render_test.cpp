@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -18,6 +19,16 @@ constexpr double kPointsPerMm = 72.0 / 25.4;
 
 std::string AsText(const std::vector<std::uint8_t>& bytes) {
   return {bytes.begin(), bytes.end()};
+}
+
+/// What a poppler tool (`command`, e.g. "pdftotext -bbox") prints for `pdf`, written to a
+/// scratch file for it (pdftotext is told "-", else it writes a file); nothing when it cannot run.
+std::optional<std::string> Poppler(const std::string& command, const RenderedLabel& pdf) {
+  test::TempDir dir;
+  const auto path = dir.path() / "label.pdf";
+  test::WriteFile(path, pdf.bytes);
+  const bool to_stdout = command.rfind("pdftotext", 0) == 0;
+  return test::Run(command + " '" + path.string() + "'" + (to_stdout ? " -" : ""));
 }
 
 // Every page's MediaBox (cairo writes them uncompressed in the page objects).
@@ -62,10 +73,7 @@ TEST(LabelPdf, PdfinfoReadsSizeAndPagesOfABatch) {
   ASSERT_TRUE(pdf) << pdf.error;
   EXPECT_EQ(MediaBoxes(AsText(pdf.bytes)).size(), 50U);
 
-  test::TempDir dir;
-  const auto path = dir.path() / "batch.pdf";
-  test::WriteFile(path, pdf.bytes);
-  const auto info = test::Run("pdfinfo '" + path.string() + "'");
+  const auto info = Poppler("pdfinfo", pdf);
   ASSERT_TRUE(info.has_value());
   EXPECT_NE(info->find("Pages:           50\n"), std::string::npos) << *info;
   EXPECT_NE(info->find("Page size:       288 x 432 pts"), std::string::npos) << *info;
@@ -78,10 +86,7 @@ TEST(LabelPdf, FontsAreEmbeddedSubsets) {
   label.office = "K\u0101raikk\u0101l \u041C\u043E\u0441\u043A\u0432\u0430 B.O";
   const RenderedLabel pdf = RenderLabelPdf(label);
   ASSERT_TRUE(pdf) << pdf.error;
-  test::TempDir dir;
-  const auto path = dir.path() / "label.pdf";
-  test::WriteFile(path, pdf.bytes);
-  const auto fonts = test::Run("pdffonts '" + path.string() + "'");
+  const auto fonts = Poppler("pdffonts", pdf);
   ASSERT_TRUE(fonts.has_value());
   // Header, rule, then one row per font: "name type encoding emb sub uni object id".
   std::istringstream rows(*fonts);
@@ -165,10 +170,7 @@ TEST(LabelText, ALongBinIsPrintedWholeOnTwoLines) {
   for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In}) {
     const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
     ASSERT_TRUE(pdf) << pdf.error;
-    test::TempDir dir;
-    const auto path = dir.path() / "label.pdf";
-    test::WriteFile(path, pdf.bytes);
-    const auto text = test::Run("pdftotext '" + path.string() + "' -");
+    const auto text = Poppler("pdftotext", pdf);
     ASSERT_TRUE(text.has_value());
     std::string words;  // the text with every run of whitespace made one space
     for (const char c : *text) {
@@ -202,10 +204,7 @@ struct Word {
 
 /// The words of a one-page PDF with their boxes (`pdftotext -bbox`).
 std::vector<Word> WordsOf(const RenderedLabel& pdf) {
-  test::TempDir dir;
-  const auto path = dir.path() / "label.pdf";
-  test::WriteFile(path, pdf.bytes);
-  const auto html = test::Run("pdftotext -bbox '" + path.string() + "' -");
+  const auto html = Poppler("pdftotext -bbox", pdf);
   EXPECT_TRUE(html.has_value());
   static const std::regex kWord(
       R"re(<word xMin="([0-9.]+)" yMin="([0-9.]+)" xMax="([0-9.]+)" yMax="([0-9.]+)">([^<]*)</word>)re");
@@ -311,10 +310,7 @@ TEST(LabelText, ABinBreaksBetweenWordsNotInsideThem) {
   label.bin = "A BLR-OUTBOUND-CONVEYOR-CHUTE-12";
   const RenderedLabel pdf = RenderLabelPdf(label, {LabelSize{75, 75}, 300});
   ASSERT_TRUE(pdf) << pdf.error;
-  test::TempDir dir;
-  const auto path = dir.path() / "label.pdf";
-  test::WriteFile(path, pdf.bytes);
-  const auto text = test::Run("pdftotext -layout '" + path.string() + "' -");
+  const auto text = Poppler("pdftotext -layout", pdf);
   ASSERT_TRUE(text.has_value());
   EXPECT_NE(text->find("A BLR-OUTBOUND-"), std::string::npos) << *text;
   EXPECT_NE(text->find("CONVEYOR-CHUTE-12"), std::string::npos) << *text;
