@@ -25,15 +25,17 @@ void PlaceTag(LabelLayout& layout) {
   layout.placement.square_y_mm = layout.tag.y + (layout.tag.h - side) / 2;
 }
 
-LabelLayout Layout(const LabelSize& size, bool landscape) {
+}  // namespace
+
+LabelLayout ComputeLayout(const LabelSize& size) {
   LabelLayout layout;
   layout.size = size;
   layout.rule_mm = kRuleMm;
   layout.frame = {kMarginMm, kMarginMm, size.width_mm - 2 * kMarginMm,
                   size.height_mm - 2 * kMarginMm};
   const Box& f = layout.frame;
-  layout.landscape = landscape;
-  if (landscape) {
+  layout.landscape = size.width_mm >= kLandscapeAspect * size.height_mm;
+  if (layout.landscape) {
     const double column = std::min(f.h, 0.6 * f.w);
     layout.tag = {f.x, f.y, column, f.h};
     const double tx = f.x + column;
@@ -54,12 +56,6 @@ LabelLayout Layout(const LabelSize& size, bool landscape) {
   }
   PlaceTag(layout);
   return layout;
-}
-
-}  // namespace
-
-LabelLayout ComputeLayout(const LabelSize& size) {
-  return Layout(size, size.width_mm >= kLandscapeAspect * size.height_mm);
 }
 
 }  // namespace pintag::label

@@ -66,14 +66,12 @@ LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan,
   label.pincode = record.pincode;
   label.key = record.key;
   // The place printed under the office is that office's: a pincode's offices can lie in
-  // several districts (1,269 of the seed's pincodes), and the record's are its first office's.
+  // several districts (1,269 of the seed's pincodes), and the one asked for need not be the main
+  // one the record's summary comes from. A pincode without offices prints none.
   if (const db::PostOffice* office = ChosenOffice(record, office_name)) {
     label.office = office->name;
     label.district = office->district;
     label.state = office->state;
-  } else {
-    label.district = record.district;
-    label.state = record.state;
   }
   label.plan = plan.name;
   label.bin = db::RouteWith(plan, record.pincode).bin;
