@@ -93,6 +93,7 @@ function renderTable() {
     }
     const r = row.record;
     const retired = r.status !== 'active';
+    const place = placeOf(row);
     const check = el('input', {
       type: 'checkbox', checked: row.include && !retired, disabled: retired, 'aria-label': `Print a label for ${which}`,
       onchange: (event) => { row.include = event.target.checked; updateButtons(); },
@@ -105,8 +106,8 @@ function renderTable() {
       el('td', {}, check),
       el('td', { class: 'mono nowrap' }, pin),
       el('td', {}, officeCell(row, index, which, retired), retired ? [' ', badge(r.status)] : null),
-      el('td', { class: 'district' }, placeOf(row).district),
-      el('td', { class: 'state hide-narrow' }, placeOf(row).state),
+      el('td', { class: 'district' }, place.district),
+      el('td', { class: 'state hide-narrow' }, place.state),
       el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
   }));
   $('results').hidden = rows.length === 0;
