@@ -21,6 +21,9 @@
 #include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace pintag {
@@ -105,9 +108,11 @@ void TakeExif(const OIIO::ImageSpec& spec, LoadedImage* image) {
 
 // ---- JPEG: libjpeg-turbo ----
 
-/// The EXIF block (APP1 "Exif\0\0") among the markers before the first scan; empty when none.
-std::span<const std::uint8_t> JpegExifBlock(std::span<const std::uint8_t> b) {
-  static constexpr char kExif[] = {'E', 'x', 'i', 'f', 0, 0};
+/// Calls `visit(marker, payload, at)` for each marker segment before the first scan, `payload`
+/// being the bytes after its length field and `at` the offset of its 0xFF; stops early when
+/// `visit` returns false, and at the first segment that does not fit the file.
+template <typename Visit>
+void ForEachHeaderSegment(std::span<const std::uint8_t> b, Visit visit) {
   std::size_t pos = 2;
   while (pos + 4 <= b.size() && b[pos] == 0xFF) {
     const std::uint8_t marker = b[pos + 1];
@@ -115,16 +120,78 @@ std::span<const std::uint8_t> JpegExifBlock(std::span<const std::uint8_t> b) {
       ++pos;
       continue;
     }
-    if (marker == 0xDA || marker == 0xD9) break;  // scan data (or the end) follows
+    if (marker == 0xDA || marker == 0xD9) return;  // scan data (or the end) follows
     const std::size_t length = Be16(&b[pos + 2]);
-    if (length < 2 || pos + 2 + length > b.size()) break;
-    if (marker == 0xE1 && length >= 2 + sizeof kExif &&
-        std::memcmp(&b[pos + 4], kExif, sizeof kExif) == 0) {
-      return b.subspan(pos + 4 + sizeof kExif, length - 2 - sizeof kExif);
-    }
+    if (length < 2 || pos + 2 + length > b.size()) return;
+    if (!visit(marker, b.subspan(pos + 4, length - 2), pos)) return;
     pos += 2 + length;
   }
-  return {};
+}
+
+/// The EXIF block (APP1 "Exif\0\0") among the markers before the first scan; empty when none.
+std::span<const std::uint8_t> JpegExifBlock(std::span<const std::uint8_t> b) {
+  static constexpr char kExif[] = {'E', 'x', 'i', 'f', 0, 0};
+  std::span<const std::uint8_t> found;
+  ForEachHeaderSegment(
+      b, [&](std::uint8_t marker, std::span<const std::uint8_t> payload, std::size_t /*at*/) {
+        if (marker == 0xE1 && payload.size() >= sizeof kExif &&
+            std::memcmp(payload.data(), kExif, sizeof kExif) == 0) {
+          found = payload.subspan(sizeof kExif);
+          return false;
+        }
+        return true;
+      });
+  return found;
+}
+
+/// Why libjpeg-turbo cannot decode this JPEG's frame at all, or empty: its first start-of-frame
+/// marker says lossless or hierarchical coding, or a sample precision other than 8 bits (medical
+/// and archival encoders, not cameras). libjpeg would call these corrupt; they are unsupported.
+std::string UnsupportedJpegFrame(std::span<const std::uint8_t> b) {
+  std::string why;
+  ForEachHeaderSegment(
+      b, [&](std::uint8_t marker, std::span<const std::uint8_t> payload, std::size_t /*at*/) {
+        // SOF0 to SOF15, less DHT (C4), JPG (C8) and DAC (CC), which share the range.
+        if (marker < 0xC0 || marker > 0xCF || marker == 0xC4 || marker == 0xC8 || marker == 0xCC) {
+          return true;
+        }
+        const int process = marker - 0xC0;
+        if (process % 4 == 3) {
+          why = "the JPEG is lossless (SOF" + std::to_string(process) +
+                "); only lossy 8-bit JPEGs, as cameras save them, are read";
+        } else if (process == 5 || process == 6 || process == 13 || process == 14) {
+          why = "the JPEG is hierarchical (SOF" + std::to_string(process) +
+                "); only lossy 8-bit JPEGs, as cameras save them, are read";
+        } else if (!payload.empty() && payload[0] != 8) {
+          why = "the JPEG has " + std::to_string(payload[0]) +
+                "-bit samples; only lossy 8-bit JPEGs, as cameras save them, are read";
+        }
+        return false;
+      });
+  return why;
+}
+
+/// A copy of the JPEG with every JFIF header's major version set to 1 (libjpeg-turbo warns on
+/// any other, "JFIF 2.01", and a warning stops the decode), or nothing when none needs it. The
+/// version only names the header's layout, which has not changed; the pixels do not depend on it.
+std::optional<std::vector<std::uint8_t>> WithJfifVersionOne(std::span<const std::uint8_t> b) {
+  static constexpr char kJfif[] = {'J', 'F', 'I', 'F', 0};
+  std::vector<std::size_t> versions;  // offsets of the major version bytes to set
+  ForEachHeaderSegment(
+      b, [&](std::uint8_t marker, std::span<const std::uint8_t> payload, std::size_t at) {
+        if (marker == 0xE0 && payload.size() >= sizeof kJfif + 2 &&
+            std::memcmp(payload.data(), kJfif, sizeof kJfif) == 0 && payload[sizeof kJfif] != 1) {
+          versions.push_back(at + 4 + sizeof kJfif);
+        }
+        return true;
+      });
+  if (versions.empty()) return std::nullopt;
+  std::vector<std::uint8_t> copy(b.begin(), b.end());
+  for (const std::size_t at : versions) {
+    copy[at] = 1;
+    copy[at + 1] = 2;  // minor version: 1.02, the last JFIF 1 revision
+  }
+  return copy;
 }
 
 /// Orientation and camera fields from a TIFF-structured EXIF block, when it is one.
@@ -197,6 +264,35 @@ int CountJpegScans(std::span<const std::uint8_t> b, int limit) {
   return scans;
 }
 
+/// libjpeg-turbo's warning for bytes between a JPEG's last scan and its end marker, which some
+/// encoders leave.
+bool WarnedOfBytesBeforeTheEnd(tjhandle tj) {
+  return tjGetErrorCode(tj) == TJERR_WARNING &&
+         std::string_view(tjGetErrorStr2(tj)).find("extraneous bytes before marker 0xd9") !=
+             std::string_view::npos;
+}
+
+/// Runs `decode(handle, flags)`, one TurboJPEG decompression into the caller's buffers, and
+/// refuses a JPEG on any warning (truncation is one), except stray bytes before the end marker:
+/// as the first warning, that one comes after every scan was decoded, so the file is decoded
+/// again without stopping on it. On failure `error` says why.
+template <typename Decode>
+bool DecodeWholeJpeg(Decode decode, std::string* error) {
+  if (decode(Decompressor(), kTurboFlags) == 0) return true;
+  if (WarnedOfBytesBeforeTheEnd(Decompressor())) {
+    DiscardDecompressor();
+    const bool whole = decode(Decompressor(), kTurboFlags & ~TJFLAG_STOPONWARNING) == 0 ||
+                       tjGetErrorCode(Decompressor()) == TJERR_WARNING;
+    if (whole) {
+      DiscardDecompressor();
+      return true;
+    }
+  }
+  *error = std::string("cannot decode the JPEG: ") + tjGetErrorStr2(Decompressor());
+  DiscardDecompressor();
+  return false;
+}
+
 struct JpegHeader {
   int width = 0;
   int height = 0;
@@ -261,7 +357,10 @@ ChromaUpsampling JpegChromaUpsampling(int subsampling, int exif_orientation, int
 LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& options) {
   tjhandle tj = Decompressor();
   if (tj == nullptr) return Fail(ImageError::kCorrupt, "cannot start the JPEG decoder");
-  std::string why;
+  std::string why = UnsupportedJpegFrame(bytes);
+  if (!why.empty()) return Fail(ImageError::kUnsupported, why);
+  const std::optional<std::vector<std::uint8_t>> jfif_one = WithJfifVersionOne(bytes);
+  if (jfif_one) bytes = *jfif_one;
   const std::optional<JpegHeader> header = ReadJpegHeader(tj, bytes, &why);
   if (!header) return Fail(ImageError::kCorrupt, why);
   if (header->width < 1 || header->height < 1) {
@@ -286,13 +385,12 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
   if (options.before_decode) options.before_decode(header->width, header->height);
   const tjscalingfactor scale = ScalingFor(options.scale_denominator);
   cv::Mat bgr(TJSCALED(header->height, scale), TJSCALED(header->width, scale), CV_8UC3);
-  if (tjDecompress2(tj, bytes.data(), bytes.size(), bgr.data, bgr.cols, static_cast<int>(bgr.step),
-                    bgr.rows, TJPF_BGR, kTurboFlags) != 0) {
-    LoadResult failed =
-        Fail(ImageError::kCorrupt, std::string("cannot decode the JPEG: ") + tjGetErrorStr2(tj),
-             header->width, header->height);
-    DiscardDecompressor();
-    return failed;
+  const auto decode = [&](tjhandle handle, int flags) {
+    return tjDecompress2(handle, bytes.data(), bytes.size(), bgr.data, bgr.cols,
+                         static_cast<int>(bgr.step), bgr.rows, TJPF_BGR, flags);
+  };
+  if (!DecodeWholeJpeg(decode, &why)) {
+    return Fail(ImageError::kCorrupt, why, header->width, header->height);
   }
   LoadedImage image;
   image.format = "jpeg";
@@ -702,7 +800,10 @@ JpegPlanesResult LoadJpegPlanes(std::span<const std::uint8_t> bytes, std::int64_
   }
   tjhandle tj = Decompressor();
   if (tj == nullptr) return fail(ImageError::kCorrupt, "cannot start the JPEG decoder");
-  std::string why;
+  std::string why = UnsupportedJpegFrame(bytes);
+  if (!why.empty()) return fail(ImageError::kUnsupported, why);
+  const std::optional<std::vector<std::uint8_t>> jfif_one = WithJfifVersionOne(bytes);
+  if (jfif_one) bytes = *jfif_one;
   const std::optional<JpegHeader> header = ReadJpegHeader(tj, bytes, &why);
   if (!header) return fail(ImageError::kCorrupt, why);
   if (OverLimit(header->width, header->height, max_pixels)) {
@@ -723,12 +824,11 @@ JpegPlanesResult LoadJpegPlanes(std::span<const std::uint8_t> bytes, std::int64_
     pointers[c] = mats[c]->data;
     strides[c] = static_cast<int>(mats[c]->step);
   }
-  if (tjDecompressToYUVPlanes(tj, bytes.data(), bytes.size(), pointers.data(), header->width,
-                              strides.data(), header->height, kTurboFlags) != 0) {
-    fail(ImageError::kCorrupt, std::string("cannot decode the JPEG: ") + tjGetErrorStr2(tj));
-    DiscardDecompressor();
-    return result;
-  }
+  const auto decode = [&](tjhandle handle, int flags) {
+    return tjDecompressToYUVPlanes(handle, bytes.data(), bytes.size(), pointers.data(),
+                                   header->width, strides.data(), header->height, flags);
+  };
+  if (!DecodeWholeJpeg(decode, &why)) return fail(ImageError::kCorrupt, why);
   LoadedImage exif;
   TakeJpegExif(bytes, &exif);
   planes.orientation = exif.exif_orientation;

@@ -378,6 +378,103 @@ TEST(ImageIo, UnusualButWholeJpegsLoad) {
   }
 }
 
+std::size_t FindMarker(const std::vector<std::uint8_t>& jpeg, std::uint8_t marker) {
+  for (std::size_t i = 0; i + 1 < jpeg.size(); ++i) {
+    if (jpeg[i] == 0xFF && jpeg[i + 1] == marker) return i;
+  }
+  ADD_FAILURE() << "no marker 0xFF" << std::hex << int{marker};
+  return 0;
+}
+
+bool SamePixels(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+}
+
+// Two things libjpeg-turbo warns about in files whose pixels are whole: a JFIF header of version
+// 2.01 (some scanners' software), and stray bytes between the last scan and the end marker (some
+// phone apps). A warning is otherwise refused, as truncation is only a warning; these two decode
+// to exactly the pixels of the same file without them.
+TEST(ImageIo, JpegsWithHarmlessWarningsLoad) {
+  for (const bool progressive : {false, true}) {
+    const std::vector<std::uint8_t> clean = Encode(
+        ".jpg", PhoneLikeFrame(200, 120), {cv::IMWRITE_JPEG_PROGRESSIVE, progressive ? 1 : 0});
+    const LoadResult reference = LoadImageBytes(clean);
+    ASSERT_TRUE(reference.image) << reference.error;
+    const JpegPlanesResult reference_planes = LoadJpegPlanes(clean);
+    ASSERT_TRUE(reference_planes.planes) << reference_planes.error;
+
+    std::vector<std::uint8_t> jfif2 = clean;
+    const std::size_t jfif = FindMarker(jfif2, 0xE0) + 4;
+    ASSERT_EQ(std::string(jfif2.begin() + jfif, jfif2.begin() + jfif + 5),
+              std::string("JFIF\0", 5));
+    jfif2[jfif + 5] = 2;
+    jfif2[jfif + 6] = 1;
+    std::vector<std::uint8_t> stray = clean;
+    ASSERT_EQ(stray[stray.size() - 2], 0xFF);
+    stray.insert(stray.end() - 2, {0x00, 0x11, 0x22, 0x33});
+
+    for (const auto& [name, bytes] :
+         {std::pair{"JFIF 2.01", &jfif2}, std::pair{"stray bytes before the end", &stray}}) {
+      const LoadResult r = LoadImageBytes(*bytes);
+      ASSERT_TRUE(r.image) << name << ", progressive " << progressive << ": " << r.error;
+      EXPECT_TRUE(SamePixels(r.image->bgr, reference.image->bgr)) << name;
+      EXPECT_EQ(r.image->chroma_upsampling, reference.image->chroma_upsampling) << name;
+      const JpegPlanesResult planes = LoadJpegPlanes(*bytes);
+      ASSERT_TRUE(planes.planes) << name << ": " << planes.error;
+      EXPECT_TRUE(SamePixels(planes.planes->y, reference_planes.planes->y)) << name;
+      EXPECT_TRUE(SamePixels(planes.planes->cr, reference_planes.planes->cr)) << name;
+    }
+    // Stray bytes never make a cut file whole. After a scan that was cut short its data is
+    // missing, so the warning that comes first is a different one, and the file stays corrupt.
+    // (A progressive file cut between two scans, then ended, is a whole JPEG of fewer scans, with
+    // or without stray bytes.)
+    const std::size_t scan = FindMarker(clean, 0xDA);
+    int corrupt = 0;
+    for (std::size_t keep = scan + 40; keep + 64 < clean.size(); keep += 97) {
+      std::vector<std::uint8_t> ended(clean.begin(), clean.begin() + static_cast<long>(keep));
+      std::vector<std::uint8_t> cut = ended;
+      ended.insert(ended.end(), {0xFF, 0xD9});
+      cut.insert(cut.end(), {0x00, 0x11, 0x22, 0x33, 0xFF, 0xD9});
+      const ImageError without_stray_bytes = LoadImageBytes(ended).kind;
+      corrupt += without_stray_bytes == ImageError::kCorrupt;
+      EXPECT_EQ(LoadImageBytes(cut).kind, without_stray_bytes)
+          << "progressive " << progressive << ", cut at " << keep;
+      EXPECT_EQ(LoadJpegPlanes(cut).kind, LoadJpegPlanes(ended).kind) << "cut at " << keep;
+    }
+    EXPECT_GT(corrupt, 10) << "progressive " << progressive;
+  }
+}
+
+// JPEGs no camera writes, which libjpeg-turbo cannot decode: 12-bit samples, lossless and
+// hierarchical coding. Their start-of-frame marker says so: unsupported, not corrupt.
+TEST(ImageIo, LosslessHierarchicalAndTwelveBitJpegsAreUnsupported) {
+  const std::vector<std::uint8_t> clean = Encode(".jpg", PhoneLikeFrame(64, 48));
+  const std::size_t frame = FindMarker(clean, 0xC0);
+  struct Case {
+    const char* name;
+    std::uint8_t marker;
+    std::uint8_t precision;
+    const char* says;
+  };
+  for (const Case& c :
+       {Case{"12-bit", 0xC1, 12, "12-bit"}, Case{"16-bit", 0xC2, 16, "16-bit"},
+        Case{"lossless", 0xC3, 8, "lossless"}, Case{"arithmetic lossless", 0xCB, 8, "lossless"},
+        Case{"hierarchical", 0xC5, 8, "hierarchical"}}) {
+    std::vector<std::uint8_t> bytes = clean;
+    bytes[frame + 1] = c.marker;
+    bytes[frame + 4] = c.precision;
+    for (const ImageError kind : {LoadImageBytes(bytes).kind, LoadJpegPlanes(bytes).kind}) {
+      EXPECT_EQ(kind, ImageError::kUnsupported) << c.name;
+    }
+    EXPECT_NE(LoadImageBytes(bytes).error.find(c.says), std::string::npos)
+        << c.name << ": " << LoadImageBytes(bytes).error;
+  }
+  // SOF1 (extended sequential) at 8 bits is what some encoders write for ordinary photos.
+  std::vector<std::uint8_t> extended = clean;
+  extended[frame + 1] = 0xC1;
+  EXPECT_TRUE(LoadImageBytes(extended).image) << LoadImageBytes(extended).error;
+}
+
 // libjpeg-turbo straight to BGR against OpenCV's own JPEG reader: the same pixels within rounding.
 TEST(ImageIo, JpegPixelsMatchOpenCv) {
   for (int quality : {75, 95}) {
