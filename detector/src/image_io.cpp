@@ -599,12 +599,22 @@ bool ReadAs8Bit(OIIO::ImageInput& input, const OIIO::ImageSpec& spec, ImageForma
   return true;
 }
 
+/// An 8-bit colour value with its alpha, composited over white; `straight`: the value is not
+/// multiplied by alpha, else it is.
+std::uint8_t OverWhite(std::uint8_t value, std::uint8_t alpha, bool straight) {
+  const int transparency = 255 - alpha;
+  if (straight) return static_cast<std::uint8_t>((value * alpha + 255 * transparency + 127) / 255);
+  return static_cast<std::uint8_t>(std::min(255, value + transparency));
+}
+
 LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat format,
                                const LoadOptions& options, bool size_told) {
   OIIO::Filesystem::IOMemReader reader(bytes.data(), bytes.size());
   OIIO::Filesystem::IOProxy* proxy = &reader;
   OIIO::ImageSpec config;
   config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  // Colour as stored, not multiplied by alpha: OverWhite does the compositing.
+  config.attribute("oiio:UnassociatedAlpha", 1);
   auto input = OIIO::ImageInput::open(ProxyName(format), &config);
   if (!input) return Fail(ImageError::kCorrupt, "cannot read image: " + OIIO::geterror());
   const OIIO::ImageSpec spec = input->spec();
@@ -660,6 +670,13 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
   const std::string format_name = input->format_name();
   input->close();
 
+  // Grey and alpha, or RGBA: composited over white, as the image shows on a page or prints. A
+  // label or tag exported with a transparent background would otherwise read its transparent
+  // pixels' colour, often black, and the tag's white quiet zone would be gone.
+  const bool has_alpha = (channels == 2 || channels == 4) && spec.alpha_channel == channels - 1;
+  // OpenImageIO marks colour it left unmultiplied, as asked (PNG, a TIFF that stores it so);
+  // its WebP reader (2.4) multiplies whatever it is asked.
+  const bool straight_alpha = spec.get_int_attribute("oiio:UnassociatedAlpha", 0) != 0;
   cv::Mat bgr(spec.height, spec.width, CV_8UC3);
   for (int y = 0; y < spec.height; ++y) {
     const std::uint8_t* src = data.data() + static_cast<std::size_t>(y) * spec.width * channels;
@@ -668,7 +685,11 @@ LoadResult LoadWithOpenImageIo(std::span<const std::uint8_t> bytes, ImageFormat 
       if (channels >= 3) {
         dst[0] = src[2], dst[1] = src[1], dst[2] = src[0];
       } else {
-        dst[0] = dst[1] = dst[2] = src[0];  // grey (and grey + alpha)
+        dst[0] = dst[1] = dst[2] = src[0];
+      }
+      if (has_alpha) {
+        const std::uint8_t alpha = src[channels - 1];
+        for (int c = 0; c < 3; ++c) dst[c] = OverWhite(dst[c], alpha, straight_alpha);
       }
     }
   }

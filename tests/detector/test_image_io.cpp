@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "pintag/codec/tag_raster.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/image_io.hpp"
 
@@ -473,6 +474,93 @@ TEST(ImageIo, LosslessHierarchicalAndTwelveBitJpegsAreUnsupported) {
   std::vector<std::uint8_t> extended = clean;
   extended[frame + 1] = 0xC1;
   EXPECT_TRUE(LoadImageBytes(extended).image) << LoadImageBytes(extended).error;
+}
+
+// Writes `values` (width × height × channels, 8-bit; WebP: RGBA only) with OpenImageIO, or
+// OpenCV for WebP; `associated`: a TIFF whose colour is stored multiplied by alpha.
+std::string WriteWithAlpha(const std::string& name, int width, int height, int channels,
+                           const std::vector<std::uint8_t>& values, bool associated = false) {
+  const std::string path = TempPath(name);
+  if (name.ends_with(".webp")) {  // lossless, which OpenCV writes at quality above 100
+    cv::Mat rgba(height, width, CV_8UC4, const_cast<std::uint8_t*>(values.data()));
+    cv::Mat bgra;
+    cv::cvtColor(rgba, bgra, cv::COLOR_RGBA2BGRA);
+    EXPECT_TRUE(cv::imwrite(path, bgra, {cv::IMWRITE_WEBP_QUALITY, 101}));
+    return path;
+  }
+  auto out = OIIO::ImageOutput::create(path);
+  EXPECT_TRUE(out) << OIIO::geterror();
+  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+  spec.alpha_channel = channels - 1;
+  if (!associated) spec.attribute("oiio:UnassociatedAlpha", 1);
+  EXPECT_TRUE(out->open(path, spec)) << out->geterror();
+  EXPECT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, values.data())) << out->geterror();
+  out->close();
+  return path;
+}
+
+// A label or tag exported with a transparent background shows on a page, and prints, over white:
+// it is read so. Its transparent pixels' stored colour (often black) must not show through.
+TEST(ImageIo, TransparentPixelsAreCompositedOverWhite) {
+  // Three pixels, RGBA: transparent black, opaque orange, orange at half alpha (128).
+  const std::vector<std::uint8_t> rgba = {0, 0, 0, 0, 200, 100, 50, 255, 200, 100, 50, 128};
+  // Over white: v × a / 255 + 255 × (255 − a) / 255.
+  const auto over_white = [](int v, int a) { return (v * a + 255 * (255 - a)) / 255.0; };
+  for (const char* name : {"alpha.png", "alpha.tif", "alpha.webp"}) {
+    const LoadResult r = LoadImageFile(WriteWithAlpha(name, 3, 1, 4, rgba));
+    ASSERT_TRUE(r.image) << name << ": " << r.error;
+    const cv::Mat& bgr = r.image->bgr;
+    EXPECT_EQ(bgr.at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255)) << name;
+    EXPECT_EQ(bgr.at<cv::Vec3b>(0, 1), cv::Vec3b(50, 100, 200)) << name;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(bgr.at<cv::Vec3b>(0, 2)[2 - c], over_white(rgba[8 + c], 128), 1.0)
+          << name << ", channel " << c;
+    }
+  }
+  // A TIFF that stores colour multiplied by alpha: the half-transparent pixel holds half of it.
+  const std::vector<std::uint8_t> associated = {0, 0, 0, 0, 200, 100, 50, 255, 100, 50, 25, 128};
+  const LoadResult tiff =
+      LoadImageFile(WriteWithAlpha("associated.tif", 3, 1, 4, associated, true));
+  ASSERT_TRUE(tiff.image) << tiff.error;
+  EXPECT_EQ(tiff.image->bgr.at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(tiff.image->bgr.at<cv::Vec3b>(0, 2)[2 - c], over_white(rgba[8 + c], 128), 1.0)
+        << "associated, channel " << c;
+  }
+  // Grey and alpha.
+  const LoadResult grey = LoadImageFile(WriteWithAlpha("grey-alpha.png", 2, 1, 2, {0, 0, 90, 255}));
+  ASSERT_TRUE(grey.image) << grey.error;
+  EXPECT_EQ(grey.image->bgr.at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
+  EXPECT_EQ(grey.image->bgr.at<cv::Vec3b>(0, 1), cv::Vec3b(90, 90, 90));
+}
+
+// The real tag, its white (quiet zone and light elements' surround) made transparent black, on a
+// transparent canvas: read as the same tag.
+TEST(ImageIo, ATagWithATransparentBackgroundIsRead) {
+  const TagKey key(11684);
+  const TagRaster tag = RenderTagRaster(key, {.square_px = 160});
+  const int width = 480;
+  const int height = 360;
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(width) * height * 4, 0);
+  int transparent = 0;
+  for (int y = 0; y < tag.image.height; ++y) {
+    for (int x = 0; x < tag.image.width; ++x) {
+      const Rgb8 p = tag.image.at(x, y);
+      const bool white = p.r > 200 && p.g > 200 && p.b > 200;
+      transparent += white;
+      const std::size_t i = (static_cast<std::size_t>(y + 60) * width + x + 120) * 4;
+      if (!white) rgba[i] = p.r, rgba[i + 1] = p.g, rgba[i + 2] = p.b, rgba[i + 3] = 255;
+    }
+  }
+  ASSERT_GT(transparent, tag.image.width * 4) << "the quiet zone is white";
+  for (const char* name : {"tag-alpha.png", "tag-alpha.webp"}) {
+    const LoadResult r = LoadImageFile(WriteWithAlpha(name, width, height, 4, rgba));
+    ASSERT_TRUE(r.image) << name << ": " << r.error;
+    const DetectResult found = Detector().detect(*r.image);
+    ASSERT_EQ(found.detections.size(), 1U) << name;
+    ASSERT_TRUE(found.detections[0].key) << name;
+    EXPECT_EQ(found.detections[0].key->value(), key.value()) << name;
+  }
 }
 
 // libjpeg-turbo straight to BGR against OpenCV's own JPEG reader: the same pixels within rounding.
