@@ -120,8 +120,12 @@ async function scan() {
     + `${photoUnshowable ? ' · this browser cannot show the photo itself (e.g. a TIFF)' : ''}`;
   show($('tags'), answer.tags.map((tag) => tagCard(tag, approximate)));
   if (n === 0) {
+    // The server says when the photo itself could hold no tag (no colour): that, not the
+    // general advice, is what the person holding the camera must change.
+    const warnings = (answer.warnings || []).map((w) => w.message);
     show($('tags'), el('li', { class: 'alert alert-info' },
-      'No PinTag found. Hold the camera steady, fill more of the frame with the label and avoid glare.'));
+      warnings.length ? `No PinTag found: ${warnings.join('; ')}.`
+        : 'No PinTag found. Hold the camera steady, fill more of the frame with the label and avoid glare.'));
   }
   drawOutlines(answer);
   showPhoto(photoUrl, n ? `Your photo with ${n === 1 ? 'the tag' : 'the tags'} outlined.` : 'Your photo.',

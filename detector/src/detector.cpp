@@ -24,6 +24,7 @@
 #include "candidates/quads.hpp"
 #include "candidates/red_blobs.hpp"
 #include "candidates/redness.hpp"
+#include "colour_content.hpp"
 #include "debug_images.hpp"
 #include "duplicates.hpp"
 #include "elapsed_ms.hpp"
@@ -428,8 +429,16 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif,
     d.alternative_pose = pose.alternative;
     d.pose_ambiguous = pose.ambiguous;
   }
+  result.timings.pose_ms = ElapsedMs(t_pose, Clock::now());
+  const bool read_any = std::any_of(result.detections.begin(), result.detections.end(),
+                                    [](const Detection& d) { return d.key.has_value(); });
+  if (!read_any && !stage::HoldsColour(bgr)) {
+    result.warnings.push_back(
+        {"no_colour",
+         "the photo has no colour; PinTag reads its tags from red and green, so take the photo "
+         "in colour (not a black-and-white or document mode)"});
+  }
   const auto end = Clock::now();
-  result.timings.pose_ms = ElapsedMs(t_pose, end);
   result.timings.total_ms = ElapsedMs(start, end);
   debug.detections(bgr, result.detections);
   return result;

@@ -115,6 +115,10 @@ json ToJson(const DetectResult& r) {
                       {"reread", t.model_rereads},
                       {"mosaic_reread", t.mosaic_rereads},
                       {"skipped_over_budget", t.model_skipped}};
+  j["warnings"] = json::array();
+  for (const PhotoWarning& w : r.warnings) {
+    j["warnings"].push_back({{"code", w.code}, {"message", w.message}});
+  }
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }

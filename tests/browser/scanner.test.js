@@ -1,10 +1,12 @@
 // Scanner: a label photo is read with one upload (pincode, office, bin, outline); wrong token and
 // non-image fail clearly.
 import assert from 'node:assert/strict';
+import { execFile } from 'node:child_process';
 import { mkdtemp, rm, writeFile } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { promisify } from 'node:util';
 import { after, before, test } from 'node:test';
 import { createToken, launchBrowser, newPage, screenshot, startServer } from './harness.js';
 
@@ -126,6 +128,23 @@ test('scanner shows the problem for a non-image file and for a token of the wron
   await page.locator('#token').fill(counterToken);
   await page.locator('#photo').setInputFiles(labelPng);
   await alert.filter({ hasText: 'HTTP 403' }).waitFor();
+});
+
+test('a photo without colour is answered with what to change, not the general advice', async () => {
+  // The label as a greyscale PNG, as a camera's black-and-white mode would save it.
+  const grey = join(dir, 'label-110001-grey.png');
+  await promisify(execFile)('oiiotool', [labelPng, '--chsum:weight=0.2126,0.7152,0.0722', '-o', grey]);
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/scanner.html`);
+  await page.locator('#token').fill(scannerToken);
+  await page.locator('#photo').setInputFiles(grey);
+  const note = page.locator('#tags .alert-info');
+  await note.waitFor();
+  assert.match(await note.textContent(), /^No PinTag found: the photo has no colour.*take the photo in colour/);
+  assert.doesNotMatch(await note.textContent(), /Hold the camera steady/);
+  assert.match(await page.locator('#summary').textContent(), /^No tag read/);
+  await screenshot(page, 'scanner-no-colour');
+  assert.deepEqual(page.problems, []);
 });
 
 test('a TIFF the browser cannot draw is still read, and the page says why no photo is shown', async () => {

@@ -111,6 +111,34 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
 }
 
 /// The bytes of a base64 data URL of `media_type`, decoded by OpenSSL; empty when it is not one.
+// A camera's black-and-white mode keeps the tag's shape and loses its bits: the answer says so,
+// where the same photo in colour is read with no warning.
+TEST_F(ServeTest, APhotoWithoutColourReadsNoTagAndTheAnswerSaysWhy) {
+  const Photo photo = PhotographLabel(client(), counter(), "110001", 20);
+  ASSERT_FALSE(photo.jpeg.empty());
+  const json colour =
+      ExpectJson(client().Post("/api/v1/detect", scanner(), photo.jpeg, "image/jpeg"));
+  ASSERT_EQ(colour["tag_count"], 1);
+  EXPECT_EQ(colour["warnings"], json::array());
+
+  const cv::Mat decoded = cv::imdecode(
+      std::vector<std::uint8_t>(photo.jpeg.begin(), photo.jpeg.end()), cv::IMREAD_COLOR);
+  cv::Mat grey;
+  cv::cvtColor(decoded, grey, cv::COLOR_BGR2GRAY);
+  for (const bool stored_as_colour : {false, true}) {
+    cv::Mat saved = grey;
+    if (stored_as_colour) cv::cvtColor(grey, saved, cv::COLOR_GRAY2BGR);
+    std::vector<std::uint8_t> jpeg;
+    ASSERT_TRUE(cv::imencode(".jpg", saved, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90}));
+    const json out = ExpectJson(client().Post("/api/v1/detect", scanner(),
+                                              std::string(jpeg.begin(), jpeg.end()), "image/jpeg"));
+    EXPECT_EQ(out["tag_count"], 0) << "stored as colour " << stored_as_colour;
+    ASSERT_EQ(out["warnings"].size(), 1U) << out.dump(1);
+    EXPECT_EQ(out["warnings"][0]["code"], "no_colour");
+    EXPECT_NE(out["warnings"][0]["message"].get<std::string>().find("colour"), std::string::npos);
+  }
+}
+
 std::string DataUrlBytes(const std::string& url, const std::string& media_type) {
   const std::string prefix = "data:" + media_type + ";base64,";
   if (url.rfind(prefix, 0) != 0) return {};

@@ -100,6 +100,7 @@ void Run(const DetectArgs& args) {
     std::cout << result.detections.size() << " tag(s) in " << args.photo << " ("
               << loaded.image->bgr.cols << "x" << loaded.image->bgr.rows << ", intrinsics "
               << ToString(result.intrinsics_source) << ", " << result.timings.total_ms << " ms)\n";
+    for (const PhotoWarning& w : result.warnings) std::cout << "  note: " << w.message << "\n";
     for (const Detection& d : result.detections) {
       if (!d.key) {
         std::cout << "  rejected candidate: " << d.reject_reason << "\n";

@@ -79,8 +79,15 @@ struct StageTimings {
                            ///< read or one of their re-reads)
 };
 
+/// Why a photo in which no tag was read could hold none, for the person holding the camera.
+struct PhotoWarning {
+  std::string code;     ///< stable, for programs: "no_colour"
+  std::string message;  ///< for people: what is wrong and what to do
+};
+
 struct DetectResult {
   std::vector<Detection> detections;
+  std::vector<PhotoWarning> warnings;  ///< only when no tag was read
   StageTimings timings;
   CameraIntrinsics intrinsics;  ///< what pose used
   IntrinsicsSource intrinsics_source = IntrinsicsSource::kAssumed;
