@@ -737,6 +737,7 @@ ImageFormat SniffImageFormat(std::span<const std::uint8_t> b) {
   if (starts({0xFF, 0xD8, 0xFF})) return ImageFormat::kJpeg;
   if (starts({0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'})) return ImageFormat::kPng;
   if (starts({'I', 'I', 42, 0}) || starts({'M', 'M', 0, 42})) return ImageFormat::kTiff;
+  if (starts({'I', 'I', 43, 0}) || starts({'M', 'M', 0, 43})) return ImageFormat::kTiff;  // BigTIFF
   if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return ImageFormat::kWebp;
   return ImageFormat::kUnknown;
 }

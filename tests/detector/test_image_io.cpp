@@ -127,6 +127,25 @@ TEST(ImageIo, PngAndTiffPixelsAreOpenImageIosOwn) {
   }
 }
 
+// BigTIFF (64-bit offsets; what some scanners and microscopes write) is a TIFF: the same pixels as
+// the classic file, and every truncation is corrupt.
+TEST(ImageIo, BigTiffIsReadAsTiff) {
+  const std::string classic = Write("classic.tif", 300, 200);
+  const std::string big =
+      Write("big.tif", 300, 200, [](OIIO::ImageSpec& spec) { spec.attribute("tiff:bigtiff", 1); });
+  const std::vector<std::uint8_t> bytes = ReadAll(big);
+  ASSERT_EQ(bytes[2], 43) << "OpenImageIO wrote a classic TIFF";
+  EXPECT_EQ(SniffImageFormat(bytes), ImageFormat::kTiff);
+  const LoadResult want = LoadImageFile(classic);
+  const LoadResult got = LoadImageBytes(bytes);
+  ASSERT_TRUE(want.image) << want.error;
+  ASSERT_TRUE(got.image) << got.error;
+  EXPECT_EQ(cv::norm(got.image->bgr, want.image->bgr, cv::NORM_INF), 0);
+  for (std::size_t keep = 16; keep + 1 < bytes.size(); keep += 4099) {
+    EXPECT_EQ(LoadImageBytes({bytes.data(), keep}).kind, ImageError::kCorrupt) << "cut at " << keep;
+  }
+}
+
 // PNG's chunk checksum (CRC-32, ISO 3309), for a hand-made chunk.
 std::uint32_t PngCrc(const std::uint8_t* data, std::size_t size) {
   std::uint32_t crc = 0xFFFFFFFFU;
