@@ -499,9 +499,10 @@ TEST(ImageIo, LosslessHierarchicalAndTwelveBitJpegsAreUnsupported) {
 // OpenCV for WebP; `associated`: a TIFF whose colour is stored multiplied by alpha.
 std::string WriteWithAlpha(const std::string& name, int width, int height, int channels,
                            const std::vector<std::uint8_t>& values, bool associated = false) {
-  const std::string path = TempPath(name);
+  std::string path = TempPath(name);
   if (name.ends_with(".webp")) {  // lossless, which OpenCV writes at quality above 100
-    cv::Mat rgba(height, width, CV_8UC4, const_cast<std::uint8_t*>(values.data()));
+    cv::Mat rgba(height, width, CV_8UC4);
+    std::copy(values.begin(), values.end(), rgba.data);
     cv::Mat bgra;
     cv::cvtColor(rgba, bgra, cv::COLOR_RGBA2BGRA);
     EXPECT_TRUE(cv::imwrite(path, bgra, {cv::IMWRITE_WEBP_QUALITY, 101}));
