@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -99,21 +100,29 @@ class DeferredEndingSignals {
 class TemporaryBeside {
  public:
   explicit TemporaryBeside(const std::string& target) {
-    std::string name = target + ".tmp-XXXXXX";
-    std::vector<char> buffer(name.begin(), name.end());
-    buffer.push_back('\0');
-    {
-      // A signal between creating the file and registering it would leave it behind: the
-      // signals that end a process wait until it is registered.
-      const DeferredEndingSignals deferred;
-      const int fd = ::mkstemp(buffer.data());
+    // A signal between creating the file and registering it would leave it behind: the signals
+    // that end a process wait until it is registered.
+    const DeferredEndingSignals deferred;
+    static constexpr char kLetters[] =
+        "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+    std::random_device random;
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      std::string name = target + ".tmp-";
+      for (int i = 0; i < 6; ++i) name += kLetters[random() % (sizeof kLetters - 1)];
+      // Created as SQLite creates a database, 0644 less the umask (mkstemp's 0600 kept a
+      // --read-only replica running as another user from serving the snapshot), and exclusively.
+      const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+      if (fd < 0 && errno == EEXIST) continue;
       if (fd < 0) {
         throw std::runtime_error(SystemError("cannot create a temporary file beside " + target));
       }
       ::close(fd);
-      path_ = buffer.data();
+      path_ = std::move(name);
       pending_ = Register(path_);
+      return;
     }
+    throw std::runtime_error("cannot create a temporary file beside " + target +
+                             ": 100 names were taken");
   }
   TemporaryBeside(const TemporaryBeside&) = delete;
   TemporaryBeside& operator=(const TemporaryBeside&) = delete;
@@ -141,7 +150,35 @@ std::string Directory(const std::string& path) {
   return parent.empty() ? "." : parent.string();
 }
 
+/// Whether the SQLite file at `path` says it keeps a write-ahead log (file format bytes 18 and 19
+/// are 2): every database `pintag serve` writes, never a snapshot.
+bool InWalMode(const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) return false;
+  std::array<unsigned char, 20> header{};
+  const bool read = std::fread(header.data(), 1, header.size(), file) == header.size();
+  std::fclose(file);
+  static constexpr char kMagic[] = "SQLite format 3";  // and its NUL
+  return read && std::memcmp(header.data(), kMagic, sizeof kMagic) == 0 && header[18] == 2 &&
+         header[19] == 2;
+}
+
 }  // namespace
+
+std::string LiveDatabaseAt(const std::string& path) {
+  // Renaming a copy over a live database swaps the file under its open connections, whose
+  // write-ahead log then belongs to another file: the next checkpoint corrupts it.
+  std::error_code error;
+  if (std::filesystem::exists(path + "-wal", error)) {
+    return path + " is a live database (" + path + "-wal is beside it)";
+  }
+  if (InWalMode(path)) {
+    return path +
+           " is a registry database (in WAL mode, as `pintag serve` keeps its --db), not "
+           "a snapshot";
+  }
+  return {};
+}
 
 Result<std::int64_t> RegistryVersion(Connection& connection) {
   return detail::Guard([&]() -> Result<std::int64_t> {
@@ -152,19 +189,15 @@ Result<std::int64_t> RegistryVersion(Connection& connection) {
 }
 
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path) {
-  // Renaming a copy over a live database swaps the file under its open connections, whose
-  // write-ahead log then belongs to another file: the next checkpoint corrupts it.
   std::error_code error;
   if (std::filesystem::equivalent(out_path, source.path(), error)) {
     return Error{ErrorCode::kConflict, "the snapshot " + out_path +
                                            " would replace the database it is taken from; write "
                                            "it to another path"};
   }
-  if (std::filesystem::exists(out_path + "-wal", error)) {
-    return Error{
-        ErrorCode::kConflict,
-        out_path + " is a live database (" + out_path +
-            "-wal is beside it): a snapshot must not replace it; write it to another path"};
+  if (const std::string live = LiveDatabaseAt(out_path); !live.empty()) {
+    return Error{ErrorCode::kConflict,
+                 live + ": a snapshot must not replace it; write it to another path"};
   }
   try {
     TemporaryBeside temporary(out_path);
@@ -200,6 +233,10 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
 }
 
 Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path) {
+  if (const std::string live = LiveDatabaseAt(path); !live.empty()) {
+    return Error{ErrorCode::kConflict,
+                 live + ": a replica must not replace it; give the replica a --db of its own"};
+  }
   try {
     TemporaryBeside temporary(path);
     {
@@ -221,7 +258,17 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
       if (!synced) throw std::runtime_error(SystemError("fsync " + temporary.path()));
     }
     Result<SnapshotInfo> verified = VerifySnapshot(temporary.path());
-    if (!verified) return verified.error();
+    if (!verified) {
+      // Named by `path`, not by the temporary file's random name: a follower logs a repeated
+      // error once.
+      Error error = verified.error();
+      const std::string named = path + " (as received)";
+      for (std::size_t at = 0; (at = error.message.find(temporary.path(), at)) != std::string::npos;
+           at += named.size()) {
+        error.message.replace(at, temporary.path().size(), named);
+      }
+      return error;
+    }
     if (::rename(temporary.path().c_str(), path.c_str()) != 0) {
       return Error{ErrorCode::kStorage, SystemError("cannot rename the snapshot to " + path)};
     }
@@ -246,6 +293,13 @@ Result<SnapshotInfo> VerifySnapshot(const std::string& path) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
     return Error{ErrorCode::kNotFound, "snapshot " + path + " does not exist"};
+  }
+  // A WAL-mode file opened read-only misses what its log holds, and leaves -wal and -shm files.
+  if (InWalMode(path)) {
+    return Error{ErrorCode::kConflict,
+                 "snapshot " + path +
+                     " is in WAL mode, as a live registry database is; a replica serves a "
+                     "snapshot (`pintag snapshot --db LIVE --out FILE` writes one)"};
   }
   try {
     Connection connection(path, {.create = false, .read_only = true});

@@ -410,6 +410,85 @@ TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 }
 
+// A registry a server writes is never replaced by a received snapshot, open (its log beside it)
+// or closed (in WAL mode, which no snapshot is): renamed over an open one, its log corrupted the
+// new file at the next checkpoint.
+TEST(Snapshot, InstallNeverReplacesALiveRegistry) {
+  TempDir dir;
+  const std::string live_path = test::CopyOfSeeded(dir);
+  std::string bytes;
+  {
+    Connection live = test::OpenExisting(live_path);
+    const std::string published = dir.file("published.db");
+    ASSERT_TRUE(WriteSnapshot(live, published).ok());
+    bytes = test::ReadFile(published);
+    ASSERT_TRUE(std::filesystem::exists(live_path + "-wal"));
+    const auto refused = InstallSnapshot(bytes, live_path);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+    EXPECT_NE(refused.error().message.find("is a live database"), std::string::npos)
+        << refused.error().message;
+    EXPECT_TRUE(AddPincode(live, Pincode(999002), {TestOffice("Still Written")}).ok());
+  }
+  ASSERT_FALSE(std::filesystem::exists(live_path + "-wal"));
+  const std::string closed = test::ReadFile(live_path);
+  for (const auto& refused : {InstallSnapshot(bytes, live_path), VerifySnapshot(live_path)}) {
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+    EXPECT_NE(refused.error().message.find("WAL mode"), std::string::npos)
+        << refused.error().message;
+  }
+  EXPECT_EQ(test::ReadFile(live_path), closed);
+  Connection live = test::OpenExisting(live_path);
+  EXPECT_TRUE(LookupPincode(live, Pincode(999002)).ok());
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+// What a follower logs for a refused download names its target, not the random temporary file,
+// so that the same refusal is logged once, not once a poll.
+TEST(Snapshot, InstallRefusalsNameTheTargetNotTheTemporaryFile) {
+  TempDir dir;
+  const std::string target = dir.file("replica.db");
+  std::string first;
+  for (int i = 0; i < 2; ++i) {
+    const auto refused = InstallSnapshot(std::string(8192, 'x'), target);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.error().message.find(".tmp-"), std::string::npos) << refused.error().message;
+    EXPECT_NE(refused.error().message.find(target), std::string::npos) << refused.error().message;
+    if (i == 0)
+      first = refused.error().message;
+    else
+      EXPECT_EQ(refused.error().message, first);
+  }
+}
+
+// Snapshot files are created as SQLite creates a database, 0644 less the umask: mkstemp's 0600
+// kept a --read-only replica running as another user from serving them.
+TEST(Snapshot, FilesAreReadableAsTheUmaskAllows) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const std::string bytes = [&] {
+    const std::string published = dir.file("published.db");
+    EXPECT_TRUE(WriteSnapshot(live, published).ok());
+    return test::ReadFile(published);
+  }();
+  const auto mode_of = [](const std::string& path) {
+    struct stat st {};
+    EXPECT_EQ(::stat(path.c_str(), &st), 0) << path;
+    return st.st_mode & 0777;
+  };
+  const mode_t previous = ::umask(022);
+  ASSERT_TRUE(WriteSnapshot(live, dir.file("open.db")).ok());
+  ASSERT_TRUE(InstallSnapshot(bytes, dir.file("installed.db")).ok());
+  ::umask(077);
+  ASSERT_TRUE(WriteSnapshot(live, dir.file("private.db")).ok());
+  ::umask(previous);
+  EXPECT_EQ(mode_of(dir.file("open.db")), 0644U);
+  EXPECT_EQ(mode_of(dir.file("installed.db")), 0644U);
+  EXPECT_EQ(mode_of(dir.file("private.db")), 0600U);
+}
+
 TEST(ScanLogFile, AReplicaAppendsToItsOwnFile) {
   TempDir dir;
   auto log = OpenScanLogFile(dir.file("scans.db"));

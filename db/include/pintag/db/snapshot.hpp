@@ -22,6 +22,12 @@ struct SnapshotInfo {
   std::uint64_t bytes = 0;            ///< its size
 };
 
+/// Why the file at `path` must not be replaced by a snapshot, or empty: it is a live database (a
+/// write-ahead log beside it), or a registry database in WAL mode, as `pintag serve` keeps its
+/// --db (a snapshot is never in WAL mode). Renaming a file over a live database swaps it under
+/// its open connections, whose log then corrupts the new file at the next checkpoint.
+std::string LiveDatabaseAt(const std::string& path);
+
 /// Copies `source` to `out_path` with SQLite's online backup API (writers on other connections
 /// go on meanwhile). The copy is made in a temporary file beside `out_path`, left without the
 /// scan log (each server keeps its own), switched to a rollback journal (a single file that
@@ -35,7 +41,8 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
 /// Puts a snapshot received as bytes (from a primary) at `path`: written to a temporary file
 /// beside it, fsynced, checked with VerifySnapshot, then renamed into place and the directory
 /// fsynced. Bytes that are not a whole snapshot of the current schema are refused with
-/// VerifySnapshot's error and `path` is left as it was.
+/// VerifySnapshot's error (naming `path`, not the temporary file) and `path` is left as it was;
+/// kConflict, with nothing written, when `path` is a live database (LiveDatabaseAt).
 Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path);
 
 /// Removes the temporary files that WriteSnapshot and InstallSnapshot are writing at this moment.
@@ -45,8 +52,9 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
 void RemoveSnapshotTemporariesOnSignal() noexcept;
 
 /// Opens `path` read-only and checks it is a whole PinTag database of the current schema
-/// (PRAGMA quick_check); its version and size. kStorage for a damaged or foreign file, kConflict
-/// for another schema version, kNotFound when it does not exist.
+/// (PRAGMA quick_check) and not in WAL mode; its version and size. kStorage for a damaged or
+/// foreign file, kConflict for another schema version or a WAL-mode file, kNotFound when it does
+/// not exist.
 Result<SnapshotInfo> VerifySnapshot(const std::string& path);
 
 }  // namespace pintag::db
