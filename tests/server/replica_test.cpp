@@ -2,6 +2,7 @@
 // serve and refuse, where their scans go, how they take a newer snapshot while requests are in
 // flight, and what they do with a file that is not one.
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
@@ -357,6 +358,86 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
   EXPECT_NE(refused.status, 0);
   EXPECT_NE(refused.out.find("cannot serve " + snapshot + ":"), std::string::npos) << refused.out;
   EXPECT_EQ(ServingFiles(snapshot), before);
+}
+
+// Both commands default to --db pintag.db: a follower started in its primary's directory was
+// handed the primary's live file, renamed a snapshot over it, and the primary's write-ahead log
+// then corrupted the new file. A replica refuses any registry a server writes, before it fetches.
+TEST_F(ReplicaSetTest, AReplicaNeverReplacesALiveRegistry) {
+  const auto inode = [](const std::string& path) {
+    struct stat st {};
+    return ::stat(path.c_str(), &st) == 0 ? st.st_ino : ino_t{0};
+  };
+  const ino_t before = inode(primary_db_);
+  const std::string token_file = dir_.file("replica.token");
+  for (const std::string& mode : {"--follow " + primaryUrl() + " --follow-token-file " + token_file,
+                                  std::string("--read-only")}) {
+    const CommandResult refused =
+        RunPintag("serve --port 0 --bind 127.0.0.1 --db " + primary_db_ + " " + mode +
+                  " --scan-log " + dir_.file("refused-scans.db"));
+    EXPECT_EQ(refused.status, 1) << mode << ": " << refused.out;
+    EXPECT_NE(refused.out.find(primary_db_ + " is a live database"), std::string::npos)
+        << refused.out;
+  }
+  EXPECT_EQ(inode(primary_db_), before);
+  httplib::Client primary("127.0.0.1", primary_->port());
+  primary.set_read_timeout(30, 0);
+  EXPECT_EQ(StatusOf(primary.Get("/readyz")), 200);
+  addPincode(primary, "999124");
+
+  // Stopped, the primary's file has no log beside it, and is still a registry a server writes.
+  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+  ASSERT_FALSE(std::filesystem::exists(primary_db_ + "-wal"));
+  const CommandResult refused =
+      RunPintag("serve --port 0 --bind 127.0.0.1 --read-only --db " + primary_db_ + " --scan-log " +
+                dir_.file("refused-scans.db"));
+  EXPECT_EQ(refused.status, 1) << refused.out;
+  EXPECT_NE(refused.out.find("in WAL mode"), std::string::npos) << refused.out;
+  EXPECT_EQ(inode(primary_db_), before);
+  EXPECT_EQ(CountRows(primary_db_, "pincodes WHERE pincode = 999124"), 1);
+}
+
+// The URL the primary's banner prints ends in a slash; a follower given it fetched from "//api/…"
+// and waited forever. A URL with a path is refused at start, not retried.
+TEST_F(ReplicaSetTest, FollowTakesThePrimaryUrlAsTheBannerPrintsIt) {
+  ServerProcess follower(
+      {"--db", replicaDb(0), "--follow", primaryUrl() + "/", "--follow-token-file",
+       dir_.file("replica.token"), "--scan-log", replicaScanLog(0)},
+      dir_.file("replica-0.err"), 60);
+  ASSERT_TRUE(follower.ok()) << stderrOf("replica-0");
+  EXPECT_EQ(RegistryVersionAt(follower.port()), RegistryVersionAt(primary_->port()));
+  httplib::Client client("127.0.0.1", follower.port());
+  client.set_read_timeout(30, 0);
+  EXPECT_EQ(Body(client.Get("/api/v1/registry"))["primary"], primaryUrl());
+
+  for (const std::string& url :
+       {primaryUrl() + "/pintag", std::string("127.0.0.1:8090"), std::string("ftp://host")}) {
+    const CommandResult refused =
+        RunPintag("serve --port 0 --db " + replicaDb(1) + " --follow " + url +
+                  " --follow-token-file " + dir_.file("replica.token"));
+    EXPECT_EQ(refused.status, 2) << url << ": " << refused.out;
+    EXPECT_NE(refused.out.find("--follow takes the primary's base URL"), std::string::npos)
+        << refused.out;
+  }
+}
+
+// A replica not told its primary says so: null in /api/v1/registry, as the API promises, and a
+// refused write says how to name it.
+TEST_F(ReplicaSetTest, AReplicaNotToldItsPrimaryNamesNone) {
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess replica({"--db", snapshot, "--read-only", "--scan-log", replicaScanLog(0)},
+                        dir_.file("replica-0.err"), 60);
+  ASSERT_TRUE(replica.ok()) << stderrOf("replica-0");
+  httplib::Client client("127.0.0.1", replica.port());
+  client.set_read_timeout(30, 0);
+  const json status = Body(client.Get("/api/v1/registry"));
+  EXPECT_EQ(status["role"], "replica");
+  EXPECT_TRUE(status["primary"].is_null()) << status.dump();
+  const auto refused =
+      client.Post("/api/v1/pincodes", Auth(admin_token_), "{}", "application/json");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 403);
+  EXPECT_NE(refused->body.find("start it with --primary URL"), std::string::npos) << refused->body;
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {

@@ -26,7 +26,7 @@ struct AppConfig {
   int max_tag_px = 4096;                           ///< largest tag PNG square side
   int busy_timeout_ms = 5000;                      ///< SQLite lock wait
   /// A read-only replica (issue 22): db_path is a snapshot, reloaded through `pool`; writes
-  /// answer 403 naming primary_url; scans go to scan_log_path.
+  /// answer 403 naming primary_url (empty: not told which); scans go to scan_log_path.
   bool read_only = false;
   std::string primary_url;
   std::string scan_log_path;  ///< an existing scan log file (db::OpenScanLogFile); none = db_path

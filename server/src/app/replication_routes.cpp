@@ -42,7 +42,8 @@ HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& /*r
   }
   if (!version) throw HttpError(503, "the registry is not readable");
   json body = {{"registry_version", *version}, {"role", context.read_only ? "replica" : "primary"}};
-  body["primary"] = context.read_only ? json(context.primary_url) : json(nullptr);
+  body["primary"] =
+      context.read_only && !context.primary_url.empty() ? json(context.primary_url) : json(nullptr);
   return HttpResponse::Json(body.dump());
 }
 

@@ -38,6 +38,22 @@ std::string ReadToken(const ReplicationArgs& args) {
   return token;
 }
 
+/// The primary's base URL as given to --follow or --primary, without the trailing slash the
+/// server's own banner prints ("http://host:8090/"); anything but scheme://host[:port] is a
+/// usage error, since the snapshot route is asked for at the root.
+std::string PrimaryBaseUrl(const std::string& option, std::string url) {
+  while (!url.empty() && url.back() == '/') url.pop_back();
+  const std::size_t scheme_end = url.find("://");
+  const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
+  const std::string authority = scheme_end == std::string::npos ? "" : url.substr(scheme_end + 3);
+  if ((scheme != "http" && scheme != "https") || authority.empty() ||
+      authority.find_first_of("/?#@ ") != std::string::npos) {
+    throw UsageError(option + " takes the primary's base URL, http://HOST[:PORT] or " +
+                     "https://HOST[:PORT], with no path; got \"" + url + "\"");
+  }
+  return url;
+}
+
 }  // namespace
 
 void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
@@ -78,7 +94,11 @@ void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
 
 Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     : args_(args), db_path_(config.db_path) {
-  if (!args_.follow.empty()) args_.read_only = true;
+  if (!args_.follow.empty()) {
+    args_.follow = PrimaryBaseUrl("--follow", args_.follow);
+    args_.read_only = true;
+  }
+  if (!args_.primary.empty()) args_.primary = PrimaryBaseUrl("--primary", args_.primary);
   if (args_.read_only && !args_.snapshot.empty()) {
     throw UsageError("--snapshot publishes a primary's registry; a --read-only replica has none");
   }
@@ -91,6 +111,12 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     return;
   }
 
+  // A replica's --db is replaced by every snapshot: never a registry a server writes (the
+  // primary's own file, when both run with the default --db in one directory).
+  if (const std::string live = db::LiveDatabaseAt(db_path_); !live.empty()) {
+    throw std::runtime_error(live + ": a read-only replica serves a snapshot of its own; give it " +
+                             "another --db (a --follow replica fetches one there)");
+  }
   if (!args_.follow.empty()) {
     token_ = ReadToken(args_);
     // A replica with no usable snapshot yet waits for its primary.
@@ -129,9 +155,7 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
   config.read_only = true;
   config.pool = pool_;
   config.scan_log_path = scan_log;
-  config.primary_url = !args_.primary.empty()  ? args_.primary
-                       : !args_.follow.empty() ? args_.follow
-                                               : "its primary (this replica was not told which)";
+  config.primary_url = !args_.primary.empty() ? args_.primary : args_.follow;  // or unknown
 }
 
 Replication::~Replication() {

@@ -23,7 +23,10 @@ server::Router ReadOnlyRouter(const server::Router& router, const std::string& p
         return server::ProblemResponse(
             {403, "Read-Only Replica",
              "this server is a read-only replica of the registry; send " + request.method + " " +
-                 request.path.substr(0, 200) + " to the primary at " + primary_url,
+                 request.path.substr(0, 200) + " to the primary" +
+                 (primary_url.empty() ? " (this replica was not told which: start it with "
+                                        "--primary URL)"
+                                      : " at " + primary_url),
              "about:blank"});
       };
       route.summary += " (a replica refuses it: send it to the primary)";

@@ -13,7 +13,8 @@ namespace pintag::replica {
 bool ChangesRegistry(const server::Route& route);
 
 /// `router` for a read-only replica: each route that ChangesRegistry answers 403 "Read-Only
-/// Replica" naming `primary_url`, before asking for a token (the body is not parsed).
+/// Replica" naming `primary_url` (empty: not told which), before asking for a token (the body is
+/// not parsed).
 server::Router ReadOnlyRouter(const server::Router& router, const std::string& primary_url);
 
 }  // namespace pintag::replica
