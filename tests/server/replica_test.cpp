@@ -203,12 +203,16 @@ TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem)
   ASSERT_TRUE(full);
   ASSERT_EQ(full->status, 200);
   EXPECT_EQ(full->get_header_value("Content-Type"), "application/vnd.sqlite3");
+  // "<version>-<the primary run's epoch>"
   const std::string etag = full->get_header_value("ETag");
-  EXPECT_EQ(etag, "\"" + std::to_string(RegistryVersionAt(primary_->port())) + "\"");
+  const std::string version_part = "\"" + std::to_string(RegistryVersionAt(primary_->port())) + "-";
+  EXPECT_EQ(etag.substr(0, version_part.size()), version_part) << etag;
+  EXPECT_EQ(etag.back(), '"');
   const std::string copy = WriteFile(dir_.file("downloaded.db"), full->body);
   const auto verified = db::VerifySnapshot(copy);
   ASSERT_TRUE(verified.ok()) << verified.error().message;
-  EXPECT_EQ("\"" + std::to_string(verified->registry_version) + "\"", etag);
+  EXPECT_EQ(etag.substr(0, version_part.size()),
+            "\"" + std::to_string(verified->registry_version) + "-");
 
   httplib::Headers current = Auth(replica_token_);
   current.emplace("If-None-Match", etag);
@@ -438,6 +442,66 @@ TEST_F(ReplicaSetTest, AReplicaNotToldItsPrimaryNamesNone) {
   ASSERT_TRUE(refused);
   EXPECT_EQ(refused->status, 403);
   EXPECT_NE(refused->body.find("start it with --primary URL"), std::string::npos) << refused->body;
+}
+
+// A registry version counts changes within one database's history. A primary restored from a
+// backup counts again from the backup's version: after as many changes as the replicas saw since,
+// it is at their version with other rows. They answered 304 to it, and served rows the primary
+// no longer had, until its next change. The ETag names the primary's run too.
+TEST_F(ReplicaSetTest, AFollowerTakesARestoredPrimarysRegistryAtTheVersionItAlreadyHolds) {
+  const std::string backup = dir_.file("backup.db");
+  {
+    db::Connection live(primary_db_, {.create = false});
+    ASSERT_TRUE(db::WriteSnapshot(live, backup).ok());
+  }
+  ServerProcess& follower = startFollower(0);
+  ASSERT_TRUE(follower.ok());
+  httplib::Client replica("127.0.0.1", follower.port());
+  replica.set_read_timeout(30, 0);
+  httplib::Client primary("127.0.0.1", primary_->port());
+  primary.set_read_timeout(30, 0);
+  const auto wait_for = [&](const std::string& pin, int status) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    int got = 0;
+    while ((got = StatusOf(replica.Get("/api/v1/pincodes/" + pin))) != status &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return got;
+  };
+  addPincode(primary, "999202");
+  ASSERT_EQ(wait_for("999202", 200), 200) << stderrOf("replica-0");
+  const std::int64_t held = RegistryVersionAt(follower.port());
+
+  // Restored: the backup, then one other pincode, which brings it to the version the replica has.
+  const int port = primary_->port();
+  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+  std::filesystem::copy_file(backup, primary_db_,
+                             std::filesystem::copy_options::overwrite_existing);
+  {
+    db::Connection restored(primary_db_, {.create = false});
+    restored.execute("PRAGMA journal_mode=WAL");
+    db::PostOffice office;
+    office.name = "Restored Nagar";
+    office.district = "Testpur";
+    office.state = "Test State";
+    office.circle = "Test";
+    office.region = "T";
+    office.division = "TD";
+    ASSERT_TRUE(db::AddPincode(restored, Pincode(999203), {office}).ok());
+    auto version = db::RegistryVersion(restored);
+    ASSERT_TRUE(version.ok());
+    ASSERT_EQ(*version, held) << "the restored registry is not at the replica's version";
+  }
+  primary_ = std::make_unique<ServerProcess>(
+      std::vector<std::string>{"--db", primary_db_, "--threads", "4", "--snapshot",
+                               dir_.file("published.db")},
+      dir_.file("primary-restored.err"), 60, port);
+  ASSERT_TRUE(primary_->ok()) << stderrOf("primary-restored");
+
+  EXPECT_EQ(wait_for("999203", 200), 200) << stderrOf("replica-0");
+  EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 404);
+  EXPECT_EQ(RegistryVersionAt(follower.port()), held);
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {

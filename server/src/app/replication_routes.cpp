@@ -56,9 +56,10 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   const db::Result<std::int64_t> live = context.publisher->liveVersion();
   if (!live) throw HttpError(503, "the live database is not readable");
   const std::optional<std::string> none_match = request.header("If-None-Match");
-  if (none_match && NoneMatchNames(*none_match, replica::VersionETag(*live))) {
+  const std::string& epoch = context.publisher->epoch();
+  if (none_match && NoneMatchNames(*none_match, replica::RegistryETag(*live, epoch))) {
     HttpResponse not_modified = HttpResponse::Bytes("application/vnd.sqlite3", "", 304);
-    not_modified.headers.emplace_back("ETag", replica::VersionETag(*live));
+    not_modified.headers.emplace_back("ETag", replica::RegistryETag(*live, epoch));
     return not_modified;
   }
   db::Result<replica::PublishedSnapshot> published = context.publisher->read();
@@ -66,7 +67,7 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   const std::int64_t version = published->info.registry_version;
   HttpResponse response =
       HttpResponse::Bytes("application/vnd.sqlite3", std::move(published.value().bytes));
-  response.headers.emplace_back("ETag", replica::VersionETag(version));
+  response.headers.emplace_back("ETag", replica::RegistryETag(version, epoch));
   response.headers.emplace_back("Cache-Control", "no-cache");
   return response;
 }

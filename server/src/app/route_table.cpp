@@ -105,7 +105,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
     {"GET",    "/api/v1/registry",                  Access::kOpen,    GetRegistryStatus,
      {"replication", "Which registry version this server serves, and whether it is the primary or a replica"}},
     {"GET",    "/api/v1/registry/snapshot",         Access::kReplica, GetRegistrySnapshot,
-     {"replication", "The registry as an SQLite snapshot for read-only replicas (ETag: its registry version)",
+     {"replication", "The registry as an SQLite snapshot for read-only replicas (ETag: its registry version and the primary run)",
       {}, {}, {"application/vnd.sqlite3"}}},
 
     {"POST",   "/api/v1/tokens",                    Access::kAdmin,   PostToken,

@@ -7,10 +7,12 @@
 
 namespace pintag::replica {
 
-std::string VersionETag(std::int64_t version) {
+std::string RegistryETag(std::int64_t version, const std::string& epoch) {
   // Appended, not `"\"" + ...`: GCC 12 warns (-Wrestrict) about that concatenation wrongly.
   std::string tag = "\"";
   tag += std::to_string(version);
+  tag += '-';
+  tag += epoch;
   tag += '"';
   return tag;
 }
@@ -27,7 +29,10 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   client.set_connection_timeout(std::chrono::seconds(5));
   client.set_read_timeout(options_.timeout);
   httplib::Headers headers = {{"Authorization", "Bearer " + options_.token}};
-  if (have) headers.emplace("If-None-Match", VersionETag(*have));
+  // The ETag is known for a snapshot fetched in this run; one found on disk at start is fetched
+  // once more, since the primary may have been restored since it was written.
+  const bool holds_installed = have && *have == installed_version_ && !installed_etag_.empty();
+  if (holds_installed) headers.emplace("If-None-Match", installed_etag_);
   const httplib::Result answer = client.Get("/api/v1/registry/snapshot", headers);
   if (!answer) {
     return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url + " did not answer: " +
@@ -39,8 +44,13 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
                                                   std::to_string(answer->status) + ": " +
                                                   answer->body.substr(0, 300)};
   }
+  const std::string etag = answer->get_header_value("ETag");
+  // A primary (or a proxy) that ignores If-None-Match sends what is already served.
+  if (holds_installed && etag == installed_etag_) return std::optional<db::SnapshotInfo>{};
   db::Result<db::SnapshotInfo> installed = db::InstallSnapshot(answer->body, options_.path);
   if (!installed) return installed.error();
+  installed_etag_ = etag;
+  installed_version_ = installed->registry_version;
   return std::optional<db::SnapshotInfo>{*installed};
 }
 

@@ -1,8 +1,10 @@
 #pragma once
 // A read-only replica that follows a primary: polls the primary's
-// GET /api/v1/registry/snapshot with If-None-Match (the version it holds) and a replica token;
-// a 200 carries a newer snapshot, which is checked and renamed into place at the replica's
-// snapshot path (db::InstallSnapshot); a 304 means it is current.
+// GET /api/v1/registry/snapshot with If-None-Match (the ETag of the snapshot it holds, when it
+// fetched it in this run) and a replica token; a 200 carries another snapshot, which is checked
+// and renamed into place at the replica's snapshot path (db::InstallSnapshot); a 304 means it is
+// current. The ETag names the primary's run as well as the version, so a primary restored from a
+// backup, whose versions count again from the backup's, is followed, not taken as current.
 
 #include <chrono>
 #include <cstdint>
@@ -45,10 +47,14 @@ class SnapshotFollower {
  private:
   FollowOptions options_;
   OnInstalled on_installed_;
+  /// The ETag and version of the last snapshot installed (the fetching thread's own).
+  std::string installed_etag_;
+  std::int64_t installed_version_ = -1;
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
-/// The ETag of a registry version: the number in double quotes.
-std::string VersionETag(std::int64_t version);
+/// The ETag of a registry version published by a primary run of `epoch`
+/// (SnapshotPublisher::epoch): "<version>-<epoch>", quoted.
+std::string RegistryETag(std::int64_t version, const std::string& epoch);
 
 }  // namespace pintag::replica

@@ -1,15 +1,28 @@
 #include "replica/snapshot_publisher.hpp"
 
 #include <fstream>
+#include <iomanip>
 #include <iostream>
+#include <random>
 #include <sstream>
 
 #include "pintag/db/database.hpp"
 
 namespace pintag::replica {
 
+namespace {
+
+std::string RandomEpoch() {
+  std::random_device random;
+  std::ostringstream hex;
+  hex << std::hex << std::setfill('0') << std::setw(8) << random() << std::setw(8) << random();
+  return hex.str();
+}
+
+}  // namespace
+
 SnapshotPublisher::SnapshotPublisher(std::string live_path, std::string out_path)
-    : live_path_(std::move(live_path)), out_path_(std::move(out_path)) {}
+    : live_path_(std::move(live_path)), out_path_(std::move(out_path)), epoch_(RandomEpoch()) {}
 
 db::Result<std::int64_t> SnapshotPublisher::liveVersion() {
   const std::lock_guard lock(mutex_);

@@ -34,6 +34,11 @@ class SnapshotPublisher {
 
   /// The live database's registry version now.
   db::Result<std::int64_t> liveVersion();
+  /// Random per publisher, so per primary run: a version counts changes within one database's
+  /// history only, and a primary restored from a backup counts again from the backup's version,
+  /// to the same numbers with other rows. The ETag names both (RegistryETag), so replicas take
+  /// the first snapshot of every run whatever its version.
+  const std::string& epoch() const { return epoch_; }
   /// The snapshot of the live version (published first if it is not yet), with its bytes.
   db::Result<PublishedSnapshot> read();
   /// Publishes when the live version differs from the published one; the published info.
@@ -47,6 +52,7 @@ class SnapshotPublisher {
 
   std::string live_path_;
   std::string out_path_;
+  std::string epoch_;
   std::mutex mutex_;  // guards the connection, published_ and the file's replacement
   std::optional<db::Connection> live_;
   std::optional<db::SnapshotInfo> published_;
