@@ -17,6 +17,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -68,7 +69,7 @@ void Usage(FILE* to) {
   std::fprintf(
       to,
       "usage: pintag_bench [options]\n"
-      "  --quick               one frame per size x tilt bin, 6 tagless (CI, seconds)\n"
+      "  --quick               one frame per size x tilt bin, 6 tagless (CI, about a minute)\n"
       "  --frames-per-bin N    frames per size x tilt x photometry bin (default 8)\n"
       "  --tagless N           tagless photograph frames (default 64)\n"
       "  --seed N              base seed of the sweep (default 1)\n"
@@ -184,6 +185,17 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       const char* v = value("--detectors");
       if (v == nullptr) return false;
       args->detectors = v;
+      // An unknown name was skipped without a word: a typo ran a sweep without its peer.
+      std::stringstream names(args->detectors);
+      for (std::string name; std::getline(names, name, ',');) {
+        if (name != "pintag" && name != "aruco" && name != "apriltag-d1" && name != "apriltag-d2") {
+          std::fprintf(stderr,
+                       "pintag_bench: --detectors: unknown detector \"%s\" (pintag, aruco, "
+                       "apriltag-d1, apriltag-d2)\n",
+                       name.c_str());
+          return false;
+        }
+      }
     } else if (a == "--pintag-options") {
       const char* v = value("--pintag-options");
       if (v == nullptr) return false;
@@ -292,7 +304,10 @@ struct CsvRow {
 int Main(int argc, char** argv) {
   Args args;
   if (!ParseArgs(argc, argv, &args)) return 2;
-  for (const std::string& dir : {args.dump_misses, args.save_frames}) {
+  // Every output place is made or checked before the sweep, which can take many minutes.
+  const std::string csv_dir =
+      args.csv.empty() ? "" : std::filesystem::path(args.csv).parent_path().string();
+  for (const std::string& dir : {args.dump_misses, args.save_frames, args.out_dir, csv_dir}) {
     if (dir.empty()) continue;
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
@@ -301,6 +316,10 @@ int Main(int argc, char** argv) {
                    ec.message().c_str());
       return 2;
     }
+  }
+  if (!args.csv.empty() && !std::ofstream(args.csv, std::ios::app)) {
+    std::fprintf(stderr, "pintag_bench: cannot write %s\n", args.csv.c_str());
+    return 2;
   }
   const auto wall_start = Clock::now();
 
@@ -382,7 +401,11 @@ int Main(int argc, char** argv) {
     cv::setNumThreads(1);
     std::vector<Rendered> rendered(end - begin);
     std::atomic<std::size_t> next{begin};
-    const auto render_worker = [&] {
+    // A photograph that cannot be read throws in a worker: kept, the others stopped, and thrown
+    // again here (uncaught on its thread it ended the process with no message).
+    std::exception_ptr render_error;
+    std::mutex render_error_mutex;
+    const auto render_frames = [&] {
       for (std::size_t i; (i = next++) < end;) {
         const FrameSpec& f = frames[i];
         for (int m = 0; m < (f.tagless() ? 1 : kMarkerCount); ++m) {
@@ -406,10 +429,20 @@ int Main(int argc, char** argv) {
         progress.update(++done, "rendering");
       }
     };
+    const auto render_worker = [&] {
+      try {
+        render_frames();
+      } catch (...) {
+        const std::lock_guard lock(render_error_mutex);
+        if (!render_error) render_error = std::current_exception();
+        next = end;
+      }
+    };
     std::vector<std::thread> pool;
     for (int t = 1; t < cores; ++t) pool.emplace_back(render_worker);
     render_worker();
     for (std::thread& t : pool) t.join();
+    if (render_error) std::rethrow_exception(render_error);
 
     // 2. Time every detector over the chunk: one thread, then all cores. The order of the
     // detectors turns from chunk to chunk so none always runs first on a cold cache.
