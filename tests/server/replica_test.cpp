@@ -2,6 +2,9 @@
 // serve and refuse, where their scans go, how they take a newer snapshot while requests are in
 // flight, and what they do with a file that is not one.
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -502,6 +505,101 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredPrimarysRegistryAtTheVersionItAlre
   EXPECT_EQ(wait_for("999203", 200), 200) << stderrOf("replica-0");
   EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 404);
   EXPECT_EQ(RegistryVersionAt(follower.port()), held);
+}
+
+// Something at a follower's primary URL that is not a working primary: it reads each request and
+// then answers nothing (`hang`), or declares a 2 GiB body and sends zeros (`huge`).
+class StubPrimary {
+ public:
+  explicit StubPrimary(bool huge) : huge_(huge) {
+    listener_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t size = sizeof address;
+    EXPECT_EQ(::bind(listener_, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    EXPECT_EQ(::listen(listener_, 8), 0);
+    EXPECT_EQ(::getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &size), 0);
+    port_ = ntohs(address.sin_port);
+    thread_ = std::thread([this] { serve(); });
+  }
+  StubPrimary(const StubPrimary&) = delete;
+  StubPrimary& operator=(const StubPrimary&) = delete;
+  ~StubPrimary() {
+    stopping_ = true;
+    ::shutdown(listener_, SHUT_RDWR);
+    thread_.join();
+    ::close(listener_);
+  }
+  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
+  int requests() const { return requests_; }
+
+ private:
+  void serve() {
+    std::vector<int> held;
+    while (!stopping_) {
+      const int fd = ::accept4(listener_, nullptr, nullptr, SOCK_CLOEXEC);
+      if (fd < 0) break;
+      test::ReceiveUntil(
+          fd, 2, [](const std::string& r) { return r.find("\r\n\r\n") != std::string::npos; });
+      ++requests_;
+      if (huge_) {
+        test::SendAll(fd,
+                      "HTTP/1.1 200 OK\r\nContent-Type: application/vnd.sqlite3\r\n"
+                      "Content-Length: 2147483648\r\n\r\n" +
+                          std::string(1 << 20, '\0'));
+        ::close(fd);
+      } else {
+        held.push_back(fd);  // never answered
+      }
+    }
+    for (const int fd : held) ::close(fd);
+  }
+
+  bool huge_;
+  int listener_ = -1;
+  int port_ = 0;
+  std::atomic<bool> stopping_{false};
+  std::atomic<int> requests_{0};
+  std::thread thread_;
+};
+
+// A follower that serves a snapshot and polls a primary that never answers stopped only after the
+// read timeout (30 s: past Docker's and Kubernetes's grace), and one sent a body of 2 GiB held it
+// all in memory. SIGTERM now cancels the download, and a body over the limit is refused as it
+// arrives, the old snapshot served.
+TEST_F(ReplicaSetTest, AFollowerStopsAtOnceAndRefusesAnOversizedSnapshot) {
+  ServerProcess& first = startFollower(0);
+  ASSERT_TRUE(first.ok());
+  ASSERT_EQ(first.stop(SIGTERM, 30), 0);
+  const std::int64_t version = RegistryVersionAt(primary_->port());
+
+  for (const bool huge : {false, true}) {
+    StubPrimary stub(huge);
+    ServerProcess follower({"--db", replicaDb(0), "--follow", stub.url(), "--follow-token-file",
+                            dir_.file("replica.token"), "--follow-interval-ms", "200", "--scan-log",
+                            replicaScanLog(0)},
+                           dir_.file("replica-0.err"), 60);
+    ASSERT_TRUE(follower.ok()) << stderrOf("replica-0");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    // Two refusals of the huge body (the second logged as the first, once), or the first poll.
+    while (stub.requests() < (huge ? 2 : 1) && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (huge) {
+      ASSERT_GE(stub.requests(), 2);
+      EXPECT_NE(stderrOf("replica-0").find("sent a snapshot of more than 1024 MiB"),
+                std::string::npos)
+          << stderrOf("replica-0");
+      EXPECT_EQ(RegistryVersionAt(follower.port()), version);
+    } else {
+      ASSERT_EQ(stub.requests(), 1);  // its first poll hangs
+    }
+    const auto asked = std::chrono::steady_clock::now();
+    EXPECT_EQ(follower.stop(SIGTERM, 60), 0) << "huge " << huge;
+    EXPECT_LT(std::chrono::steady_clock::now() - asked, std::chrono::seconds(15))
+        << "huge " << huge;
+  }
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {

@@ -3,6 +3,8 @@
 
 #include <httplib.h>
 
+#include <charconv>
+#include <cstdint>
 #include <iostream>
 
 namespace pintag::replica {
@@ -20,6 +22,15 @@ std::string RegistryETag(std::int64_t version, const std::string& epoch) {
 SnapshotFollower::SnapshotFollower(FollowOptions options, OnInstalled on_installed)
     : options_(std::move(options)), on_installed_(std::move(on_installed)) {}
 
+SnapshotFollower::~SnapshotFollower() {
+  {
+    const std::lock_guard lock(client_mutex_);
+    stopping_ = true;
+    if (client_ != nullptr) client_->stop();  // a blocked read returns at once
+  }
+  thread_.stop();
+}
+
 db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     std::optional<std::int64_t> have) {
   httplib::Client client(options_.primary_url);
@@ -28,12 +39,48 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   }
   client.set_connection_timeout(std::chrono::seconds(5));
   client.set_read_timeout(options_.timeout);
+  {
+    const std::lock_guard lock(client_mutex_);
+    if (stopping_) return db::Error{db::ErrorCode::kBusy, "stopping"};
+    client_ = &client;
+  }
+  struct Unregister {
+    SnapshotFollower* follower;
+    ~Unregister() {
+      const std::lock_guard lock(follower->client_mutex_);
+      follower->client_ = nullptr;
+    }
+  } unregister{this};
   httplib::Headers headers = {{"Authorization", "Bearer " + options_.token}};
   // The ETag is known for a snapshot fetched in this run; one found on disk at start is fetched
   // once more, since the primary may have been restored since it was written.
   const bool holds_installed = have && *have == installed_version_ && !installed_etag_.empty();
   if (holds_installed) headers.emplace("If-None-Match", installed_etag_);
-  const httplib::Result answer = client.Get("/api/v1/registry/snapshot", headers);
+  // The body is received here, not by the client, so that a body past max_bytes is refused
+  // as it arrives (a primary, or whatever answers at its URL, sent 2 GB and got it all held).
+  std::string body;
+  bool too_large = false;
+  const httplib::Result answer = client.Get(
+      "/api/v1/registry/snapshot", headers,
+      [&](const httplib::Response& response) {
+        const std::string length = response.get_header_value("Content-Length");
+        std::uint64_t declared = 0;
+        const auto [end, error] =
+            std::from_chars(length.data(), length.data() + length.size(), declared);
+        too_large = error == std::errc::result_out_of_range ||
+                    (error == std::errc() && declared > options_.max_bytes);
+        return !too_large;
+      },
+      [&](const char* data, std::size_t size) {
+        too_large = body.size() + size > options_.max_bytes;
+        if (!too_large) body.append(data, size);
+        return !too_large;
+      });
+  if (too_large) {
+    return db::Error{db::ErrorCode::kStorage,
+                     "primary " + options_.primary_url + " sent a snapshot of more than " +
+                         std::to_string(options_.max_bytes >> 20) + " MiB; refused"};
+  }
   if (!answer) {
     return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url + " did not answer: " +
                                                httplib::to_string(answer.error())};
@@ -42,12 +89,12 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   if (answer->status != 200) {
     return db::Error{db::ErrorCode::kStorage, "primary " + options_.primary_url + " answered " +
                                                   std::to_string(answer->status) + ": " +
-                                                  answer->body.substr(0, 300)};
+                                                  body.substr(0, 300)};
   }
   const std::string etag = answer->get_header_value("ETag");
   // A primary (or a proxy) that ignores If-None-Match sends what is already served.
   if (holds_installed && etag == installed_etag_) return std::optional<db::SnapshotInfo>{};
-  db::Result<db::SnapshotInfo> installed = db::InstallSnapshot(answer->body, options_.path);
+  db::Result<db::SnapshotInfo> installed = db::InstallSnapshot(body, options_.path);
   if (!installed) return installed.error();
   installed_etag_ = etag;
   installed_version_ = installed->registry_version;
@@ -57,6 +104,10 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
 void SnapshotFollower::start(Have have, std::chrono::milliseconds interval) {
   thread_.start(interval, [this, have = std::move(have), last_error = std::string()]() mutable {
     const auto fetched = fetch(have());
+    {
+      const std::lock_guard lock(client_mutex_);
+      if (stopping_) return;  // a download cancelled by the destructor is not an error
+    }
     if (!fetched) {
       if (fetched.error().message != last_error) {
         std::cerr << "pintag serve: following " << options_.primary_url << ": "

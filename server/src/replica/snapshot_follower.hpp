@@ -9,12 +9,17 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <string>
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "replica/periodic_thread.hpp"
+
+namespace httplib {
+class Client;
+}
 
 namespace pintag::replica {
 
@@ -23,6 +28,9 @@ struct FollowOptions {
   std::string token;                 ///< a replica (or admin) token's secret
   std::string path;                  ///< where the replica's snapshot lives
   std::chrono::seconds timeout{30};  ///< per request to the primary
+  /// A larger answer is refused as it arrives (the body is held in memory until installed; the
+  /// seeded registry's snapshot is about 35 MB).
+  std::size_t max_bytes = std::size_t{1} << 30;
 };
 
 class SnapshotFollower {
@@ -30,7 +38,9 @@ class SnapshotFollower {
   using OnInstalled = std::function<void(const db::SnapshotInfo&)>;
 
   SnapshotFollower(FollowOptions options, OnInstalled on_installed);
-  ~SnapshotFollower() = default;  ///< stops the thread
+  /// Cancels a download in progress (an install in progress finishes) and stops the thread: a
+  /// primary that answers slowly, or not at all, held SIGTERM for the read timeout (30 s).
+  ~SnapshotFollower();
   SnapshotFollower(const SnapshotFollower&) = delete;
   SnapshotFollower& operator=(const SnapshotFollower&) = delete;
 
@@ -47,6 +57,9 @@ class SnapshotFollower {
  private:
   FollowOptions options_;
   OnInstalled on_installed_;
+  std::mutex client_mutex_;  // guards stopping_'s meaning for client_ and client_ itself
+  bool stopping_ = false;
+  httplib::Client* client_ = nullptr;  ///< the download in progress, to cancel
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
   std::string installed_etag_;
   std::int64_t installed_version_ = -1;
