@@ -240,6 +240,42 @@ TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem)
   EXPECT_NE(changed->get_header_value("ETag"), etag);
 }
 
+// Replicas all ask for the snapshot after a change, and a publication takes seconds: each request
+// held a worker thread meanwhile, and six of them stalled the primary's /readyz for 6 s. At most
+// two are answered at once; the rest get 503 with Retry-After and leave their threads free.
+TEST_F(ReplicaSetTest, SnapshotDownloadsLeaveThePrimarysWorkersFree) {
+  httplib::Client primary("127.0.0.1", primary_->port());
+  primary.set_read_timeout(30, 0);
+  addPincode(primary, "999125");
+  std::vector<std::thread> downloads;
+  std::vector<int> statuses(6, 0);
+  std::vector<std::string> retry_after(6);
+  for (std::size_t i = 0; i < statuses.size(); ++i) {
+    downloads.emplace_back([&, i] {
+      httplib::Client client("127.0.0.1", primary_->port());
+      client.set_read_timeout(60, 0);
+      const auto r = client.Get("/api/v1/registry/snapshot", Auth(replica_token_));
+      statuses[i] = StatusOf(r);
+      if (r) retry_after[i] = r->get_header_value("Retry-After");
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  httplib::Client probe("127.0.0.1", primary_->port());
+  probe.set_read_timeout(30, 0);
+  EXPECT_EQ(StatusOf(probe.Get("/readyz")), 200);
+  for (std::thread& t : downloads) t.join();
+  int busy = 0;
+  for (std::size_t i = 0; i < statuses.size(); ++i) {
+    EXPECT_TRUE(statuses[i] == 200 || statuses[i] == 503) << statuses[i];
+    if (statuses[i] == 503) {
+      ++busy;
+      EXPECT_EQ(retry_after[i], "1");
+    }
+  }
+  EXPECT_GE(busy, 1);
+  EXPECT_LE(busy, 4);
+}
+
 TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequestsInFlight) {
   const std::string snapshot = publishTo("served.db");
   ServerProcess& replica = startReadOnly(0, snapshot);

@@ -62,6 +62,17 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
     not_modified.headers.emplace_back("ETag", replica::RegistryETag(*live, epoch));
     return not_modified;
   }
+  const std::optional<replica::SnapshotPublisher::ReaderSlot> slot = context.publisher->tryReader();
+  if (!slot) {
+    HttpResponse busy = server::ProblemResponse(
+        {503, "Service Unavailable",
+         std::to_string(replica::SnapshotPublisher::kMaxSnapshotReaders) +
+             " snapshots are being sent; ask again in a second (the worker threads stay free for "
+             "other requests)",
+         "about:blank"});
+    busy.headers.emplace_back("Retry-After", "1");
+    return busy;
+  }
   db::Result<replica::PublishedSnapshot> published = context.publisher->read();
   if (!published) throw HttpError(503, "no snapshot could be published; see the server's log");
   const std::int64_t version = published->info.registry_version;

@@ -25,13 +25,23 @@ SnapshotPublisher::SnapshotPublisher(std::string live_path, std::string out_path
     : live_path_(std::move(live_path)), out_path_(std::move(out_path)), epoch_(RandomEpoch()) {}
 
 db::Result<std::int64_t> SnapshotPublisher::liveVersion() {
-  const std::lock_guard lock(mutex_);
+  const std::lock_guard lock(version_mutex_);
   try {
-    if (!live_) live_.emplace(live_path_, db::ConnectionOptions{.create = false});
+    if (!version_connection_) {
+      version_connection_.emplace(live_path_, db::ConnectionOptions{.create = false});
+    }
   } catch (const db::SqliteError& e) {
     return db::Error{db::ErrorCode::kStorage, e.what()};
   }
-  return db::RegistryVersion(*live_);
+  return db::RegistryVersion(*version_connection_);
+}
+
+std::optional<SnapshotPublisher::ReaderSlot> SnapshotPublisher::tryReader() {
+  if (++readers_ > kMaxSnapshotReaders) {
+    --readers_;
+    return std::nullopt;
+  }
+  return std::optional<ReaderSlot>(std::in_place, &readers_);
 }
 
 db::Result<db::SnapshotInfo> SnapshotPublisher::publishLocked() {

@@ -5,11 +5,13 @@
 // the live version moved since, so a replica never gets a snapshot older than a write that
 // already returned.
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
@@ -32,8 +34,29 @@ class SnapshotPublisher {
   SnapshotPublisher(const SnapshotPublisher&) = delete;
   SnapshotPublisher& operator=(const SnapshotPublisher&) = delete;
 
-  /// The live database's registry version now.
+  /// The live database's registry version now; never waits for a publication in progress
+  /// (its own connection), so a replica that is current gets its 304 at once.
   db::Result<std::int64_t> liveVersion();
+
+  /// At most kMaxSnapshotReaders whole snapshots are answered at once: each holds a worker
+  /// thread while a publication takes seconds, and replicas that all asked after one change took
+  /// every worker (the primary's /readyz waited 6 s). A held slot; empty when all are taken.
+  class ReaderSlot {
+   public:
+    explicit ReaderSlot(std::atomic<int>* count) : count_(count) {}
+    ReaderSlot(ReaderSlot&& other) noexcept : count_(std::exchange(other.count_, nullptr)) {}
+    ReaderSlot(const ReaderSlot&) = delete;
+    ReaderSlot& operator=(const ReaderSlot&) = delete;
+    ReaderSlot& operator=(ReaderSlot&&) = delete;
+    ~ReaderSlot() {
+      if (count_ != nullptr) --*count_;
+    }
+
+   private:
+    std::atomic<int>* count_;
+  };
+  static constexpr int kMaxSnapshotReaders = 2;
+  std::optional<ReaderSlot> tryReader();
   /// Random per publisher, so per primary run: a version counts changes within one database's
   /// history only, and a primary restored from a backup counts again from the backup's version,
   /// to the same numbers with other rows. The ETag names both (RegistryETag), so replicas take
@@ -55,6 +78,9 @@ class SnapshotPublisher {
   std::string epoch_;
   std::mutex mutex_;  // guards the connection, published_ and the file's replacement
   std::optional<db::Connection> live_;
+  std::mutex version_mutex_;  // guards version_connection_
+  std::optional<db::Connection> version_connection_;
+  std::atomic<int> readers_{0};
   std::optional<db::SnapshotInfo> published_;
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
