@@ -638,6 +638,62 @@ TEST_F(ReplicaSetTest, AFollowerStopsAtOnceAndRefusesAnOversizedSnapshot) {
   }
 }
 
+// A follower whose token was revoked went on serving its last snapshot, ready, with nothing to
+// show it had stopped following, and SIGHUP did not re-read its token file. Its registry status
+// now says how its polls go, and SIGHUP takes a rotated token.
+TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken) {
+  ServerProcess& follower = startFollower(0);
+  ASSERT_TRUE(follower.ok());
+  httplib::Client replica("127.0.0.1", follower.port());
+  replica.set_read_timeout(30, 0);
+  httplib::Client primary("127.0.0.1", primary_->port());
+  primary.set_read_timeout(30, 0);
+  const auto follow = [&] { return Body(replica.Get("/api/v1/registry"))["follow"]; };
+  const auto deadline = [] { return std::chrono::steady_clock::now() + std::chrono::seconds(60); };
+  for (const auto until = deadline();
+       follow()["last_answer"].is_null() && std::chrono::steady_clock::now() < until;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_TRUE(follow()["last_answer"].is_string()) << follow().dump();
+  EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
+
+  // Revoked on the primary: the replica still serves and is ready, and its status says why it
+  // no longer follows.
+  std::int64_t replica_token_id = -1;
+  const json tokens = Body(primary.Get("/api/v1/tokens", Auth(admin_token_)));
+  for (const json& t : tokens["tokens"]) {
+    if (t["role"] == "replica" && t["revoked_at"].is_null()) replica_token_id = t["id"];
+  }
+  ASSERT_GT(replica_token_id, 0);
+  ASSERT_EQ(StatusOf(primary.Post("/api/v1/tokens/" + std::to_string(replica_token_id) + "/revoke",
+                                  Auth(admin_token_), "", "application/json")),
+            200);
+  for (const auto until = deadline();
+       follow()["error"].is_null() && std::chrono::steady_clock::now() < until;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_NE(follow()["error"].get<std::string>().find("401"), std::string::npos) << follow().dump();
+  EXPECT_TRUE(follow()["failing_since"].is_string());
+  EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
+
+  // A new token in the file, SIGHUP: it follows again.
+  const json made =
+      Body(primary.Post("/api/v1/tokens", Auth(admin_token_),
+                        R"({"role": "replica", "label": "rotated"})", "application/json"));
+  ASSERT_TRUE(made["secret"].is_string()) << made.dump();
+  WriteFile(dir_.file("replica.token"), made["secret"].get<std::string>() + "\n");
+  follower.signal(SIGHUP);
+  addPincode(primary, "999126");
+  int status = 0;
+  for (const auto until = deadline();
+       (status = StatusOf(replica.Get("/api/v1/pincodes/999126"))) != 200 &&
+       std::chrono::steady_clock::now() < until;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_EQ(status, 200) << stderrOf("replica-0");
+  EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
+}
+
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {
   const std::string snapshot = publishTo("shared.db");
   ServerProcess& first = startReadOnly(0, snapshot);

@@ -110,6 +110,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->read_only = config.read_only;
   context->primary_url = config.primary_url;
   context->publisher = config.publisher;
+  context->follow_status = config.follow_status;
   DefineCounters(*context->metrics);
   server::Router router = AppRouter(context);
   if (config.read_only) router = replica::ReadOnlyRouter(router, config.primary_url);

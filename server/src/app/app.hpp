@@ -12,6 +12,7 @@
 
 #include "app/connection_pool.hpp"
 #include "pintag/server/api.hpp"
+#include "replica/follow_status.hpp"
 #include "replica/snapshot_publisher.hpp"
 
 namespace pintag::app {
@@ -33,6 +34,8 @@ struct AppConfig {
   std::shared_ptr<ConnectionPool> pool;  ///< connections to db_path; made here when not given
   /// A primary's snapshot for its replicas (GET /api/v1/registry/snapshot); none = no route.
   std::shared_ptr<replica::SnapshotPublisher> publisher;
+  /// A following replica's polls, shown by GET /api/v1/registry (null: not following).
+  std::shared_ptr<const replica::FollowStatus> follow_status;
 };
 
 /// Builds the Api. Throws std::runtime_error when the web dir does not exist.

@@ -10,6 +10,7 @@
 #include "app/connection_pool.hpp"
 #include "app/pixel_budget.hpp"
 #include "pintag/server/metrics.hpp"
+#include "replica/follow_status.hpp"
 #include "replica/snapshot_publisher.hpp"
 
 namespace pintag::app {
@@ -37,6 +38,7 @@ struct AppContext {
   bool read_only = false;
   std::string primary_url;
   std::shared_ptr<replica::SnapshotPublisher> publisher;
+  std::shared_ptr<const replica::FollowStatus> follow_status;  ///< AppConfig::follow_status
 };
 
 /// Room for an image of `pixels` under the context's budget (--max-pixels-in-flight), held until

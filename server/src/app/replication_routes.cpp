@@ -1,6 +1,8 @@
 // GET /api/v1/registry and GET /api/v1/registry/snapshot: which registry version a server
 // serves, and the primary's snapshot for its read-only replicas (docs/SCALING.md).
 
+#include <chrono>
+#include <ctime>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -11,6 +13,16 @@
 
 namespace pintag::app {
 namespace {
+
+/// "2026-12-05T23:50:01Z", as the registry's own timestamps read.
+std::string UtcTimestamp(std::chrono::system_clock::time_point t) {
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(t);
+  std::tm utc{};
+  ::gmtime_r(&seconds, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
+}
 
 /// RFC 9110 section 13.1.2: `*`, or a comma-separated list of entity tags, weak ones (W/"…")
 /// compared by their opaque part, as If-None-Match's weak comparison does.
@@ -44,6 +56,15 @@ HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& /*r
   json body = {{"registry_version", *version}, {"role", context.read_only ? "replica" : "primary"}};
   body["primary"] =
       context.read_only && !context.primary_url.empty() ? json(context.primary_url) : json(nullptr);
+  if (context.follow_status) {
+    const replica::FollowStatus::View follow = context.follow_status->view();
+    const auto when = [](const std::optional<replica::FollowStatus::Clock::time_point>& t) {
+      return t ? json(UtcTimestamp(*t)) : json(nullptr);
+    };
+    body["follow"] = {{"last_answer", when(follow.last_answer)},
+                      {"error", follow.error.empty() ? json(nullptr) : json(follow.error)},
+                      {"failing_since", when(follow.failing_since)}};
+  }
   return HttpResponse::Json(body.dump());
 }
 

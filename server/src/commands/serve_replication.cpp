@@ -119,6 +119,8 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
   }
   if (!args_.follow.empty()) {
     token_ = ReadToken(args_);
+    follow_status_ = std::make_shared<replica::FollowStatus>();
+    config.follow_status = follow_status_;
     // A replica with no usable snapshot yet waits for its primary.
     if (!db::VerifySnapshot(db_path_)) {
       replica::SnapshotFollower first({args_.follow, token_, db_path_}, nullptr);
@@ -174,11 +176,18 @@ void Replication::start() {
       replica::FollowOptions{args_.follow, token_, db_path_},
       [watcher = watcher_.get()](const db::SnapshotInfo&) { watcher->check(); });
   follower_->start([watcher = watcher_.get()] { return watcher->loaded().registry_version; },
-                   std::chrono::milliseconds(args_.follow_interval_ms));
+                   std::chrono::milliseconds(args_.follow_interval_ms), follow_status_);
 }
 
 void Replication::reload() {
   if (watcher_) watcher_->check();
+  if (!follower_) return;
+  // A rotated replica token: written to --follow-token-file, then SIGHUP.
+  try {
+    follower_->setToken(ReadToken(args_));
+  } catch (const std::exception& e) {
+    std::cerr << "pintag serve: SIGHUP: keeping the replica token: " << e.what() << "\n";
+  }
 }
 
 std::string Replication::describe() const {

@@ -41,7 +41,7 @@ class Replication {
   bool readOnly() const { return args_.read_only; }
   /// Starts the watcher, follower and publisher threads (once the port is bound).
   void start();
-  /// SIGHUP: look at the snapshot file now.
+  /// SIGHUP: look at the snapshot file now, and re-read a follower's token.
   void reload();
   /// One line for the start banner.
   std::string describe() const;
@@ -53,6 +53,7 @@ class Replication {
   std::string token_;
   std::shared_ptr<replica::SnapshotPublisher> publisher_;
   std::unique_ptr<replica::SnapshotWatcher> watcher_;
+  std::shared_ptr<replica::FollowStatus> follow_status_;
   std::unique_ptr<replica::SnapshotFollower> follower_;
 };
 

@@ -51,7 +51,12 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
       follower->client_ = nullptr;
     }
   } unregister{this};
-  httplib::Headers headers = {{"Authorization", "Bearer " + options_.token}};
+  std::string token;
+  {
+    const std::lock_guard lock(client_mutex_);
+    token = options_.token;
+  }
+  httplib::Headers headers = {{"Authorization", "Bearer " + token}};
   // The ETag is known for a snapshot fetched in this run; one found on disk at start is fetched
   // once more, since the primary may have been restored since it was written.
   const bool holds_installed = have && *have == installed_version_ && !installed_etag_.empty();
@@ -101,13 +106,21 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   return std::optional<db::SnapshotInfo>{*installed};
 }
 
-void SnapshotFollower::start(Have have, std::chrono::milliseconds interval) {
-  thread_.start(interval, [this, have = std::move(have), last_error = std::string()]() mutable {
+void SnapshotFollower::setToken(std::string token) {
+  const std::lock_guard lock(client_mutex_);
+  options_.token = std::move(token);
+}
+
+void SnapshotFollower::start(Have have, std::chrono::milliseconds interval,
+                             std::shared_ptr<FollowStatus> status) {
+  thread_.start(interval, [this, have = std::move(have), status = std::move(status),
+                           last_error = std::string()]() mutable {
     const auto fetched = fetch(have());
     {
       const std::lock_guard lock(client_mutex_);
       if (stopping_) return;  // a download cancelled by the destructor is not an error
     }
+    if (status) fetched ? status->succeeded() : status->failed(fetched.error().message);
     if (!fetched) {
       if (fetched.error().message != last_error) {
         std::cerr << "pintag serve: following " << options_.primary_url << ": "

@@ -9,12 +9,14 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "replica/follow_status.hpp"
 #include "replica/periodic_thread.hpp"
 
 namespace httplib {
@@ -51,13 +53,17 @@ class SnapshotFollower {
 
   /// The registry version the replica serves now (nothing before its first snapshot).
   using Have = std::function<std::optional<std::int64_t>()>;
-  /// Polls every `interval` on a thread of its own, until destroyed.
-  void start(Have have, std::chrono::milliseconds interval);
+  /// Polls every `interval` on a thread of its own, until destroyed, telling `status` how each
+  /// poll went (may be null).
+  void start(Have have, std::chrono::milliseconds interval,
+             std::shared_ptr<FollowStatus> status = nullptr);
+  /// The token for the next poll (SIGHUP re-reads --follow-token-file).
+  void setToken(std::string token);
 
  private:
   FollowOptions options_;
   OnInstalled on_installed_;
-  std::mutex client_mutex_;  // guards stopping_'s meaning for client_ and client_ itself
+  std::mutex client_mutex_;  // guards stopping_, client_ and options_.token
   bool stopping_ = false;
   httplib::Client* client_ = nullptr;  ///< the download in progress, to cancel
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
