@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <stdexcept>
+#include <vector>
 
 #include "app/app.hpp"
 #include "pintag/db/database.hpp"
@@ -16,6 +17,7 @@ namespace {
 FuzzRegistry Make() {
   std::string dir = (std::filesystem::temp_directory_path() / "pintag-fuzz-XXXXXX").string();
   if (::mkdtemp(dir.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  RemoveDirectoryAtExit(dir);
   FuzzRegistry registry;
   registry.db_path = dir + "/registry.db";
   auto opened = db::OpenDatabase(registry.db_path);
@@ -29,6 +31,9 @@ FuzzRegistry Make() {
   registry.admin_token = token(db::Role::kAdmin);
   registry.counter_token = token(db::Role::kCounter);
   registry.scanner_token = token(db::Role::kScanner);
+  // Token 4, for the revoke seed: revoking token 1 (the admin's) locked every later input out of
+  // the admin routes for the rest of a campaign.
+  token(db::Role::kScanner);
   app::AppConfig config;
   config.db_path = registry.db_path;
   config.max_pixels = 1 << 20;  // small photos keep executions fast; limits are tested elsewhere
@@ -46,6 +51,17 @@ void ReplaceAll(std::string& text, std::string_view from, const std::string& to)
 }
 
 }  // namespace
+
+void RemoveDirectoryAtExit(const std::string& dir) {
+  static std::vector<std::string> dirs;
+  if (dirs.empty()) {
+    std::atexit([] {
+      std::error_code ignored;
+      for (const std::string& d : dirs) std::filesystem::remove_all(d, ignored);
+    });
+  }
+  dirs.push_back(dir);
+}
 
 const FuzzRegistry& Registry() {
   static const FuzzRegistry registry = Make();

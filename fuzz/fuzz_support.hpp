@@ -18,6 +18,10 @@ struct FuzzRegistry {
 /// Made on first call (seeding takes a second or two), then the same for the whole process.
 const FuzzRegistry& Registry();
 
+/// Removes `dir` and what it holds when the process exits normally (a fuzz registry is about
+/// 34 MB); a crash leaves it, beside the reproducer.
+void RemoveDirectoryAtExit(const std::string& dir);
+
 /// `text` with @ADMIN@, @COUNTER@ and @SCANNER@ replaced by those tokens' secrets, so seeds
 /// reach the handlers behind auth and mutations of them reach the auth checks.
 std::string WithTokens(std::string text);

@@ -2,6 +2,7 @@
 // integer query parameters. Each must accept or refuse (a 400 HttpError), never crash; what it
 // accepts must print back to text it accepts again as the same value.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -40,7 +41,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   if (const auto label = pintag::ParseLabelSize(text)) {
     const auto again = pintag::ParseLabelSize(pintag::ToString(*label.size));
-    if (!again) std::abort();
+    const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-5 * std::abs(b); };
+    if (!again || !near(again.size->width_mm, label.size->width_mm) ||
+        !near(again.size->height_mm, label.size->height_mm)) {
+      std::abort();
+    }
   }
   Refusable([&] { (void)pintag::app::PlanNameValue(text); });
   Refusable([&] { (void)pintag::app::LabelSizeValue(text); });

@@ -45,7 +45,8 @@ ParsedLabelSize ParseLabelSize(std::string_view text);
 /// Empty when `size` is within the limits above, else why not.
 std::string ValidateLabelSize(const LabelSize& size);
 
-/// "100x150mm"-style text that ParseLabelSize reads back to the same size.
+/// "100x150mm"-style text with six significant digits (for messages), which ParseLabelSize reads
+/// back to the same size within a relative 1e-5.
 std::string ToString(const LabelSize& size);
 
 }  // namespace pintag
