@@ -456,10 +456,11 @@ TEST(Snapshot, InstallRefusalsNameTheTargetNotTheTemporaryFile) {
     ASSERT_FALSE(refused.ok());
     EXPECT_EQ(refused.error().message.find(".tmp-"), std::string::npos) << refused.error().message;
     EXPECT_NE(refused.error().message.find(target), std::string::npos) << refused.error().message;
-    if (i == 0)
+    if (i == 0) {
       first = refused.error().message;
-    else
+    } else {
       EXPECT_EQ(refused.error().message, first);
+    }
   }
 }
 
