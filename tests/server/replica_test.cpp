@@ -11,6 +11,7 @@
 #include <array>
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <thread>
 
@@ -37,6 +38,32 @@ json Body(const httplib::Result& r) {
 // comparison instead of crashing the test (and losing the servers' stderr the fixture prints).
 int StatusOf(const httplib::Result& r) {
   return r ? r->status : -1;
+}
+
+// A client of a server on loopback that waits up to 30 s for an answer.
+httplib::Client LoopbackClient(int port) {
+  httplib::Client client("127.0.0.1", port);
+  client.set_read_timeout(30, 0);
+  return client;
+}
+
+// Polls `done` every 50 ms until it holds or `limit` passes; whether it holds. Polled, not timed:
+// the limit only stops a broken server from hanging the test.
+bool WaitUntil(const std::function<bool()>& done,
+               std::chrono::seconds limit = std::chrono::seconds(60)) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return true;
+}
+
+// Waits for GET `path` to answer `status`; the last status seen.
+int WaitForStatus(httplib::Client& client, const std::string& path, int status) {
+  int seen = 0;
+  WaitUntil([&] { return (seen = StatusOf(client.Get(path))) == status; });
+  return seen;
 }
 
 std::int64_t CountRows(const std::string& path, const std::string& table) {
@@ -159,16 +186,7 @@ TEST_F(ReplicaSetTest, AFollowerServesAPincodeAddedOnThePrimary) {
   httplib::Client primary("127.0.0.1", primary_->port());
   primary.set_read_timeout(30, 0);
   addPincode(primary, "999123");
-  // Polled, not timed: the deadline only stops a broken follower from hanging the test.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  int status = 0;
-  while (std::chrono::steady_clock::now() < deadline) {
-    const auto r = client.Get("/api/v1/pincodes/999123");
-    status = r ? r->status : 0;
-    if (status == 200) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  ASSERT_EQ(status, 200) << stderrOf("replica-0");
+  ASSERT_EQ(WaitForStatus(client, "/api/v1/pincodes/999123", 200), 200) << stderrOf("replica-0");
   EXPECT_EQ(RegistryVersionAt(replica.port()), RegistryVersionAt(primary_->port()));
 }
 
@@ -495,21 +513,10 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredPrimarysRegistryAtTheVersionItAlre
   }
   ServerProcess& follower = startFollower(0);
   ASSERT_TRUE(follower.ok());
-  httplib::Client replica("127.0.0.1", follower.port());
-  replica.set_read_timeout(30, 0);
-  httplib::Client primary("127.0.0.1", primary_->port());
-  primary.set_read_timeout(30, 0);
-  const auto wait_for = [&](const std::string& pin, int status) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    int got = 0;
-    while ((got = StatusOf(replica.Get("/api/v1/pincodes/" + pin))) != status &&
-           std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    return got;
-  };
+  httplib::Client replica = LoopbackClient(follower.port());
+  httplib::Client primary = LoopbackClient(primary_->port());
   addPincode(primary, "999202");
-  ASSERT_EQ(wait_for("999202", 200), 200) << stderrOf("replica-0");
+  ASSERT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999202", 200), 200) << stderrOf("replica-0");
   const std::int64_t held = RegistryVersionAt(follower.port());
 
   // Restored: the backup, then one other pincode, which brings it to the version the replica has.
@@ -538,7 +545,7 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredPrimarysRegistryAtTheVersionItAlre
       dir_.file("primary-restored.err"), 60, port);
   ASSERT_TRUE(primary_->ok()) << stderrOf("primary-restored");
 
-  EXPECT_EQ(wait_for("999203", 200), 200) << stderrOf("replica-0");
+  EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999203", 200), 200) << stderrOf("replica-0");
   EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 404);
   EXPECT_EQ(RegistryVersionAt(follower.port()), held);
 }
@@ -617,11 +624,8 @@ TEST_F(ReplicaSetTest, AFollowerStopsAtOnceAndRefusesAnOversizedSnapshot) {
                             replicaScanLog(0)},
                            dir_.file("replica-0.err"), 60);
     ASSERT_TRUE(follower.ok()) << stderrOf("replica-0");
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     // Two refusals of the huge body (the second logged as the first, once), or the first poll.
-    while (stub.requests() < (huge ? 2 : 1) && std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
+    WaitUntil([&] { return stub.requests() >= (huge ? 2 : 1); });
     if (huge) {
       ASSERT_GE(stub.requests(), 2);
       EXPECT_NE(stderrOf("replica-0").find("sent a snapshot of more than 1024 MiB"),
@@ -644,16 +648,10 @@ TEST_F(ReplicaSetTest, AFollowerStopsAtOnceAndRefusesAnOversizedSnapshot) {
 TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken) {
   ServerProcess& follower = startFollower(0);
   ASSERT_TRUE(follower.ok());
-  httplib::Client replica("127.0.0.1", follower.port());
-  replica.set_read_timeout(30, 0);
-  httplib::Client primary("127.0.0.1", primary_->port());
-  primary.set_read_timeout(30, 0);
+  httplib::Client replica = LoopbackClient(follower.port());
+  httplib::Client primary = LoopbackClient(primary_->port());
   const auto follow = [&] { return Body(replica.Get("/api/v1/registry"))["follow"]; };
-  const auto deadline = [] { return std::chrono::steady_clock::now() + std::chrono::seconds(60); };
-  for (const auto until = deadline();
-       follow()["last_answer"].is_null() && std::chrono::steady_clock::now() < until;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  WaitUntil([&] { return !follow()["last_answer"].is_null(); });
   EXPECT_TRUE(follow()["last_answer"].is_string()) << follow().dump();
   EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
 
@@ -668,10 +666,7 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   ASSERT_EQ(StatusOf(primary.Post("/api/v1/tokens/" + std::to_string(replica_token_id) + "/revoke",
                                   Auth(admin_token_), "", "application/json")),
             200);
-  for (const auto until = deadline();
-       follow()["error"].is_null() && std::chrono::steady_clock::now() < until;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  WaitUntil([&] { return !follow()["error"].is_null(); });
   EXPECT_NE(follow()["error"].get<std::string>().find("401"), std::string::npos) << follow().dump();
   EXPECT_TRUE(follow()["failing_since"].is_string());
   EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
@@ -684,13 +679,7 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   WriteFile(dir_.file("replica.token"), made["secret"].get<std::string>() + "\n");
   follower.signal(SIGHUP);
   addPincode(primary, "999126");
-  int status = 0;
-  for (const auto until = deadline();
-       (status = StatusOf(replica.Get("/api/v1/pincodes/999126"))) != 200 &&
-       std::chrono::steady_clock::now() < until;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  EXPECT_EQ(status, 200) << stderrOf("replica-0");
+  EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999126", 200), 200) << stderrOf("replica-0");
   EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
 }
 
