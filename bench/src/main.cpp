@@ -2,14 +2,17 @@
 // (issue 6; docs/BENCHMARKS.md says how to run it and what each column means).
 
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -317,9 +320,14 @@ int Main(int argc, char** argv) {
       return 2;
     }
   }
-  if (!args.csv.empty() && !std::ofstream(args.csv, std::ios::app)) {
-    std::fprintf(stderr, "pintag_bench: cannot write %s\n", args.csv.c_str());
-    return 2;
+  // A directory that exists may still refuse files: asked now, not after the sweep.
+  const std::string csv_place = args.csv.empty() ? "" : csv_dir.empty() ? "." : csv_dir;
+  for (const std::string& dir : {args.out_dir, csv_place}) {
+    if (!dir.empty() && ::access(dir.c_str(), W_OK) != 0) {
+      std::fprintf(stderr, "pintag_bench: cannot write in %s: %s\n", dir.c_str(),
+                   std::strerror(errno));
+      return 2;
+    }
   }
   const auto wall_start = Clock::now();
 

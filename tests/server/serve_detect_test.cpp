@@ -110,7 +110,6 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_NE((*scans)[0].token_id, (*scans)[2].token_id);  // admin made the last call
 }
 
-/// The bytes of a base64 data URL of `media_type`, decoded by OpenSSL; empty when it is not one.
 // A camera's black-and-white mode keeps the tag's shape and loses its bits: the answer says so,
 // where the same photo in colour is read with no warning.
 TEST_F(ServeTest, APhotoWithoutColourReadsNoTagAndTheAnswerSaysWhy) {
@@ -139,6 +138,7 @@ TEST_F(ServeTest, APhotoWithoutColourReadsNoTagAndTheAnswerSaysWhy) {
   }
 }
 
+/// The bytes of a base64 data URL of `media_type`, decoded by OpenSSL; empty when it is not one.
 std::string DataUrlBytes(const std::string& url, const std::string& media_type) {
   const std::string prefix = "data:" + media_type + ";base64,";
   if (url.rfind(prefix, 0) != 0) return {};

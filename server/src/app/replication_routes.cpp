@@ -78,7 +78,11 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   if (!live) throw HttpError(503, "the live database is not readable");
   const std::optional<std::string> none_match = request.header("If-None-Match");
   const std::string& epoch = context.publisher->epoch();
-  if (none_match && NoneMatchNames(*none_match, replica::RegistryETag(*live, epoch))) {
+  // "<version>" alone is what followers before the epoch send: still current for them, so that
+  // during a rolling upgrade they are not sent the whole registry on every poll.
+  const std::string version_only = "\"" + std::to_string(*live) + "\"";
+  if (none_match && (NoneMatchNames(*none_match, replica::RegistryETag(*live, epoch)) ||
+                     NoneMatchNames(*none_match, version_only))) {
     HttpResponse not_modified = HttpResponse::Bytes("application/vnd.sqlite3", "", 304);
     not_modified.headers.emplace_back("ETag", replica::RegistryETag(*live, epoch));
     return not_modified;

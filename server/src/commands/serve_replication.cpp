@@ -38,19 +38,58 @@ std::string ReadToken(const ReplicationArgs& args) {
   return token;
 }
 
-/// The primary's base URL as given to --follow or --primary, without the trailing slash the
-/// server's own banner prints ("http://host:8090/"); anything but scheme://host[:port] is a
-/// usage error, since the snapshot route is asked for at the root.
-std::string PrimaryBaseUrl(const std::string& option, std::string url) {
+std::string WithoutTrailingSlashes(std::string url) {
   while (!url.empty() && url.back() == '/') url.pop_back();
+  return url;
+}
+
+/// The primary's base URL as given to --follow, without the trailing slash the server's own
+/// banner prints ("http://host:8090/"). Anything but scheme://host[:port], the port 1-65535, is
+/// a usage error: the snapshot route is asked for at the root, and cpp-httplib's client throws on
+/// a port beyond an int and polls nothing for a host it cannot parse.
+std::string PrimaryBaseUrl(std::string url) {
+  url = WithoutTrailingSlashes(std::move(url));
+  const auto refuse = [&] {
+    return UsageError(
+        "--follow takes the primary's base URL, http://HOST[:PORT] or "
+        "https://HOST[:PORT] with no path; got \"" +
+        url + "\"");
+  };
   const std::size_t scheme_end = url.find("://");
-  const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
-  const std::string authority = scheme_end == std::string::npos ? "" : url.substr(scheme_end + 3);
-  if ((scheme != "http" && scheme != "https") || authority.empty() ||
-      authority.find_first_of("/?#@ ") != std::string::npos) {
-    throw UsageError(option + " takes the primary's base URL, http://HOST[:PORT] or " +
-                     "https://HOST[:PORT], with no path; got \"" + url + "\"");
+  if (scheme_end == std::string::npos) throw refuse();
+  const std::string scheme = url.substr(0, scheme_end);
+  const std::string authority = url.substr(scheme_end + 3);
+  // [v6 address]:port, or host:port; the host is letters, digits, '.', '-', '_'.
+  std::string host = authority;
+  std::string port;
+  if (!authority.empty() && authority.front() == '[') {
+    const std::size_t close = authority.find(']');
+    if (close == std::string::npos) throw refuse();
+    host = authority.substr(1, close - 1);
+    const std::string rest = authority.substr(close + 1);
+    if (!rest.empty() && rest.front() != ':') throw refuse();
+    if (!rest.empty()) port = rest.substr(1);
+    // cpp-httplib 0.11 reads an IPv6 literal of digits and colons only.
+    if (host.empty() || host.find_first_not_of("0123456789:") != std::string::npos) {
+      throw refuse();
+    }
+  } else {
+    const std::size_t colon = authority.find(':');
+    if (colon != std::string::npos) {
+      host = authority.substr(0, colon);
+      port = authority.substr(colon + 1);
+      if (port.empty()) throw refuse();
+    }
+    if (host.empty() ||
+        host.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                               "0123456789.-_") != std::string::npos) {
+      throw refuse();
+    }
   }
+  const bool port_ok = port.empty() || (port.size() <= 5 &&
+                                        port.find_first_not_of("0123456789") == std::string::npos &&
+                                        std::stoi(port) >= 1 && std::stoi(port) <= 65535);
+  if ((scheme != "http" && scheme != "https") || !port_ok) throw refuse();
   return url;
 }
 
@@ -95,10 +134,11 @@ void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
 Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     : args_(args), db_path_(config.db_path) {
   if (!args_.follow.empty()) {
-    args_.follow = PrimaryBaseUrl("--follow", args_.follow);
+    args_.follow = PrimaryBaseUrl(args_.follow);
     args_.read_only = true;
   }
-  if (!args_.primary.empty()) args_.primary = PrimaryBaseUrl("--primary", args_.primary);
+  // Only a name in refusals: a primary behind a path prefix may be named so.
+  args_.primary = WithoutTrailingSlashes(args_.primary);
   if (args_.read_only && !args_.snapshot.empty()) {
     throw UsageError("--snapshot publishes a primary's registry; a --read-only replica has none");
   }

@@ -2,6 +2,7 @@
 #include "replica/snapshot_follower.hpp"
 
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <charconv>
 #include <cstdint>
@@ -23,10 +24,13 @@ SnapshotFollower::SnapshotFollower(FollowOptions options, OnInstalled on_install
     : options_(std::move(options)), on_installed_(std::move(on_installed)) {}
 
 SnapshotFollower::~SnapshotFollower() {
+  stopping_ = true;
   {
     const std::lock_guard lock(client_mutex_);
-    stopping_ = true;
-    if (client_ != nullptr) client_->stop();  // a blocked read returns at once
+    // A request in flight has its socket shut: a blocked read returns at once (a connect in
+    // progress first ends, within its 5 s timeout). One not yet in flight finds stopping_ set
+    // where its socket is made.
+    if (client_ != nullptr) client_->stop();
   }
   thread_.stop();
 }
@@ -39,6 +43,9 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   }
   client.set_connection_timeout(std::chrono::seconds(5));
   client.set_read_timeout(options_.timeout);
+  client.set_socket_options([this](socket_t socket) {
+    if (stopping_) ::shutdown(socket, SHUT_RDWR);
+  });
   {
     const std::lock_guard lock(client_mutex_);
     if (stopping_) return db::Error{db::ErrorCode::kBusy, "stopping"};
@@ -91,6 +98,11 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
                                                httplib::to_string(answer.error())};
   }
   if (answer->status == 304) return std::optional<db::SnapshotInfo>{};
+  // The primary is sending as many snapshots as it will at once: asked again at the next poll,
+  // not an error (it would log and mark the follower failing after every change).
+  if (answer->status == 503 && answer->has_header("Retry-After")) {
+    return std::optional<db::SnapshotInfo>{};
+  }
   if (answer->status != 200) {
     return db::Error{db::ErrorCode::kStorage, "primary " + options_.primary_url + " answered " +
                                                   std::to_string(answer->status) + ": " +
@@ -115,11 +127,14 @@ void SnapshotFollower::start(Have have, std::chrono::milliseconds interval,
                              std::shared_ptr<FollowStatus> status) {
   thread_.start(interval, [this, have = std::move(have), status = std::move(status),
                            last_error = std::string()]() mutable {
-    const auto fetched = fetch(have());
-    {
-      const std::lock_guard lock(client_mutex_);
-      if (stopping_) return;  // a download cancelled by the destructor is not an error
+    // An exception must not leave this thread (std::terminate would end the server).
+    db::Result<std::optional<db::SnapshotInfo>> fetched = std::optional<db::SnapshotInfo>{};
+    try {
+      fetched = fetch(have());
+    } catch (const std::exception& e) {
+      fetched = db::Error{db::ErrorCode::kStorage, std::string("following failed: ") + e.what()};
     }
+    if (stopping_) return;  // a download cancelled by the destructor is not an error
     if (status) fetched ? status->succeeded() : status->failed(fetched.error().message);
     if (!fetched) {
       if (fetched.error().message != last_error) {

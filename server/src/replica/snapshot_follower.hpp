@@ -6,6 +6,7 @@
 // current. The ETag names the primary's run as well as the version, so a primary restored from a
 // backup, whose versions count again from the backup's, is followed, not taken as current.
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -63,8 +64,11 @@ class SnapshotFollower {
  private:
   FollowOptions options_;
   OnInstalled on_installed_;
-  std::mutex client_mutex_;  // guards stopping_, client_ and options_.token
-  bool stopping_ = false;
+  std::mutex client_mutex_;  // guards client_ and options_.token
+  /// Set before the client is stopped, and read where the client makes its socket: a stop()
+  /// before the request is in flight does nothing in cpp-httplib 0.11, so the socket is shut
+  /// there instead (never under client_mutex_, which stop() may hold while it waits).
+  std::atomic<bool> stopping_{false};
   httplib::Client* client_ = nullptr;  ///< the download in progress, to cancel
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
   std::string installed_etag_;
