@@ -264,30 +264,14 @@ int CountJpegScans(std::span<const std::uint8_t> b, int limit) {
   return scans;
 }
 
-/// libjpeg-turbo's warning for bytes between a JPEG's last scan and its end marker, which some
-/// encoders leave.
-bool WarnedOfBytesBeforeTheEnd(tjhandle tj) {
-  return tjGetErrorCode(tj) == TJERR_WARNING &&
-         std::string_view(tjGetErrorStr2(tj)).find("extraneous bytes before marker 0xd9") !=
-             std::string_view::npos;
-}
-
 /// Runs `decode(handle, flags)`, one TurboJPEG decompression into the caller's buffers, and
-/// refuses a JPEG on any warning (truncation is one), except stray bytes before the end marker:
-/// as the first warning, that one comes after every scan was decoded, so the file is decoded
-/// again without stopping on it. On failure `error` says why.
+/// refuses a JPEG on any warning: truncation is one. So is "extraneous bytes before marker 0xd9"
+/// (stray bytes after the last scan), which some encoders leave in whole files, but which a cut
+/// file followed by bytes and an end marker also gives when the decoder took those bytes as the
+/// missing data: the two cannot be told apart. On failure `error` says why.
 template <typename Decode>
 bool DecodeWholeJpeg(Decode decode, std::string* error) {
   if (decode(Decompressor(), kTurboFlags) == 0) return true;
-  if (WarnedOfBytesBeforeTheEnd(Decompressor())) {
-    DiscardDecompressor();
-    const bool whole = decode(Decompressor(), kTurboFlags & ~TJFLAG_STOPONWARNING) == 0 ||
-                       tjGetErrorCode(Decompressor()) == TJERR_WARNING;
-    if (whole) {
-      DiscardDecompressor();
-      return true;
-    }
-  }
   *error = std::string("cannot decode the JPEG: ") + tjGetErrorStr2(Decompressor());
   DiscardDecompressor();
   return false;

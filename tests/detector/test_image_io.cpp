@@ -260,7 +260,9 @@ cv::Mat PhoneLikeFrame(int width, int height) {
     }
   }
   cv::Mat noise(height, width, CV_8UC3);
-  cv::randn(noise, 0, 6);
+  // A generator of its own: the global one's state depends on which tests ran before.
+  cv::RNG rng(20261205);
+  rng.fill(noise, cv::RNG::NORMAL, 0, 6);
   cv::add(image, noise, image);
   return image;
 }
@@ -410,11 +412,14 @@ bool SamePixels(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
 }
 
-// Two things libjpeg-turbo warns about in files whose pixels are whole: a JFIF header of version
-// 2.01 (some scanners' software), and stray bytes between the last scan and the end marker (some
-// phone apps). A warning is otherwise refused, as truncation is only a warning; these two decode
-// to exactly the pixels of the same file without them.
-TEST(ImageIo, JpegsWithHarmlessWarningsLoad) {
+// A JFIF header of version 2.01 (some scanners' software) is a libjpeg warning, which is
+// otherwise refused (truncation is only a warning): such a file decodes to exactly the pixels of
+// the same file at version 1.
+// Stray bytes between the last scan and the end marker are not accepted the same way: when
+// libjpeg warns of them (it reads some into its bit buffer unwarned), a cut file followed by
+// bytes and an end marker gives the same warning whenever the decoder took those bytes as its
+// missing data. That was found at two cut points of a progressive photo while they were accepted.
+TEST(ImageIo, JpegsWithAJfifVersionOtherThanOneLoad) {
   for (const bool progressive : {false, true}) {
     const std::vector<std::uint8_t> clean = Encode(
         ".jpg", PhoneLikeFrame(200, 120), {cv::IMWRITE_JPEG_PROGRESSIVE, progressive ? 1 : 0});
@@ -429,39 +434,14 @@ TEST(ImageIo, JpegsWithHarmlessWarningsLoad) {
               std::string("JFIF\0", 5));
     jfif2[jfif + 5] = 2;
     jfif2[jfif + 6] = 1;
-    std::vector<std::uint8_t> stray = clean;
-    ASSERT_EQ(stray[stray.size() - 2], 0xFF);
-    stray.insert(stray.end() - 2, {0x00, 0x11, 0x22, 0x33});
-
-    for (const auto& [name, bytes] :
-         {std::pair{"JFIF 2.01", &jfif2}, std::pair{"stray bytes before the end", &stray}}) {
-      const LoadResult r = LoadImageBytes(*bytes);
-      ASSERT_TRUE(r.image) << name << ", progressive " << progressive << ": " << r.error;
-      EXPECT_TRUE(SamePixels(r.image->bgr, reference.image->bgr)) << name;
-      EXPECT_EQ(r.image->chroma_upsampling, reference.image->chroma_upsampling) << name;
-      const JpegPlanesResult planes = LoadJpegPlanes(*bytes);
-      ASSERT_TRUE(planes.planes) << name << ": " << planes.error;
-      EXPECT_TRUE(SamePixels(planes.planes->y, reference_planes.planes->y)) << name;
-      EXPECT_TRUE(SamePixels(planes.planes->cr, reference_planes.planes->cr)) << name;
-    }
-    // Stray bytes never make a cut file whole. After a scan that was cut short its data is
-    // missing, so the warning that comes first is a different one, and the file stays corrupt.
-    // (A progressive file cut between two scans, then ended, is a whole JPEG of fewer scans, with
-    // or without stray bytes.)
-    const std::size_t scan = FindMarker(clean, 0xDA);
-    int corrupt = 0;
-    for (std::size_t keep = scan + 40; keep + 64 < clean.size(); keep += 97) {
-      std::vector<std::uint8_t> ended(clean.begin(), clean.begin() + static_cast<long>(keep));
-      std::vector<std::uint8_t> cut = ended;
-      ended.insert(ended.end(), {0xFF, 0xD9});
-      cut.insert(cut.end(), {0x00, 0x11, 0x22, 0x33, 0xFF, 0xD9});
-      const ImageError without_stray_bytes = LoadImageBytes(ended).kind;
-      corrupt += without_stray_bytes == ImageError::kCorrupt;
-      EXPECT_EQ(LoadImageBytes(cut).kind, without_stray_bytes)
-          << "progressive " << progressive << ", cut at " << keep;
-      EXPECT_EQ(LoadJpegPlanes(cut).kind, LoadJpegPlanes(ended).kind) << "cut at " << keep;
-    }
-    EXPECT_GT(corrupt, 10) << "progressive " << progressive;
+    const LoadResult r = LoadImageBytes(jfif2);
+    ASSERT_TRUE(r.image) << "progressive " << progressive << ": " << r.error;
+    EXPECT_TRUE(SamePixels(r.image->bgr, reference.image->bgr));
+    EXPECT_EQ(r.image->chroma_upsampling, reference.image->chroma_upsampling);
+    const JpegPlanesResult planes = LoadJpegPlanes(jfif2);
+    ASSERT_TRUE(planes.planes) << planes.error;
+    EXPECT_TRUE(SamePixels(planes.planes->y, reference_planes.planes->y));
+    EXPECT_TRUE(SamePixels(planes.planes->cr, reference_planes.planes->cr));
   }
 }
 
