@@ -28,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_values.hpp"
 #include "detectors.hpp"
 #include "reading/decision.hpp"
 #include "reading/model_reader.hpp"
@@ -126,10 +127,21 @@ bool ParseArgs(int argc, char** argv, Args& args) {
       return argv[++i];
     };
     if (a == "--world") {
-      args.sweep.world =
-          std::string(next()) == "tuning" ? scene::World::kTuning : scene::World::kHeldOut;
+      const char* w = next();
+      const std::optional<scene::World> world = ParseWorld(w);
+      if (!world) {
+        std::fprintf(stderr, "pintag_genie_probe: --world is held-out or tuning, got \"%s\"\n", w);
+        std::exit(2);
+      }
+      args.sweep.world = *world;
     } else if (a == "--seed") {
-      args.sweep.seed = std::strtoull(next(), nullptr, 10);
+      const char* v = next();
+      const std::optional<std::uint64_t> seed = ParseSeed(v);
+      if (!seed) {
+        std::fprintf(stderr, "pintag_genie_probe: --seed takes a whole number, got \"%s\"\n", v);
+        std::exit(2);
+      }
+      args.sweep.seed = *seed;
     } else if (a == "--frames-per-bin") {
       args.sweep.frames_per_bin = std::max(1, std::atoi(next()));
     } else if (a == "--threads") {

@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_values.hpp"
 #include "homography.hpp"
 #include "lead_tail.hpp"
 #include "pintag/scene/rng.hpp"
@@ -122,10 +123,21 @@ int Main(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--world") {
-      const std::string w = next();
-      args.sweep.world = w == "tuning" ? scene::World::kTuning : scene::World::kHeldOut;
+      const char* w = next();
+      const std::optional<scene::World> world = ParseWorld(w);
+      if (!world) {
+        std::fprintf(stderr, "pintag_reader_probe: --world is held-out or tuning, got \"%s\"\n", w);
+        std::exit(2);
+      }
+      args.sweep.world = *world;
     } else if (a == "--seed") {
-      args.sweep.seed = std::strtoull(next(), nullptr, 10);
+      const char* v = next();
+      const std::optional<std::uint64_t> seed = ParseSeed(v);
+      if (!seed) {
+        std::fprintf(stderr, "pintag_reader_probe: --seed takes a whole number, got \"%s\"\n", v);
+        std::exit(2);
+      }
+      args.sweep.seed = *seed;
     } else if (a == "--frames-per-bin") {
       args.sweep.frames_per_bin = std::max(1, std::atoi(next()));
     } else if (a == "--jitter") {
@@ -135,7 +147,15 @@ int Main(int argc, char** argv) {
     } else if (a == "--threads") {
       args.threads = std::atoi(next());
     } else if (a == "--reader") {
-      args.model = std::string(next()) == "model";
+      const std::string reader = next();
+      if (reader != "model") {
+        std::fprintf(stderr,
+                     "pintag_reader_probe: --reader takes model (without it: the direct "
+                     "reader), got \"%s\"\n",
+                     reader.c_str());
+        std::exit(2);
+      }
+      args.model = true;
     } else if (a == "--residuals") {
       args.residuals = next();
     } else if (a == "--csv") {

@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_values.hpp"
 #include "detectors.hpp"
 #include "explain.hpp"
 #include "machine.hpp"
@@ -141,16 +142,21 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--seed") {
       const char* v = value("--seed");
       if (v == nullptr) return false;
-      args->sweep.seed = std::strtoull(v, nullptr, 10);
+      const std::optional<std::uint64_t> seed = ParseSeed(v);
+      if (!seed) {
+        std::fprintf(stderr, "pintag_bench: --seed takes a whole number, got \"%s\"\n", v);
+        return false;
+      }
+      args->sweep.seed = *seed;
     } else if (a == "--world") {
       const char* v = value("--world");
       if (v == nullptr) return false;
-      const std::string w = v;
-      if (w != "held-out" && w != "tuning") {
+      const std::optional<scene::World> world = ParseWorld(v);
+      if (!world) {
         std::fprintf(stderr, "pintag_bench: --world is held-out or tuning\n");
         return false;
       }
-      args->sweep.world = w == "tuning" ? scene::World::kTuning : scene::World::kHeldOut;
+      args->sweep.world = *world;
     } else if (a == "--jpeg-quality") {
       if (!integer("--jpeg-quality", 1, 100, &args->sweep.jpeg_quality)) return false;
     } else if (a == "--jpeg-chroma") {

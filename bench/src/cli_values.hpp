@@ -1,0 +1,19 @@
+#pragma once
+// Values the benchmark and the research probes take on their command lines, read strictly: a
+// typo in --world ran the held-out world, which nothing may be tuned on, and --seed abc ran seed 0.
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include "pintag/scene/scene.hpp"
+
+namespace pintag::bench {
+
+/// "held-out" or "tuning"; nothing for anything else.
+std::optional<scene::World> ParseWorld(std::string_view text);
+
+/// A decimal seed of at most 19 digits (no sign, nothing after it); nothing for anything else.
+std::optional<std::uint64_t> ParseSeed(std::string_view text);
+
+}  // namespace pintag::bench
