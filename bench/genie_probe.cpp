@@ -127,21 +127,9 @@ bool ParseArgs(int argc, char** argv, Args& args) {
       return argv[++i];
     };
     if (a == "--world") {
-      const char* w = next();
-      const std::optional<scene::World> world = ParseWorld(w);
-      if (!world) {
-        std::fprintf(stderr, "pintag_genie_probe: --world is held-out or tuning, got \"%s\"\n", w);
-        std::exit(2);
-      }
-      args.sweep.world = *world;
+      args.sweep.world = WorldOrExit("pintag_genie_probe", next());
     } else if (a == "--seed") {
-      const char* v = next();
-      const std::optional<std::uint64_t> seed = ParseSeed(v);
-      if (!seed) {
-        std::fprintf(stderr, "pintag_genie_probe: --seed takes a whole number, got \"%s\"\n", v);
-        std::exit(2);
-      }
-      args.sweep.seed = *seed;
+      args.sweep.seed = SeedOrExit("pintag_genie_probe", next());
     } else if (a == "--frames-per-bin") {
       args.sweep.frames_per_bin = std::max(1, std::atoi(next()));
     } else if (a == "--threads") {

@@ -1,6 +1,8 @@
 #include "cli_values.hpp"
 
 #include <charconv>
+#include <cstdio>
+#include <cstdlib>
 
 namespace pintag::bench {
 
@@ -16,6 +18,20 @@ std::optional<std::uint64_t> ParseSeed(std::string_view text) {
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), seed);
   if (error != std::errc() || end != text.data() + text.size()) return std::nullopt;
   return seed;
+}
+
+scene::World WorldOrExit(const char* tool, const char* text) {
+  const std::optional<scene::World> world = ParseWorld(text);
+  if (world) return *world;
+  std::fprintf(stderr, "%s: --world is held-out or tuning, got \"%s\"\n", tool, text);
+  std::exit(2);
+}
+
+std::uint64_t SeedOrExit(const char* tool, const char* text) {
+  const std::optional<std::uint64_t> seed = ParseSeed(text);
+  if (seed) return *seed;
+  std::fprintf(stderr, "%s: --seed takes a whole number, got \"%s\"\n", tool, text);
+  std::exit(2);
 }
 
 }  // namespace pintag::bench

@@ -16,4 +16,9 @@ std::optional<scene::World> ParseWorld(std::string_view text);
 /// A decimal seed of at most 19 digits (no sign, nothing after it); nothing for anything else.
 std::optional<std::uint64_t> ParseSeed(std::string_view text);
 
+/// ParseWorld and ParseSeed for a tool's option: anything else is printed as `tool`'s usage
+/// error and the process exits with status 2.
+scene::World WorldOrExit(const char* tool, const char* text);
+std::uint64_t SeedOrExit(const char* tool, const char* text);
+
 }  // namespace pintag::bench

@@ -142,21 +142,11 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     } else if (a == "--seed") {
       const char* v = value("--seed");
       if (v == nullptr) return false;
-      const std::optional<std::uint64_t> seed = ParseSeed(v);
-      if (!seed) {
-        std::fprintf(stderr, "pintag_bench: --seed takes a whole number, got \"%s\"\n", v);
-        return false;
-      }
-      args->sweep.seed = *seed;
+      args->sweep.seed = SeedOrExit("pintag_bench", v);
     } else if (a == "--world") {
       const char* v = value("--world");
       if (v == nullptr) return false;
-      const std::optional<scene::World> world = ParseWorld(v);
-      if (!world) {
-        std::fprintf(stderr, "pintag_bench: --world is held-out or tuning\n");
-        return false;
-      }
-      args->sweep.world = *world;
+      args->sweep.world = WorldOrExit("pintag_bench", v);
     } else if (a == "--jpeg-quality") {
       if (!integer("--jpeg-quality", 1, 100, &args->sweep.jpeg_quality)) return false;
     } else if (a == "--jpeg-chroma") {
