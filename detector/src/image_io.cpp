@@ -264,14 +264,13 @@ int CountJpegScans(std::span<const std::uint8_t> b, int limit) {
   return scans;
 }
 
-/// Runs `decode(handle, flags)`, one TurboJPEG decompression into the caller's buffers, and
-/// refuses a JPEG on any warning: truncation is one. So is "extraneous bytes before marker 0xd9"
-/// (stray bytes after the last scan), which some encoders leave in whole files, but which a cut
-/// file followed by bytes and an end marker also gives when the decoder took those bytes as the
-/// missing data: the two cannot be told apart. On failure `error` says why.
+/// Runs `decode(handle)`, one TurboJPEG decompression with kTurboFlags into the caller's buffers;
+/// on failure (any warning: truncation is one) `error` says why and the handle is replaced. Stray
+/// bytes before the end marker are refused too when libjpeg warns of them: a cut file followed by
+/// bytes and an end marker gives the same warning when the decoder took the bytes as its data.
 template <typename Decode>
 bool DecodeWholeJpeg(Decode decode, std::string* error) {
-  if (decode(Decompressor(), kTurboFlags) == 0) return true;
+  if (decode(Decompressor()) == 0) return true;
   *error = std::string("cannot decode the JPEG: ") + tjGetErrorStr2(Decompressor());
   DiscardDecompressor();
   return false;
@@ -369,9 +368,9 @@ LoadResult LoadJpeg(std::span<const std::uint8_t> bytes, const LoadOptions& opti
   if (options.before_decode) options.before_decode(header->width, header->height);
   const tjscalingfactor scale = ScalingFor(options.scale_denominator);
   cv::Mat bgr(TJSCALED(header->height, scale), TJSCALED(header->width, scale), CV_8UC3);
-  const auto decode = [&](tjhandle handle, int flags) {
+  const auto decode = [&](tjhandle handle) {
     return tjDecompress2(handle, bytes.data(), bytes.size(), bgr.data, bgr.cols,
-                         static_cast<int>(bgr.step), bgr.rows, TJPF_BGR, flags);
+                         static_cast<int>(bgr.step), bgr.rows, TJPF_BGR, kTurboFlags);
   };
   if (!DecodeWholeJpeg(decode, &why)) {
     return Fail(ImageError::kCorrupt, why, header->width, header->height);
@@ -830,9 +829,9 @@ JpegPlanesResult LoadJpegPlanes(std::span<const std::uint8_t> bytes, std::int64_
     pointers[c] = mats[c]->data;
     strides[c] = static_cast<int>(mats[c]->step);
   }
-  const auto decode = [&](tjhandle handle, int flags) {
+  const auto decode = [&](tjhandle handle) {
     return tjDecompressToYUVPlanes(handle, bytes.data(), bytes.size(), pointers.data(),
-                                   header->width, strides.data(), header->height, flags);
+                                   header->width, strides.data(), header->height, kTurboFlags);
   };
   if (!DecodeWholeJpeg(decode, &why)) return fail(ImageError::kCorrupt, why);
   LoadedImage exif;

@@ -96,6 +96,12 @@ json ToJson(const Detection& d) {
   return j;
 }
 
+json ToJson(const std::vector<PhotoWarning>& warnings) {
+  json out = json::array();
+  for (const PhotoWarning& w : warnings) out.push_back({{"code", w.code}, {"message", w.message}});
+  return out;
+}
+
 json ToJson(const DetectResult& r) {
   json j;
   j["detections"] = json::array();
@@ -115,10 +121,7 @@ json ToJson(const DetectResult& r) {
                       {"reread", t.model_rereads},
                       {"mosaic_reread", t.mosaic_rereads},
                       {"skipped_over_budget", t.model_skipped}};
-  j["warnings"] = json::array();
-  for (const PhotoWarning& w : r.warnings) {
-    j["warnings"].push_back({{"code", w.code}, {"message", w.message}});
-  }
+  j["warnings"] = ToJson(r.warnings);
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }

@@ -234,10 +234,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   out["plan"] = plan.name;
   out["tag_count"] = tags.size();
   out["tags"] = std::move(tags);
-  out["warnings"] = json::array();
-  for (const PhotoWarning& w : result.warnings) {
-    out["warnings"].push_back({{"code", w.code}, {"message", w.message}});
-  }
+  out["warnings"] = ToJson(result.warnings);
   out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
   outcome->result_json = out.dump();
 

@@ -92,8 +92,8 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
     HttpResponse busy = server::ProblemResponse(
         {503, "Service Unavailable",
          std::to_string(replica::SnapshotPublisher::kMaxSnapshotReaders) +
-             " snapshots are being sent; ask again in a second (the worker threads stay free for "
-             "other requests)",
+             " snapshots are being prepared; ask again in a second (the worker threads stay free "
+             "for other requests)",
          "about:blank"});
     busy.headers.emplace_back("Retry-After", "1");
     return busy;

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "pintag/detector/detection.hpp"
 #include "pintag/detector/options.hpp"
@@ -11,7 +12,11 @@
 namespace pintag {
 
 nlohmann::json ToJson(const Detection& detection);
-/// {"detections": [...], "intrinsics": {...}, "intrinsics_source": "...", "timings_ms": {...}}
+/// [{"code": "no_colour", "message": "..."}, ...]: DetectResult::warnings, as the CLI's JSON and
+/// the detect route's answer both carry them.
+nlohmann::json ToJson(const std::vector<PhotoWarning>& warnings);
+/// {"detections": [...], "intrinsics": {...}, "intrinsics_source": "...", "timings_ms": {...},
+///  "warnings": [...]}
 nlohmann::json ToJson(const DetectResult& result);
 
 nlohmann::json ToJson(const DetectorOptions& options);
