@@ -111,6 +111,7 @@ void Usage(FILE* to) {
 }
 
 bool ParseArgs(int argc, char** argv, Args* args) {
+  bool frames_per_bin_given = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&](const char* name) -> const char* {
@@ -137,6 +138,7 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       args->sweep.quick = true;
     } else if (a == "--frames-per-bin") {
       if (!integer("--frames-per-bin", 1, 100000, &args->sweep.frames_per_bin)) return false;
+      frames_per_bin_given = true;
     } else if (a == "--tagless") {
       if (!integer("--tagless", 0, 1000000, &args->sweep.tagless_frames)) return false;
     } else if (a == "--seed") {
@@ -229,6 +231,11 @@ bool ParseArgs(int argc, char** argv, Args* args) {
       Usage(stderr);
       return false;
     }
+  }
+  // --quick draws one frame per bin and at most 6 tagless: a count given beside it was ignored.
+  if (args->sweep.quick && frames_per_bin_given) {
+    std::fprintf(stderr, "pintag_bench: --quick runs one frame per bin; drop --frames-per-bin\n");
+    return false;
   }
   if (const std::string error = SweepOptionsError(args->sweep); !error.empty()) {
     std::fprintf(stderr, "pintag_bench: %s\n", error.c_str());
@@ -331,6 +338,7 @@ int Main(int argc, char** argv) {
   result.machine = GatherMachineInfo(PINTAG_SOURCE_DIR);
   for (int i = 0; i < argc; ++i) result.command_line += (i ? " " : "") + std::string(argv[i]);
   result.sweep = args.sweep;
+  result.chosen_frames_only = !args.only_frames.empty();
   result.photos = static_cast<int>(scene::BackgroundPhotos(args.sweep.world).size());
   result.camera = CameraFor(args.sweep.world);
   const scene::Camera camera = result.camera;

@@ -25,6 +25,7 @@ struct BenchResult {
   int all_cores = 0;        ///< threads of the second pass; 0 = not run
   int all_cores_every = 1;  ///< the second pass timed every this-many-th chunk
   double wall_seconds = 0;
+  bool chosen_frames_only = false;  ///< --frame: the frames named, not the sweep
   std::string command_line;
 };
 
