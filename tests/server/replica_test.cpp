@@ -637,9 +637,9 @@ TEST_F(ReplicaSetTest, AFollowerStopsAtOnceAndRefusesAnOversizedSnapshot) {
       // Refused at every poll, logged once.
       const std::string log = stderrOf("replica-0");
       const std::string refusal = "sent a snapshot of more than 1024 MiB";
-      const std::size_t first = log.find(refusal);
-      EXPECT_NE(first, std::string::npos) << log;
-      EXPECT_EQ(log.find(refusal, first + 1), std::string::npos) << log;
+      const std::size_t first_refusal = log.find(refusal);
+      EXPECT_NE(first_refusal, std::string::npos) << log;
+      EXPECT_EQ(log.find(refusal, first_refusal + 1), std::string::npos) << log;
       EXPECT_EQ(RegistryVersionAt(follower.port()), version);
     } else {
       ASSERT_EQ(stub.requests(), 1);  // its first poll hangs
