@@ -49,6 +49,30 @@ TEST(Metrics, NamedCountersAreExportedFromDefinition) {
   EXPECT_EQ(m.counter("unknown_total"), 0);
 }
 
+// A gauge is read at each scrape: its value then, and none at all while its source leaves it out.
+TEST(Metrics, GaugesAreReadFromTheirSourceAtEachScrape) {
+  Metrics m;
+  double level = 0;
+  m.addGaugeSource([&level] {
+    std::vector<Metrics::Gauge> gauges = {{"pintag_test_level", "A level.", level}};
+    if (level > 1) gauges.push_back({"pintag_test_high_since_seconds", "", 1.5e9});
+    return gauges;
+  });
+  std::string text = m.renderPrometheus();
+  EXPECT_NE(text.find("# HELP pintag_test_level A level.\n# TYPE pintag_test_level gauge\n"
+                      "pintag_test_level 0\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("pintag_test_high_since_seconds"), std::string::npos) << text;
+  level = 2.5;
+  text = m.renderPrometheus();
+  EXPECT_NE(text.find("\npintag_test_level 2.5\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("# TYPE pintag_test_high_since_seconds gauge\n"
+                      "pintag_test_high_since_seconds 1500000000\n"),
+            std::string::npos)
+      << text;
+}
+
 TEST(Metrics, EscapesLabelValues) {
   Metrics m;
   m.observeRequest("a\"b\\c\nd", "GET", 404, 0);

@@ -660,9 +660,16 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   httplib::Client replica = LoopbackClient(follower.port());
   httplib::Client primary = LoopbackClient(primary_->port());
   const auto follow = [&] { return Body(replica.Get("/api/v1/registry"))["follow"]; };
+  const auto metrics = [&] {
+    const httplib::Result got = replica.Get("/metrics");
+    return got ? got->body : std::string();
+  };
   WaitUntil([&] { return !follow()["last_answer"].is_null(); });
   EXPECT_TRUE(follow()["last_answer"].is_string()) << follow().dump();
   EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
+  EXPECT_NE(metrics().find("\npintag_follow_failing 0\n"), std::string::npos) << metrics();
+  EXPECT_NE(metrics().find("\npintag_follow_last_answer_timestamp_seconds "), std::string::npos);
+  EXPECT_EQ(metrics().find("pintag_follow_failing_since_timestamp_seconds"), std::string::npos);
 
   // Revoked on the primary: the replica still serves and is ready, and its status says why it
   // no longer follows.
@@ -679,6 +686,8 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   EXPECT_NE(follow()["error"].get<std::string>().find("401"), std::string::npos) << follow().dump();
   EXPECT_TRUE(follow()["failing_since"].is_string());
   EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
+  EXPECT_NE(metrics().find("\npintag_follow_failing 1\n"), std::string::npos) << metrics();
+  EXPECT_NE(metrics().find("\npintag_follow_failing_since_timestamp_seconds "), std::string::npos);
 
   // A new token in the file, SIGHUP: it follows again.
   const json made =
@@ -690,6 +699,7 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   addPincode(primary, "999126");
   EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999126", 200), 200) << stderrOf("replica-0");
   EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
+  EXPECT_NE(metrics().find("\npintag_follow_failing 0\n"), std::string::npos) << metrics();
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {

@@ -2,6 +2,9 @@
 
 #include <sys/stat.h>
 
+#include <chrono>
+#include <vector>
+
 #include "app/context.hpp"
 #include "app/db_problems.hpp"
 #include "app/route_table.hpp"
@@ -50,6 +53,33 @@ void DefineCounters(server::Metrics& metrics) {
   metrics.defineCounter(kUnknownKeysCounter, "Decoded tags whose key no pincode holds.");
   metrics.defineCounter(kPixelBudgetWaitsCounter,
                         "Photos and PNGs that waited for room under --max-pixels-in-flight.");
+}
+
+/// A following replica's polls as gauges, so that an alert can fire on a replica that serves an
+/// old snapshot while it stays ready (GET /api/v1/registry says the same to a person).
+void AddFollowGauges(server::Metrics& metrics,
+                     std::shared_ptr<const replica::FollowStatus> follow_status) {
+  metrics.addGaugeSource([follow_status = std::move(follow_status)] {
+    const replica::FollowStatus::View view = follow_status->view();
+    const auto seconds = [](replica::FollowStatus::Clock::time_point t) {
+      return std::chrono::duration<double>(t.time_since_epoch()).count();
+    };
+    std::vector<server::Metrics::Gauge> gauges;
+    gauges.push_back({"pintag_follow_failing",
+                      "1 while this replica's polls of its primary fail, else 0.",
+                      view.failing_since ? 1.0 : 0.0});
+    if (view.last_answer) {
+      gauges.push_back({"pintag_follow_last_answer_timestamp_seconds",
+                        "When the primary last answered a poll (200 or 304), Unix time.",
+                        seconds(*view.last_answer)});
+    }
+    if (view.failing_since) {
+      gauges.push_back({"pintag_follow_failing_since_timestamp_seconds",
+                        "When this replica's polls began to fail, Unix time.",
+                        seconds(*view.failing_since)});
+    }
+    return gauges;
+  });
 }
 
 }  // namespace
@@ -112,6 +142,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->publisher = config.publisher;
   context->follow_status = config.follow_status;
   DefineCounters(*context->metrics);
+  if (config.follow_status) AddFollowGauges(*context->metrics, config.follow_status);
   server::Router router = AppRouter(context);
   if (config.read_only) router = replica::ReadOnlyRouter(router, config.primary_url);
 

@@ -79,7 +79,25 @@ long long Metrics::requestCount(std::string_view route, std::string_view method,
   return it == requests_.end() ? 0 : it->second.count;
 }
 
+void Metrics::addGaugeSource(GaugeSource source) {
+  const std::lock_guard lock(mutex_);
+  gauge_sources_.push_back(std::move(source));
+}
+
 std::string Metrics::renderPrometheus() const {
+  std::vector<GaugeSource> sources;
+  {
+    const std::lock_guard lock(mutex_);
+    sources = gauge_sources_;
+  }
+  std::string gauges;
+  for (const GaugeSource& source : sources) {
+    for (const Gauge& gauge : source()) {
+      if (!gauge.help.empty()) gauges += "# HELP " + gauge.name + " " + gauge.help + "\n";
+      gauges += "# TYPE " + gauge.name + " gauge\n";
+      gauges += gauge.name + " " + Number(gauge.value) + "\n";
+    }
+  }
   const std::lock_guard lock(mutex_);
   std::string out;
   out += "# HELP pintag_http_requests_total HTTP requests answered, by route, method and status.\n";
@@ -112,7 +130,7 @@ std::string Metrics::renderPrometheus() const {
     out += "# TYPE " + name + " counter\n";
     out += name + " " + Number(c.value) + "\n";
   }
-  return out;
+  return out + gauges;
 }
 
 }  // namespace pintag::server

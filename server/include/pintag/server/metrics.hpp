@@ -1,13 +1,16 @@
 #pragma once
-// Prometheus metrics: request counts and latency histograms by route, method and status, plus
-// named counters the application increments (detections, labels rendered, …). Thread-safe.
+// Prometheus metrics: request counts and latency histograms by route, method and status, named
+// counters the application increments (detections, labels rendered, …), and gauges read when
+// scraped (a replica's follow status). Thread-safe.
 
 #include <array>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <vector>
 
 namespace pintag::server {
 
@@ -32,6 +35,17 @@ class Metrics {
   /// Requests observed with this route, method and status.
   long long requestCount(std::string_view route, std::string_view method, int status) const;
 
+  /// A gauge's value at one scrape. `name` is a Prometheus metric name without a "_total" end.
+  struct Gauge {
+    std::string name;
+    std::string help;
+    double value = 0;
+  };
+  /// Called on every scrape, outside the metrics' lock, for gauges whose value lives elsewhere.
+  /// A gauge it leaves out is not exported at that scrape (a time that has not happened yet).
+  using GaugeSource = std::function<std::vector<Gauge>()>;
+  void addGaugeSource(GaugeSource source);
+
   /// The text exposition format, version 0.0.4 (content type kContentType).
   std::string renderPrometheus() const;
   static constexpr std::string_view kContentType = "text/plain; version=0.0.4; charset=utf-8";
@@ -51,6 +65,7 @@ class Metrics {
   mutable std::mutex mutex_;
   std::map<Key, Histogram> requests_;
   std::map<std::string, Counter, std::less<>> counters_;
+  std::vector<GaugeSource> gauge_sources_;
 };
 
 }  // namespace pintag::server
