@@ -131,17 +131,18 @@ bool ParseArgs(int argc, char** argv, Args& args) {
     } else if (a == "--seed") {
       args.sweep.seed = SeedOrExit("pintag_genie_probe", next());
     } else if (a == "--frames-per-bin") {
-      args.sweep.frames_per_bin = std::max(1, std::atoi(next()));
+      args.sweep.frames_per_bin =
+          IntegerOrExit("pintag_genie_probe", "--frames-per-bin", next(), 1, 100000);
     } else if (a == "--threads") {
-      args.threads = std::atoi(next());
+      args.threads = IntegerOrExit("pintag_genie_probe", "--threads", next(), 0, 1024);
     } else if (a == "--min-size") {
-      args.min_size_px = std::atoi(next());
+      args.min_size_px = IntegerOrExit("pintag_genie_probe", "--min-size", next(), 1, 10000);
     } else if (a == "--max-size") {
-      args.max_size_px = std::atoi(next());
+      args.max_size_px = IntegerOrExit("pintag_genie_probe", "--max-size", next(), 1, 10000);
     } else if (a == "--max-tilt") {
-      args.max_tilt_deg = std::atoi(next());
+      args.max_tilt_deg = IntegerOrExit("pintag_genie_probe", "--max-tilt", next(), 0, 89);
     } else if (a == "--rivals") {
-      args.rivals = std::clamp(std::atoi(next()), 0, 120);
+      args.rivals = IntegerOrExit("pintag_genie_probe", "--rivals", next(), 0, 120);
     } else if (a == "--mismatch") {
       args.mismatch = true;
     } else if (a == "--csv") {
@@ -153,6 +154,15 @@ bool ParseArgs(int argc, char** argv, Args& args) {
                    "[--rivals N | --mismatch] [--threads N] [--csv FILE]\n");
       return false;
     }
+  }
+  // The CSV is written at the end of a run of many minutes: a path it cannot write is said now.
+  if (!args.csv.empty()) {
+    FILE* csv = std::fopen(args.csv.c_str(), "a");
+    if (csv == nullptr) {
+      std::fprintf(stderr, "pintag_genie_probe: cannot write %s\n", args.csv.c_str());
+      return false;
+    }
+    std::fclose(csv);
   }
   return true;
 }

@@ -127,13 +127,14 @@ int Main(int argc, char** argv) {
     } else if (a == "--seed") {
       args.sweep.seed = SeedOrExit("pintag_reader_probe", next());
     } else if (a == "--frames-per-bin") {
-      args.sweep.frames_per_bin = std::max(1, std::atoi(next()));
+      args.sweep.frames_per_bin =
+          IntegerOrExit("pintag_reader_probe", "--frames-per-bin", next(), 1, 100000);
     } else if (a == "--jitter") {
-      args.jitter_px = std::atof(next());
+      args.jitter_px = NumberOrExit("pintag_reader_probe", "--jitter", next(), 0, 10);
     } else if (a == "--draws") {
-      args.draws = std::max(1, std::atoi(next()));
+      args.draws = IntegerOrExit("pintag_reader_probe", "--draws", next(), 1, 100000);
     } else if (a == "--threads") {
-      args.threads = std::atoi(next());
+      args.threads = IntegerOrExit("pintag_reader_probe", "--threads", next(), 0, 1024);
     } else if (a == "--reader") {
       const std::string reader = next();
       if (reader != "model") {
@@ -151,17 +152,13 @@ int Main(int argc, char** argv) {
     } else if (a == "--verbose") {
       args.verbose = true;
     } else if (a == "--max-size") {
-      args.max_size_px = std::atoi(next());
+      args.max_size_px = IntegerOrExit("pintag_reader_probe", "--max-size", next(), 1, 10000);
     } else if (a == "--frame") {
-      args.frame = std::atoi(next());
+      args.frame = IntegerOrExit("pintag_reader_probe", "--frame", next(), 0, 10'000'000);
     } else if (a == "--jpeg-quality") {
       // As pintag_bench's: every frame saved at this quality, not the one its light draws.
-      const int quality = std::atoi(next());
-      if (quality < 1 || quality > 100) {
-        std::fprintf(stderr, "pintag_reader_probe: --jpeg-quality is 1 to 100\n");
-        return 2;
-      }
-      args.sweep.jpeg_quality = quality;
+      args.sweep.jpeg_quality =
+          IntegerOrExit("pintag_reader_probe", "--jpeg-quality", next(), 1, 100);
     } else if (a == "--s-curve") {
       args.sweep.s_curve = true;  // as pintag_bench's
     } else if (a == "--vng-demosaic") {
@@ -169,8 +166,8 @@ int Main(int argc, char** argv) {
     } else if (a == "--no-mosaic") {
       args.sweep.no_mosaic = true;  // as pintag_bench's: analysis of the held-out phone
     } else if (a == "--sensor-scale") {
-      args.sweep.sensor_scale =
-          std::atoi(next());  // as pintag_bench's; SweepOptionsError checks it
+      args.sweep.sensor_scale = IntegerOrExit("pintag_reader_probe", "--sensor-scale", next(), 1,
+                                              4);  // as pintag_bench's
     } else {
       std::fprintf(stderr,
                    "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
@@ -209,6 +206,10 @@ int Main(int argc, char** argv) {
   std::vector<double> wrong_fit_leads, wrong_narrow_fit_leads, wrong_misfit_leads;
   std::size_t model_readings = 0;
   FILE* csv = args.csv.empty() ? nullptr : std::fopen(args.csv.c_str(), "w");
+  if (!args.csv.empty() && csv == nullptr) {  // the run went on and wrote nothing
+    std::fprintf(stderr, "pintag_reader_probe: cannot write %s\n", args.csv.c_str());
+    return 2;
+  }
   if (csv != nullptr) {
     std::fprintf(
         csv,

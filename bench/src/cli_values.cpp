@@ -34,4 +34,30 @@ std::uint64_t SeedOrExit(const char* tool, const char* text) {
   std::exit(2);
 }
 
+int IntegerOrExit(const char* tool, const char* option, const char* text, int lowest, int highest) {
+  const std::string_view view(text);
+  int value = 0;
+  const auto [end, error] = std::from_chars(view.data(), view.data() + view.size(), value);
+  if (view.empty() || error != std::errc() || end != view.data() + view.size() || value < lowest ||
+      value > highest) {
+    std::fprintf(stderr, "%s: %s takes a whole number from %d to %d, got \"%s\"\n", tool, option,
+                 lowest, highest, text);
+    std::exit(2);
+  }
+  return value;
+}
+
+double NumberOrExit(const char* tool, const char* option, const char* text, double lowest,
+                    double highest) {
+  char* end = nullptr;
+  const double value = std::strtod(text, &end);
+  // Written so that NaN fails the range test too.
+  if (*text == '\0' || *end != '\0' || !(value >= lowest && value <= highest)) {
+    std::fprintf(stderr, "%s: %s takes a number from %g to %g, got \"%s\"\n", tool, option, lowest,
+                 highest, text);
+    std::exit(2);
+  }
+  return value;
+}
+
 }  // namespace pintag::bench

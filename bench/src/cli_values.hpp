@@ -21,4 +21,11 @@ std::optional<std::uint64_t> ParseSeed(std::string_view text);
 scene::World WorldOrExit(const char* tool, const char* text);
 std::uint64_t SeedOrExit(const char* tool, const char* text);
 
+/// The whole of `text` as a decimal integer in [lowest, highest], or a number in [lowest,
+/// highest]; anything else (a count of "abc" read as 0, a negative count clamped to 1) is
+/// printed as `tool`'s usage error naming `option`, and the process exits with status 2.
+int IntegerOrExit(const char* tool, const char* option, const char* text, int lowest, int highest);
+double NumberOrExit(const char* tool, const char* option, const char* text, double lowest,
+                    double highest);
+
 }  // namespace pintag::bench
