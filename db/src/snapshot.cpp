@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "guard.hpp"
+#include "key_continuity.hpp"
 #include "pintag/db/database.hpp"
 
 namespace pintag::db {
@@ -268,6 +269,17 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
         error.message.replace(at, temporary.path().size(), named);
       }
       return error;
+    }
+    // A registry served now (a replica's last snapshot) is replaced only by one that keeps its
+    // keys. A file there that is not a snapshot is replaced, as a damaged one must be.
+    if (VerifySnapshot(path)) {
+      if (const std::string lost = KeysNotKept(path, temporary.path()); !lost.empty()) {
+        return Error{ErrorCode::kConflict,
+                     "the snapshot received does not keep the keys of " + path + ": " + lost +
+                         ". Labels printed with them would be misrouted, so " + path +
+                         " stays as it was. A primary restored from an older backup does this; "
+                         "restore it from this file instead (docs/SCALING.md)"};
+      }
     }
     if (::rename(temporary.path().c_str(), path.c_str()) != 0) {
       return Error{ErrorCode::kStorage, SystemError("cannot rename the snapshot to " + path)};

@@ -410,6 +410,51 @@ TEST(Snapshot, InstallPutsReceivedBytesInPlaceOnlyWhenTheyAreWhole) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 }
 
+// A primary restored from an older backup gives the keys it lost to the next pincodes it adds. A
+// replica that took its registry would read every label printed with such a key as another
+// pincode, so the snapshot the replica serves stays until one keeps all its keys.
+TEST(Snapshot, InstallRefusesASnapshotThatDoesNotKeepTheServedKeys) {
+  TempDir dir;
+  const std::string primary_path = test::CopyOfSeeded(dir);
+  const std::string backup_path = dir.file("backup.db");
+  std::filesystem::copy_file(primary_path, backup_path);
+  const auto snapshot_of = [&](Connection& connection, const std::string& name) {
+    const auto written = WriteSnapshot(connection, dir.file(name));
+    EXPECT_TRUE(written.ok()) << written.error().message;
+    return test::ReadFile(dir.file(name));
+  };
+  const std::string target = dir.file("replica.db");
+  Connection primary = test::OpenExisting(primary_path);
+  const auto lost = AddPincode(primary, Pincode(100016), {TestOffice("Lost Nagar")});
+  ASSERT_TRUE(lost.ok()) << lost.error().message;
+  ASSERT_TRUE(InstallSnapshot(snapshot_of(primary, "before.db"), target).ok());
+  const std::string served = test::ReadFile(target);
+  const std::string lost_key = "key " + std::to_string(lost->key.value()) + " (pincode 100016)";
+
+  // The backup, restored, lacks the key; then it gives it to the next pincode that probes there.
+  Connection restored = test::OpenExisting(backup_path);
+  const std::string without_key = snapshot_of(restored, "restored.db");
+  const auto reused = AddPincode(restored, Pincode(101003), {TestOffice("Other Nagar")});
+  ASSERT_TRUE(reused.ok()) << reused.error().message;
+  ASSERT_EQ(reused->key.value(), lost->key.value()) << "101003 no longer probes to 100016's key";
+  const std::string with_key_reused = snapshot_of(restored, "reused.db");
+  for (const auto& [bytes, says] : {std::pair{without_key, lost_key + " is missing"},
+                                    std::pair{with_key_reused, lost_key + " is given to 101003"}}) {
+    const auto refused = InstallSnapshot(bytes, target);
+    ASSERT_FALSE(refused.ok()) << says;
+    EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+    EXPECT_NE(refused.error().message.find(says), std::string::npos) << refused.error().message;
+    EXPECT_EQ(test::ReadFile(target), served);
+  }
+
+  // The primary that kept its keys goes on replacing the snapshot as it changes.
+  ASSERT_TRUE(AddPincode(primary, Pincode(999004), {TestOffice("Later Nagar")}).ok());
+  const auto newer = InstallSnapshot(snapshot_of(primary, "after.db"), target);
+  ASSERT_TRUE(newer.ok()) << newer.error().message;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
 // A registry a server writes is never replaced by a received snapshot, open (its log beside it)
 // or closed (in WAL mode, which no snapshot is): renamed over an open one, its log corrupted the
 // new file at the next checkpoint.

@@ -510,29 +510,28 @@ TEST_F(ReplicaSetTest, AReplicaNotToldItsPrimaryNamesNone) {
 // A registry version counts changes within one database's history. A primary restored from a
 // backup counts again from the backup's version: after as many changes as the replicas saw since,
 // it is at their version with other rows. They answered 304 to it, and served rows the primary
-// no longer had, until its next change. The ETag names the primary's run too.
-TEST_F(ReplicaSetTest, AFollowerTakesARestoredPrimarysRegistryAtTheVersionItAlreadyHolds) {
-  const std::string backup = dir_.file("backup.db");
-  {
-    db::Connection live(primary_db_, {.create = false});
-    ASSERT_TRUE(db::WriteSnapshot(live, backup).ok());
-  }
-  ServerProcess& follower = startFollower(0);
-  ASSERT_TRUE(follower.ok());
-  httplib::Client replica = LoopbackClient(follower.port());
-  httplib::Client primary = LoopbackClient(primary_->port());
-  addPincode(primary, "999202");
-  ASSERT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999202", 200), 200) << stderrOf("replica-0");
-  const std::int64_t held = RegistryVersionAt(follower.port());
-
-  // Restored: the backup, then one other pincode, which brings it to the version the replica has.
-  const int port = primary_->port();
-  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
-  std::filesystem::copy_file(backup, primary_db_,
-                             std::filesystem::copy_options::overwrite_existing);
-  {
-    db::Connection restored(primary_db_, {.create = false});
-    restored.execute("PRAGMA journal_mode=WAL");
+// no longer had, until its next change. The ETag names the primary's run too, so a follower takes
+// a restored registry that keeps its keys. One that lost keys the follower serves would give them
+// to the next pincodes it adds, and labels printed with them would be misrouted: the follower
+// refuses it, says why, and follows again once the primary is restored from the follower's file.
+TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServed) {
+  const auto restore_primary = [&](const std::string& from, const std::string& log_name,
+                                   const std::function<void(db::Connection&)>& change) {
+    const int port = primary_->port();
+    ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+    std::filesystem::copy_file(from, primary_db_, std::filesystem::copy_options::overwrite_existing);
+    {
+      db::Connection restored(primary_db_, {.create = false});
+      restored.execute("PRAGMA journal_mode=WAL");
+      change(restored);
+    }
+    primary_ = std::make_unique<ServerProcess>(
+        std::vector<std::string>{"--db", primary_db_, "--threads", "4", "--snapshot",
+                                 dir_.file("published.db")},
+        dir_.file(log_name + ".err"), 60, port);
+    ASSERT_TRUE(primary_->ok()) << stderrOf(log_name);
+  };
+  const auto add_directly = [](db::Connection& connection, int pin) {
     db::PostOffice office;
     office.name = "Restored Nagar";
     office.district = "Testpur";
@@ -540,20 +539,67 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredPrimarysRegistryAtTheVersionItAlre
     office.circle = "Test";
     office.region = "T";
     office.division = "TD";
-    ASSERT_TRUE(db::AddPincode(restored, Pincode(999203), {office}).ok());
-    auto version = db::RegistryVersion(restored);
+    ASSERT_TRUE(db::AddPincode(connection, Pincode(pin), {office}).ok()) << pin;
+  };
+  const std::string before_999202 = publishTo("backup-old.db");
+  ServerProcess& follower = startFollower(0);
+  ASSERT_TRUE(follower.ok());
+  httplib::Client replica = LoopbackClient(follower.port());
+  httplib::Client primary = LoopbackClient(primary_->port());
+  addPincode(primary, "999202");
+  ASSERT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999202", 200), 200) << stderrOf("replica-0");
+  const std::string with_999202 = publishTo("backup-new.db");
+  // Three changes, as many as adding a pincode with an office makes.
+  for (const std::string pin : {"999202", "110001", "110002"}) {
+    ASSERT_EQ(StatusOf(primary.Post("/api/v1/pincodes/" + pin + "/retire", Auth(admin_token_), "",
+                                    "application/json")),
+              200);
+  }
+  WaitUntil([&] {
+    return Body(replica.Get("/api/v1/pincodes/110002")).value("status", "") == "retired";
+  });
+  const std::int64_t held = RegistryVersionAt(follower.port());
+
+  // Restored from the newer backup, one pincode added: the replica's version, other rows, every
+  // key kept. The follower takes it (999202 active again, 999203 there).
+  restore_primary(with_999202, "primary-restored", [&](db::Connection& restored) {
+    add_directly(restored, 999203);
+    const auto version = db::RegistryVersion(restored);
     ASSERT_TRUE(version.ok());
     ASSERT_EQ(*version, held) << "the restored registry is not at the replica's version";
-  }
-  primary_ = std::make_unique<ServerProcess>(
-      std::vector<std::string>{"--db", primary_db_, "--threads", "4", "--snapshot",
-                               dir_.file("published.db")},
-      dir_.file("primary-restored.err"), 60, port);
-  ASSERT_TRUE(primary_->ok()) << stderrOf("primary-restored");
-
+  });
   EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999203", 200), 200) << stderrOf("replica-0");
-  EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 404);
+  EXPECT_EQ(Body(replica.Get("/api/v1/pincodes/999202")).value("status", ""), "active");
   EXPECT_EQ(RegistryVersionAt(follower.port()), held);
+
+  // Restored from the older backup, which lacks 999202: refused, named, the replica still ready.
+  const std::int64_t key_of_999202 = Body(replica.Get("/api/v1/pincodes/999202"))["key"];
+  restore_primary(before_999202, "primary-old", [&](db::Connection& restored) {
+    add_directly(restored, 999204);
+  });
+  const auto follow = [&] { return Body(replica.Get("/api/v1/registry"))["follow"]; };
+  const auto follow_error = [&] {
+    const json status = follow();
+    return status["error"].is_string() ? status["error"].get<std::string>() : std::string();
+  };
+  WaitUntil([&] { return follow_error().find("keep the keys") != std::string::npos; });
+  const std::string error = follow_error();
+  EXPECT_NE(error.find("key " + std::to_string(key_of_999202) + " (pincode 999202)"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("misrouted"), std::string::npos) << error;
+  EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 200);
+  EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999204")), 404);
+  EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
+  EXPECT_NE(stderrOf("replica-0").find("does not keep the keys"), std::string::npos);
+
+  // The way back SCALING.md gives: the primary restored from the replica's own file.
+  restore_primary(replicaDb(0), "primary-from-replica", [](db::Connection&) {});
+  addPincode(primary, "999205");
+  EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999205", 200), 200) << stderrOf("replica-0");
+  EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 200);
+  WaitUntil([&] { return follow()["error"].is_null(); });
+  EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
 }
 
 // Something at a follower's primary URL that is not a working primary: it reads each request and

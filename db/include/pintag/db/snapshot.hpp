@@ -42,7 +42,10 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
 /// beside it, fsynced, checked with VerifySnapshot, then renamed into place and the directory
 /// fsynced. Bytes that are not a whole snapshot of the current schema are refused with
 /// VerifySnapshot's error (naming `path`, not the temporary file) and `path` is left as it was;
-/// kConflict, with nothing written, when `path` is a live database (LiveDatabaseAt).
+/// kConflict, with nothing written, when `path` is a live database (LiveDatabaseAt). kConflict,
+/// `path` left as it was, when `path` holds a snapshot whose keys the received one does not all
+/// give to the same pincodes (a primary restored from an older backup reuses the keys it lost,
+/// and labels printed with them would be misrouted).
 Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path);
 
 /// Removes the temporary files that WriteSnapshot and InstallSnapshot are writing at this moment.
