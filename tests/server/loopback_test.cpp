@@ -4,6 +4,7 @@
 #include <httplib.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -355,6 +356,92 @@ TEST_F(LoopbackTest, AcceptedConnectionsHaveNagleOff) {
   ASSERT_EQ(getsockopt(accepted, IPPROTO_TCP, TCP_NODELAY, &nodelay, &size), 0);
   EXPECT_NE(nodelay, 0);
   close(client);
+}
+
+// Each connection used to wait for its request in a worker: 16 that sent nothing, or a few that
+// sent their head a byte at a time, held every worker for the keep-alive timeout (5 s) each, and
+// /livez waited 20 s. Connections now wait for a whole head without a worker.
+TEST_F(LoopbackTest, ConnectionsThatSendNothingOrDripTheirHeadHoldNoWorker) {
+  std::vector<int> silent(16);
+  for (int& fd : silent) fd = pintag::test::ConnectLoopback(server_->port());
+  std::vector<int> dripping;
+  dripping.reserve(8);
+  for (int i = 0; i < 8; ++i) {
+    dripping.push_back(pintag::test::ConnectLoopback(server_->port()));
+    ASSERT_TRUE(pintag::test::SendAll(dripping.back(), "GET /livez HTTP/1.1\r\nHost: x"));
+  }
+  std::atomic<bool> drip{true};
+  std::thread dripper([&] {
+    while (drip) {
+      for (const int fd : dripping) pintag::test::SendAll(fd, "\r\nX-Drip: 1");
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // all of them accepted
+
+  // Four workers, 24 connections waiting: answered before one keep-alive timeout could pass.
+  const auto start = std::chrono::steady_clock::now();
+  const httplib::Result answer = client_->Get("/livez");
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_TRUE(answer) << httplib::to_string(answer.error());
+  EXPECT_EQ(answer->status, 200);
+  EXPECT_LT(seconds, 4.0);
+
+  // A dripped head is answered once its blank line comes, and the connection is kept alive for
+  // a next request sent after a pause.
+  drip = false;
+  dripper.join();
+  for (const int fd : dripping) {
+    ASSERT_TRUE(pintag::test::SendAll(fd, "\r\n\r\n"));
+    const std::string first = pintag::test::ReceiveUntil(fd, 10, pintag::test::HasWholeResponse);
+    EXPECT_EQ(first.rfind("HTTP/1.1 200", 0), 0U) << first;
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_TRUE(pintag::test::SendAll(dripping[0], "GET /livez HTTP/1.1\r\nHost: x\r\n\r\n"));
+  const std::string second =
+      pintag::test::ReceiveUntil(dripping[0], 10, pintag::test::HasWholeResponse);
+  EXPECT_EQ(second.rfind("HTTP/1.1 200", 0), 0U) << second;
+  for (const int fd : silent) ::close(fd);
+  for (const int fd : dripping) ::close(fd);
+}
+
+// A connection that waits past the keep-alive timeout is closed, and past the limit of waiting
+// connections the one that has waited longest is closed for a new one.
+TEST(Loopback, WaitingConnectionsAreClosedAtTheirTimeoutAndPastTheLimit) {
+  auto metrics = std::make_shared<Metrics>();
+  auto api = std::make_shared<const Api>(test::TestRouter(metrics), test::FakeVerifier(), nullptr,
+                                         metrics, ApiOptions{kMaxBody, std::nullopt, {}});
+  ServerOptions options;
+  options.port = 0;
+  options.threads = 2;
+  options.keep_alive_timeout = std::chrono::seconds(2);
+  options.max_idle_connections = 4;
+  HttpServer server(api, options);
+  std::string error;
+  ASSERT_TRUE(server.start(&error)) << error;
+  const auto closed_by_server = [](int fd, int within_s) {
+    pollfd readable{fd, POLLIN, 0};
+    char byte = 0;
+    return ::poll(&readable, 1, within_s * 1000) == 1 && ::recv(fd, &byte, 1, MSG_DONTWAIT) == 0;
+  };
+
+  std::vector<int> waiting;
+  for (int i = 0; i < 4; ++i) {
+    waiting.push_back(pintag::test::ConnectLoopback(server.port()));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const int newest = pintag::test::ConnectLoopback(server.port());
+  EXPECT_TRUE(closed_by_server(waiting[0], 1)) << "the longest waiting is closed";
+  for (const int fd : {waiting[1], newest}) {
+    ASSERT_TRUE(pintag::test::SendAll(fd, "GET /livez HTTP/1.1\r\nHost: x\r\n\r\n"));
+    const std::string answer = pintag::test::ReceiveUntil(fd, 10, pintag::test::HasWholeResponse);
+    EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer;
+  }
+  // Silent from now on: closed after the 2 s keep-alive timeout.
+  EXPECT_TRUE(closed_by_server(newest, 10));
+  for (const int fd : waiting) ::close(fd);
+  ::close(newest);
 }
 
 TEST(Loopback, PortInUseIsAClearError) {

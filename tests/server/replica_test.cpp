@@ -591,6 +591,8 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServ
   EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999202")), 200);
   EXPECT_EQ(StatusOf(replica.Get("/api/v1/pincodes/999204")), 404);
   EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
+  // Logged just after the status is set.
+  WaitUntil([&] { return stderrOf("replica-0").find("keep the keys") != std::string::npos; });
   EXPECT_NE(stderrOf("replica-0").find("does not keep the keys"), std::string::npos);
 
   // The way back SCALING.md gives: the primary restored from the replica's own file.

@@ -140,17 +140,6 @@ void ConnectionStream::get_local_ip_and_port(std::string& ip, int& port) const {
   }
 }
 
-bool NextRequestArrives(int fd, std::chrono::seconds keep_alive,
-                        const std::atomic<int>& listening) {
-  const auto deadline = std::chrono::steady_clock::now() + keep_alive;
-  while (listening != -1) {
-    const int ready = Wait(fd, POLLIN, 10);
-    if (ready > 0) return true;
-    if (ready < 0 || std::chrono::steady_clock::now() > deadline) return false;
-  }
-  return false;
-}
-
 void LingerBeforeClosing(int fd) {
   ::shutdown(fd, SHUT_WR);
   std::array<char, 16384> sink{};

@@ -18,7 +18,6 @@
 #include <httplib.h>
 
 #include <array>
-#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <string>
@@ -72,11 +71,6 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t buffered_begin_ = 0;
   std::size_t buffered_end_ = 0;
 };
-
-/// Waits for a kept-alive connection's next request: true once a byte has arrived; false when
-/// `keep_alive` passes, the connection fails, or `listening` is closed (the server stops). Looks
-/// every 10 ms, so that a stop is not held up by an idle connection.
-bool NextRequestArrives(int fd, std::chrono::seconds keep_alive, const std::atomic<int>& listening);
 
 /// Closing a socket with unread bytes resets the connection, and a reset may reach the client
 /// before it has read the answer it was sent. So: no more writes, then what the client is still

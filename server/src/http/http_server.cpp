@@ -29,11 +29,13 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <thread>
 
 #include "connection_stream.hpp"
 #include "header_text.hpp"
+#include "idle_connections.hpp"
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
@@ -89,8 +91,27 @@ std::chrono::microseconds Microseconds(time_t seconds, time_t microseconds) {
   return std::chrono::seconds(seconds) + std::chrono::microseconds(microseconds);
 }
 
+/// The worker pool cpp-httplib is given (and deletes after shutdown()), which says when it is
+/// shutting down, so that no parked connection is handed to it after.
+class WorkerPool final : public httplib::TaskQueue {
+ public:
+  WorkerPool(std::size_t threads, std::function<void()> on_shutdown)
+      : pool_(threads), on_shutdown_(std::move(on_shutdown)) {}
+
+  void enqueue(std::function<void()> fn) override { pool_.enqueue(std::move(fn)); }
+  void shutdown() override {
+    on_shutdown_();
+    pool_.shutdown();  // requests in flight finish
+  }
+
+ private:
+  httplib::ThreadPool pool_;
+  std::function<void()> on_shutdown_;
+};
+
 /// cpp-httplib's server with its one-request entry point opened (answerRaw), and its connection
-/// loop replaced by the same loop reading through ConnectionStream (the head budget).
+/// loop replaced by one that reads through ConnectionStream (the head budget) and parks a
+/// connection between requests in IdleConnections instead of waiting in its worker.
 class Server : public httplib::Server {
  public:
   using httplib::Server::process_request;
@@ -99,22 +120,26 @@ class Server : public httplib::Server {
   /// request line was still coming): cpp-httplib then writes nothing.
   std::function<void(ConnectionStream&)> answer_unended_head;
 
- private:
-  /// As cpp-httplib 0.11.4's: up to keep_alive_max_count_ requests, each waited for at most
-  /// keep_alive_timeout_sec_, each read through a new stream; then the socket is shut and closed.
-  bool process_and_close_socket(socket_t sock) override {
-    bool ok = false;
-    for (std::size_t left = keep_alive_max_count_;
-         left > 0 &&
-         NextRequestArrives(sock, std::chrono::seconds(keep_alive_timeout_sec_), svr_sock_);
-         --left) {
+  /// Set before the server listens: where a connection waits between requests.
+  IdleConnections* idle = nullptr;
+
+  /// As cpp-httplib 0.11.4's loop: up to `left` requests, each read through a new stream, then
+  /// the socket is shut and closed. A request not there yet is waited for in `idle`, for at most
+  /// keep_alive_timeout_sec_, and this worker is free meanwhile.
+  void serveConnection(int sock, std::size_t left) {
+    for (; left > 0; --left) {
+      if (PeekRequestHead(sock, kMaxRequestHeadBytes) != HeadState::kReady) {
+        idle->park(sock, left,
+                   IdleConnections::Clock::now() + std::chrono::seconds(keep_alive_timeout_sec_));
+        return;
+      }
       ConnectionStream stream(sock, Microseconds(read_timeout_sec_, read_timeout_usec_),
                               Microseconds(write_timeout_sec_, write_timeout_usec_),
                               kMaxRequestHeadBytes);
       t_connection = &stream;
       t_state = RequestState{};  // nothing of the previous request carries over
       bool closed = false;
-      ok = process_request(stream, left == 1, closed, nullptr);
+      const bool ok = process_request(stream, left == 1, closed, nullptr);
       t_connection = nullptr;
       if (stream.overBudget() && !stream.wasAnswered() && answer_unended_head) {
         answer_unended_head(stream);
@@ -129,7 +154,12 @@ class Server : public httplib::Server {
     }
     ::shutdown(sock, SHUT_RDWR);
     ::close(sock);
-    return ok;
+  }
+
+ private:
+  bool process_and_close_socket(socket_t sock) override {
+    serveConnection(sock, keep_alive_max_count_);
+    return true;
   }
 };
 
@@ -238,6 +268,22 @@ struct HttpServer::Impl {
   std::shared_ptr<const Api> api;
   ServerOptions options;
   Server server;
+  std::mutex pool_mutex;
+  WorkerPool* pool = nullptr;  ///< cpp-httplib's, from listening until its shutdown; pool_mutex
+  /// Connections between requests. Declared after `server`, so it ends first.
+  std::unique_ptr<IdleConnections> idle;
+
+  /// A parked connection whose next request arrived goes back to a worker; one that comes back
+  /// while the pool shuts down is closed.
+  void resume(int fd, std::size_t requests_left) {
+    const std::lock_guard lock(pool_mutex);
+    if (pool == nullptr) {
+      ::shutdown(fd, SHUT_RDWR);
+      ::close(fd);
+      return;
+    }
+    pool->enqueue([this, fd, requests_left] { server.serveConnection(fd, requests_left); });
+  }
   std::atomic<int> listen_fd{-1};
   int port = 0;
   std::thread thread;
@@ -421,26 +467,48 @@ struct HttpServer::Impl {
   /// What cpp-httplib could not answer: a head over the budget while its request line was still
   /// being read. Written whole here, logged and counted as the logger would.
   void answerUnendedHead(ConnectionStream& stream) {
-    const HttpResponse problem = HeadTooLarge();
+    answerWithoutRequest(stream, "Request Header Fields Too Large", HeadTooLarge(), true);
+  }
+
+  /// A head still coming Limits::head_timeout after its first bytes (IdleConnections): 408,
+  /// written without waiting, on the thread that waits for every idle connection.
+  void answerHeadTimeout(int fd) {
+    ConnectionStream stream(fd, std::chrono::microseconds(0), std::chrono::microseconds(0), 0);
+    answerWithoutRequest(
+        stream, "Request Timeout",
+        ProblemResponse(408, "the request line and headers did not all arrive within " +
+                                 std::to_string(options.read_timeout.count()) +
+                                 " s of their first byte"),
+        false);
+  }
+
+  /// Writes `problem` on a connection whose request was never read whole, asking to close it, and
+  /// counts and logs it as cpp-httplib's answers are. Without `wait`, only what the socket takes
+  /// at once is written.
+  void answerWithoutRequest(ConnectionStream& stream, std::string_view reason,
+                            const HttpResponse& problem, bool wait) {
     const std::string id = RequestIdFrom(std::nullopt);
-    const std::string answer =
-        "HTTP/1.1 431 Request Header Fields Too Large\r\nContent-Type: " + problem.content_type +
-        "\r\nContent-Length: " + std::to_string(problem.body.size()) +
-        "\r\nConnection: close\r\nX-Request-Id: " + id + "\r\n\r\n" + problem.body;
+    const std::string answer = "HTTP/1.1 " + std::to_string(problem.status) + " " +
+                               std::string(reason) + "\r\nContent-Type: " + problem.content_type +
+                               "\r\nContent-Length: " + std::to_string(problem.body.size()) +
+                               "\r\nConnection: close\r\nX-Request-Id: " + id + "\r\n\r\n" +
+                               problem.body;
     for (std::size_t sent = 0; sent < answer.size();) {
-      const ssize_t n = stream.write(answer.data() + sent, answer.size() - sent);
+      const ssize_t n = wait ? stream.write(answer.data() + sent, answer.size() - sent)
+                             : ::send(stream.socket(), answer.data() + sent, answer.size() - sent,
+                                      MSG_DONTWAIT | MSG_NOSIGNAL);
       if (n <= 0) break;
       sent += static_cast<std::size_t>(n);
     }
     std::string client;
     int client_port = 0;
     stream.get_remote_ip_and_port(client, client_port);
-    api->metrics().observeRequest("unmatched", "other", 431, 0);
+    api->metrics().observeRequest("unmatched", "other", problem.status, 0);
     LogAccess({.request_id = id,
                .client = client,
                .method = "",
                .path = "",
-               .status = 431,
+               .status = problem.status,
                .bytes = problem.body.size(),
                .seconds = 0,
                .principal = ""});
@@ -479,9 +547,28 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
   Impl* impl = impl_.get();
   httplib::Server& s = impl->server;
 
+  IdleConnections::Limits idle_limits;
+  idle_limits.max_parked =
+      static_cast<std::size_t>(std::max(1, impl->options.max_idle_connections));
+  idle_limits.head_budget = kMaxRequestHeadBytes;
+  idle_limits.head_timeout = impl->options.read_timeout;
+  idle_limits.answer_head_timeout = [impl](int fd) { impl->answerHeadTimeout(fd); };
+  impl->idle = std::make_unique<IdleConnections>(
+      [impl](int fd, std::size_t requests_left) { impl->resume(fd, requests_left); },
+      std::move(idle_limits));
+  impl->server.idle = impl->idle.get();
   const int threads = std::clamp(impl->options.threads, 1, 256);
-  s.new_task_queue = [threads] {
-    return new httplib::ThreadPool(static_cast<std::size_t>(threads));
+  s.new_task_queue = [impl, threads] {
+    auto* pool = new WorkerPool(static_cast<std::size_t>(threads), [impl] {
+      {
+        const std::lock_guard lock(impl->pool_mutex);
+        impl->pool = nullptr;
+      }
+      impl->idle->closeAll();
+    });
+    const std::lock_guard lock(impl->pool_mutex);
+    impl->pool = pool;
+    return pool;
   };
   s.set_payload_max_length(impl->api->options().max_body_bytes);
   s.set_read_timeout(impl->options.read_timeout);

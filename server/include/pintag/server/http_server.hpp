@@ -21,6 +21,9 @@ struct ServerOptions {
   std::chrono::seconds write_timeout{5};   ///< per write of a response
   std::chrono::seconds keep_alive_timeout{5};
   int keep_alive_max_requests = 100;  ///< requests per connection before it is closed
+  /// Connections waiting for a request at once (each an open socket, no thread); past this the
+  /// one whose keep-alive wait ends first is closed.
+  int max_idle_connections = 1024;
   int listen_backlog = 128;           ///< pending connections queued by the kernel
 };
 

@@ -1,0 +1,181 @@
+#include "idle_connections.hpp"
+
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdint>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+namespace pintag::server {
+namespace {
+
+void ShutAndClose(int fd) {
+  ::shutdown(fd, SHUT_RDWR);
+  ::close(fd);
+}
+
+}  // namespace
+
+HeadState PeekRequestHead(int fd, std::size_t head_budget) {
+  thread_local std::vector<char> peeked;
+  peeked.resize(head_budget);
+  ssize_t n = 0;
+  do {
+    n = ::recv(fd, peeked.data(), peeked.size(), MSG_PEEK | MSG_DONTWAIT);
+  } while (n < 0 && errno == EINTR);
+  if (n < 0)
+    return errno == EAGAIN || errno == EWOULDBLOCK ? HeadState::kNothing : HeadState::kReady;
+  if (n == 0 || static_cast<std::size_t>(n) == head_budget) return HeadState::kReady;
+  const std::string_view head(peeked.data(), static_cast<std::size_t>(n));
+  // cpp-httplib takes a bare LF as a line's end too.
+  const bool whole = head.find("\r\n\r\n") != std::string_view::npos ||
+                     head.find("\n\n") != std::string_view::npos ||
+                     head.find("\n\r\n") != std::string_view::npos;
+  return whole ? HeadState::kReady : HeadState::kPart;
+}
+
+IdleConnections::IdleConnections(Ready ready, Limits limits)
+    : ready_(std::move(ready)), limits_(std::move(limits)) {
+  limits_.max_parked = std::max<std::size_t>(1, limits_.max_parked);
+  epoll_fd_ = ::epoll_create1(EPOLL_CLOEXEC);
+  wake_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  if (epoll_fd_ < 0 || wake_fd_ < 0) throw std::runtime_error("cannot create an epoll set");
+  epoll_event wake{};
+  wake.events = EPOLLIN;
+  wake.data.fd = wake_fd_;
+  ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, wake_fd_, &wake);
+  thread_ = std::thread([this] { run(); });
+}
+
+IdleConnections::~IdleConnections() {
+  {
+    const std::lock_guard lock(mutex_);
+    ending_ = true;
+  }
+  closeAll();
+  thread_.join();
+  ::close(wake_fd_);
+  ::close(epoll_fd_);
+}
+
+void IdleConnections::park(int fd, std::size_t requests_left, Clock::time_point deadline) {
+  const std::lock_guard lock(mutex_);
+  if (closed_) {
+    ShutAndClose(fd);
+    return;
+  }
+  if (waiting_.size() >= limits_.max_parked) {
+    const auto first_to_end = std::min_element(
+        waiting_.begin(), waiting_.end(),
+        [](const auto& a, const auto& b) { return a.second.deadline < b.second.deadline; });
+    closeLocked(first_to_end->first);
+  }
+  epoll_event event{};
+  // Edge-triggered: part of a head that stays unread is reported again only when more comes.
+  event.events = EPOLLIN | EPOLLRDHUP | EPOLLET;
+  event.data.fd = fd;
+  if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) != 0) {
+    ShutAndClose(fd);
+    return;
+  }
+  waiting_[fd] = Waiting{requests_left, deadline};
+  const std::uint64_t one = 1;  // the thread's wait may end later than this deadline
+  [[maybe_unused]] const ssize_t written = ::write(wake_fd_, &one, sizeof one);
+}
+
+void IdleConnections::closeAll() {
+  const std::lock_guard lock(mutex_);
+  closed_ = true;
+  while (!waiting_.empty()) closeLocked(waiting_.begin()->first);
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t written = ::write(wake_fd_, &one, sizeof one);
+}
+
+std::size_t IdleConnections::parked() const {
+  const std::lock_guard lock(mutex_);
+  return waiting_.size();
+}
+
+void IdleConnections::closeLocked(int fd) {
+  ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);
+  const auto it = waiting_.find(fd);
+  const bool head_began = it != waiting_.end() && it->second.head_began;
+  waiting_.erase(fd);
+  if (head_began && !closed_ && limits_.answer_head_timeout) {
+    // What the client sent is then read and dropped, so that closing does not reset the
+    // connection under the answer.
+    limits_.answer_head_timeout(fd);
+    ::shutdown(fd, SHUT_WR);
+    std::array<char, 4096> sink{};
+    while (::recv(fd, sink.data(), sink.size(), MSG_DONTWAIT) > 0) {
+    }
+  }
+  ShutAndClose(fd);
+}
+
+void IdleConnections::run() {
+  std::array<epoll_event, 64> events{};
+  std::vector<std::pair<int, std::size_t>> ready;
+  for (;;) {
+    int timeout_ms = 1000;
+    {
+      const std::lock_guard lock(mutex_);
+      if (ending_) return;
+      const Clock::time_point now = Clock::now();
+      for (const auto& [fd, waiting] : waiting_) {
+        const auto left =
+            std::chrono::ceil<std::chrono::milliseconds>(waiting.deadline - now).count();
+        timeout_ms = static_cast<int>(std::clamp<std::int64_t>(left, 0, timeout_ms));
+      }
+    }
+    const int n =
+        ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), timeout_ms);
+    if (n < 0 && errno != EINTR) return;
+    ready.clear();
+    {
+      const std::lock_guard lock(mutex_);
+      for (int i = 0; i < n; ++i) {
+        const int fd = events[static_cast<std::size_t>(i)].data.fd;
+        if (fd == wake_fd_) {
+          std::uint64_t count = 0;
+          [[maybe_unused]] const ssize_t got = ::read(wake_fd_, &count, sizeof count);
+          continue;
+        }
+        const auto it = waiting_.find(fd);
+        if (it == waiting_.end()) continue;  // closed meanwhile
+        const HeadState head = PeekRequestHead(fd, limits_.head_budget);
+        if (head != HeadState::kReady) {
+          if (head == HeadState::kPart && !it->second.head_began) {
+            it->second.head_began = true;
+            it->second.deadline =
+                std::min(it->second.deadline, Clock::now() + limits_.head_timeout);
+          }
+          continue;
+        }
+        ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);
+        ready.emplace_back(fd, it->second.requests_left);
+        waiting_.erase(it);
+      }
+      const Clock::time_point now = Clock::now();
+      for (auto it = waiting_.begin(); it != waiting_.end();) {
+        if (it->second.deadline > now) {
+          ++it;
+          continue;
+        }
+        const int fd = it->first;
+        ++it;
+        closeLocked(fd);
+      }
+    }
+    for (const auto& [fd, left] : ready) ready_(fd, left);
+  }
+}
+
+}  // namespace pintag::server
