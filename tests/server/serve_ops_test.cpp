@@ -175,6 +175,9 @@ TEST_F(ServeTest, ReadyzFailsWhenTheDatabaseIsUnreachable) {
   json problem = ExpectProblem(client().Get("/readyz"), 503);
   EXPECT_EQ(problem["title"], "Not Ready");
   EXPECT_NE(problem["detail"].get<std::string>().find("missing"), std::string::npos);
+  // An open route: what is wrong, not where the file is.
+  EXPECT_EQ(problem["detail"].get<std::string>().find(db_path_), std::string::npos) << problem;
+  EXPECT_EQ(problem.dump().find(dir_.path().filename().string()), std::string::npos) << problem;
   ExpectJson(client().Get("/livez"));  // the process is still up
   std::filesystem::rename(db_path_ + ".away", db_path_);
   ExpectJson(client().Get("/readyz"));

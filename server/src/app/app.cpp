@@ -84,15 +84,17 @@ void AddFollowGauges(server::Metrics& metrics,
 
 }  // namespace
 
+// /readyz is open: its answers say what is wrong without the --db path (the operator knows it),
+// as the storage problems of db_problems.cpp keep file names to the log.
 server::HealthCheck DatabaseHealthCheck(const std::string& path) {
   struct stat at_start {};
   const bool known = ::stat(path.c_str(), &at_start) == 0;
   return [path, at_start, known]() -> std::optional<std::string> {
     struct stat now {};
-    if (::stat(path.c_str(), &now) != 0) return "database unreachable: " + path + " is missing";
+    if (::stat(path.c_str(), &now) != 0) return "database unreachable: its file is missing";
     if (known && (now.st_dev != at_start.st_dev || now.st_ino != at_start.st_ino)) {
-      return "database unreachable: " + path +
-             " was replaced since the server started (restart it to use the new file)";
+      return "database unreachable: its file was replaced since the server started (restart it "
+             "to use the new file)";
     }
     try {
       db::ConnectionOptions options;
@@ -100,10 +102,14 @@ server::HealthCheck DatabaseHealthCheck(const std::string& path) {
       options.busy_timeout_ms = 1000;
       db::Connection connection(path, options);
       if (connection.queryInt64("PRAGMA user_version") != db::kSchemaVersion)
-        return "database unreachable: " + path + " has an unexpected schema version";
+        return "database unreachable: it has an unexpected schema version";
       connection.queryInt64("SELECT count(*) FROM (SELECT 1 FROM tag_keys LIMIT 1)");
     } catch (const std::exception& e) {
-      return std::string("database unreachable: ") + e.what();
+      std::string why = e.what();  // SQLite's reason, without the path an open error names
+      for (std::size_t at = 0; (at = why.find(path, at)) != std::string::npos;) {
+        why.replace(at, path.size(), "the file");
+      }
+      return "database unreachable: " + why;
     }
     return std::nullopt;
   };
