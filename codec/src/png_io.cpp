@@ -3,6 +3,10 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
 namespace pintag {
 namespace {
 
@@ -23,34 +27,45 @@ OIIO::ImageSpec PngSpec(const RgbImage& image, double dpi) {
   return spec;
 }
 
-bool Write(const RgbImage& image, const std::string& name, double dpi,
-           OIIO::Filesystem::IOProxy* proxy, std::string* error) {
-  auto out = OIIO::ImageOutput::create("png");
-  if (!out) {
-    *error = "no PNG writer: " + OIIO::geterror();
-    return false;
-  }
-  OIIO::ImageSpec spec = PngSpec(image, dpi);
-  if (proxy != nullptr) spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-  if (!out->open(name, spec) || !out->write_image(OIIO::TypeDesc::UINT8, image.pixels.data()) ||
-      !out->close()) {
-    *error = "cannot write PNG " + name + ": " + out->geterror();
-    return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 std::vector<std::uint8_t> EncodePng(const RgbImage& image, double dpi, std::string* error) {
+  auto out = OIIO::ImageOutput::create("png");
+  if (!out) {
+    *error = "no PNG writer: " + OIIO::geterror();
+    return {};
+  }
   std::vector<unsigned char> bytes;
-  OIIO::Filesystem::IOVecOutput proxy(bytes);
-  if (!Write(image, "memory.png", dpi, &proxy, error)) return {};
+  OIIO::Filesystem::IOVecOutput vec_output(bytes);
+  OIIO::Filesystem::IOProxy* proxy = &vec_output;
+  OIIO::ImageSpec spec = PngSpec(image, dpi);
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  if (!out->open("memory.png", spec) ||
+      !out->write_image(OIIO::TypeDesc::UINT8, image.pixels.data()) || !out->close()) {
+    *error = "cannot encode PNG: " + out->geterror();
+    return {};
+  }
   return {bytes.begin(), bytes.end()};
 }
 
 bool WritePng(const RgbImage& image, const std::string& path, double dpi, std::string* error) {
-  return Write(image, path, dpi, nullptr, error);
+  // Encoded in memory and written here: OpenImageIO's PNG writer does not check the close of its
+  // file, so on a full disk (the last buffer never written) it reported success.
+  const std::vector<std::uint8_t> bytes = EncodePng(image, dpi, error);
+  if (bytes.empty()) return false;
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) {
+    *error = "cannot write PNG " + path + ": " + std::strerror(errno);
+    return false;
+  }
+  int failure = 0;
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) failure = errno;
+  if (std::fclose(file) != 0 && failure == 0) failure = errno;
+  if (failure != 0) {
+    *error = "cannot write PNG " + path + ": " + std::strerror(failure);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace pintag

@@ -13,7 +13,8 @@ namespace pintag {
 /// `error` when encoding fails.
 std::vector<std::uint8_t> EncodePng(const RgbImage& image, double dpi, std::string* error);
 
-/// Writes a PNG file; returns false and sets `error` (with the path and reason) on failure.
+/// Writes a PNG file; returns false and sets `error` (with the path and reason) on failure, a full
+/// disk included.
 bool WritePng(const RgbImage& image, const std::string& path, double dpi, std::string* error);
 
 }  // namespace pintag

@@ -1,0 +1,36 @@
+// A `pintag` command whose output cannot be written fails (exit 1, saying so) instead of reporting
+// success. /dev/full stands in for a full disk: opening it works, every write fails with ENOSPC.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+constexpr const char* kFull = "/dev/full";
+
+TEST(CliWrites, RenderToAFullDiskFailsForPngAsForSvg) {
+  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  const TempDir dir;
+  for (const char* name : {"full.png", "full.svg"}) {
+    const std::string path = dir.file(name);
+    std::filesystem::create_symlink(kFull, path);
+    const CommandResult run = RunPintag("render --key 1 --size-px 100 -o " + path);
+    EXPECT_EQ(run.status, 1) << name << ": " << run.out;
+    EXPECT_NE(run.out.find("cannot write"), std::string::npos) << name << ": " << run.out;
+    EXPECT_EQ(run.out.find("wrote key"), std::string::npos) << name << ": " << run.out;
+  }
+  // The same command to a real file still writes a PNG.
+  const std::string png = dir.file("tag.png");
+  const CommandResult written = RunPintag("render --key 1 --size-px 100 -o " + png);
+  EXPECT_EQ(written.status, 0) << written.out;
+  EXPECT_EQ(ReadFile(png).substr(0, 8), "\x89PNG\r\n\x1a\n");
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
