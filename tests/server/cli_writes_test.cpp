@@ -32,5 +32,15 @@ TEST(CliWrites, RenderToAFullDiskFailsForPngAsForSvg) {
   EXPECT_EQ(ReadFile(png).substr(0, 8), "\x89PNG\r\n\x1a\n");
 }
 
+TEST(CliWrites, KeysExportToAFullDiskFails) {
+  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult run = RunPintagWithStdoutTo("keys export --db " + db, kFull);
+  EXPECT_EQ(run.status, 1) << run.out;
+  EXPECT_NE(run.out.find("cannot write the key table"), std::string::npos) << run.out;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

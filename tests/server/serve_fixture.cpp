@@ -53,9 +53,10 @@ double Metric(const std::string& text, const std::string& series) {
   return 0;
 }
 
-CommandResult RunPintag(const std::string& arguments) {
+namespace {
+
+CommandResult RunShell(const std::string& line) {
   CommandResult result;
-  const std::string line = PintagExe() + " " + arguments + " 2>&1";
   FILE* pipe = ::popen(line.c_str(), "r");
   if (pipe == nullptr) return result;
   std::array<char, 4096> buffer{};
@@ -65,6 +66,17 @@ CommandResult RunPintag(const std::string& arguments) {
   const int raw = ::pclose(pipe);
   if (WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
   return result;
+}
+
+}  // namespace
+
+CommandResult RunPintag(const std::string& arguments) {
+  return RunShell(PintagExe() + " " + arguments + " 2>&1");
+}
+
+CommandResult RunPintagWithStdoutTo(const std::string& arguments, const std::string& stdout_path) {
+  // 2>&1 first: stderr to the pipe, then stdout alone to the file.
+  return RunShell(PintagExe() + " " + arguments + " 2>&1 >" + stdout_path);
 }
 
 ServerProcess::ServerProcess(const std::vector<std::string>& args, const std::string& stderr_file,

@@ -30,6 +30,7 @@ void Export(const KeysArgs& args) {
            db::ToString(row.status) + "\n";
   }
   std::cout << out << std::flush;
+  if (!std::cout) throw std::runtime_error("cannot write the key table to standard output");
 }
 
 void Lookup(const KeysArgs& args) {
