@@ -42,5 +42,31 @@ TEST(CliWrites, KeysExportToAFullDiskFails) {
   EXPECT_NE(run.out.find("cannot write the key table"), std::string::npos) << run.out;
 }
 
+TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
+  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult run = RunPintagWithStdoutTo("token create --role admin --db " + db, kFull);
+  EXPECT_EQ(run.status, 1) << run.out;
+  EXPECT_NE(run.out.find("the token is revoked"), std::string::npos) << run.out;
+
+  // Every token in the database (the one just made among them) is revoked: nobody holds a usable
+  // secret that was never shown.
+  const CommandResult list = RunPintagWithStdoutTo("token list --db " + db, dir.file("list.csv"));
+  ASSERT_EQ(list.status, 0) << list.out;
+  std::istringstream rows(ReadFile(dir.file("list.csv")));
+  std::string row;
+  std::getline(rows, row);
+  ASSERT_EQ(row, "id,role,label,created_at,revoked_at");
+  int tokens = 0;
+  while (std::getline(rows, row)) {
+    ++tokens;
+    EXPECT_NE(row.back(), ',') << "not revoked: " << row;
+    EXPECT_NE(row.find(",admin,"), std::string::npos) << row;
+  }
+  EXPECT_EQ(tokens, 1);
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

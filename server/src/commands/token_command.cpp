@@ -28,7 +28,20 @@ void Create(const TokenArgs& args) {
   if (!token) throw std::runtime_error(token.error().message);
   std::cerr << "token " << token->info.id << " (" << db::ToString(*role)
             << "); the secret below is shown only now:\n";
-  std::cout << token->secret << "\n";
+  std::cout << token->secret << "\n" << std::flush;
+  if (!std::cout) {
+    // The secret is lost or only partly written (stdout full or closed): revoke the token rather
+    // than leave a working one that nobody knowingly holds.
+    const std::string id = std::to_string(token->info.id);
+    auto revoked = db::RevokeToken(connection, token->info.id);
+    if (!revoked) {
+      throw std::runtime_error("cannot write the secret of token " + id +
+                               " to standard output, and revoking it failed (" +
+                               revoked.error().message + "): run `pintag token revoke " + id + "`");
+    }
+    throw std::runtime_error("cannot write the secret of token " + id +
+                             " to standard output; the token is revoked");
+  }
 }
 
 void List(const TokenArgs& args) {
