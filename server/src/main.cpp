@@ -1,9 +1,25 @@
 // The `pintag` command: one executable, one subcommand per job.
 
+#include <cstdio>
 #include <exception>
 #include <iostream>
 
 #include "commands/commands.hpp"
+
+namespace {
+
+/// 0, or 1 after saying so when what was printed on stdout could not all be written: a full disk
+/// or a closed pipe must not end in exit 0 with the output lost (`pintag token list > /dev/full`).
+int StdoutStatus() {
+  std::cout.flush();
+  if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    std::cerr << "pintag: cannot write to standard output\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's exit() only prints
   CLI::App app{"PinTag: colour fiducial markers that carry Indian pincodes", "pintag"};
@@ -13,7 +29,7 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // CLI11 prints the message (or the help); its own codes (100 and up) mean a usage error too.
-    return app.exit(e) == 0 ? 0 : 2;
+    return app.exit(e) == 0 ? StdoutStatus() : 2;
   } catch (const pintag::cli::UsageError& e) {
     std::cerr << "pintag: " << e.what() << "\n";
     return 2;
@@ -21,5 +37,6 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
     std::cerr << "pintag: " << e.what() << "\n";
     return 1;
   }
-  return 0;
+  // Not for serve, whose stdout is a banner and whose exit status says how it stopped.
+  return app.got_subcommand("serve") ? 0 : StdoutStatus();
 }

@@ -68,5 +68,21 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
   EXPECT_EQ(tokens, 1);
 }
 
+TEST(CliWrites, AnyCommandWhoseOutputIsLostExitsOne) {
+  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  for (const std::string& command :
+       {"keys lookup 110001 --db " + db, "token list --db " + db, std::string("--help")}) {
+    const CommandResult run = RunPintagWithStdoutTo(command, kFull);
+    EXPECT_EQ(run.status, 1) << command << ": " << run.out;
+    EXPECT_NE(run.out.find("cannot write to standard output"), std::string::npos)
+        << command << ": " << run.out;
+  }
+  const CommandResult fine = RunPintagWithStdoutTo("keys lookup 110001 --db " + db, "/dev/null");
+  EXPECT_EQ(fine.status, 0) << fine.out;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test
