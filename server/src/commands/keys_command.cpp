@@ -36,17 +36,19 @@ void Export(const KeysArgs& args) {
 void Lookup(const KeysArgs& args) {
   if (args.pincode.empty() && !args.key) throw UsageError("give a pincode or --key KEY");
   if (!args.pincode.empty() && args.key) throw UsageError("give a pincode or --key, not both");
-  db::Connection connection = OpenDb(args.db);
-  std::optional<db::Result<db::PincodeRecord>> record;
-  if (args.key) {
-    record.emplace(db::LookupKey(connection, TagKey(static_cast<std::uint16_t>(*args.key))));
-  } else {
-    const ParsedPincode pincode = ParsePincode(args.pincode);
-    if (!pincode) throw UsageError("'" + args.pincode + "': " + pincode.error);
-    record.emplace(db::LookupPincode(connection, *pincode.pincode));
+  // Read before the database is opened: a mistyped pincode must not create and seed one.
+  std::optional<Pincode> pincode;
+  if (!args.pincode.empty()) {
+    const ParsedPincode parsed = ParsePincode(args.pincode);
+    if (!parsed) throw UsageError("'" + args.pincode + "': " + parsed.error);
+    pincode = *parsed.pincode;
   }
-  if (!*record) throw std::runtime_error(record->error().message);
-  const db::PincodeRecord& r = record->value();
+  db::Connection connection = OpenDb(args.db);
+  const db::Result<db::PincodeRecord> record =
+      pincode ? db::LookupPincode(connection, *pincode)
+              : db::LookupKey(connection, TagKey(static_cast<std::uint16_t>(*args.key)));
+  if (!record) throw std::runtime_error(record.error().message);
+  const db::PincodeRecord& r = record.value();
   std::cout << "pincode  " << r.pincode.str() << "\nkey      " << r.key.value() << "\nstatus   "
             << db::ToString(r.status) << "\ndistrict " << r.district << "\nstate    " << r.state
             << "\ncircle   " << r.circle << "\nregion   " << r.region << "\ndivision " << r.division
