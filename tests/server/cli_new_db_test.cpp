@@ -21,5 +21,24 @@ TEST(CliNewDb, AMalformedPincodeIsRefusedBeforeTheDatabaseIsCreated) {
   EXPECT_FALSE(std::filesystem::exists(db));
 }
 
+TEST(CliNewDb, ABadTokenLabelIsAUsageErrorBeforeTheDatabaseIsCreated) {
+  const TempDir dir;
+  const std::string db = dir.file("new.db");
+  const CommandResult tab =
+      RunPintag("token create --role admin --label \"$(printf 'a\\tb')\" --db " + db);
+  EXPECT_EQ(tab.status, 2) << tab.out;
+  EXPECT_NE(tab.out.find("--label contains control character 9"), std::string::npos) << tab.out;
+  const CommandResult long_label =
+      RunPintag("token create --role admin --label " + std::string(201, 'x') + " --db " + db);
+  EXPECT_EQ(long_label.status, 2) << long_label.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+
+  // A good label still makes a token (and, the file being missing, the database).
+  const CommandResult made = RunPintag("token create --role admin --label 'desk 2' --db " + db);
+  EXPECT_EQ(made.status, 0) << made.out;
+  EXPECT_NE(made.out.find("pt_"), std::string::npos) << made.out;
+  EXPECT_TRUE(std::filesystem::exists(db));
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -8,6 +8,7 @@
 #include "commands/open_db.hpp"
 #include "pintag/db/csv.hpp"
 #include "pintag/db/database.hpp"
+#include "pintag/db/text.hpp"
 #include "pintag/db/tokens.hpp"
 
 namespace pintag::cli {
@@ -23,6 +24,11 @@ struct TokenArgs {
 void Create(const TokenArgs& args) {
   const auto role = db::ParseRole(args.role);
   if (!role) throw UsageError("--role must be admin, counter, scanner or replica");
+  // Checked as CreateToken checks it, before the database is opened: a bad label must not create
+  // and seed one.
+  if (auto error = db::CheckText("label", args.label, db::kMaxLabelBytes, true)) {
+    throw UsageError("--" + error->message);
+  }
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token) throw std::runtime_error(token.error().message);
