@@ -20,6 +20,8 @@
 namespace pintag::db {
 namespace {
 
+constexpr std::int64_t kProgressEvery = 4096;  ///< rows between progress calls
+
 enum Column {
   kOffice,
   kPincode,
@@ -143,12 +145,6 @@ std::string StripTypeSuffix(std::string name, const std::optional<std::string>& 
   return name;
 }
 
-struct ParsedRow {
-  std::int64_t line;
-  Pincode pincode;
-  PostOffice office;
-};
-
 /// An optional detail the two rows agree on, or that only one of them knows.
 template <typename T>
 bool Agree(const std::optional<T>& a, const std::optional<T>& b) {
@@ -177,7 +173,7 @@ bool MergeRepeat(PostOffice& kept, const PostOffice& later) {
 }
 
 /// One data record into a row, or the reason it is bad.
-Result<ParsedRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
+Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   if (record.fields.size() != mapping.width) {
     return Error{ErrorCode::kInvalid, "expected " + std::to_string(mapping.width) +
                                           " fields, got " + std::to_string(record.fields.size())};
@@ -194,7 +190,7 @@ Result<ParsedRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   };
   const ParsedPincode pincode = ParsePincode(field(kPincode));
   if (!pincode) return Error{ErrorCode::kInvalid, "pincode: " + pincode.error};
-  ParsedRow row{record.line, *pincode.pincode, {}};
+  ImportRow row{record.line, *pincode.pincode, {}};
   PostOffice& office = row.office;
   office.branch_type = NormalizeType(optional(kType));
   office.name = StripTypeSuffix(field(kOffice), office.branch_type);
@@ -224,8 +220,7 @@ const char* ToString(CsvLayout layout) {
   return layout == CsvLayout::kNewer ? "newer (with latitude/longitude)" : "older (with taluk)";
 }
 
-Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
-                                        const ImportOptions& options) {
+Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions& options) {
   const auto progress = [&](std::string_view phase, std::uint64_t done, std::uint64_t total) {
     if (options.progress) options.progress(phase, done, total);
   };
@@ -243,10 +238,10 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
   }
 
   // Parse and check everything before touching the database.
-  ImportReport report;
+  ParsedImport parsed;
+  ImportReport& report = parsed.report;
   report.layout = mapping->layout;
-  std::vector<ParsedRow> rows;
-  constexpr std::int64_t kProgressEvery = 4096;
+  std::vector<ImportRow>& rows = parsed.rows;
   // An office twice in one file: the first is kept. A row that repeats it (or adds only details
   // it lacked, which are then taken) is counted; one that contradicts it is a bad row (applying
   // both would leave the last one, and each re-import would change the office twice).
@@ -265,7 +260,7 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
       report.problems.push_back({record->line, error});
       continue;
     }
-    Result<ParsedRow> row = ParseRow(*mapping, *record);
+    Result<ImportRow> row = ParseRow(*mapping, *record);
     if (!row) {
       report.problems.push_back({record->line, row.error().message});
       continue;
@@ -273,7 +268,7 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
     const auto [first, inserted] =
         first_of.try_emplace({row->pincode.value(), row->office.name}, rows.size());
     if (!inserted) {
-      ParsedRow& kept = rows[first->second];
+      ImportRow& kept = rows[first->second];
       if (MergeRepeat(kept.office, row->office)) {
         ++report.repeated_rows;
       } else {
@@ -288,13 +283,23 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
     if (report.rows % kProgressEvery == 0) progress("parse", reader.position(), csv.size());
   }
   progress("parse", csv.size(), csv.size());
+  return parsed;
+}
+
+Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport parsed,
+                                       const ImportOptions& options) {
+  const auto progress = [&](std::string_view phase, std::uint64_t done, std::uint64_t total) {
+    if (options.progress) options.progress(phase, done, total);
+  };
+  ImportReport& report = parsed.report;
+  const std::vector<ImportRow>& rows = parsed.rows;
+  report.applied = false;
   if (options.strict && !report.problems.empty()) return report;  // applied stays false
 
-  const std::string source =
-      options.source.empty()
-          ? std::string(mapping->layout == CsvLayout::kNewer ? "import:india-post-newer"
-                                                             : "import:india-post-older")
-          : options.source;
+  const std::string source = options.source.empty() ? std::string(report.layout == CsvLayout::kNewer
+                                                                      ? "import:india-post-newer"
+                                                                      : "import:india-post-older")
+                                                    : options.source;
   return detail::Guard([&]() -> Result<ImportReport> {
     Transaction transaction(connection);
     KeyAllocator allocator = detail::LoadKeyAllocator(connection);
@@ -305,7 +310,7 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
     }
     Statement upsert = connection.prepare(detail::UpsertOfficeSql());
     for (std::size_t i = 0; i < rows.size(); ++i) {
-      const ParsedRow& row = rows[i];
+      const ImportRow& row = rows[i];
       if (known.insert(row.pincode.value()).second) {
         const auto key = detail::InsertPincode(connection, allocator, row.pincode, source);
         if (!key) {
@@ -333,6 +338,13 @@ Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view
     report.applied = true;
     return report;
   });
+}
+
+Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
+                                        const ImportOptions& options) {
+  Result<ParsedImport> parsed = ParseDirectoryCsv(csv, options);
+  if (!parsed) return parsed.error();
+  return ApplyDirectoryCsv(connection, std::move(parsed).value(), options);
 }
 
 Result<std::string> ReadImportFile(const std::string& path) {

@@ -40,5 +40,37 @@ TEST(CliNewDb, ABadTokenLabelIsAUsageErrorBeforeTheDatabaseIsCreated) {
   EXPECT_TRUE(std::filesystem::exists(db));
 }
 
+TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
+  const TempDir dir;
+  const std::string header =
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n";
+  const std::string bad_row = "Delhi,Delhi,New Delhi,Nowhere,12345,BO,Delivery,X,Y,NA,NA\n";
+  struct Case {
+    const char* name;
+    std::string content;
+    const char* options;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"empty.csv", "", "", "the file is empty"},
+      {"header.csv", "pincode,name\n110001,x\n", "", "not an All India Pincode Directory header"},
+      {"quote.csv", header + "\"Delhi,Delhi\n", "", "never closed"},
+      {"all_bad.csv", header + bad_row + bad_row, "", "none of its 2 rows could be imported"},
+      {"strict.csv", header + bad_row, "--strict", "--strict: 1 bad rows, nothing imported"},
+  };
+  for (const Case& c : cases) {
+    const std::string file = WriteFile(dir.path() / c.name, c.content);
+    const std::string db = dir.file(std::string(c.name) + ".db");
+    std::string command = "import " + file;
+    command.append(" --db ").append(db).append(" ").append(c.options);
+    const CommandResult run = RunPintag(command);
+    EXPECT_EQ(run.status, 1) << c.name << ": " << run.out;
+    EXPECT_NE(run.out.find(c.says), std::string::npos) << c.name << ": " << run.out;
+    EXPECT_EQ(run.out.find("created"), std::string::npos) << c.name << ": " << run.out;
+    EXPECT_FALSE(std::filesystem::exists(db)) << c.name;
+  }
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -6,6 +6,8 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
@@ -47,11 +49,21 @@ class ProgressBar {
   bool drawn_ = false;
 };
 
+/// The bad rows, as FILE:LINE: reason, the first kProblemsShown of them.
+void PrintProblems(const std::string& file, const std::vector<db::RowProblem>& problems) {
+  for (std::size_t i = 0; i < problems.size() && i < kProblemsShown; ++i) {
+    std::cerr << file << ":" << problems[i].line << ": " << problems[i].message << "\n";
+  }
+  if (problems.size() > kProblemsShown) {
+    std::cerr << "... and " << problems.size() - kProblemsShown << " more bad rows\n";
+  }
+}
+
 void Run(const ImportArgs& args) {
-  // Read before the database is opened: a missing file must not leave a new, seeded database.
+  // Read and checked before the database is opened: a missing file, one that is not a directory
+  // CSV, one whose rows are all bad or (--strict) any bad, must not leave a new, seeded database.
   const db::Result<std::string> csv = db::ReadImportFile(args.file);
   if (!csv) throw std::runtime_error(csv.error().message);
-  db::Connection connection = OpenDb(args.db);
   db::ImportOptions options;
   options.strict = args.strict;
   auto bar = std::make_shared<ProgressBar>();
@@ -60,28 +72,29 @@ void Run(const ImportArgs& args) {
       (*bar)(phase, done, total);
     };
   }
-  auto result = db::ImportDirectoryCsv(connection, *csv, options);
+  db::Result<db::ParsedImport> parsed = db::ParseDirectoryCsv(*csv, options);
+  if (!parsed) {
+    bar.reset();
+    throw std::runtime_error(args.file + ": " + parsed.error().message);
+  }
+  const std::vector<db::RowProblem>& bad = parsed->report.problems;
+  if (!bad.empty() && (args.strict || parsed->rows.empty())) {
+    bar.reset();
+    PrintProblems(args.file, bad);
+    if (args.strict) {
+      throw std::runtime_error("--strict: " + std::to_string(bad.size()) +
+                               " bad rows, nothing imported");
+    }
+    throw std::runtime_error(args.file + ": none of its " + std::to_string(parsed->report.rows) +
+                             " rows could be imported");
+  }
+  db::Connection connection = OpenDb(args.db);
+  auto result = db::ApplyDirectoryCsv(connection, std::move(parsed).value(), options);
   bar.reset();
   options.progress = nullptr;
   if (!result) throw std::runtime_error(args.file + ": " + result.error().message);
   const db::ImportReport& report = *result;
-  for (std::size_t i = 0; i < report.problems.size() && i < kProblemsShown; ++i) {
-    std::cerr << args.file << ":" << report.problems[i].line << ": " << report.problems[i].message
-              << "\n";
-  }
-  if (report.problems.size() > kProblemsShown) {
-    std::cerr << "... and " << report.problems.size() - kProblemsShown << " more bad rows\n";
-  }
-  if (!report.applied) {
-    throw std::runtime_error("--strict: " + std::to_string(report.problems.size()) +
-                             " bad rows, nothing imported");
-  }
-  const std::int64_t read =
-      report.offices_added + report.offices_updated + report.offices_unchanged;
-  if (read == 0 && !report.problems.empty()) {
-    throw std::runtime_error(args.file + ": none of its " + std::to_string(report.rows) +
-                             " rows could be imported");
-  }
+  PrintProblems(args.file, report.problems);
   std::cout << "imported " << args.file << " (" << db::ToString(report.layout)
             << " layout): " << report.rows << " rows, " << report.offices_added
             << " offices added, " << report.offices_updated << " updated, "

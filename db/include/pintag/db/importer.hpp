@@ -20,6 +20,7 @@
 
 #include "pintag/codec/pincode.hpp"
 #include "pintag/codec/tag_key.hpp"
+#include "pintag/db/registry.hpp"
 #include "pintag/db/result.hpp"
 #include "pintag/db/sqlite.hpp"
 
@@ -57,10 +58,33 @@ struct ImportReport {
   std::vector<RowProblem> problems;                        ///< bad rows, skipped or refusing
 };
 
-/// Imports CSV text. Errors (nothing applied): kInvalid for an unrecognised header or a quoted
-/// field never closed (the rest of the file is then one field), kFull when the keys run out,
-/// kBusy/kStorage from SQLite. Bad rows are reported in the report instead; an office (pincode
-/// and name) a second time is a bad row unless the row is the same as the first, which is kept.
+/// One office of a parsed file, checked and ready to write.
+struct ImportRow {
+  std::int64_t line = 0;  ///< where its record starts, as RowProblem::line
+  Pincode pincode{100000};
+  PostOffice office;
+};
+
+/// A file read and checked, nothing written: its layout, row counts and bad rows in `report`
+/// (`applied` false, no new pincodes yet) and the offices to write.
+struct ParsedImport {
+  ImportReport report;
+  std::vector<ImportRow> rows;
+};
+
+/// The first half of ImportDirectoryCsv, which touches no database: a caller can refuse a bad
+/// file (kInvalid, as below) or one whose rows are all bad before it opens or creates one.
+Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions& options = {});
+/// The second half: writes a parsed file in one transaction; with `options.strict` and bad rows,
+/// nothing (the report's `applied` false). Errors as ImportDirectoryCsv's from SQLite and keys.
+Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport parsed,
+                                       const ImportOptions& options = {});
+
+/// Imports CSV text (ParseDirectoryCsv, then ApplyDirectoryCsv). Errors (nothing applied): kInvalid
+/// for an unrecognised header or a quoted field never closed (the rest of the file is then one
+/// field), kFull when the keys run out, kBusy/kStorage from SQLite. Bad rows are reported in the
+/// report instead; an office (pincode and name) a second time is a bad row unless the row is the
+/// same as the first, which is kept.
 Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
                                         const ImportOptions& options = {});
 /// The whole file, read before any database is opened; kNotFound when it cannot be read,
