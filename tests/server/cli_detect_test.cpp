@@ -126,5 +126,20 @@ TEST(CliDetect, RefusesWhatIsNotAPhotoWithAClearMessage) {
   EXPECT_NE(bad_size.out.find("tag-size-mm"), std::string::npos) << bad_size.out;
 }
 
+TEST(CliDetect, APrincipalPointWithoutFocalLengthsIsRefusedAsTheApiRefusesIt) {
+  // It was ignored: the pose came from assumed intrinsics while the user believed theirs were used.
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  for (const char* options : {" --cx 5", " --cy 5", " --cx 5 --cy 5"}) {
+    const CommandResult refused = RunPintag("detect " + photo.path + options);
+    EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
+    EXPECT_NE(refused.out.find("--cx and --cy need --fx and --fy"), std::string::npos)
+        << options << ": " << refused.out;
+  }
+  const CommandResult given = RunPintag("detect " + photo.path + Intrinsics(photo.camera));
+  EXPECT_EQ(given.status, 0) << given.out;
+  EXPECT_NE(given.out.find("intrinsics given"), std::string::npos) << given.out;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

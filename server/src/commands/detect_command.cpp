@@ -78,6 +78,9 @@ void Run(const DetectArgs& args) {
   options.return_rejected = args.rejected;
   const int given = args.fx.has_value() + args.fy.has_value();
   if (given == 1) throw UsageError("give both --fx and --fy, or neither");
+  // As the detect route: a principal point alone was ignored, and the pose came from assumed
+  // intrinsics while the user believed theirs were used.
+  if ((args.cx || args.cy) && given != 2) throw UsageError("--cx and --cy need --fx and --fy");
   // OpenCV reads 4, 5, 8, 12 or 14 coefficients; with 6 or 7 its pose solver returns nothing.
   const std::size_t coefficients = args.distortion.size();
   if (coefficients != 0 && coefficients != 4 && coefficients != 5 && coefficients != 8) {
@@ -145,9 +148,11 @@ void AddDetectCommand(CLI::App& app) {
   cmd->add_option("--fy", args->fy, "focal length y, pixels")
       ->check(FiniteNumber())
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--cx", args->cx, "principal point x, pixels (default: image centre)")
+  cmd->add_option("--cx", args->cx,
+                  "principal point x, pixels (default: image centre; needs --fx and --fy)")
       ->check(FiniteNumber());
-  cmd->add_option("--cy", args->cy, "principal point y, pixels (default: image centre)")
+  cmd->add_option("--cy", args->cy,
+                  "principal point y, pixels (default: image centre; needs --fx and --fy)")
       ->check(FiniteNumber());
   cmd->add_option("--distortion", args->distortion,
                   "k1 k2 p1 p2 [k3 [k4 k5 k6]], OpenCV order: 4, 5 or 8 numbers")
