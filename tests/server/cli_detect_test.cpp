@@ -141,5 +141,28 @@ TEST(CliDetect, APrincipalPointWithoutFocalLengthsIsRefusedAsTheApiRefusesIt) {
   EXPECT_NE(given.out.find("intrinsics given"), std::string::npos) << given.out;
 }
 
+TEST(CliDetect, AWrongCommandLineIsExitTwoEvenWhenThePhotoIsMissing) {
+  const test::TempDir dir;
+  const std::string missing = dir.file("missing.jpg");
+  for (const std::string& options :
+       {std::string(" --fx 1000 --fy 1000 --distortion 1 2 3 4 5 6"), std::string(" --fx 1000"),
+        std::string(" --cx 5"), std::string(" --distortion 0 0 0 0")}) {
+    const CommandResult refused = RunPintag(std::string("detect ").append(missing).append(options));
+    EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
+    EXPECT_EQ(refused.out.find("cannot open"), std::string::npos) << options << ": " << refused.out;
+  }
+  // Right options and a missing photo: the job fails (1).
+  EXPECT_EQ(RunPintag("detect " + missing + " --fx 1000 --fy 1000 --distortion 0 0 0 0").status, 1);
+}
+
+TEST(CliDetect, HelpSaysHowManyDistortionNumbersItTakes) {
+  const CommandResult help = RunPintag("detect --help");
+  EXPECT_EQ(help.status, 0) << help.out;
+  EXPECT_NE(help.out.find("--distortion K1 K2 P1 P2 [K3 [K4 K5 K6]]"), std::string::npos)
+      << help.out;
+  EXPECT_NE(help.out.find("4, 5 or 8 numbers"), std::string::npos) << help.out;
+  EXPECT_EQ(help.out.find(" x 4"), std::string::npos) << help.out;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -67,19 +67,12 @@ void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
   }
 }
 
-void Run(const DetectArgs& args) {
-  const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
-  if (!loaded.image) throw std::runtime_error(loaded.error);
-
-  DetectorOptions options;
-  options.tag_size_m = args.tag_size_mm / 1000.0;
-  options.threads = args.threads;
-  options.debug_dir = args.debug_dir;
-  options.return_rejected = args.rejected;
+/// What the command line alone can tell is wrong, checked before the photo is read: a usage error
+/// exits 2 whatever the photo (a missing one included). The intrinsics rules are the detect
+/// route's (server/src/app/detect_route.cpp).
+void CheckOptions(const DetectArgs& args) {
   const int given = args.fx.has_value() + args.fy.has_value();
   if (given == 1) throw UsageError("give both --fx and --fy, or neither");
-  // As the detect route: a principal point alone was ignored, and the pose came from assumed
-  // intrinsics while the user believed theirs were used.
   if ((args.cx || args.cy) && given != 2) throw UsageError("--cx and --cy need --fx and --fy");
   // OpenCV reads 4, 5, 8, 12 or 14 coefficients; with 6 or 7 its pose solver returns nothing.
   const std::size_t coefficients = args.distortion.size();
@@ -88,7 +81,19 @@ void Run(const DetectArgs& args) {
                      std::to_string(coefficients));
   }
   if (coefficients != 0 && given != 2) throw UsageError("--distortion needs --fx and --fy");
-  if (given == 2) {
+}
+
+void Run(const DetectArgs& args) {
+  CheckOptions(args);
+  const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
+  if (!loaded.image) throw std::runtime_error(loaded.error);
+
+  DetectorOptions options;
+  options.tag_size_m = args.tag_size_mm / 1000.0;
+  options.threads = args.threads;
+  options.debug_dir = args.debug_dir;
+  options.return_rejected = args.rejected;
+  if (args.fx && args.fy) {
     const cv::Mat& img = loaded.image->bgr;
     options.intrinsics =
         CameraIntrinsics{*args.fx, *args.fy, args.cx.value_or((img.cols - 1) / 2.0),
@@ -155,7 +160,9 @@ void AddDetectCommand(CLI::App& app) {
                   "principal point y, pixels (default: image centre; needs --fx and --fy)")
       ->check(FiniteNumber());
   cmd->add_option("--distortion", args->distortion,
-                  "k1 k2 p1 p2 [k3 [k4 k5 k6]], OpenCV order: 4, 5 or 8 numbers")
+                  "lens distortion in OpenCV's order: 4, 5 or 8 numbers (needs --fx and --fy)")
+      // CLI11 would show "FLOAT x 4" (the least it takes): say which counts it reads instead.
+      ->option_text("K1 K2 P1 P2 [K3 [K4 K5 K6]]")
       ->expected(4, 8)
       ->check(FiniteNumber());
   cmd->add_flag("--json", args->json, "print JSON");
