@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -146,7 +147,8 @@ TEST(CliDetect, AWrongCommandLineIsExitTwoEvenWhenThePhotoIsMissing) {
   const std::string missing = dir.file("missing.jpg");
   for (const std::string& options :
        {std::string(" --fx 1000 --fy 1000 --distortion 1 2 3 4 5 6"), std::string(" --fx 1000"),
-        std::string(" --cx 5"), std::string(" --distortion 0 0 0 0")}) {
+        std::string(" --cx 5"), std::string(" --distortion 0 0 0 0"),
+        " --debug-dir " + WriteFile(dir.path() / "afile", "x")}) {
     const CommandResult refused = RunPintag(std::string("detect ").append(missing).append(options));
     EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
     EXPECT_EQ(refused.out.find("cannot open"), std::string::npos) << options << ": " << refused.out;
@@ -162,6 +164,42 @@ TEST(CliDetect, HelpSaysHowManyDistortionNumbersItTakes) {
       << help.out;
   EXPECT_NE(help.out.find("4, 5 or 8 numbers"), std::string::npos) << help.out;
   EXPECT_EQ(help.out.find(" x 4"), std::string::npos) << help.out;
+}
+
+TEST(CliDetect, ADebugDirThatIsAFileIsRefusedAndAGoodOneGetsEveryStage) {
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  const std::string file = WriteFile(dir.path() / "afile", "not a directory\n");
+  const CommandResult refused = RunPintag("detect " + photo.path + " --debug-dir " + file);
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("is not a directory"), std::string::npos) << refused.out;
+  EXPECT_EQ(ReadFile(file), "not a directory\n");
+
+  const std::string debug = dir.file("stages/deeper");
+  const CommandResult written = RunPintag("detect " + photo.path + " --debug-dir " + debug);
+  EXPECT_EQ(written.status, 0) << written.out;
+  for (const char* stage : {"1_redness.png", "2_blobs.png", "3_quads.png", "4_detections.png"}) {
+    EXPECT_TRUE(std::filesystem::is_regular_file(std::filesystem::path(debug) / stage)) << stage;
+  }
+}
+
+TEST(CliDetect, AnOverlayPathThatIsThePhotoIsRefusedAndThePhotoKept) {
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  const std::string before = ReadFile(photo.path);
+  const std::string link = dir.file("link.png");
+  std::filesystem::create_symlink(photo.path, link);
+  for (const std::string& overlay : {photo.path, link, (dir.path() / "." / "photo.png").string()}) {
+    const CommandResult refused = RunPintag("detect " + photo.path + " --overlay " + overlay);
+    EXPECT_EQ(refused.status, 2) << overlay << ": " << refused.out;
+    EXPECT_NE(refused.out.find("is the photo itself"), std::string::npos) << refused.out;
+  }
+  EXPECT_EQ(ReadFile(photo.path), before);
+
+  const std::string seen = dir.file("seen.png");
+  const CommandResult drawn = RunPintag("detect " + photo.path + " --overlay " + seen);
+  EXPECT_EQ(drawn.status, 0) << drawn.out;
+  EXPECT_EQ(cv::imread(seen).size(), cv::imread(photo.path).size());
 }
 
 }  // namespace

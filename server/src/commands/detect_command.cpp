@@ -1,8 +1,13 @@
 // `pintag detect`: find every tag in a photo; print keys and poses (JSON with --json) and draw an
 // overlay with outlines, keys and pose axes.
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <opencv2/calib3d.hpp>
@@ -81,10 +86,30 @@ void CheckOptions(const DetectArgs& args) {
                      std::to_string(coefficients));
   }
   if (coefficients != 0 && given != 2) throw UsageError("--distortion needs --fx and --fy");
+  std::error_code ec;
+  if (!args.overlay.empty() && std::filesystem::equivalent(args.photo, args.overlay, ec)) {
+    throw UsageError("--overlay " + args.overlay + " is the photo itself; give another file");
+  }
+  if (!args.debug_dir.empty() && std::filesystem::exists(args.debug_dir, ec) &&
+      !std::filesystem::is_directory(args.debug_dir, ec)) {
+    throw UsageError("--debug-dir " + args.debug_dir + " is not a directory");
+  }
 }
 
 void Run(const DetectArgs& args) {
   CheckOptions(args);
+  if (!args.debug_dir.empty()) {
+    // The detector writes its stage images without a word when it cannot: say so here instead.
+    std::error_code ec;
+    std::filesystem::create_directories(args.debug_dir, ec);
+    if (ec) {
+      throw std::runtime_error("cannot make --debug-dir " + args.debug_dir + ": " + ec.message());
+    }
+    if (::access(args.debug_dir.c_str(), W_OK | X_OK) != 0) {
+      throw std::runtime_error("cannot write in --debug-dir " + args.debug_dir + ": " +
+                               std::strerror(errno));
+    }
+  }
   const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
   if (!loaded.image) throw std::runtime_error(loaded.error);
 
