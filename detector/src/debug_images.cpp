@@ -1,17 +1,55 @@
 #include "debug_images.hpp"
 
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "pintag/detector/tag_outline.hpp"
 
 namespace pintag::stage {
 
+namespace {
+
+/// `image` as a PNG file at `path`: "" when written, else why not. Encoded in memory and written
+/// here because cv::imwrite does not check its file's close, so a full disk passed for a small
+/// image (its bytes all still buffered).
+std::string WritePngFile(const std::string& path, const cv::Mat& image) {
+  std::vector<std::uint8_t> bytes;
+  try {
+    if (!cv::imencode(".png", image, bytes)) return "cannot encode it";
+  } catch (const cv::Exception& e) {
+    return e.what();
+  }
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) return std::strerror(errno);
+  int failure = 0;
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) failure = errno;
+  if (std::fclose(file) != 0 && failure == 0) failure = errno;
+  return failure == 0 ? std::string() : std::strerror(failure);
+}
+
+}  // namespace
+
 void DebugImages::write(const std::string& name, const cv::Mat& image) const {
+  // Kept, not thrown: a stage image is a by-product, and the detector reports it once at the end
+  // (DetectResult::error) rather than leave the caller believing the images are there.
+  const std::string path = (std::filesystem::path(dir_) / name).string();
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
-  cv::imwrite((std::filesystem::path(dir_) / name).string(), image);
+  const std::string why = ec ? ec.message() : WritePngFile(path, image);
+  if (why.empty()) return;
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (failure_.empty()) failure_ = "cannot write debug image " + path + ": " + why;
+}
+
+std::string DebugImages::failure() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return failure_;
 }
 
 void DebugImages::redness(const cv::Mat& mask) const {

@@ -1,6 +1,7 @@
 #pragma once
 // DetectorOptions::debug_dir: each stage writes an image there, numbered in pipeline order.
 
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -23,9 +24,14 @@ class DebugImages {
   void quads(const cv::Mat& bgr, const std::vector<Quad>& quads) const;
   void detections(const cv::Mat& bgr, const std::vector<Detection>& detections) const;
 
+  /// The first image that could not be written, with why; empty while every one was.
+  std::string failure() const;
+
  private:
   void write(const std::string& name, const cv::Mat& image) const;
   std::string dir_;
+  mutable std::mutex mutex_;  ///< guards failure_: stages may write from worker threads
+  mutable std::string failure_;
 };
 
 }  // namespace pintag::stage

@@ -441,6 +441,7 @@ DetectResult Detector::detect(const cv::Mat& bgr, const ExifCamera* exif,
   const auto end = Clock::now();
   result.timings.total_ms = ElapsedMs(start, end);
   debug.detections(bgr, result.detections);
+  if (std::string failure = debug.failure(); !failure.empty()) result.error = std::move(failure);
   return result;
 }
 

@@ -68,6 +68,24 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
   EXPECT_EQ(tokens, 1);
 }
 
+TEST(CliWrites, DetectImagesToAFullDiskFail) {
+  // The debug images' writes were not checked at all (and cv::imwrite says true for a small image
+  // on a full disk: all of it is still buffered when it closes the file unchecked).
+  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  const TempDir dir;
+  const std::string photo = dir.file("tag.png");
+  ASSERT_EQ(RunPintag("render --key 11684 --size-px 64 -o " + photo).status, 0);
+  const std::filesystem::path debug = dir.path() / "stages";
+  std::filesystem::create_directory(debug);
+  std::filesystem::create_symlink(kFull, debug / "1_redness.png");
+  const CommandResult staged = RunPintag("detect " + photo + " --debug-dir " + debug.string());
+  EXPECT_EQ(staged.status, 1) << staged.out;
+  EXPECT_NE(staged.out.find("cannot write debug image"), std::string::npos) << staged.out;
+  EXPECT_NE(staged.out.find("1_redness.png"), std::string::npos) << staged.out;
+  // The stages after the one that failed are still written.
+  EXPECT_TRUE(std::filesystem::is_regular_file(debug / "4_detections.png"));
+}
+
 TEST(CliWrites, AnyCommandWhoseOutputIsLostExitsOne) {
   if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
   const TempDir dir;
