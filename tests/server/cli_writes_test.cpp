@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 
@@ -69,10 +71,18 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
 }
 
 TEST(CliWrites, DetectImagesToAFullDiskFail) {
-  // The debug images' writes were not checked at all (and cv::imwrite says true for a small image
-  // on a full disk: all of it is still buffered when it closes the file unchecked).
+  // Small images: OpenCV's writers buffer all of one and never check the close, so cv::imwrite
+  // said true, and the debug images' writes were not checked at all.
   if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
   const TempDir dir;
+  const std::string blank = dir.file("blank.png");
+  ASSERT_TRUE(cv::imwrite(blank, cv::Mat(16, 16, CV_8UC3, cv::Scalar(200, 200, 200))));
+  const std::string overlay = dir.file("seen.png");
+  std::filesystem::create_symlink(kFull, overlay);
+  const CommandResult drawn = RunPintag("detect " + blank + " --overlay " + overlay);
+  EXPECT_EQ(drawn.status, 1) << drawn.out;
+  EXPECT_NE(drawn.out.find("cannot write overlay"), std::string::npos) << drawn.out;
+
   const std::string photo = dir.file("tag.png");
   ASSERT_EQ(RunPintag("render --key 11684 --size-px 64 -o " + photo).status, 0);
   const std::filesystem::path debug = dir.path() / "stages";

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -69,6 +70,33 @@ void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
       cv::arrowedLine(image, projected[0], projected[i + 1], colours[i], thickness, cv::LINE_AA, 0,
                       0.15);
     }
+  }
+}
+
+/// The overlay in the format its extension names. Encoded in memory and written here with every
+/// error checked: cv::imwrite does not check its file's close, so on a full disk a small overlay
+/// (all its bytes still buffered) was reported written.
+void WriteOverlay(const std::string& path, const cv::Mat& image) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  std::vector<std::uint8_t> bytes;
+  bool encoded = false;
+  try {
+    encoded = !ext.empty() && cv::imencode(ext, image, bytes);
+  } catch (const cv::Exception&) {
+    encoded = false;
+  }
+  if (!encoded) {
+    throw std::runtime_error("cannot write overlay " + path + ": no image format for '" + ext +
+                             "'");
+  }
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  int failure = file == nullptr ? errno : 0;
+  if (file != nullptr) {
+    if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) failure = errno;
+    if (std::fclose(file) != 0 && failure == 0) failure = errno;
+  }
+  if (failure != 0) {
+    throw std::runtime_error("cannot write overlay " + path + ": " + std::strerror(failure));
   }
 }
 
@@ -153,13 +181,7 @@ void Run(const DetectArgs& args) {
   if (!args.overlay.empty()) {
     cv::Mat overlay = loaded.image->bgr.clone();
     DrawOverlay(overlay, result, options.tag_size_m);
-    bool ok = false;
-    try {
-      ok = cv::imwrite(args.overlay, overlay);
-    } catch (const cv::Exception&) {
-      ok = false;
-    }
-    if (!ok) throw std::runtime_error("cannot write overlay " + args.overlay);
+    WriteOverlay(args.overlay, overlay);
   }
 }
 
