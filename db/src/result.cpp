@@ -10,6 +10,8 @@ const char* ToString(ErrorCode code) {
       return "not_found";
     case ErrorCode::kConflict:
       return "conflict";
+    case ErrorCode::kPrecondition:
+      return "precondition";
     case ErrorCode::kUnauthorized:
       return "unauthorized";
     case ErrorCode::kFull:

@@ -1,7 +1,11 @@
 #include "pintag/db/sort_plan.hpp"
 
+#include <openssl/evp.h>
+
 #include <algorithm>
+#include <array>
 #include <set>
+#include <stdexcept>
 
 #include "guard.hpp"
 #include "pintag/db/csv.hpp"
@@ -22,34 +26,61 @@ Error UnknownPlan(std::string_view name) {
   return {ErrorCode::kNotFound, "no sort plan named '" + std::string(name) + "'"};
 }
 
-/// Writes the plan in the caller's transaction.
-/// Returns true when a plan of that name was there and has been replaced.
-bool WritePlan(Connection& connection, const SortPlan& plan,
-               StoredDescription description = StoredDescription::kReplace) {
-  std::string kept = plan.description;
+bool ByPrefix(const SortRule& a, const SortRule& b) {
+  return a.prefix < b.prefix;
+}
+
+/// Writes the plan in the caller's transaction and returns it as stored (rules by prefix, the
+/// description it kept). `replaced`: set to whether a plan of that name was there.
+SortPlan WritePlan(Connection& connection, const SortPlan& plan, bool* replaced = nullptr,
+                   StoredDescription description = StoredDescription::kReplace) {
+  SortPlan stored = plan;
   if (description == StoredDescription::kKeep) {
-    Statement stored = connection.prepare("SELECT description FROM sort_plans WHERE name = ?1");
-    stored.bind(1, plan.name);
-    if (stored.step()) kept = stored.getText(0);
+    Statement kept = connection.prepare("SELECT description FROM sort_plans WHERE name = ?1");
+    kept.bind(1, plan.name);
+    if (kept.step()) stored.description = kept.getText(0);
   }
-  const bool replaced =
+  const bool deleted =
       connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, plan.name).run() > 0;
+  if (replaced != nullptr) *replaced = deleted;
   connection
       .prepare(std::string("INSERT INTO sort_plans (name, fallback_bin, description, updated_at) "
                            "VALUES (?1, ?2, ?3, ") +
                detail::kNowSql + ")")
-      .bind(1, plan.name)
-      .bind(2, plan.fallback_bin)
-      .bind(3, kept)
+      .bind(1, stored.name)
+      .bind(2, stored.fallback_bin)
+      .bind(3, stored.description)
       .run();
   const std::int64_t id = connection.lastInsertRowid();
   Statement insert =
       connection.prepare("INSERT INTO sort_rules (plan_id, prefix, bin) VALUES (?1, ?2, ?3)");
-  for (const SortRule& rule : plan.rules) {
+  for (const SortRule& rule : stored.rules) {
     insert.bind(1, id).bind(2, rule.prefix).bind(3, rule.bin).run();
     insert.reset();
   }
-  return replaced;
+  std::sort(stored.rules.begin(), stored.rules.end(), ByPrefix);
+  return stored;
+}
+
+/// The stored plan called `name`, if there is one.
+std::optional<SortPlan> ReadPlan(Connection& connection, std::string_view name) {
+  Statement head = connection.prepare(
+      "SELECT id, name, fallback_bin, description FROM sort_plans WHERE name = ?1");
+  head.bind(1, name);
+  if (!head.step()) return std::nullopt;
+  SortPlan plan{head.getText(1), head.getText(2), head.getText(3), {}};
+  Statement rules =
+      connection.prepare("SELECT prefix, bin FROM sort_rules WHERE plan_id = ?1 ORDER BY prefix");
+  rules.bind(1, head.getInt64(0));
+  while (rules.step()) plan.rules.push_back({rules.getText(0), rules.getText(1)});
+  return plan;
+}
+
+/// Each field behind its length, so no two different plans hash the same bytes.
+void AppendField(std::string& out, std::string_view field) {
+  out += std::to_string(field.size());
+  out += ':';
+  out += field;
 }
 
 }  // namespace
@@ -130,27 +161,78 @@ std::string PlanToCsv(const SortPlan& plan) {
 }
 
 Result<bool> SavePlan(Connection& connection, const SortPlan& plan, StoredDescription description) {
+  auto saved = SavePlanIf(connection, plan, {}, description);
+  if (!saved) return saved.error();
+  return saved->replaced;
+}
+
+std::string PlanVersion(const SortPlan& plan) {
+  std::vector<SortRule> rules = plan.rules;
+  std::sort(rules.begin(), rules.end(), ByPrefix);
+  std::string bytes;
+  AppendField(bytes, plan.name);
+  AppendField(bytes, plan.fallback_bin);
+  AppendField(bytes, plan.description);
+  for (const SortRule& rule : rules) {
+    AppendField(bytes, rule.prefix);
+    AppendField(bytes, rule.bin);
+  }
+  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
+  unsigned int size = 0;
+  if (EVP_Digest(bytes.data(), bytes.size(), digest.data(), &size, EVP_sha256(), nullptr) != 1) {
+    throw std::runtime_error("SHA-256 failed");
+  }
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string version;
+  for (unsigned int i = 0; i < 16 && i < size; ++i) {
+    version += kHex[digest[i] >> 4];
+    version += kHex[digest[i] & 15];
+  }
+  return version;
+}
+
+bool PlanVersions::contains(std::string_view version) const {
+  return any || std::find(versions.begin(), versions.end(), version) != versions.end();
+}
+
+Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
+                             const PlanCondition& condition, StoredDescription description) {
   if (auto error = CheckPlan(plan)) return *error;
-  return Guard([&]() -> Result<bool> {
+  return Guard([&]() -> Result<SavedPlan> {
     Transaction transaction(connection);
-    const bool replaced = WritePlan(connection, plan, description);
+    if (condition.match || condition.none_match) {
+      // Read under the write lock: no other writer can change the plan between here and commit.
+      const std::optional<SortPlan> stored = ReadPlan(connection, plan.name);
+      const std::string version = stored ? PlanVersion(*stored) : std::string();
+      if (condition.match && !stored) {
+        return Error{ErrorCode::kPrecondition,
+                     "there is no sort plan named '" + plan.name + "' to replace"};
+      }
+      if (condition.match && !condition.match->contains(version)) {
+        return Error{ErrorCode::kPrecondition,
+                     "sort plan '" + plan.name + "' is not at the version given (it is now \"" +
+                         version + "\"): read it again and redo the change"};
+      }
+      if (condition.none_match && stored && condition.none_match->contains(version)) {
+        return Error{ErrorCode::kPrecondition,
+                     condition.none_match->any
+                         ? "a sort plan named '" + plan.name + "' already exists"
+                         : "sort plan '" + plan.name + "' is at a version the write excludes"};
+      }
+    }
+    SavedPlan saved;
+    saved.plan = WritePlan(connection, plan, &saved.replaced, description);
     transaction.commit();
-    return replaced;
+    saved.version = PlanVersion(saved.plan);
+    return saved;
   });
 }
 
 Result<SortPlan> GetPlan(Connection& connection, std::string_view name) {
   return Guard([&]() -> Result<SortPlan> {
-    Statement head = connection.prepare(
-        "SELECT id, name, fallback_bin, description FROM sort_plans WHERE name = ?1");
-    head.bind(1, name);
-    if (!head.step()) return UnknownPlan(name);
-    SortPlan plan{head.getText(1), head.getText(2), head.getText(3), {}};
-    Statement rules =
-        connection.prepare("SELECT prefix, bin FROM sort_rules WHERE plan_id = ?1 ORDER BY prefix");
-    rules.bind(1, head.getInt64(0));
-    while (rules.step()) plan.rules.push_back({rules.getText(0), rules.getText(1)});
-    return plan;
+    std::optional<SortPlan> plan = ReadPlan(connection, name);
+    if (!plan) return UnknownPlan(name);
+    return std::move(*plan);
   });
 }
 

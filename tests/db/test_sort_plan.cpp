@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <functional>
+
 #include "db_test_util.hpp"
 #include "pintag/db/sort_plan.hpp"
 
@@ -86,6 +89,58 @@ TEST_F(SortPlans, KeepingTheStoredDescriptionKeepsItOnlyWhenThereIsOne) {
   EXPECT_EQ(GetPlan(db_, "hub-b").value().description, "given");
   ASSERT_TRUE(SavePlan(db_, from_csv).ok());  // kReplace: the description given, empty
   EXPECT_EQ(GetPlan(db_, "hub-a").value().description, "");
+}
+
+TEST_F(SortPlans, VersionNamesEverythingStored) {
+  const SortPlan plan = HubPlan();
+  EXPECT_EQ(PlanVersion(plan).size(), 32U);
+  SortPlan reordered = plan;
+  std::reverse(reordered.rules.begin(), reordered.rules.end());
+  EXPECT_EQ(PlanVersion(reordered), PlanVersion(plan));  // rules are a set, kept by prefix
+  const std::vector<std::function<void(SortPlan&)>> changes = {
+      [](SortPlan& p) { p.description += "."; }, [](SortPlan& p) { p.fallback_bin += "."; },
+      [](SortPlan& p) { p.rules[0].bin += "."; }, [](SortPlan& p) { p.rules.pop_back(); }};
+  for (std::size_t i = 0; i < changes.size(); ++i) {
+    SortPlan changed = plan;
+    changes[i](changed);
+    EXPECT_NE(PlanVersion(changed), PlanVersion(plan)) << "change " << i;
+  }
+  // Field boundaries count: "ab" + "c" is not "a" + "bc".
+  EXPECT_NE(PlanVersion({"p", "ab", "c", {}}), PlanVersion({"p", "a", "bc", {}}));
+}
+
+TEST_F(SortPlans, ConditionalSaveChecksTheStoredVersionFirst) {
+  const auto saved = SavePlanIf(db_, HubPlan(), {std::nullopt, PlanVersions{true, {}}});
+  ASSERT_TRUE(saved.ok()) << saved.error().message;
+  EXPECT_FALSE(saved->replaced);
+  EXPECT_EQ(saved->version, PlanVersion(GetPlan(db_, "hub-a").value()));
+
+  // If-None-Match: * on a stored plan, If-Match on a version it is not at, or on no plan at all.
+  SortPlan other{"hub-a", "other", "", {{"2", "two"}}};
+  const auto exists = SavePlanIf(db_, other, {std::nullopt, PlanVersions{true, {}}});
+  ASSERT_FALSE(exists.ok());
+  EXPECT_EQ(exists.error().code, ErrorCode::kPrecondition);
+  const auto stale = SavePlanIf(db_, other, {PlanVersions{false, {"0123"}}, std::nullopt});
+  ASSERT_FALSE(stale.ok());
+  EXPECT_EQ(stale.error().code, ErrorCode::kPrecondition);
+  EXPECT_NE(stale.error().message.find(saved->version), std::string::npos);
+  SortPlan absent = other;
+  absent.name = "hub-z";
+  EXPECT_EQ(SavePlanIf(db_, absent, {PlanVersions{true, {}}, std::nullopt}).error().code,
+            ErrorCode::kPrecondition);
+  EXPECT_EQ(GetPlan(db_, "hub-a").value(), HubPlan());
+  EXPECT_EQ(GetPlan(db_, "hub-z").error().code, ErrorCode::kNotFound);
+
+  // The version read is met once; the writer after it holds a stale one.
+  const PlanCondition read_at{PlanVersions{false, {"elsewhere", saved->version}}, std::nullopt};
+  const auto first = SavePlanIf(db_, other, read_at);
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  EXPECT_TRUE(first->replaced);
+  EXPECT_EQ(first->plan, other);
+  SortPlan second = HubPlan();
+  second.fallback_bin = "lost";
+  EXPECT_EQ(SavePlanIf(db_, second, read_at).error().code, ErrorCode::kPrecondition);
+  EXPECT_EQ(GetPlan(db_, "hub-a").value(), other);
 }
 
 TEST_F(SortPlans, RejectsMalformedPlans) {

@@ -1,5 +1,7 @@
 // Routing, sort plans and tokens on a real `pintag serve`.
 
+#include <atomic>
+
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -103,6 +105,92 @@ TEST_F(ServeTest, SortPlansReadAndWrite) {
         << body << " -> " << problem.dump();
   }
   EXPECT_EQ(ExpectJson(client().Get("/api/v1/sortplans"))["plans"].size(), 2U);
+}
+
+// Two admins editing one plan: the second to save, holding the version both read, must be told
+// (412) instead of silently undoing the first one's change.
+TEST_F(ServeTest, SortPlanWritesAreConditionalOnTheVersionRead) {
+  const std::string plan_path = "/api/v1/sortplans/hub";
+  const std::string v1 = "prefix,bin\n*,manual\n11,delhi\n";
+  const auto put = [&](const std::string& body, const httplib::Headers& extra,
+                       const std::string& type = "text/csv") {
+    httplib::Headers headers = admin();
+    headers.insert(extra.begin(), extra.end());
+    return client().Put(plan_path, headers, body, type);
+  };
+  const auto bins = [&] {
+    return ExpectJson(client().Get("/api/v1/route/110001?plan=hub"))["bin"].get<std::string>();
+  };
+
+  // If-None-Match: * creates a new plan, and never replaces one.
+  auto created = put(v1, {{"If-None-Match", "*"}});
+  ASSERT_TRUE(created);
+  ASSERT_EQ(created->status, 201) << created->body;
+  const std::string etag = created->get_header_value("ETag");
+  ASSERT_EQ(etag.size(), 34U) << etag;  // "…32 hex digits…", strong (no W/)
+  EXPECT_EQ(etag.front(), '"');
+  EXPECT_EQ(ExpectProblem(put("prefix,bin\n*,other\n", {{"If-None-Match", "*"}}), 412)["title"],
+            "Precondition Failed");
+  EXPECT_EQ(bins(), "delhi");
+
+  // GET sends the same version; the CSV form its own tag of it.
+  auto got = client().Get(plan_path);
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->get_header_value("ETag"), etag);
+  auto got_csv = client().Get(plan_path + "?format=csv");
+  ASSERT_TRUE(got_csv);
+  const std::string csv_etag = got_csv->get_header_value("ETag");
+  EXPECT_EQ(csv_etag, etag.substr(0, 33) + "-csv\"");
+
+  // A tag that is not the plan's, or a plan that is not there: 412, nothing written.
+  const json stale = ExpectProblem(put("prefix,bin\n*,other\n", {{"If-Match", "\"nope\""}}), 412);
+  EXPECT_EQ(stale["title"], "Precondition Failed");
+  EXPECT_NE(stale["detail"].get<std::string>().find(etag.substr(1, 32)), std::string::npos)
+      << stale.dump();
+  EXPECT_EQ(bins(), "delhi");
+  ExpectJson(put(v1, {{"If-Match", "*"}}));  // met by any plan there; the same plan, same tag
+  EXPECT_EQ(client().Get(plan_path)->get_header_value("ETag"), etag);
+  auto absent = client().Put(
+      "/api/v1/sortplans/absent",
+      httplib::Headers{{"Authorization", "Bearer " + admin_token_}, {"If-Match", etag}}, v1,
+      "text/csv");
+  ExpectProblem(absent, 412);
+  ExpectProblem(client().Get("/api/v1/sortplans/absent"), 404);
+  // A weak tag never matches If-Match (strong comparison); a malformed header is refused.
+  ExpectProblem(put(v1, {{"If-Match", "W/" + etag}}), 412);
+  EXPECT_EQ(ExpectProblem(put(v1, {{"If-Match", "nope"}}), 400)["detail"].get<std::string>().find(
+                "If-Match"),
+            0U);
+
+  // The current tag, in either form, is met once: the answer carries the new version, and the
+  // old tag is then refused.
+  std::string current = client().Get(plan_path)->get_header_value("ETag");
+  auto saved =
+      put("prefix,bin\n*,manual\n11,north\n", {{"If-Match", current.substr(0, 33) + "-csv\""}});
+  ASSERT_TRUE(saved);
+  ASSERT_EQ(saved->status, 200) << saved->body;
+  EXPECT_NE(saved->get_header_value("ETag"), current);
+  EXPECT_EQ(saved->get_header_value("ETag"), client().Get(plan_path)->get_header_value("ETag"));
+  EXPECT_EQ(bins(), "north");
+  ExpectProblem(put("prefix,bin\n*,manual\n11,lost\n", {{"If-Match", current}}), 412);
+  EXPECT_EQ(bins(), "north");
+
+  // Several writers holding the same version at once: exactly one wins.
+  current = client().Get(plan_path)->get_header_value("ETag");
+  std::atomic<int> next{0}, refused{0};
+  const int won = CallsRightFromConcurrentClients(server_->port(), 6, 1, [&](httplib::Client& c) {
+    const std::string bin = "writer" + std::to_string(next++);
+    auto r = c.Put(plan_path, {{"Authorization", "Bearer " + admin_token_}, {"If-Match", current}},
+                   "prefix,bin\n*,manual\n11," + bin + "\n", "text/csv");
+    if (r && r->status == 412) ++refused;
+    return r && r->status == 200;
+  });
+  EXPECT_EQ(won, 1);
+  EXPECT_EQ(refused, 5);
+
+  // Without either header a PUT overwrites, as it always did.
+  ExpectJson(put("prefix,bin\n*,manual\n11,last\n", {}));
+  EXPECT_EQ(bins(), "last");
 }
 
 TEST_F(ServeTest, TokensCreateListRevoke) {

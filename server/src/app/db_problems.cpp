@@ -15,6 +15,8 @@ void ThrowDbError(const db::Error& error, std::string title) {
       throw HttpError(404, error.message, std::move(title));
     case db::ErrorCode::kConflict:
       throw HttpError(409, error.message, std::move(title));
+    case db::ErrorCode::kPrecondition:
+      throw HttpError(412, error.message, title.empty() ? "Precondition Failed" : std::move(title));
     case db::ErrorCode::kUnauthorized:
       throw HttpError(401, error.message, std::move(title));
     case db::ErrorCode::kFull:

@@ -14,7 +14,8 @@
 namespace pintag::app {
 
 /// Throws the HttpError for a registry error: kInvalid 400, kNotFound 404, kConflict 409,
-/// kUnauthorized 401, kFull 507, kBusy 503, kStorage 500 (its message goes to stderr only).
+/// kPrecondition 412, kUnauthorized 401, kFull 507, kBusy 503, kStorage 500 (its message goes to
+/// stderr only).
 [[noreturn]] void ThrowDbError(const db::Error& error, std::string title = {});
 
 template <typename T>

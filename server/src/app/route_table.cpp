@@ -96,10 +96,10 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
     {"GET",    "/api/v1/sortplans",                 Access::kOpen,    GetSortPlans,
      {"routing", "Every sort plan with its fallback bin and rule count"}},
     {"GET",    "/api/v1/sortplans/{name}",          Access::kOpen,    GetSortPlan,
-     {"routing", "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv)",
+     {"routing", "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv), with its version as ETag",
       {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}}},
     {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   PutSortPlan,
-     {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON",
+     {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new",
       {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}}},
 
     {"GET",    "/api/v1/registry",                  Access::kOpen,    GetRegistryStatus,

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "app/db_problems.hpp"
+#include "app/entity_tags.hpp"
 #include "app/params.hpp"
 #include "app/routes.hpp"
 
@@ -33,6 +34,12 @@ bool WantsCsv(const HttpRequest& request) {
 
 HttpError BadPlan(std::string detail) {
   return HttpError(400, std::move(detail), "Bad Sort Plan");
+}
+
+/// A plan's fault as a problem: 400 "Bad Sort Plan" for what is wrong in it; the others (413 over
+/// the rule limit, 412, 503, …) keep their status's own title.
+[[noreturn]] void ThrowPlanError(const db::Error& error) {
+  ThrowDbError(error, error.code == db::ErrorCode::kInvalid ? "Bad Sort Plan" : "");
 }
 
 /// Refuses a field `object` has that `known` does not list: a misspelt field would otherwise be
@@ -78,6 +85,48 @@ db::SortPlan PlanFromJson(const std::string& name, const json& body) {
   return plan;
 }
 
+// A plan's ETag: its version (db::PlanVersion), quoted; the CSV form adds "-csv", since a strong
+// ETag names one representation and the JSON and CSV of one version differ.
+constexpr std::string_view kCsvTagSuffix = "-csv";
+
+std::string PlanETag(const std::string& version, bool csv) {
+  return "\"" + version + (csv ? std::string(kCsvTagSuffix) : std::string()) + "\"";
+}
+
+/// The plan versions a header's tags name, either form. `strong`: If-Match compares strongly,
+/// so a weak tag matches nothing there; If-None-Match compares weakly.
+db::PlanVersions VersionsOf(const EntityTagList& list, bool strong) {
+  db::PlanVersions versions{list.any, {}};
+  for (const EntityTag& tag : list.tags) {
+    if (strong && tag.weak) continue;
+    std::string_view version = tag.opaque;
+    if (version.ends_with(kCsvTagSuffix)) version.remove_suffix(kCsvTagSuffix.size());
+    versions.versions.emplace_back(version);
+  }
+  return versions;
+}
+
+/// If-Match and If-None-Match of a PUT as the condition the stored plan must meet.
+db::PlanCondition PlanConditionOf(const HttpRequest& request) {
+  db::PlanCondition condition;
+  if (const auto match = EntityTagsHeader(request, "If-Match")) {
+    condition.match = VersionsOf(*match, true);
+  }
+  if (const auto none_match = EntityTagsHeader(request, "If-None-Match")) {
+    condition.none_match = VersionsOf(*none_match, false);
+  }
+  return condition;
+}
+
+HttpResponse PlanResponse(std::string body, std::string content_type, const std::string& version,
+                          bool csv, int status = 200) {
+  HttpResponse response = HttpResponse::Bytes(std::move(content_type), std::move(body), status);
+  response.headers.emplace_back("ETag", PlanETag(version, csv));
+  // JSON or CSV is chosen by Accept as well as ?format=.
+  response.headers.emplace_back("Vary", "Accept");
+  return response;
+}
+
 }  // namespace
 
 HttpResponse GetRoute(const AppContext& context, const HttpRequest& request) {
@@ -114,10 +163,11 @@ HttpResponse GetSortPlans(const AppContext& context, const HttpRequest&) {
 HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request) {
   auto connection = context.pool->acquire();
   const db::SortPlan plan = LoadPlan(*connection, PlanNameParam(request));
+  const std::string version = db::PlanVersion(plan);
   if (WantsCsv(request)) {
-    return HttpResponse::Bytes("text/csv; charset=utf-8", db::PlanToCsv(plan));
+    return PlanResponse(db::PlanToCsv(plan), "text/csv; charset=utf-8", version, true);
   }
-  return HttpResponse::Json(PlanJson(plan).dump());
+  return PlanResponse(PlanJson(plan).dump(), "application/json", version, false);
 }
 
 HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) {
@@ -125,20 +175,25 @@ HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) 
   db::SortPlan plan;
   const bool csv = request.content_type == "text/csv";
   if (csv) {
-    plan = Unwrap(db::ParsePlanCsv(name, request.body), "Bad Sort Plan");
+    auto parsed = db::ParsePlanCsv(name, request.body);
+    if (!parsed) ThrowPlanError(parsed.error());
+    plan = std::move(parsed).value();
     if (const auto description = request.queryParam("description")) plan.description = *description;
   } else {
     plan = PlanFromJson(name, JsonBody(request));
   }
-  if (const auto problem = db::CheckPlan(plan)) ThrowDbError(*problem, "Bad Sort Plan");
+  if (const auto problem = db::CheckPlan(plan)) ThrowPlanError(*problem);
   auto connection = context.pool->acquire();
   // The CSV has no place for the description: one fetched as CSV, edited and put back keeps it,
   // unless ?description= says otherwise.
   const db::StoredDescription description = csv && !request.queryParam("description")
                                                 ? db::StoredDescription::kKeep
                                                 : db::StoredDescription::kReplace;
-  const bool replaced = Unwrap(db::SavePlan(*connection, plan, description), "Bad Sort Plan");
-  return HttpResponse::Json(PlanJson(LoadPlan(*connection, name)).dump(), replaced ? 200 : 201);
+  // Without If-Match or If-None-Match the plan is overwritten whatever it was (docs/API.md).
+  auto saved = db::SavePlanIf(*connection, plan, PlanConditionOf(request), description);
+  if (!saved) ThrowPlanError(saved.error());
+  return PlanResponse(PlanJson(saved->plan).dump(), "application/json", saved->version, false,
+                      saved->replaced ? 200 : 201);
 }
 
 }  // namespace pintag::app

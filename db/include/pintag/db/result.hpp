@@ -13,6 +13,7 @@ enum class ErrorCode {
   kInvalid,       ///< bad input: malformed pincode, empty or over-long text, bad CSV   (400)
   kNotFound,      ///< no such pincode, key, plan or token                             (404)
   kConflict,      ///< already exists, or the operation contradicts the data           (409)
+  kPrecondition,  ///< the stored thing is not in the state the write was made against (412)
   kUnauthorized,  ///< token unknown, revoked or wrong secret (one message for all)    (401)
   kFull,          ///< all 32,768 keys are allocated                                   (507)
   kBusy,          ///< the database stayed locked longer than the busy timeout         (503)

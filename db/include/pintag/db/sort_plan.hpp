@@ -32,6 +32,7 @@ struct SortPlan {
   std::string fallback_bin;     ///< where pincodes no rule matches go
   std::string description;      ///< free text, may be empty
   std::vector<SortRule> rules;  ///< ascending by prefix when read back; prefixes unique
+  bool operator==(const SortPlan&) const = default;
 };
 
 struct Routing {
@@ -61,6 +62,38 @@ enum class StoredDescription {
 /// true when it replaced one (decided inside the transaction, so of two writers only one creates).
 Result<bool> SavePlan(Connection& connection, const SortPlan& plan,
                       StoredDescription description = StoredDescription::kReplace);
+
+/// The version of a plan as stored: 32 hex digits of SHA-256 over its name, fallback bin,
+/// description and rules (in prefix order), so it changes whenever any of them does, and equal
+/// plans have equal versions on every server. The HTTP routes send it as the plan's ETag.
+std::string PlanVersion(const SortPlan& plan);
+
+/// A set of plan versions a write is conditional on; `any` stands for every version (HTTP's `*`).
+struct PlanVersions {
+  bool any = false;
+  std::vector<std::string> versions;
+  bool contains(std::string_view version) const;
+};
+
+/// What a conditional write requires of the stored plan (HTTP If-Match / If-None-Match).
+struct PlanCondition {
+  std::optional<PlanVersions> match;       ///< a stored plan whose version is in the set
+  std::optional<PlanVersions> none_match;  ///< no stored plan, or one whose version is not in it
+};
+
+/// What a save left stored.
+struct SavedPlan {
+  bool replaced = false;  ///< a plan of that name was there before
+  SortPlan plan;          ///< as stored: rules by prefix, the description it kept
+  std::string version;    ///< PlanVersion(plan)
+};
+
+/// SavePlan, when the stored plan meets `condition`: the check and the write are one
+/// transaction (BEGIN IMMEDIATE), so of two writers holding the same version only the first
+/// succeeds. kPrecondition, and nothing written, when the condition does not hold.
+Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
+                             const PlanCondition& condition,
+                             StoredDescription description = StoredDescription::kReplace);
 /// kNotFound for an unknown plan.
 Result<SortPlan> GetPlan(Connection& connection, std::string_view name);
 Result<std::vector<std::string>> ListPlans(Connection& connection);  ///< names, ascending
