@@ -12,6 +12,8 @@ const char* ToString(ErrorCode code) {
       return "conflict";
     case ErrorCode::kPrecondition:
       return "precondition";
+    case ErrorCode::kTooLarge:
+      return "too_large";
     case ErrorCode::kUnauthorized:
       return "unauthorized";
     case ErrorCode::kFull:

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -20,6 +21,17 @@ using detail::Guard;
 bool IsPrefix(std::string_view prefix) {
   return !prefix.empty() && prefix.size() <= 6 &&
          std::all_of(prefix.begin(), prefix.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+Error TooManyRules(std::string_view at) {
+  return {ErrorCode::kTooLarge,
+          std::string(at) + "a sort plan has at most " + std::to_string(kMaxPlanRules) + " rules"};
+}
+
+/// `error` with `at` ("line 4: ") put before its message.
+Error At(std::string_view at, Error error) {
+  error.message.insert(0, at);
+  return error;
 }
 
 Error UnknownPlan(std::string_view name) {
@@ -85,20 +97,33 @@ void AppendField(std::string& out, std::string_view field) {
 
 }  // namespace
 
+std::optional<Error> CheckRule(const SortRule& rule) {
+  if (!IsPrefix(rule.prefix)) {
+    return Error{ErrorCode::kInvalid,
+                 "rule prefix '" + rule.prefix.substr(0, 40) + "' is not 1 to 6 digits"};
+  }
+  if (rule.prefix[0] == '0') {
+    return Error{ErrorCode::kInvalid, "rule prefix '" + rule.prefix +
+                                          "' starts with 0, as no pincode does: the rule could "
+                                          "never match"};
+  }
+  return CheckText("bin for prefix " + rule.prefix, rule.bin, kMaxBinBytes);
+}
+
 std::optional<Error> CheckPlan(const SortPlan& plan) {
   if (auto error = CheckText("plan name", plan.name, kMaxBinBytes)) return error;
   if (auto error = CheckText("fallback bin", plan.fallback_bin, kMaxBinBytes)) return error;
   if (auto error = CheckText("description", plan.description, kMaxLabelBytes, true)) return error;
+  if (plan.rules.size() > kMaxPlanRules) {
+    return Error{ErrorCode::kTooLarge, "the plan has " + std::to_string(plan.rules.size()) +
+                                           " rules; a sort plan has at most " +
+                                           std::to_string(kMaxPlanRules)};
+  }
   std::set<std::string_view> prefixes;
   for (const SortRule& rule : plan.rules) {
-    if (!IsPrefix(rule.prefix)) {
-      return Error{ErrorCode::kInvalid, "rule prefix '" + rule.prefix + "' is not 1 to 6 digits"};
-    }
+    if (auto error = CheckRule(rule)) return error;
     if (!prefixes.insert(rule.prefix).second) {
       return Error{ErrorCode::kInvalid, "prefix " + rule.prefix + " appears twice"};
-    }
-    if (auto error = CheckText("bin for prefix " + rule.prefix, rule.bin, kMaxBinBytes)) {
-      return error;
     }
   }
   return std::nullopt;
@@ -127,6 +152,7 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv) {
     return Error{ErrorCode::kInvalid, "line 1: expected the header 'prefix,bin'"};
   }
   bool have_fallback = false;
+  std::map<std::string, std::int64_t> line_of;  // each rule's prefix, and its line
   while (const auto record = reader.next(&error)) {
     const std::string at = "line " + std::to_string(record->line) + ": ";
     if (!error.empty()) return Error{ErrorCode::kInvalid, at + error};
@@ -138,9 +164,22 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv) {
       if (have_fallback) return Error{ErrorCode::kInvalid, at + "a second fallback row '*'"};
       have_fallback = true;
       plan.fallback_bin = record->fields[1];
-    } else {
-      plan.rules.push_back({record->fields[0], record->fields[1]});
+      if (auto problem = CheckText("fallback bin", plan.fallback_bin, kMaxBinBytes)) {
+        return At(at, *problem);
+      }
+      continue;
     }
+    // Stopped at the first rule too many: the rest is not read into memory.
+    if (plan.rules.size() == kMaxPlanRules) return TooManyRules(at);
+    SortRule rule{record->fields[0], record->fields[1]};
+    if (auto problem = CheckRule(rule)) return At(at, *problem);
+    const auto [first, inserted] = line_of.try_emplace(rule.prefix, record->line);
+    if (!inserted) {
+      return Error{ErrorCode::kInvalid, at + "prefix " + rule.prefix +
+                                            " appears twice (first on line " +
+                                            std::to_string(first->second) + ")"};
+    }
+    plan.rules.push_back(std::move(rule));
   }
   if (!have_fallback) {
     return Error{ErrorCode::kInvalid, "no fallback row: add '*,<bin>' for unmatched pincodes"};

@@ -189,6 +189,34 @@ TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
   EXPECT_NE(wide.error().message.find("line 3"), std::string::npos);
   EXPECT_FALSE(ParsePlanCsv("x", "pin,bin\n*,a\n").ok());
   EXPECT_FALSE(ParsePlanCsv("x", "prefix,bin\n*,a\n12345a,b\n").ok());
+  // A rule no pincode can match (none starts with 0), and a prefix twice: both lines named.
+  const auto zero = ParsePlanCsv("x", "prefix,bin\n*,a\n1,b\n012345,z\n");
+  ASSERT_FALSE(zero.ok());
+  EXPECT_EQ(zero.error().message.rfind("line 4: rule prefix '012345' starts with 0", 0), 0U)
+      << zero.error().message;
+  const auto twice = ParsePlanCsv("x", "prefix,bin\n*,a\n11,b\n56,c\n11,d\n");
+  ASSERT_FALSE(twice.ok());
+  EXPECT_EQ(twice.error().message, "line 5: prefix 11 appears twice (first on line 3)");
+}
+
+TEST_F(SortPlans, RulesPerPlanAreLimited) {
+  SortPlan plan{"big", "m", "", {}};
+  std::string csv = "prefix,bin\n*,m\n";
+  for (std::size_t i = 0; i < kMaxPlanRules; ++i) {
+    plan.rules.push_back({std::to_string(100000 + i), "b"});
+    csv += plan.rules.back().prefix + ",b\n";
+  }
+  EXPECT_FALSE(CheckPlan(plan).has_value());
+  ASSERT_TRUE(ParsePlanCsv("big", csv).ok());
+  plan.rules.push_back({"1", "one too many"});
+  ASSERT_TRUE(CheckPlan(plan).has_value());
+  EXPECT_EQ(CheckPlan(plan)->code, ErrorCode::kTooLarge);
+  EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kTooLarge);
+  const auto over = ParsePlanCsv("big", csv + "1,one too many\n");
+  ASSERT_FALSE(over.ok());
+  EXPECT_EQ(over.error().code, ErrorCode::kTooLarge);
+  EXPECT_EQ(over.error().message, "line 100003: a sort plan has at most 100000 rules");
+  EXPECT_EQ(GetPlan(db_, "big").error().code, ErrorCode::kNotFound);
 }
 
 }  // namespace

@@ -193,6 +193,50 @@ TEST_F(ServeTest, SortPlanWritesAreConditionalOnTheVersionRead) {
   EXPECT_EQ(bins(), "last");
 }
 
+// A rule no pincode can match, or a prefix given twice, is refused naming the line (or rule) so a
+// long CSV can be put right; nothing is saved.
+TEST_F(ServeTest, SortPlanFaultsAreNamedByLine) {
+  const auto refused = [&](const std::string& body, const std::string& type,
+                           const std::string& says) {
+    const json problem =
+        ExpectProblem(client().Put("/api/v1/sortplans/bad", admin(), body, type), 400);
+    EXPECT_EQ(problem["title"], "Bad Sort Plan");
+    EXPECT_NE(problem["detail"].get<std::string>().find(says), std::string::npos)
+        << body << " -> " << problem.dump();
+  };
+  refused("prefix,bin\n*,m\n11,a\n0,zero\n", "text/csv", "line 4: rule prefix '0' starts with 0");
+  refused("prefix,bin\n*,m\n012345,z\n", "text/csv", "line 3: rule prefix '012345' starts with 0");
+  refused(
+      R"({"fallback_bin": "m", "rules": [{"prefix": "1", "bin": "a"}, {"prefix": "04", "bin": "b"}]})",
+      "application/json", "rules[1]: rule prefix '04' starts with 0");
+  refused("prefix,bin\n*,m\n11,a\n56,b\n11,c\n", "text/csv",
+          "line 5: prefix 11 appears twice (first on line 3)");
+  refused(
+      R"({"fallback_bin": "m", "rules": [{"prefix": "11", "bin": "a"}, {"prefix": "11", "bin": "b"}]})",
+      "application/json", "rules[1]: prefix 11 appears twice (first at rules[0])");
+  refused("prefix,bin\n*,m\n11,\"\u200b\"\n", "text/csv", "line 3: bin for prefix 11 is blank");
+  ExpectProblem(client().Get("/api/v1/sortplans/bad"), 404);
+}
+
+// A plan has at most 100,000 rules: one over is refused naming the limit, without saving.
+TEST_F(ServeTest, SortPlanRuleLimit) {
+  std::string csv = "prefix,bin\n*,manual\n";
+  for (int prefix = 100000; prefix < 200000; ++prefix) {
+    csv += std::to_string(prefix) + ",b" + std::to_string(prefix % 100) + "\n";
+  }
+  ExpectJson(client().Put("/api/v1/sortplans/big", admin(), csv, "text/csv"), 201);
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/123456?plan=big"))["bin"], "b56");
+  const json over = ExpectProblem(
+      client().Put("/api/v1/sortplans/big", admin(), csv + "200000,over\n", "text/csv"), 413);
+  EXPECT_NE(
+      over["detail"].get<std::string>().find("line 100003: a sort plan has at most 100000 rules"),
+      std::string::npos)
+      << over.dump();
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/200000?plan=big"))["bin"], "manual");
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/sortplans"))["plans"][0]["name"], "big");
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/sortplans"))["plans"][0]["rules"], 100000);
+}
+
 TEST_F(ServeTest, TokensCreateListRevoke) {
   ExpectProblem(client().Get("/api/v1/tokens"), 401);
   ExpectProblem(client().Get("/api/v1/tokens", counter()), 403);

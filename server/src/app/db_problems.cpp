@@ -17,6 +17,8 @@ void ThrowDbError(const db::Error& error, std::string title) {
       throw HttpError(409, error.message, std::move(title));
     case db::ErrorCode::kPrecondition:
       throw HttpError(412, error.message, title.empty() ? "Precondition Failed" : std::move(title));
+    case db::ErrorCode::kTooLarge:
+      throw HttpError(413, error.message, std::move(title));
     case db::ErrorCode::kUnauthorized:
       throw HttpError(401, error.message, std::move(title));
     case db::ErrorCode::kFull:
@@ -31,12 +33,14 @@ void ThrowDbError(const db::Error& error, std::string title) {
   throw HttpError(500, "the database failed to answer", "Database Error");
 }
 
+void ThrowUnknownPlan(std::string_view name) {
+  throw HttpError(404, "no sort plan named '" + std::string(name.substr(0, 100)) + "'",
+                  "Unknown Sort Plan");
+}
+
 db::SortPlan LoadPlan(db::Connection& connection, std::string_view name) {
   auto plan = db::GetPlan(connection, name);
-  if (!plan && plan.error().code == db::ErrorCode::kNotFound) {
-    throw HttpError(404, "no sort plan named '" + std::string(name.substr(0, 100)) + "'",
-                    "Unknown Sort Plan");
-  }
+  if (!plan && plan.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(name);
   return Unwrap(std::move(plan));
 }
 

@@ -14,8 +14,8 @@
 namespace pintag::app {
 
 /// Throws the HttpError for a registry error: kInvalid 400, kNotFound 404, kConflict 409,
-/// kPrecondition 412, kUnauthorized 401, kFull 507, kBusy 503, kStorage 500 (its message goes to
-/// stderr only).
+/// kPrecondition 412, kTooLarge 413, kUnauthorized 401, kFull 507, kBusy 503, kStorage 500 (its
+/// message goes to stderr only).
 [[noreturn]] void ThrowDbError(const db::Error& error, std::string title = {});
 
 template <typename T>
@@ -27,6 +27,8 @@ inline void Unwrap(const db::Result<void>& result, std::string title = {}) {
   if (!result) ThrowDbError(result.error(), std::move(title));
 }
 
+/// 404 "Unknown Sort Plan" for the plan called `name`.
+[[noreturn]] void ThrowUnknownPlan(std::string_view name);
 /// The sort plan called `name`; 404 "Unknown Sort Plan" when there is none.
 db::SortPlan LoadPlan(db::Connection& connection, std::string_view name);
 

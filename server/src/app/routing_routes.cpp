@@ -2,6 +2,7 @@
 // anyone, written by admins as CSV or JSON).
 
 #include <algorithm>
+#include <map>
 
 #include "app/db_problems.hpp"
 #include "app/entity_tags.hpp"
@@ -75,12 +76,25 @@ db::SortPlan PlanFromJson(const std::string& name, const json& body) {
   plan.fallback_bin = text(body, "fallback_bin", true);
   plan.description = text(body, "description", false);
   if (!body.contains("rules") || !body["rules"].is_array()) throw BadPlan("'rules' must be a list");
+  if (body["rules"].size() > db::kMaxPlanRules) {
+    throw HttpError(413, "the plan has " + std::to_string(body["rules"].size()) +
+                             " rules; a sort plan has at most " +
+                             std::to_string(db::kMaxPlanRules));
+  }
+  std::map<std::string, std::size_t> index_of;  // each rule's prefix, and where it was
   for (std::size_t i = 0; i < body["rules"].size(); ++i) {
     const json& rule = body["rules"][i];
     const std::string where = "rules[" + std::to_string(i) + "]: ";
     if (!rule.is_object()) throw BadPlan(where + R"(expected {"prefix": …, "bin": …})");
     RefuseUnknownFields(rule, {"prefix", "bin"}, where);
-    plan.rules.push_back({text(rule, "prefix", true, where), text(rule, "bin", true, where)});
+    db::SortRule read{text(rule, "prefix", true, where), text(rule, "bin", true, where)};
+    if (const auto problem = db::CheckRule(read)) throw BadPlan(where + problem->message);
+    const auto [first, inserted] = index_of.try_emplace(read.prefix, i);
+    if (!inserted) {
+      throw BadPlan(where + "prefix " + read.prefix + " appears twice (first at rules[" +
+                    std::to_string(first->second) + "])");
+    }
+    plan.rules.push_back(std::move(read));
   }
   return plan;
 }
@@ -133,12 +147,15 @@ HttpResponse GetRoute(const AppContext& context, const HttpRequest& request) {
   const Pincode pincode = PincodeParam(request);
   const std::string plan_name = PlanQuery(request);
   auto connection = context.pool->acquire();
-  const db::SortPlan plan = LoadPlan(*connection, plan_name);
-  const db::Routing routing = db::RouteWith(plan, pincode);
+  // The six prefixes of the pincode looked up by index, not the whole plan read (a plan may
+  // hold up to db::kMaxPlanRules rules).
+  auto routed = db::Route(*connection, pincode, plan_name);
+  if (!routed && routed.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(plan_name);
+  const db::Routing routing = Unwrap(std::move(routed));
   auto record = db::LookupPincode(*connection, pincode);
   if (!record && record.error().code != db::ErrorCode::kNotFound) ThrowDbError(record.error());
   json out = {{"pincode", pincode.str()},
-              {"plan", plan.name},
+              {"plan", plan_name},
               {"bin", routing.bin},
               {"matched_prefix", routing.rule ? json(routing.rule->prefix) : json(nullptr)},
               {"fallback", !routing.rule.has_value()},

@@ -14,13 +14,15 @@ enum class ErrorCode {
   kNotFound,      ///< no such pincode, key, plan or token                             (404)
   kConflict,      ///< already exists, or the operation contradicts the data           (409)
   kPrecondition,  ///< the stored thing is not in the state the write was made against (412)
+  kTooLarge,      ///< over a documented limit, such as the rules of a sort plan       (413)
   kUnauthorized,  ///< token unknown, revoked or wrong secret (one message for all)    (401)
   kFull,          ///< all 32,768 keys are allocated                                   (507)
   kBusy,          ///< the database stayed locked longer than the busy timeout         (503)
   kStorage,       ///< any other SQLite or file failure; the message says which        (500)
 };
 
-/// "invalid", "not_found", "conflict", "unauthorized", "full", "busy", "storage".
+/// "invalid", "not_found", "conflict", "precondition", "too_large",
+/// "unauthorized", "full", "busy", "storage".
 const char* ToString(ErrorCode code);
 
 struct Error {

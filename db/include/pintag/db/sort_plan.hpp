@@ -22,7 +22,7 @@ namespace pintag::db {
 inline constexpr std::string_view kDefaultPlanName = "default";
 
 struct SortRule {
-  std::string prefix;  ///< 1–6 ASCII digits
+  std::string prefix;  ///< 1–6 ASCII digits, the first 1–9
   std::string bin;     ///< 1–64 bytes of text
   bool operator==(const SortRule&) const = default;
 };
@@ -40,14 +40,25 @@ struct Routing {
   std::optional<SortRule> rule;  ///< the rule that matched; nothing when the fallback was used
 };
 
-/// Nothing when the plan is well formed, else kInvalid saying what is wrong.
+/// Rules a plan may have. A plan with a rule for every pincode has about 19,000; past the limit
+/// a PUT is refused (kTooLarge) before it costs seconds and hundreds of megabytes.
+inline constexpr std::size_t kMaxPlanRules = 100'000;
+
+/// Nothing when the rule is well formed, else kInvalid saying what is wrong: a prefix is 1–6
+/// digits and does not start with 0 (no pincode does, so such a rule could never match); the
+/// bin is 1–64 bytes of text.
+std::optional<Error> CheckRule(const SortRule& rule);
+
+/// Nothing when the plan is well formed, else kInvalid saying what is wrong (or kTooLarge for
+/// more than kMaxPlanRules rules).
 std::optional<Error> CheckPlan(const SortPlan& plan);
 
 /// Routes with a plan already in memory (no database); longest prefix wins.
 Routing RouteWith(const SortPlan& plan, Pincode pincode);
 
 /// Plan CSV: a `prefix,bin` header, then one rule per row; the row with prefix `*` gives the
-/// fallback bin and must appear exactly once. RFC 4180 quoting. Errors name the line.
+/// fallback bin and must appear exactly once. RFC 4180 quoting. Errors name the line; more than
+/// kMaxPlanRules rules: kTooLarge, read no further.
 Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv);
 /// The inverse: header, `*` row, then rules in ascending prefix order.
 std::string PlanToCsv(const SortPlan& plan);
