@@ -1,5 +1,6 @@
 #include "pintag/db/registry.hpp"
 
+#include <map>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -186,6 +187,18 @@ Result<PincodeRecord> AddPincode(Connection& connection, Pincode pincode,
                                  const std::vector<PostOffice>& offices) {
   for (const PostOffice& office : offices) {
     if (auto error = detail::CheckOffice(office)) return *error;
+  }
+  // A name is one office of a pincode (compared without the spaces at either end, as stored
+  // offices are matched): two entries under it would be merged into one mixing both.
+  std::map<std::string_view, std::size_t> first_named;
+  for (std::size_t i = 0; i < offices.size(); ++i) {
+    const auto [first, inserted] = first_named.try_emplace(TrimSpaces(offices[i].name), i);
+    if (!inserted) {
+      return Error{ErrorCode::kInvalid, "offices " + std::to_string(first->second + 1) + " and " +
+                                            std::to_string(i + 1) + " are both named '" +
+                                            std::string(first->first) +
+                                            "'; give each office of a pincode once"};
+    }
   }
   return Guard([&]() -> Result<PincodeRecord> {
     Transaction transaction(connection);

@@ -150,6 +150,12 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
                     409)["title"],
       "Pincode Exists");  // refused for the pincode, not for the office's fields
 
+  // The office with some fields changed, as a JSON object (each key once).
+  const auto office_with = [&](const json& changes) {
+    json changed = json::parse("{" + office + "}");
+    for (const auto& [field, value] : changes.items()) changed[field] = value;
+    return changed.dump();
+  };
   const auto refused = [&](const std::string& body, const std::string& says) {
     const json problem =
         ExpectProblem(client().Post("/api/v1/pincodes", admin(), body, "application/json"), 400);
@@ -162,15 +168,25 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
           "office 1 needs a non-empty district, state, circle, region, division");
   refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "distrct": "Typo"}]})",
           "office 1: unknown field 'distrct'");
-  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "name": "   "}]})",
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", "   "}}) + "]}",
           "needs a non-empty name");
-  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "latitude": "north"}]})",
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"latitude", "north"}}) + "]}",
           "'latitude' must be a number");
-  refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "latitude": 91}]})",
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"latitude", 91}}) + "]}",
           "latitude must be -90 to 90");
   refused(R"({"pincode": "999012", "key": 5})", "unknown field 'key'");
   refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "pincode": "999013"}]})",
           "is not the pincode being added");
+  // Two offices under one name would be stored as one mixing both: refused, naming it.
+  const std::string alpha_a = R"({"name": "Alpha", "district": "North", "state": "State A",
+      "circle": "C", "region": "R", "division": "D"})";
+  const std::string alpha_b = R"({"name": "Alpha", "district": "South", "state": "State B",
+      "circle": "C", "region": "R", "division": "D"})";
+  refused(R"({"pincode": "999012", "offices": [)" + alpha_a + "," + alpha_b + "]}",
+          "offices 1 and 2 are both named 'Alpha'");
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", " Beta"}}) + "," +
+              office_with({{"name", "Beta"}}) + "]}",
+          "both named 'Beta'");
 }
 
 }  // namespace

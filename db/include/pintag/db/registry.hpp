@@ -99,7 +99,8 @@ Result<RegistryCounts> CountRegistry(Connection& connection);
 
 /// Adds a pincode with the next key its probe sequence finds free (DESIGN.md §2) and the given
 /// offices (may be empty). kConflict when it exists (retired too: a pincode is never re-keyed),
-/// kFull when no key is left, kInvalid for bad office text.
+/// kFull when no key is left, kInvalid for bad office text or two offices of one name (compared
+/// without the spaces at either end).
 Result<PincodeRecord> AddPincode(Connection& connection, Pincode pincode,
                                  const std::vector<PostOffice>& offices = {});
 
