@@ -189,5 +189,50 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
           "both named 'Beta'");
 }
 
+// A key twice in one object would act on one of two values the client sent (the parser keeps the
+// last): every JSON body route refuses it, naming the key, and does nothing.
+TEST_F(ServeTest, JsonBodyWithAKeyTwiceIsRefusedNamingIt) {
+  const auto refused = [&](const httplib::Result& r, const std::string& key) {
+    const json problem = ExpectProblem(r, 400);
+    EXPECT_EQ(problem["title"], "Malformed JSON");
+    EXPECT_NE(problem["detail"].get<std::string>().find("'" + key + "' appears twice"),
+              std::string::npos)
+        << problem.dump();
+  };
+  refused(client().Post("/api/v1/pincodes", admin(),
+                        R"({"pincode": "999003", "pincode": "999004"})", "application/json"),
+          "pincode");
+  ExpectProblem(client().Get("/api/v1/pincodes/999003"), 404);
+  ExpectProblem(client().Get("/api/v1/pincodes/999004"), 404);
+  // In a nested object too.
+  refused(client().Post("/api/v1/pincodes", admin(),
+                        R"({"pincode": "999003", "offices": [{"name": "A", "name": "B",
+                            "district": "D", "state": "S", "circle": "C", "region": "R",
+                            "division": "V"}]})",
+                        "application/json"),
+          "name");
+  ExpectProblem(client().Get("/api/v1/pincodes/999003"), 404);
+  refused(client().Put("/api/v1/sortplans/twice", admin(),
+                       R"({"fallback_bin": "a", "fallback_bin": "b", "rules": []})",
+                       "application/json"),
+          "fallback_bin");
+  ExpectProblem(client().Get("/api/v1/sortplans/twice"), 404);
+  refused(client().Post("/api/v1/tokens", admin(), R"({"role": "scanner", "role": "admin"})",
+                        "application/json"),
+          "role");
+  refused(client().Post("/api/v1/labels", counter(),
+                        R"({"pincodes": ["110001"], "size": "a6", "size": "4x6in"})",
+                        "application/json"),
+          "size");
+  // The same key in two objects is no duplicate.
+  ExpectJson(client().Post("/api/v1/pincodes", admin(),
+                           R"({"pincode": "999005", "offices": [{"name": "A", "district": "D",
+                               "state": "S", "circle": "C", "region": "R", "division": "V"},
+                               {"name": "B", "district": "D", "state": "S", "circle": "C",
+                               "region": "R", "division": "V"}]})",
+                           "application/json"),
+             201);
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -4,6 +4,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <set>
+#include <vector>
 
 #include "pintag/codec/label.hpp"
 #include "pintag/db/sort_plan.hpp"
@@ -187,8 +189,31 @@ nlohmann::json JsonBody(const HttpRequest& request) {
     throw HttpError(413, "the JSON body holds about " + std::to_string(shape.items) +
                              " items; at most " + std::to_string(kMaxJsonItems) + " are read");
   }
-  nlohmann::json body = nlohmann::json::parse(request.body, nullptr, false);
+  // A key twice in one object: nlohmann keeps the last, so {"pincode": "1…", "pincode": "2…"}
+  // would act on one of two values the client sent without a word. Refused instead, naming it.
+  std::vector<std::set<std::string>> keys_seen;  // one set per object being parsed
+  std::optional<std::string> duplicate;
+  const nlohmann::json::parser_callback_t callback =
+      [&](int /*depth*/, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        using Event = nlohmann::json::parse_event_t;
+        if (event == Event::object_start) {
+          keys_seen.emplace_back();
+        } else if (event == Event::object_end && !keys_seen.empty()) {
+          keys_seen.pop_back();
+        } else if (event == Event::key && !keys_seen.empty() && !duplicate &&
+                   !keys_seen.back().insert(parsed.get<std::string>()).second) {
+          duplicate = parsed.get<std::string>();
+        }
+        return true;
+      };
+  nlohmann::json body = nlohmann::json::parse(request.body, callback, false);
   if (body.is_discarded()) throw HttpError(400, "the body is not valid JSON", "Malformed JSON");
+  if (duplicate) {
+    throw HttpError(400,
+                    "the key " + Quoted(*duplicate) +
+                        " appears twice in one object of the JSON body; give each key once",
+                    "Malformed JSON");
+  }
   return body;
 }
 

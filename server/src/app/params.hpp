@@ -60,8 +60,9 @@ inline constexpr std::size_t kMaxJsonDepth = 32;
 /// about a gigabyte, and this many to at most ~20 MB. A pincode with 1,000 offices has ~15,000; a
 /// sort plan 3 a rule, so up to ~83,000 rules (a plan for every pincode has ~19,000).
 inline constexpr std::size_t kMaxJsonItems = 250'000;
-/// The body parsed as JSON; 400 "Malformed JSON" when it is not, or nests deeper than
-/// kMaxJsonDepth; 413 when it holds more than kMaxJsonItems.
+/// The body parsed as JSON; 400 "Malformed JSON" when it is not, nests deeper than
+/// kMaxJsonDepth or has a key twice in one object (naming it); 413 when it holds more than
+/// kMaxJsonItems.
 nlohmann::json JsonBody(const server::HttpRequest& request);
 /// A pincode given as a JSON string or number; `where` names it in the problem ("pincodes[3]").
 Pincode PincodeValue(const nlohmann::json& value, std::string_view where);
