@@ -12,15 +12,51 @@ std::string_view TrimSpaces(std::string_view text) {
   return text.substr(first, text.find_last_not_of(' ') - first + 1);
 }
 
+namespace {
+
+// Unicode 15: the space separators (Zs), U+2028/U+2029 (Zl, Zp), U+0085, the format characters
+// (Cf) and the other characters that render as nothing on their own.
+bool IsInvisible(char32_t c) {
+  struct Range {
+    char32_t first, last;
+  };
+  static constexpr Range kInvisible[] = {
+      {0x0020, 0x0020},   {0x0085, 0x0085},   {0x00A0, 0x00A0},   {0x00AD, 0x00AD},
+      {0x034F, 0x034F},   {0x0600, 0x0605},   {0x061C, 0x061C},   {0x06DD, 0x06DD},
+      {0x070F, 0x070F},   {0x0890, 0x0891},   {0x08E2, 0x08E2},   {0x115F, 0x1160},
+      {0x1680, 0x1680},   {0x180B, 0x180F},   {0x2000, 0x200F},   {0x2028, 0x202F},
+      {0x205F, 0x2064},   {0x2066, 0x206F},   {0x3000, 0x3000},   {0x3164, 0x3164},
+      {0xFE00, 0xFE0F},   {0xFEFF, 0xFEFF},   {0xFFA0, 0xFFA0},   {0xFFF9, 0xFFFB},
+      {0x110BD, 0x110BD}, {0x110CD, 0x110CD}, {0x13430, 0x1343F}, {0x1BCA0, 0x1BCA3},
+      {0x1D173, 0x1D17A}, {0xE0001, 0xE0001}, {0xE0020, 0xE007F}, {0xE0100, 0xE01EF},
+  };
+  for (const Range& range : kInvisible) {
+    if (c < range.first) return false;  // ranges ascend
+    if (c <= range.last) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool IsBlank(std::string_view text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const Utf8CodePoint decoded = DecodeUtf8(text, i);
+    if (decoded.length == 0 || !IsInvisible(decoded.value)) return false;
+    i += decoded.length;
+  }
+  return true;
+}
+
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty) {
   const auto invalid = [&](const std::string& why) {
     return Error{ErrorCode::kInvalid, std::string(field) + " " + why};
   };
   if (value.empty() && !allow_empty) return invalid("is empty");
-  if (!allow_empty && value.find_first_not_of(' ') == std::string_view::npos) {
-    return invalid("is only spaces");
-  }
+  // "\u200b" or a no-break space would be stored as a name nobody can see or type.
+  if (!allow_empty && IsBlank(value))
+    return invalid("is blank (only spaces or invisible characters)");
   if (value.size() > max_bytes) {
     return invalid("is " + std::to_string(value.size()) + " bytes long; at most " +
                    std::to_string(max_bytes) + " allowed");

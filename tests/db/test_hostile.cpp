@@ -9,6 +9,7 @@
 #include "pintag/db/registry.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/sort_plan.hpp"
+#include "pintag/db/text.hpp"
 #include "pintag/db/tokens.hpp"
 
 namespace pintag::db {
@@ -136,6 +137,32 @@ TEST_F(Hostile, OfficeFieldsAndSearch) {
     EXPECT_EQ(Search(db_, {.district = text}).error().code, ErrorCode::kInvalid);
     EXPECT_EQ(Search(db_, {.state = text}).error().code, ErrorCode::kInvalid);
   }
+  EXPECT_EQ(LookupPincode(db_, Pincode(998000)).error().code, ErrorCode::kNotFound);
+}
+
+// A name of spaces and invisible characters only would be stored as one nobody can see or type.
+TEST_F(Hostile, InvisibleTextIsBlank) {
+  for (const std::string& text : {std::string("\u200b"), std::string("\u00a0"),
+                                  std::string("\ufeff"), std::string(" \u3000 \u2007"),
+                                  std::string("\u2060\u200d\u00ad"), std::string("\u202f\u3164")}) {
+    EXPECT_TRUE(IsBlank(text)) << text;
+    for (std::string PostOffice::*field : {&PostOffice::name, &PostOffice::district}) {
+      PostOffice office = OfficeOf("ok");
+      office.*field = text;
+      const auto added = AddPincode(db_, Pincode(998000), {office});
+      ASSERT_FALSE(added.ok()) << text;
+      EXPECT_EQ(added.error().code, ErrorCode::kInvalid);
+      EXPECT_NE(added.error().message.find("is blank"), std::string::npos) << added.error().message;
+    }
+    const SortPlan plan{"ok", text, "", {{"1", "ok"}}};
+    EXPECT_EQ(SavePlan(db_, plan).error().code, ErrorCode::kInvalid) << text;
+  }
+  // Visible text with invisible characters in it is text (ZWJ and ZWNJ shape Indic scripts).
+  for (const std::string& text : {std::string("a\u200b"), std::string("\u0915\u094d\u200d"),
+                                  std::string("\u00a0x\u00a0"), std::string("0")}) {
+    EXPECT_FALSE(IsBlank(text)) << text;
+  }
+  EXPECT_FALSE(IsBlank("\xff"));  // invalid UTF-8 is refused as such, not as blank
   EXPECT_EQ(LookupPincode(db_, Pincode(998000)).error().code, ErrorCode::kNotFound);
 }
 

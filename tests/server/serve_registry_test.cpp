@@ -170,6 +170,13 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
           "office 1: unknown field 'distrct'");
   refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", "   "}}) + "]}",
           "needs a non-empty name");
+  // Invisible text is blank too: a zero-width space for a name, a no-break space for a district.
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", "\u200b"}}) + "]}",
+          "needs a non-empty name");
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"district", "\u00a0"}}) + "]}",
+          "needs a non-empty district");
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"state", "\ufeff\u3000"}}) + "]}",
+          "needs a non-empty state");
   refused(R"({"pincode": "999012", "offices": [)" + office_with({{"latitude", "north"}}) + "]}",
           "'latitude' must be a number");
   refused(R"({"pincode": "999012", "offices": [)" + office_with({{"latitude", 91}}) + "]}",

@@ -7,6 +7,7 @@
 #include "app/params.hpp"
 #include "app/registry_json.hpp"
 #include "app/routes.hpp"
+#include "pintag/db/text.hpp"
 
 namespace pintag::app {
 namespace {
@@ -48,7 +49,7 @@ db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode)
   std::string missing;
   for (const char* name : kRequiredFields) {
     const std::optional<std::string> value = text(name);
-    if (!value || value->find_first_not_of(' ') == std::string::npos) {
+    if (!value || db::IsBlank(*value)) {  // spaces, U+00A0, U+200B, … only: nothing to read
       missing += (missing.empty() ? "" : ", ") + std::string(name);
     }
   }

@@ -20,7 +20,15 @@ inline constexpr std::size_t kMaxJsonBytes = 1 << 20;  ///< a scan log entry's J
 /// and, from the seed and imports, stored ("New Delhi " and "New Delhi" are one office).
 std::string_view TrimSpaces(std::string_view text);
 
-/// Nothing when `value` is acceptable for `field`; else the kInvalid error saying why.
+/// True when `text` shows nothing: it is empty or holds only spaces and invisible characters —
+/// Unicode's space separators (Zs: U+0020, U+00A0 no-break space, U+2000–U+200A, U+3000, …),
+/// line and paragraph separators, format characters (Cf: U+200B zero-width space, U+200C/D,
+/// U+2060 word joiner, U+FEFF, U+00AD soft hyphen, bidi controls, …), U+0085, the Hangul fillers
+/// and variation selectors. Invalid UTF-8 is not blank (CheckText refuses it on its own).
+bool IsBlank(std::string_view text);
+
+/// Nothing when `value` is acceptable for `field`; else the kInvalid error saying why. Unless
+/// `allow_empty`, a blank value (IsBlank) is refused too.
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty = false);
 
