@@ -276,6 +276,15 @@ TEST_F(ServeTest, TokensCreateListRevoke) {
   ExpectProblem(client().Post("/api/v1/tokens", admin(), R"({"role": "root"})", "application/json"),
                 400);
   ExpectProblem(client().Post("/api/v1/tokens", admin(), R"(["admin"])", "application/json"), 400);
+  // A misspelt field is refused, not dropped (the token would have no label), and none is made.
+  const std::size_t tokens = ExpectJson(client().Get("/api/v1/tokens", admin()))["tokens"].size();
+  const json misspelt =
+      ExpectProblem(client().Post("/api/v1/tokens", admin(), R"({"role": "scanner", "lable": "x"})",
+                                  "application/json"),
+                    400);
+  EXPECT_NE(misspelt["detail"].get<std::string>().find("unknown field 'lable'"), std::string::npos)
+      << misspelt.dump();
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/tokens", admin()))["tokens"].size(), tokens);
 }
 
 }  // namespace
