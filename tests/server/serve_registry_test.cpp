@@ -1,5 +1,6 @@
 // Registry routes of a real `pintag serve`: lookups, search, keys, adding and retiring.
 
+#include "pintag/db/database.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -194,6 +195,41 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
   refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", " Beta"}}) + "," +
               office_with({{"name", "Beta"}}) + "]}",
           "both named 'Beta'");
+}
+
+// With every key taken, adding a pincode is 507 titled as docs/API.md says: the reason phrase.
+TEST_F(ServeTest, NoKeyLeftIsInsufficientStorage) {
+  {
+    // Every free key given to a pincode from 950000 up that the registry lacks, in one go.
+    auto opened = db::OpenDatabase(db_path_, {.create = false});
+    ASSERT_TRUE(opened) << opened.error().message;
+    db::Connection& connection = opened.value().connection;
+    connection.execute(R"sql(
+      CREATE TEMP TABLE free_keys AS
+        WITH RECURSIVE k(v) AS (SELECT 0 UNION ALL SELECT v + 1 FROM k WHERE v < 32767)
+        SELECT v, row_number() OVER (ORDER BY v) AS n FROM k
+        WHERE v NOT IN (SELECT tag_key FROM tag_keys);
+      CREATE TEMP TABLE free_pins AS
+        WITH RECURSIVE p(v) AS (SELECT 950000 UNION ALL SELECT v + 1 FROM p WHERE v < 999990)
+        SELECT v, row_number() OVER (ORDER BY v) AS n FROM p
+        WHERE v NOT IN (SELECT pincode FROM pincodes);
+      BEGIN;
+      INSERT INTO pincodes (pincode, status, added_at, source)
+        SELECT free_pins.v, 'active', 'test', 'test' FROM free_keys JOIN free_pins USING (n);
+      INSERT INTO tag_keys (pincode, tag_key, allocated_at)
+        SELECT free_pins.v, free_keys.v, 'test' FROM free_keys JOIN free_pins USING (n);
+      COMMIT;
+    )sql");
+    ASSERT_EQ(connection.queryInt64("SELECT count(*) FROM tag_keys"), 32768);
+  }
+  const json full = ExpectProblem(
+      client().Post("/api/v1/pincodes", admin(),
+                    R"({"pincode": "999999", "offices": [{"name": "Last", "district": "D",
+                        "state": "S", "circle": "C", "region": "R", "division": "V"}]})",
+                    "application/json"),
+      507);
+  EXPECT_EQ(full["title"], "Insufficient Storage");
+  ExpectProblem(client().Get("/api/v1/pincodes/999999"), 404);
 }
 
 // A key twice in one object would act on one of two values the client sent (the parser keeps the

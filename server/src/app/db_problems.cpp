@@ -22,7 +22,10 @@ void ThrowDbError(const db::Error& error, std::string title) {
     case db::ErrorCode::kUnauthorized:
       throw HttpError(401, error.message, std::move(title));
     case db::ErrorCode::kFull:
-      throw HttpError(507, error.message, std::move(title));
+      // Named here: the shared status table (server/src/http/problem.cpp) has no 507 and would
+      // title it "Error", where docs/API.md promises the reason phrase.
+      throw HttpError(507, error.message,
+                      title.empty() ? "Insufficient Storage" : std::move(title));
     case db::ErrorCode::kBusy:
       throw HttpError(503, "the database is busy; try again", "Service Unavailable");
     case db::ErrorCode::kStorage:
