@@ -1,5 +1,6 @@
 // The `pintag` command: one executable, one subcommand per job.
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -22,6 +23,10 @@ int StdoutStatus() {
 }  // namespace
 
 int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's exit() only prints
+  // A reader that has gone (`pintag token create | head -c0`) is a write error to handle, not a
+  // signal that ends the command: `token create` must live to revoke the token it could not show.
+  // The server writes with MSG_NOSIGNAL already.
+  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"PinTag: colour fiducial markers that carry Indian pincodes", "pintag"};
   app.require_subcommand(1);
   pintag::cli::AddRegisteredCommands(app);

@@ -1,13 +1,19 @@
 // A `pintag` command whose output cannot be written fails (exit 1, saying so) instead of reporting
 // success. /dev/full stands in for a full disk: opening it works, every write fails with ENOSPC.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "serve_fixture.hpp"
 
@@ -17,7 +23,7 @@ namespace {
 constexpr const char* kFull = "/dev/full";
 
 TEST(CliWrites, RenderToAFullDiskFailsForPngAsForSvg) {
-  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
   const TempDir dir;
   for (const char* name : {"full.png", "full.svg"}) {
     const std::string path = dir.file(name);
@@ -35,7 +41,7 @@ TEST(CliWrites, RenderToAFullDiskFailsForPngAsForSvg) {
 }
 
 TEST(CliWrites, KeysExportToAFullDiskFails) {
-  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
   const TempDir dir;
   const std::string db = dir.file("copy.db");
   std::filesystem::copy_file(SeededTemplate(), db);
@@ -44,17 +50,9 @@ TEST(CliWrites, KeysExportToAFullDiskFails) {
   EXPECT_NE(run.out.find("cannot write the key table"), std::string::npos) << run.out;
 }
 
-TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
-  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
-  const TempDir dir;
-  const std::string db = dir.file("copy.db");
-  std::filesystem::copy_file(SeededTemplate(), db);
-  const CommandResult run = RunPintagWithStdoutTo("token create --role admin --db " + db, kFull);
-  EXPECT_EQ(run.status, 1) << run.out;
-  EXPECT_NE(run.out.find("the token is revoked"), std::string::npos) << run.out;
-
-  // Every token in the database (the one just made among them) is revoked: nobody holds a usable
-  // secret that was never shown.
+// Every token in the database at `db` (the one just made among them) is revoked: nobody holds a
+// usable secret that was never shown.
+void ExpectOneAdminTokenRevoked(const TempDir& dir, const std::string& db) {
   const CommandResult list = RunPintagWithStdoutTo("token list --db " + db, dir.file("list.csv"));
   ASSERT_EQ(list.status, 0) << list.out;
   std::istringstream rows(ReadFile(dir.file("list.csv")));
@@ -70,10 +68,63 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
   EXPECT_EQ(tokens, 1);
 }
 
+TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
+  ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult run = RunPintagWithStdoutTo("token create --role admin --db " + db, kFull);
+  EXPECT_EQ(run.status, 1) << run.out;
+  EXPECT_NE(run.out.find("the token is revoked"), std::string::npos) << run.out;
+  ExpectOneAdminTokenRevoked(dir, db);
+}
+
+// The same through a pipe whose reader has gone (`pintag token create | head -c0`): SIGPIPE
+// killed the command before it could revoke the token it had made.
+TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  int pipe_fds[2];
+  ASSERT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
+  ::close(pipe_fds[0]);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
+  const std::string err = dir.file("err.txt");
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  // SIGPIPE at its default in the command, whatever this process does with it.
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t pipe_signal;
+  sigemptyset(&pipe_signal);
+  sigaddset(&pipe_signal, SIGPIPE);
+  posix_spawnattr_setsigdefault(&attributes, &pipe_signal);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
+  const std::string exe = PintagExe();
+  std::vector<std::string> words = {exe, "token", "create", "--role", "admin", "--db", db};
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = ::posix_spawn(&pid, exe.c_str(), &actions, &attributes, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  ::close(pipe_fds[1]);
+  ASSERT_EQ(spawned, 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 1) << ReadFile(err);
+  EXPECT_NE(ReadFile(err).find("the token is revoked"), std::string::npos) << ReadFile(err);
+  ExpectOneAdminTokenRevoked(dir, db);
+}
+
 TEST(CliWrites, DetectImagesToAFullDiskFail) {
   // Small images: OpenCV's writers buffer all of one and never check the close, so cv::imwrite
   // said true, and the debug images' writes were not checked at all.
-  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
   const TempDir dir;
   const std::string blank = dir.file("blank.png");
   ASSERT_TRUE(cv::imwrite(blank, cv::Mat(16, 16, CV_8UC3, cv::Scalar(200, 200, 200))));
@@ -97,7 +148,7 @@ TEST(CliWrites, DetectImagesToAFullDiskFail) {
 }
 
 TEST(CliWrites, AnyCommandWhoseOutputIsLostExitsOne) {
-  if (!std::filesystem::exists(kFull)) GTEST_SKIP() << "no /dev/full";
+  ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
   const TempDir dir;
   const std::string db = dir.file("copy.db");
   std::filesystem::copy_file(SeededTemplate(), db);
