@@ -440,6 +440,26 @@ TEST(Loopback, WaitingConnectionsAreClosedAtTheirTimeoutAndPastTheLimit) {
   }
   // Silent from now on: closed after the 2 s keep-alive timeout.
   EXPECT_TRUE(closed_by_server(newest, 10));
+
+  // The keep-alive timeout bounds the wait for a request's first byte, not its head: one begun
+  // just before it ends has the read timeout (5 s) from its first byte.
+  const int late = pintag::test::ConnectLoopback(server.port());
+  std::this_thread::sleep_for(std::chrono::milliseconds(1700));
+  ASSERT_TRUE(pintag::test::SendAll(late, "GET /livez HTTP/1.1\r\n"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  ASSERT_TRUE(pintag::test::SendAll(late, "Host: x\r\n\r\n"));
+  const std::string late_answer =
+      pintag::test::ReceiveUntil(late, 10, pintag::test::HasWholeResponse);
+  EXPECT_EQ(late_answer.rfind("HTTP/1.1 200", 0), 0U) << late_answer;
+  ::close(late);
+
+  // A client that stops sending halfway through a head is let go at once, not at the read
+  // timeout.
+  const int half = pintag::test::ConnectLoopback(server.port());
+  ASSERT_TRUE(pintag::test::SendAll(half, "GET /livez HTTP/1.1\r\nHost"));
+  ::shutdown(half, SHUT_WR);
+  EXPECT_TRUE(closed_by_server(half, 3));
+  ::close(half);
   for (const int fd : waiting) ::close(fd);
   ::close(newest);
 }

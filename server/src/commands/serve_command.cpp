@@ -5,6 +5,7 @@
 
 #include <malloc.h>
 #include <signal.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -77,6 +78,17 @@ void OneOpenCvThreadPerRequest() {
   cv::setNumThreads(1);
 }
 
+/// Each waiting connection is an open file (up to 1,024 of them, ServerOptions), beside the
+/// databases and photos the workers open. A soft limit of 1,024, systemd's default, ran out before
+/// waiting connections were closed for new ones; the hard limit is the administrator's bound.
+void RaiseOpenFileLimit() {
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_NOFILE, &limit) == 0 && limit.rlim_cur < limit.rlim_max) {
+    limit.rlim_cur = limit.rlim_max;
+    ::setrlimit(RLIMIT_NOFILE, &limit);
+  }
+}
+
 void Run(const ServeArgs& args) {
   // SIGHUP asks a replica to reload; a follower may wait long for its first snapshot below, and
   // SIGHUP's default action would end it there. Handled now, a SIGHUP waits until the signal
@@ -84,6 +96,7 @@ void Run(const ServeArgs& args) {
   ServeSignals signals;
   LimitMallocArenas();
   OneOpenCvThreadPerRequest();
+  RaiseOpenFileLimit();
   server::ConfigureLog(server::ParseLogFormat(args.log_format).value_or(server::LogFormat::kText));
   // An empty address would listen on every interface unasked.
   if (args.bind.empty()) throw UsageError("--bind needs an address, e.g. 127.0.0.1 or 0.0.0.0");

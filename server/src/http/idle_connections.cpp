@@ -1,5 +1,6 @@
 #include "idle_connections.hpp"
 
+#include <poll.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <sys/socket.h>
@@ -25,20 +26,33 @@ void ShutAndClose(int fd) {
 
 HeadState PeekRequestHead(int fd, std::size_t head_budget) {
   thread_local std::vector<char> peeked;
-  peeked.resize(head_budget);
+  const std::size_t enough = std::min(head_budget, kWorkerTakesHeadBytes);
+  peeked.resize(enough);
   ssize_t n = 0;
   do {
     n = ::recv(fd, peeked.data(), peeked.size(), MSG_PEEK | MSG_DONTWAIT);
   } while (n < 0 && errno == EINTR);
   if (n < 0)
     return errno == EAGAIN || errno == EWOULDBLOCK ? HeadState::kNothing : HeadState::kReady;
-  if (n == 0 || static_cast<std::size_t>(n) == head_budget) return HeadState::kReady;
+  // Past kWorkerTakesHeadBytes a worker reads the rest (and refuses a head past the budget with
+  // 431): a queue that never holds the whole budget (a small receive window) would otherwise keep
+  // such a head waiting, and each peek of a head sent in small pieces copies all of it again.
+  if (n == 0 || static_cast<std::size_t>(n) >= enough) {
+    return HeadState::kReady;
+  }
   const std::string_view head(peeked.data(), static_cast<std::size_t>(n));
   // cpp-httplib takes a bare LF as a line's end too.
   const bool whole = head.find("\r\n\r\n") != std::string_view::npos ||
                      head.find("\n\n") != std::string_view::npos ||
                      head.find("\n\r\n") != std::string_view::npos;
-  return whole ? HeadState::kReady : HeadState::kPart;
+  if (whole) return HeadState::kReady;
+  // A peer that stopped sending halfway goes to a worker, which reads to the end and closes: the
+  // rest of its head will never come.
+  pollfd peer{fd, POLLRDHUP, 0};
+  if (::poll(&peer, 1, 0) > 0 && (peer.revents & (POLLRDHUP | POLLHUP | POLLERR)) != 0) {
+    return HeadState::kReady;
+  }
+  return HeadState::kPart;
 }
 
 IdleConnections::IdleConnections(Ready ready, Limits limits)
@@ -105,13 +119,15 @@ std::size_t IdleConnections::parked() const {
 
 void IdleConnections::closeLocked(int fd) {
   ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);
-  const auto it = waiting_.find(fd);
-  const bool head_began = it != waiting_.end() && it->second.head_began;
   waiting_.erase(fd);
-  if (head_began && !closed_ && limits_.answer_head_timeout) {
-    // What the client sent is then read and dropped, so that closing does not reset the
-    // connection under the answer.
+  ShutAndClose(fd);
+}
+
+void IdleConnections::answerTimeoutAndClose(int fd) {
+  if (limits_.answer_head_timeout) {
     limits_.answer_head_timeout(fd);
+    // What the client sent is read and dropped, so that closing does not reset the connection
+    // under the answer (bytes that arrive later still may).
     ::shutdown(fd, SHUT_WR);
     std::array<char, 4096> sink{};
     while (::recv(fd, sink.data(), sink.size(), MSG_DONTWAIT) > 0) {
@@ -123,6 +139,7 @@ void IdleConnections::closeLocked(int fd) {
 void IdleConnections::run() {
   std::array<epoll_event, 64> events{};
   std::vector<std::pair<int, std::size_t>> ready;
+  std::vector<int> timed_out;  ///< heads begun and not ended in time: answered 408
   for (;;) {
     int timeout_ms = 1000;
     {
@@ -139,6 +156,7 @@ void IdleConnections::run() {
         ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), timeout_ms);
     if (n < 0 && errno != EINTR) return;
     ready.clear();
+    timed_out.clear();
     {
       const std::lock_guard lock(mutex_);
       for (int i = 0; i < n; ++i) {
@@ -153,9 +171,9 @@ void IdleConnections::run() {
         const HeadState head = PeekRequestHead(fd, limits_.head_budget);
         if (head != HeadState::kReady) {
           if (head == HeadState::kPart && !it->second.head_began) {
+            // The keep-alive wait ends with the first byte; the head has its own time from it.
             it->second.head_began = true;
-            it->second.deadline =
-                std::min(it->second.deadline, Clock::now() + limits_.head_timeout);
+            it->second.deadline = Clock::now() + limits_.head_timeout;
           }
           continue;
         }
@@ -170,10 +188,19 @@ void IdleConnections::run() {
           continue;
         }
         const int fd = it->first;
+        const bool head_began = it->second.head_began;
         ++it;
-        closeLocked(fd);
+        if (head_began) {
+          ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);
+          waiting_.erase(fd);
+          timed_out.push_back(fd);
+        } else {
+          closeLocked(fd);
+        }
       }
     }
+    // Outside the lock: answering logs, and workers parking connections wait on the lock.
+    for (const int fd : timed_out) answerTimeoutAndClose(fd);
     for (const auto& [fd, left] : ready) ready_(fd, left);
   }
 }

@@ -15,12 +15,17 @@
 
 namespace pintag::server {
 
+/// Bytes of a head after which a worker takes it even unended: far above a real request's head
+/// (a few hundred bytes to a few KiB), well within any receive queue.
+inline constexpr std::size_t kWorkerTakesHeadBytes = std::size_t{32} * 1024;
+
 /// What has arrived of a connection's next request, read without taking it from the socket.
 enum class HeadState {
   kNothing,  ///< no byte yet
   kPart,     ///< part of a head
-  kReady,    ///< a worker should take it: the whole head (up to its blank line, or `head_budget`
-             ///< bytes of it, which the worker refuses), or the peer closed, or the socket failed
+  kReady,    ///< a worker should take it: the whole head (up to its blank line), or
+             ///< kWorkerTakesHeadBytes of it (the worker reads the rest within the budget), or the
+             ///< peer stopped sending, or the socket failed
 };
 HeadState PeekRequestHead(int fd, std::size_t head_budget);
 
@@ -48,8 +53,9 @@ class IdleConnections {
   IdleConnections(const IdleConnections&) = delete;
   IdleConnections& operator=(const IdleConnections&) = delete;
 
-  /// Waits for `fd`'s next request head until `deadline` (or Limits::head_timeout after its first
-  /// bytes, if sooner), then shuts and closes it. After closeAll() it closes `fd` at once.
+  /// Waits for `fd`'s next request until `deadline`, then shuts and closes it; once the request's
+  /// first bytes come, its head has Limits::head_timeout from then instead, and is answered with
+  /// Limits::answer_head_timeout when it runs out. After closeAll() it closes `fd` at once.
   void park(int fd, std::size_t requests_left, Clock::time_point deadline);
   /// Closes every parked connection and each one parked from now on (the server is stopping).
   void closeAll();
@@ -63,9 +69,10 @@ class IdleConnections {
     bool head_began = false;  ///< its deadline is then the head's
   };
   void run();
-  /// Takes `fd` out of the set and closes it, first answering with Limits::answer_head_timeout
-  /// when part of a head came; mutex_ held.
+  /// Takes `fd` out of the set and closes it without a word; mutex_ held.
   void closeLocked(int fd);
+  /// Answers a head that ran out of time (Limits::answer_head_timeout) and closes; no lock held.
+  void answerTimeoutAndClose(int fd);
 
   Ready ready_;
   Limits limits_;
