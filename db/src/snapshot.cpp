@@ -258,22 +258,28 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
       ::close(fd);
       if (!synced) throw std::runtime_error(SystemError("fsync " + temporary.path()));
     }
-    Result<SnapshotInfo> verified = VerifySnapshot(temporary.path());
-    if (!verified) {
-      // Named by `path`, not by the temporary file's random name: a follower logs a repeated
-      // error once.
-      Error error = verified.error();
+    // Errors name `path`, not the temporary file's random name: a follower logs a repeated error
+    // once.
+    const auto named_by_target = [&](std::string message) {
       const std::string named = path + " (as received)";
-      for (std::size_t at = 0; (at = error.message.find(temporary.path(), at)) != std::string::npos;
+      for (std::size_t at = 0; (at = message.find(temporary.path(), at)) != std::string::npos;
            at += named.size()) {
-        error.message.replace(at, temporary.path().size(), named);
+        message.replace(at, temporary.path().size(), named);
       }
-      return error;
-    }
+      return message;
+    };
+    Result<SnapshotInfo> verified = VerifySnapshot(temporary.path());
+    if (!verified) return Error{verified.error().code, named_by_target(verified.error().message)};
     // A registry served now (a replica's last snapshot) is replaced only by one that keeps its
     // keys. A file there that is not a snapshot is replaced, as a damaged one must be.
     if (VerifySnapshot(path)) {
-      if (const std::string lost = KeysNotKept(path, temporary.path()); !lost.empty()) {
+      std::string lost;
+      try {
+        lost = KeysNotKept(path, temporary.path());
+      } catch (const std::exception& e) {
+        return Error{ErrorCode::kStorage, "cannot compare the keys: " + named_by_target(e.what())};
+      }
+      if (!lost.empty()) {
         return Error{ErrorCode::kConflict,
                      "the snapshot received does not keep the keys of " + path + ": " + lost +
                          ". Labels printed with them would be misrouted, so " + path +

@@ -519,7 +519,8 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServ
                                    const std::function<void(db::Connection&)>& change) {
     const int port = primary_->port();
     ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
-    std::filesystem::copy_file(from, primary_db_, std::filesystem::copy_options::overwrite_existing);
+    std::filesystem::copy_file(from, primary_db_,
+                               std::filesystem::copy_options::overwrite_existing);
     {
       db::Connection restored(primary_db_, {.create = false});
       restored.execute("PRAGMA journal_mode=WAL");
@@ -574,9 +575,8 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServ
 
   // Restored from the older backup, which lacks 999202: refused, named, the replica still ready.
   const std::int64_t key_of_999202 = Body(replica.Get("/api/v1/pincodes/999202"))["key"];
-  restore_primary(before_999202, "primary-old", [&](db::Connection& restored) {
-    add_directly(restored, 999204);
-  });
+  restore_primary(before_999202, "primary-old",
+                  [&](db::Connection& restored) { add_directly(restored, 999204); });
   const auto follow = [&] { return Body(replica.Get("/api/v1/registry"))["follow"]; };
   const auto follow_error = [&] {
     const json status = follow();
@@ -594,6 +594,22 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServ
   // Logged just after the status is set.
   WaitUntil([&] { return stderrOf("replica-0").find("keep the keys") != std::string::npos; });
   EXPECT_NE(stderrOf("replica-0").find("does not keep the keys"), std::string::npos);
+  // Not downloaded again at every poll (200 ms) while the primary serves the same registry: the
+  // follower names the refused ETag, gets 304s, and the refusal stands.
+  const auto snapshot_answers = [&](const std::string& status) {
+    const std::string log = stderrOf("primary-old");
+    const std::string line = "path=/api/v1/registry/snapshot status=" + status;
+    std::size_t count = 0;
+    for (std::size_t at = 0; (at = log.find(line, at)) != std::string::npos; at += line.size()) {
+      ++count;
+    }
+    return count;
+  };
+  const std::size_t sent_before = snapshot_answers("200");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_EQ(snapshot_answers("200"), sent_before);
+  EXPECT_GE(snapshot_answers("304"), 3U);
+  EXPECT_NE(follow_error().find("keep the keys"), std::string::npos) << follow_error();
 
   // The way back SCALING.md gives: the primary restored from the replica's own file.
   restore_primary(replicaDb(0), "primary-from-replica", [](db::Connection&) {});

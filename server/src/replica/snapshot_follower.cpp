@@ -67,7 +67,9 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   // The ETag is known for a snapshot fetched in this run; one found on disk at start is fetched
   // once more, since the primary may have been restored since it was written.
   const bool holds_installed = have && *have == installed_version_ && !installed_etag_.empty();
-  if (holds_installed) headers.emplace("If-None-Match", installed_etag_);
+  std::string none_match = holds_installed ? installed_etag_ : "";
+  if (!refused_etag_.empty()) none_match += (none_match.empty() ? "" : ", ") + refused_etag_;
+  if (!none_match.empty()) headers.emplace("If-None-Match", none_match);
   // The body is received here, not by the client, so that a body past max_bytes is refused
   // as it arrives (a primary, or whatever answers at its URL, sent 2 GB and got it all held).
   std::string body;
@@ -97,7 +99,12 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url + " did not answer: " +
                                                httplib::to_string(answer.error())};
   }
-  if (answer->status == 304) return std::optional<db::SnapshotInfo>{};
+  if (answer->status == 304) {
+    if (!refused_etag_.empty() && answer->get_header_value("ETag") == refused_etag_) {
+      return refused_error_;
+    }
+    return std::optional<db::SnapshotInfo>{};
+  }
   // The primary is sending as many snapshots as it will at once: asked again at the next poll,
   // not an error (it would log and mark the follower failing after every change).
   if (answer->status == 503 && answer->has_header("Retry-After")) {
@@ -112,7 +119,16 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   // A primary (or a proxy) that ignores If-None-Match sends what is already served.
   if (holds_installed && etag == installed_etag_) return std::optional<db::SnapshotInfo>{};
   db::Result<db::SnapshotInfo> installed = db::InstallSnapshot(body, options_.path);
-  if (!installed) return installed.error();
+  if (!installed) {
+    // A refusal for what the snapshot holds stands until the primary serves another; a download
+    // that did not arrive whole is fetched again.
+    if (installed.error().code == db::ErrorCode::kConflict && !etag.empty()) {
+      refused_etag_ = etag;
+      refused_error_ = installed.error();
+    }
+    return installed.error();
+  }
+  refused_etag_.clear();
   installed_etag_ = etag;
   installed_version_ = installed->registry_version;
   return std::optional<db::SnapshotInfo>{*installed};

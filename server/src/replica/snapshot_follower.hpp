@@ -73,6 +73,10 @@ class SnapshotFollower {
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
   std::string installed_etag_;
   std::int64_t installed_version_ = -1;
+  /// A snapshot refused for what it holds (it does not keep the keys served), and why: not
+  /// fetched again while the primary still serves it, and the refusal stands meanwhile.
+  std::string refused_etag_;
+  db::Error refused_error_{db::ErrorCode::kConflict, ""};
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
