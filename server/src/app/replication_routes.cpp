@@ -1,12 +1,14 @@
 // GET /api/v1/registry and GET /api/v1/registry/snapshot: which registry version a server
 // serves, and the primary's snapshot for its read-only replicas (docs/SCALING.md).
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <optional>
 #include <string>
 #include <string_view>
 
+#include "app/entity_tags.hpp"
 #include "app/routes.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "replica/snapshot_follower.hpp"
@@ -24,24 +26,13 @@ std::string UtcTimestamp(std::chrono::system_clock::time_point t) {
   return text;
 }
 
-/// RFC 9110 section 13.1.2: `*`, or a comma-separated list of entity tags, weak ones (W/"…")
-/// compared by their opaque part, as If-None-Match's weak comparison does.
-bool NoneMatchNames(std::string_view header, std::string_view etag) {
-  const auto trimmed = [](std::string_view text) {
-    while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-    while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-    return text;
-  };
-  if (trimmed(header) == "*") return true;
-  while (!header.empty()) {
-    const std::size_t comma = header.find(',');
-    std::string_view tag = trimmed(header.substr(0, comma));
-    if (tag.rfind("W/", 0) == 0) tag.remove_prefix(2);
-    if (tag == etag) return true;
-    if (comma == std::string_view::npos) break;
-    header.remove_prefix(comma + 1);
-  }
-  return false;
+/// If-None-Match's weak comparison (RFC 9110 section 13.1.2): `*`, or a tag whose opaque part is
+/// that of `etag` (quoted), weak or not.
+bool NoneMatchNames(const EntityTagList& none_match, std::string_view etag) {
+  if (none_match.any) return true;
+  return std::any_of(none_match.tags.begin(), none_match.tags.end(), [&](const EntityTag& tag) {
+    return etag.size() == tag.opaque.size() + 2 && etag.substr(1, tag.opaque.size()) == tag.opaque;
+  });
 }
 
 }  // namespace
@@ -76,7 +67,7 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   }
   const db::Result<std::int64_t> live = context.publisher->liveVersion();
   if (!live) throw HttpError(503, "the live database is not readable");
-  const std::optional<std::string> none_match = request.header("If-None-Match");
+  const std::optional<EntityTagList> none_match = EntityTagsHeader(request, "If-None-Match");
   const std::string& epoch = context.publisher->epoch();
   // "<version>" alone is what followers before the epoch send: still current for them, so that
   // during a rolling upgrade they are not sent the whole registry on every poll.
