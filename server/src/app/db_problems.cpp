@@ -16,16 +16,13 @@ void ThrowDbError(const db::Error& error, std::string title) {
     case db::ErrorCode::kConflict:
       throw HttpError(409, error.message, std::move(title));
     case db::ErrorCode::kPrecondition:
-      throw HttpError(412, error.message, title.empty() ? "Precondition Failed" : std::move(title));
+      throw HttpError(412, error.message, std::move(title));
     case db::ErrorCode::kTooLarge:
       throw HttpError(413, error.message, std::move(title));
     case db::ErrorCode::kUnauthorized:
       throw HttpError(401, error.message, std::move(title));
     case db::ErrorCode::kFull:
-      // Named here: the shared status table (server/src/http/problem.cpp) has no 507 and would
-      // title it "Error", where docs/API.md promises the reason phrase.
-      throw HttpError(507, error.message,
-                      title.empty() ? "Insufficient Storage" : std::move(title));
+      throw HttpError(507, error.message, std::move(title));
     case db::ErrorCode::kBusy:
       throw HttpError(503, "the database is busy; try again", "Service Unavailable");
     case db::ErrorCode::kStorage:
