@@ -170,6 +170,30 @@ TEST_F(LoopbackTest, ProblemFor413WithChunkedBody) {
   EXPECT_NE(answer.find(R"("bytes":10)"), std::string::npos) << answer;
 }
 
+// A body in a transfer coding the server does not read (gzip) was read until the read timeout (5 s)
+// and then answered 400. It is refused at once, 501 as RFC 9112 asks, and the connection closed.
+TEST_F(LoopbackTest, ProblemFor501WithATransferCodingOtherThanChunked) {
+  std::string head = ChunkedUploadHead();
+  head.replace(head.find("chunked"), 7, "gzip");
+  const auto start = std::chrono::steady_clock::now();
+  const std::string answer = raw(head + "abc");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 4.0);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 501", 0), 0U) << answer.substr(0, 300);
+  EXPECT_NE(answer.find("application/problem+json"), std::string::npos) << answer;
+  EXPECT_NE(answer.find("transfer coding this server does not read (gzip)"), std::string::npos)
+      << answer;
+  EXPECT_NE(answer.find("Connection: close"), std::string::npos) << answer;
+}
+
+// Ranges are not served, and answers say so (cpp-httplib said "Accept-Ranges: bytes").
+TEST_F(LoopbackTest, AnswersSayRangesAreNotServed) {
+  const httplib::Result answer = client_->Get("/livez", {{"Range", "bytes=0-3"}});
+  ASSERT_TRUE(answer) << httplib::to_string(answer.error());
+  EXPECT_EQ(answer->status, 200);
+  EXPECT_EQ(answer->body, R"({"status":"ok"})");
+  EXPECT_EQ(answer->get_header_value("Accept-Ranges"), "none");
+}
+
 // After a 413 the rest of the body stays unread on the connection. A request hidden there, right
 // after the chunk that crossed the limit, must not be answered as if it were a request.
 TEST_F(LoopbackTest, UnreadBodyIsNotParsedAsARequest) {

@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -200,6 +201,18 @@ bool AnnouncesBody(const httplib::Request& req) {
          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
 }
 
+/// A Transfer-Encoding other than chunked alone (gzip, say): cpp-httplib reads such a body until
+/// the read timeout and then answers 400; RFC 9112 (section 6.1) asks for 501 at once.
+bool UnknownTransferCoding(const httplib::Request& req) {
+  if (!req.has_header("Transfer-Encoding")) return false;
+  std::string coding = req.get_header_value("Transfer-Encoding");
+  std::transform(coding.begin(), coding.end(), coding.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::size_t begin = coding.find_first_not_of(" \t");
+  const std::size_t end = coding.find_last_not_of(" \t");
+  return begin == std::string::npos || coding.substr(begin, end - begin + 1) != "chunked";
+}
+
 bool AmbiguousLength(const httplib::Request& req) {
   const std::size_t lengths = req.get_header_value_count("Content-Length");
   return lengths > 1 || (lengths == 1 && req.has_header("Transfer-Encoding"));
@@ -314,6 +327,8 @@ struct HttpServer::Impl {
                                            ? std::optional(req.get_header_value("X-Request-Id"))
                                            : std::nullopt);
     res.set_header("X-Request-Id", t_state.request_id);
+    // cpp-httplib says "Accept-Ranges: bytes" unless told otherwise, and ranges are not served.
+    res.set_header("Accept-Ranges", "none");
     // Every answer is whole: cpp-httplib 0.11.4 cut API answers to a Range with status 200, and
     // answered an unsatisfiable one without a body. Ignoring Range is allowed (RFC 9110, 14.2).
     const_cast<httplib::Request&>(req).ranges.clear();  // cpp-httplib's own object, not const
@@ -330,6 +345,12 @@ struct HttpServer::Impl {
           ProblemResponse(400,
                           "the request declares its body's length twice (Content-Length "
                           "with another Content-Length or with Transfer-Encoding)");
+    }
+    if (!t_state.admission.rejection && UnknownTransferCoding(req)) {
+      t_state.admission.rejection = ProblemResponse(
+          501, "the request's body is sent in a transfer coding this server does not read (" +
+                   req.get_header_value("Transfer-Encoding").substr(0, 100) +
+                   "); send it with Content-Length or chunked");
     }
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
