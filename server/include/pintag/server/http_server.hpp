@@ -24,7 +24,7 @@ struct ServerOptions {
   /// Connections waiting for a request at once (each an open socket, no thread); past this the
   /// one whose keep-alive wait ends first is closed.
   int max_idle_connections = 1024;
-  int listen_backlog = 128;           ///< pending connections queued by the kernel
+  int listen_backlog = 128;  ///< pending connections queued by the kernel
 };
 
 class HttpServer {
