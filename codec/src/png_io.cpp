@@ -3,9 +3,9 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
+#include <string_view>
+
+#include "pintag/codec/file_output.hpp"
 
 namespace pintag {
 namespace {
@@ -49,23 +49,15 @@ std::vector<std::uint8_t> EncodePng(const RgbImage& image, double dpi, std::stri
 }
 
 bool WritePng(const RgbImage& image, const std::string& path, double dpi, std::string* error) {
-  // Encoded in memory and written here: OpenImageIO's PNG writer does not check the close of its
-  // file, so on a full disk (the last buffer never written) it reported success.
+  // Encoded in memory and written whole: OpenImageIO's PNG writer does not check the close of
+  // its file, so on a full disk (the last buffer never written) it reported success.
   const std::vector<std::uint8_t> bytes = EncodePng(image, dpi, error);
   if (bytes.empty()) return false;
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) {
-    *error = "cannot write PNG " + path + ": " + std::strerror(errno);
-    return false;
-  }
-  int failure = 0;
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) failure = errno;
-  if (std::fclose(file) != 0 && failure == 0) failure = errno;
-  if (failure != 0) {
-    *error = "cannot write PNG " + path + ": " + std::strerror(failure);
-    return false;
-  }
-  return true;
+  const std::string failure = WriteWholeFile(
+      path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  if (failure.empty()) return true;
+  *error = "cannot write PNG " + path + ": " + failure;
+  return false;
 }
 
 }  // namespace pintag

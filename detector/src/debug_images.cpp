@@ -1,14 +1,12 @@
 #include "debug_images.hpp"
 
-#include <cerrno>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "pintag/codec/file_output.hpp"
 #include "pintag/detector/tag_outline.hpp"
 
 namespace pintag::stage {
@@ -16,8 +14,7 @@ namespace pintag::stage {
 namespace {
 
 /// `image` as a PNG file at `path`: "" when written, else why not. Encoded in memory and written
-/// here because cv::imwrite does not check its file's close, so a full disk passed for a small
-/// image (its bytes all still buffered).
+/// whole because cv::imwrite does not check its file's close (WriteWholeFile).
 std::string WritePngFile(const std::string& path, const cv::Mat& image) {
   std::vector<std::uint8_t> bytes;
   try {
@@ -25,12 +22,8 @@ std::string WritePngFile(const std::string& path, const cv::Mat& image) {
   } catch (const cv::Exception& e) {
     return e.what();
   }
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) return std::strerror(errno);
-  int failure = 0;
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) failure = errno;
-  if (std::fclose(file) != 0 && failure == 0) failure = errno;
-  return failure == 0 ? std::string() : std::strerror(failure);
+  return WriteWholeFile(
+      path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/option_checks.hpp"
+#include "pintag/codec/file_output.hpp"
 #include "pintag/codec/label.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
@@ -73,9 +74,8 @@ void DrawOverlay(cv::Mat image, const DetectResult& result, double tag_size_m) {
   }
 }
 
-/// The overlay in the format its extension names. Encoded in memory and written here with every
-/// error checked: cv::imwrite does not check its file's close, so on a full disk a small overlay
-/// (all its bytes still buffered) was reported written.
+/// The overlay in the format its extension names, encoded in memory and written whole:
+/// cv::imwrite does not check its file's close (WriteWholeFile).
 void WriteOverlay(const std::string& path, const cv::Mat& image) {
   const std::string ext = std::filesystem::path(path).extension().string();
   std::vector<std::uint8_t> bytes;
@@ -89,15 +89,9 @@ void WriteOverlay(const std::string& path, const cv::Mat& image) {
     throw std::runtime_error("cannot write overlay " + path + ": no image format for '" + ext +
                              "'");
   }
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  int failure = file == nullptr ? errno : 0;
-  if (file != nullptr) {
-    if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) failure = errno;
-    if (std::fclose(file) != 0 && failure == 0) failure = errno;
-  }
-  if (failure != 0) {
-    throw std::runtime_error("cannot write overlay " + path + ": " + std::strerror(failure));
-  }
+  const std::string failure = WriteWholeFile(
+      path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  if (!failure.empty()) throw std::runtime_error("cannot write overlay " + path + ": " + failure);
 }
 
 /// What the command line alone can tell is wrong, checked before the photo is read: a usage error

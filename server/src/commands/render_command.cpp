@@ -3,13 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
 
 #include "commands/commands.hpp"
 #include "commands/option_checks.hpp"
+#include "pintag/codec/file_output.hpp"
 #include "pintag/codec/png_io.hpp"
 #include "pintag/codec/tag_raster.hpp"
 #include "pintag/codec/tag_svg.hpp"
@@ -54,9 +54,11 @@ void Run(const RenderArgs& args) {
   if (ext == ".svg") {
     const TagSvgOptions options = args.size_mm ? TagSvgOptions{*args.size_mm, "mm"}
                                                : TagSvgOptions{double(*args.size_px), "px"};
-    std::ofstream out(args.output, std::ios::binary);
-    out << RenderTagSvg(key, options);
-    if (!out.flush()) throw std::runtime_error("cannot write " + args.output);
+    // Written whole: the stream's flush was checked, its close not (WriteWholeFile).
+    if (const std::string failure = WriteWholeFile(args.output, RenderTagSvg(key, options));
+        !failure.empty()) {
+      throw std::runtime_error("cannot write " + args.output + ": " + failure);
+    }
   } else {
     const int square_px = args.size_px
                               ? *args.size_px
