@@ -207,11 +207,9 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
       items.push_back({PincodeValue(pins[i], where), std::nullopt});
       continue;
     }
-    for (const auto& [field, value] : pins[i].items()) {
-      if (field != "pincode" && field != "office") {
-        throw HttpError(400, where + " has an unknown field '" + field.substr(0, 40) +
-                                 "'; an item is a pincode or {\"pincode\", \"office\"}");
-      }
+    if (const std::optional<std::string> field = UnknownField(pins[i], {"pincode", "office"})) {
+      throw HttpError(400, where + " has an unknown field '" + field->substr(0, 40) +
+                               "'; an item is a pincode or {\"pincode\", \"office\"}");
     }
     if (!pins[i].contains("pincode")) throw HttpError(400, where + " needs a 'pincode'");
     Item item{PincodeValue(pins[i]["pincode"], where + ".pincode"), std::nullopt};

@@ -217,6 +217,14 @@ nlohmann::json JsonBody(const HttpRequest& request) {
   return body;
 }
 
+std::optional<std::string> UnknownField(const nlohmann::json& object,
+                                        std::initializer_list<std::string_view> known) {
+  for (const auto& [field, value] : object.items()) {
+    if (std::find(known.begin(), known.end(), field) == known.end()) return field;
+  }
+  return std::nullopt;
+}
+
 Pincode PincodeValue(const nlohmann::json& value, std::string_view where) {
   std::string text;
   if (value.is_string()) {

@@ -5,6 +5,7 @@
 // accepts. The OpenAPI notes of the shared query parameters sit beside their parsers.
 
 #include <cstdint>
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -64,6 +65,10 @@ inline constexpr std::size_t kMaxJsonItems = 250'000;
 /// kMaxJsonDepth or has a key twice in one object (naming it); 413 when it holds more than
 /// kMaxJsonItems.
 nlohmann::json JsonBody(const server::HttpRequest& request);
+/// The first field of JSON object `object` that `known` does not list, if any: the write routes
+/// refuse it, since a misspelt field would otherwise be dropped without a word.
+std::optional<std::string> UnknownField(const nlohmann::json& object,
+                                        std::initializer_list<std::string_view> known);
 /// A pincode given as a JSON string or number; `where` names it in the problem ("pincodes[3]").
 Pincode PincodeValue(const nlohmann::json& value, std::string_view where);
 /// A label size from its text; 400 "Bad Label Size".

@@ -118,12 +118,10 @@ HttpResponse PostPincode(const AppContext& context, const HttpRequest& request) 
   const json body = JsonBody(request);
   if (!body.is_object() || !body.contains("pincode"))
     throw HttpError(400, R"(expected {"pincode": "NNNNNN", "offices": [{"name": …}, …]})");
-  for (const auto& [field, value] : body.items()) {
-    if (field != "pincode" && field != "offices") {
-      throw HttpError(400, "unknown field '" + field +
-                               "': a new pincode has 'pincode' and "
-                               "'offices' only (its key is allocated)");
-    }
+  if (const std::optional<std::string> field = UnknownField(body, {"pincode", "offices"})) {
+    throw HttpError(400, "unknown field '" + *field +
+                             "': a new pincode has 'pincode' and 'offices' only (its key is "
+                             "allocated)");
   }
   const Pincode pincode = PincodeValue(body["pincode"], "'pincode'");
   std::vector<db::PostOffice> offices;

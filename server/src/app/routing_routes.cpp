@@ -43,14 +43,11 @@ HttpError BadPlan(std::string detail) {
   ThrowDbError(error, error.code == db::ErrorCode::kInvalid ? "Bad Sort Plan" : "");
 }
 
-/// Refuses a field `object` has that `known` does not list: a misspelt field would otherwise be
-/// dropped without a word, and the plan saved without what it was meant to say.
+/// Refuses a field `object` has that `known` does not list (UnknownField), as a bad plan.
 void RefuseUnknownFields(const json& object, std::initializer_list<std::string_view> known,
                          const std::string& where) {
-  for (const auto& [field, value] : object.items()) {
-    if (std::find(known.begin(), known.end(), field) == known.end()) {
-      throw BadPlan(where + "unknown field '" + field.substr(0, 40) + "'");
-    }
+  if (const std::optional<std::string> field = UnknownField(object, known)) {
+    throw BadPlan(where + "unknown field '" + field->substr(0, 40) + "'");
   }
 }
 

@@ -24,11 +24,9 @@ HttpResponse PostToken(const AppContext& context, const HttpRequest& request) {
     throw HttpError(400, R"(expected {"role": "admin|counter|scanner|replica", "label": "…"})");
   }
   // Refused, not dropped: a misspelt "lable" would otherwise issue a token with no label.
-  for (const auto& [field, value] : body.items()) {
-    if (field != "role" && field != "label") {
-      throw HttpError(
-          400, "unknown field '" + field.substr(0, 40) + "': a token has 'role' and 'label' only");
-    }
+  if (const std::optional<std::string> field = UnknownField(body, {"role", "label"})) {
+    throw HttpError(
+        400, "unknown field '" + field->substr(0, 40) + "': a token has 'role' and 'label' only");
   }
   const auto role = db::ParseRole(body["role"].get<std::string>());
   if (!role) throw HttpError(400, "role must be admin, counter, scanner or replica");
