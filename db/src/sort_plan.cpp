@@ -1,16 +1,13 @@
 #include "pintag/db/sort_plan.hpp"
 
-#include <openssl/evp.h>
-
 #include <algorithm>
-#include <array>
 #include <map>
 #include <set>
-#include <stdexcept>
 
 #include "guard.hpp"
 #include "pintag/db/csv.hpp"
 #include "pintag/db/text.hpp"
+#include "sha256.hpp"
 #include "sort_plan_internal.hpp"
 
 namespace pintag::db {
@@ -216,16 +213,13 @@ std::string PlanVersion(const SortPlan& plan) {
     AppendField(bytes, rule.prefix);
     AppendField(bytes, rule.bin);
   }
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int size = 0;
-  if (EVP_Digest(bytes.data(), bytes.size(), digest.data(), &size, EVP_sha256(), nullptr) != 1) {
-    throw std::runtime_error("SHA-256 failed");
-  }
+  const std::string digest = detail::Sha256({bytes});
   static constexpr char kHex[] = "0123456789abcdef";
   std::string version;
-  for (unsigned int i = 0; i < 16 && i < size; ++i) {
-    version += kHex[digest[i] >> 4];
-    version += kHex[digest[i] & 15];
+  for (std::size_t i = 0; i < 16; ++i) {
+    const auto byte = static_cast<unsigned char>(digest[i]);
+    version += kHex[byte >> 4];
+    version += kHex[byte & 15];
   }
   return version;
 }

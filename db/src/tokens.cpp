@@ -1,10 +1,8 @@
 #include "pintag/db/tokens.hpp"
 
 #include <openssl/crypto.h>
-#include <openssl/evp.h>
 #include <sys/random.h>
 
-#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -12,6 +10,7 @@
 
 #include "guard.hpp"
 #include "pintag/db/text.hpp"
+#include "sha256.hpp"
 
 namespace pintag::db {
 namespace {
@@ -20,7 +19,6 @@ using detail::Guard;
 
 constexpr std::size_t kSaltBytes = 16;
 constexpr std::size_t kSecretBytes = 32;
-constexpr std::size_t kHashBytes = 32;
 
 std::string RandomBytes(std::size_t count) {
   std::string bytes(count, '\0');
@@ -55,16 +53,7 @@ std::string Base64Url(std::string_view bytes) {
 }
 
 std::string Sha256(std::string_view salt, std::string_view secret) {
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int size = 0;
-  EVP_MD_CTX* context = EVP_MD_CTX_new();
-  const bool ok = context != nullptr && EVP_DigestInit_ex(context, EVP_sha256(), nullptr) == 1 &&
-                  EVP_DigestUpdate(context, salt.data(), salt.size()) == 1 &&
-                  EVP_DigestUpdate(context, secret.data(), secret.size()) == 1 &&
-                  EVP_DigestFinal_ex(context, digest.data(), &size) == 1;
-  EVP_MD_CTX_free(context);
-  if (!ok || size != kHashBytes) throw std::runtime_error("SHA-256 failed");
-  return std::string(reinterpret_cast<const char*>(digest.data()), size);
+  return detail::Sha256({salt, secret});
 }
 
 TokenInfo ReadInfo(const Statement& s) {
