@@ -70,6 +70,7 @@ bool ConnectionStream::is_writable() const {
 
 ssize_t ConnectionStream::read(char* ptr, size_t size) {
   if (!head_read_) {
+    if (head_check_.refusal()) return -1;
     if (handed_out_ >= head_budget_) {
       over_budget_ = true;
       return -1;
@@ -107,6 +108,7 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
   }
   if (!head_read_) {
     handed_out_ += n;
+    if (!head_check_.take(std::string_view(ptr, n))) return -1;
   } else if (size == 1 && *ptr != '\n') {
     ++body_line_bytes_;  // a line being read byte by byte; a larger read is content, not a line
   } else {

@@ -88,6 +88,14 @@ HttpResponse HeadTooLarge() {
                                   " bytes; at most 100 headers of 64 KiB in all are read");
 }
 
+/// Why the head `stream` was reading was refused: its syntax (RequestHeadCheck), or its size.
+HttpResponse HeadRefusal(const ConnectionStream& stream) {
+  if (const auto& refusal = stream.headRefusal()) {
+    return ProblemResponse(refusal->status, refusal->detail);
+  }
+  return HeadTooLarge();
+}
+
 std::chrono::microseconds Microseconds(time_t seconds, time_t microseconds) {
   return std::chrono::seconds(seconds) + std::chrono::microseconds(microseconds);
 }
@@ -117,8 +125,9 @@ class Server : public httplib::Server {
  public:
   using httplib::Server::process_request;
 
-  /// Answers a request whose head ran past the budget before cpp-httplib could answer it (its
-  /// request line was still coming): cpp-httplib then writes nothing.
+  /// Answers a request whose head was refused (past the budget, or its syntax) before
+  /// cpp-httplib could answer it (its request line was still coming): cpp-httplib then writes
+  /// nothing.
   std::function<void(ConnectionStream&)> answer_unended_head;
 
   /// Set before the server listens: where a connection waits between requests.
@@ -142,12 +151,13 @@ class Server : public httplib::Server {
       bool closed = false;
       const bool ok = process_request(stream, left == 1, closed, nullptr);
       t_connection = nullptr;
-      if (stream.overBudget() && !stream.wasAnswered() && answer_unended_head) {
+      const bool head_refused = stream.overBudget() || stream.headRefusal().has_value();
+      if (head_refused && !stream.wasAnswered() && answer_unended_head) {
         answer_unended_head(stream);
       }
-      // An answer that asked to close (a refusal that left a body unread, the head budget):
+      // An answer that asked to close (a refusal that left a body unread, a refused head):
       // cpp-httplib would have read on, taking the unread bytes for the next request.
-      if (stream.overBudget() || stream.closeAfterAnswer()) {
+      if (head_refused || stream.closeAfterAnswer()) {
         LingerBeforeClosing(sock);
         break;
       }
@@ -461,9 +471,9 @@ struct HttpServer::Impl {
       t_state.request_id = RequestIdFrom(std::nullopt);
       res.set_header("X-Request-Id", t_state.request_id);
     }
-    if (t_connection != nullptr && t_connection->overBudget()) {
-      // A head that did not end within the budget: cpp-httplib saw a failed read (400).
-      Apply(HeadTooLarge(), res);
+    if (t_connection != nullptr && (t_connection->overBudget() || t_connection->headRefusal())) {
+      // A head refused while it was read: cpp-httplib saw a failed read (400).
+      Apply(HeadRefusal(*t_connection), res);
       res.set_header("Connection", "close");
       return httplib::Server::HandlerResponse::Handled;
     }
@@ -488,7 +498,8 @@ struct HttpServer::Impl {
   /// What cpp-httplib could not answer: a head over the budget while its request line was still
   /// being read. Written whole here, logged and counted as the logger would.
   void answerUnendedHead(ConnectionStream& stream) {
-    answerWithoutRequest(stream, "Request Header Fields Too Large", HeadTooLarge(), true);
+    const HttpResponse problem = HeadRefusal(stream);
+    answerWithoutRequest(stream, StatusTitle(problem.status), problem, true);
   }
 
   /// A head still coming Limits::head_timeout after its first bytes (IdleConnections): 408,
