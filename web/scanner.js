@@ -40,17 +40,41 @@ function svg(name, attributes, text) {
   return node;
 }
 
-// The answer's corners are in the photo's pixels after its EXIF orientation, as the browser
-// shows it; the SVG's view box is that pixel grid, stretched over the picture.
-function drawOutlines(answer) {
+// A point of the upright photo (the answer's frame, W × H) in the file's stored pixels, for a
+// photo whose EXIF orientation `o` the browser did not apply.
+function uprightToStored(o, W, H, [x, y]) {
+  switch (o) {
+    case 2: return [W - x, y];
+    case 3: return [W - x, H - y];
+    case 4: return [x, H - y];
+    case 5: return [y, x];
+    case 6: return [y, W - x];
+    case 7: return [H - y, W - x];
+    case 8: return [H - y, x];
+    default: return [x, y];
+  }
+}
+
+// The answer's corners are in the photo's pixels after its EXIF orientation; the SVG's view box
+// is the pixel grid the browser shows, stretched over the picture. Browsers apply the
+// orientation of a JPEG but not always of other files (Chromium shows a WebP as stored): when the
+// picture's size is the answer's turned a quarter, the corners are taken back to the stored grid.
+async function drawOutlines(answer) {
   const outlines = $('outlines');
   outlines.replaceChildren();
   const { width, height } = answer.image;
-  outlines.setAttribute('viewBox', `0 0 ${width} ${height}`);
+  const picture = $('scan-photo');
+  await picture.decode().catch(() => {});  // its natural size is known once it is decoded
+  const o = answer.image.exif_orientation || 1;
+  const shownAsStored = o >= 5 && width !== height
+    && picture.naturalWidth === height && picture.naturalHeight === width;
+  const [viewWidth, viewHeight] = shownAsStored ? [height, width] : [width, height];
+  const place = shownAsStored ? (point) => uprightToStored(o, width, height, point) : (point) => point;
+  outlines.setAttribute('viewBox', `0 0 ${viewWidth} ${viewHeight}`);
   outlines.setAttribute('preserveAspectRatio', 'none');
   const fontSize = Math.max(width, height) / 28;
   for (const tag of answer.tags) {
-    const corners = tag.corners_px;
+    const corners = tag.corners_px.map(place);
     const group = svg('g', { class: tag.status, 'data-pincode': tag.pincode || '' });
     group.append(svg('polygon', { points: corners.map(([x, y]) => `${x},${y}`).join(' ') }));
     const centreX = corners.reduce((sum, [x]) => sum + x, 0) / corners.length;
@@ -127,7 +151,8 @@ async function scan() {
       warnings.length ? `No PinTag found: ${warnings.join('; ')}.`
         : 'No PinTag found. Hold the camera steady, fill more of the frame with the label and avoid glare.'));
   }
-  drawOutlines(answer);
+  await drawOutlines(answer);
+  if (run !== scanCount) return;
   showPhoto(photoUrl, n ? `Your photo with ${n === 1 ? 'the tag' : 'the tags'} outlined.` : 'Your photo.',
     `The photo with ${n} ${n === 1 ? 'tag' : 'tags'} outlined${n ? `: ${answer.tags.map((t) => t.pincode || 'unknown key').join(', ')}` : ''}`);
   $('scan-photo').dataset.outlined = '1';

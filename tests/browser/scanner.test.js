@@ -163,3 +163,47 @@ test('a TIFF the browser cannot draw is still read, and the page says why no pho
   await screenshot(page, 'scanner-tiff');
   assert.deepEqual(page.problems, []);
 });
+
+test('the outline sits on the tag of a WebP whose EXIF orientation the browser does not apply', async () => {
+  // A committed 450 × 800 WebP holding the tag of 110001, stored turned a quarter with EXIF
+  // Orientation 6 (also a seed of the image fuzz target). The server reads it upright
+  // (800 × 450); Chromium shows a WebP as stored, so the page must place the corners itself.
+  const webp = join(dirname(fileURLToPath(import.meta.url)), '../../fuzz/corpus/image_detect/tag-exif6.webp');
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/scanner.html`);
+  await page.locator('#token').fill(scannerToken);
+  await page.locator('#photo').setInputFiles(webp);
+  await page.locator('#scan-photo[data-outlined="1"]').waitFor();
+  assert.match(await page.locator('#summary').textContent(), /^1 tag read.*photo 800 × 450/);
+  const outline = await page.evaluate(() => {
+    const img = document.getElementById('scan-photo');
+    const box = document.querySelector('#outlines g[data-pincode="110001"] polygon').getBoundingClientRect();
+    const frame = img.getBoundingClientRect();
+    const canvas = document.createElement('canvas');
+    canvas.width = img.naturalWidth;
+    canvas.height = img.naturalHeight;
+    const context = canvas.getContext('2d');
+    context.drawImage(img, 0, 0);
+    const luma = (x, y) => {
+      const px = Math.round((x - frame.left) * img.naturalWidth / frame.width);
+      const py = Math.round((y - frame.top) * img.naturalHeight / frame.height);
+      const [r, g, b] = context.getImageData(px, py, 1, 1).data;
+      return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    };
+    const cx = box.left + box.width / 2;
+    const cy = box.top + box.height / 2;
+    return {
+      natural: [img.naturalWidth, img.naturalHeight],
+      // just inside each edge of the outline (black square) and just outside it (background)
+      inside: [luma(box.left + box.width * 0.06, cy), luma(box.right - box.width * 0.06, cy),
+        luma(cx, box.top + box.height * 0.06), luma(cx, box.bottom - box.height * 0.06)],
+      outside: [luma(box.left - box.width * 0.1, cy), luma(box.right + box.width * 0.1, cy),
+        luma(cx, box.top - box.height * 0.1), luma(cx, box.bottom + box.height * 0.1)],
+    };
+  });
+  const shown = JSON.stringify(outline);
+  for (const value of outline.inside) assert.ok(value < 80, shown);
+  for (const value of outline.outside) assert.ok(value > 170, shown);
+  await screenshot(page, 'scanner-webp-exif6');
+  assert.deepEqual(page.problems, []);
+});
