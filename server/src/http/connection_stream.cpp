@@ -27,18 +27,24 @@ int Wait(int fd, short events, int timeout_ms) {
   return ready;
 }
 
-/// The peer is still there: nothing to read, or something to read that is not the end of the
-/// stream (a closed or reset connection reads as 0 or an error).
+/// The peer can still read what is written: the connection is not reset. The end of the stream
+/// (a read of 0) is not enough to say it is gone: a client may shut its sending side once its
+/// request is sent (`nc -N`, `socat`) and then wait for the answer. cpp-httplib's check took that
+/// for a closed connection and wrote such a client nothing.
 bool PeerStillThere(int fd) {
-  const int ready = Wait(fd, POLLIN, 0);
+  pollfd entry{fd, POLLIN, 0};
+  int ready = 0;
+  do {
+    ready = ::poll(&entry, 1, 0);
+  } while (ready < 0 && errno == EINTR);
   if (ready == 0) return true;
-  if (ready < 0) return false;
+  if (ready < 0 || (entry.revents & (POLLERR | POLLHUP | POLLNVAL)) != 0) return false;
   char byte = 0;
   ssize_t n = 0;
   do {
-    n = ::recv(fd, &byte, 1, MSG_PEEK);
+    n = ::recv(fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
   } while (n < 0 && errno == EINTR);
-  return n > 0;
+  return n >= 0 || errno == EAGAIN || errno == EWOULDBLOCK;
 }
 
 void NameAndPort(const sockaddr_storage& address, socklen_t length, std::string& ip, int& port) {
@@ -87,19 +93,40 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
     std::memcpy(ptr, buffer_.data() + buffered_begin_, n);
     buffered_begin_ += n;
   } else {
-    if (Wait(fd_, POLLIN, read_timeout_ms_) <= 0) return -1;
-    // Large reads (a body) go straight to the caller; small ones (a head, byte by byte) are
-    // served from one recv into the buffer.
-    const bool direct = size >= buffer_.size();
-    char* into = direct ? ptr : buffer_.data();
+    if (Wait(fd_, POLLIN, read_timeout_ms_) <= 0) {
+      read_end_ = ReadEnd::kTimedOut;
+      return -1;
+    }
     ssize_t got = 0;
-    do {
-      got = ::recv(fd_, into, direct ? size : buffer_.size(), 0);
-    } while (got < 0 && errno == EINTR);
-    if (got <= 0) return got;
-    if (direct) {
+    if (head_read_ || head_ended_) {
+      // The body: exactly the bytes asked for, which cpp-httplib bounds by the body's length (a
+      // chunk-size line it reads one byte at a time).
+      do {
+        got = ::recv(fd_, ptr, size, 0);
+      } while (got < 0 && errno == EINTR);
+      if (got <= 0) {
+        read_end_ = got == 0 ? ReadEnd::kClosed : ReadEnd::kFailed;
+        return got;
+      }
       n = static_cast<std::size_t>(got);
     } else {
+      // The head, which cpp-httplib reads a byte at a time: one peek, then what it holds of the
+      // head is taken into the buffer, never a byte past the head's blank line. A byte past it
+      // could be the next request on the connection (pipelined), and the buffer ends with this
+      // request.
+      do {
+        got = ::recv(fd_, buffer_.data(), buffer_.size(), MSG_PEEK);
+      } while (got < 0 && errno == EINTR);
+      if (got <= 0) {
+        read_end_ = got == 0 ? ReadEnd::kClosed : ReadEnd::kFailed;
+        return got;
+      }
+      const std::size_t take =
+          headBytesToTake(std::string_view(buffer_.data(), static_cast<std::size_t>(got)));
+      do {
+        got = ::recv(fd_, buffer_.data(), take, 0);
+      } while (got < 0 && errno == EINTR);
+      if (got <= 0) return got;
       n = std::min(size, static_cast<std::size_t>(got));
       std::memcpy(ptr, buffer_.data(), n);
       buffered_begin_ = n;
@@ -115,6 +142,25 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
     body_line_bytes_ = 0;
   }
   return static_cast<ssize_t>(n);
+}
+
+std::size_t ConnectionStream::headBytesToTake(std::string_view peeked) {
+  // The head: all of what was peeked, unless the blank line that ends the head is in it.
+  for (std::size_t i = 0; i < peeked.size(); ++i) {
+    const char c = peeked[i];
+    if (c != '\n') {
+      ++head_line_bytes_;
+      head_line_last_ = c;
+      continue;
+    }
+    const bool blank = head_line_bytes_ == 0 || (head_line_bytes_ == 1 && head_line_last_ == '\r');
+    head_line_bytes_ = 0;
+    if (blank) {
+      head_ended_ = true;
+      return i + 1;
+    }
+  }
+  return peeked.size();
 }
 
 ssize_t ConnectionStream::write(const char* ptr, size_t size) {
@@ -139,22 +185,6 @@ void ConnectionStream::get_local_ip_and_port(std::string& ip, int& port) const {
   socklen_t length = sizeof address;
   if (::getsockname(fd_, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
     NameAndPort(address, length, ip, port);
-  }
-}
-
-void LingerBeforeClosing(int fd) {
-  ::shutdown(fd, SHUT_WR);
-  std::array<char, 16384> sink{};
-  std::size_t dropped = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-  while (dropped < (std::size_t{1} << 20) && std::chrono::steady_clock::now() < deadline) {
-    if (Wait(fd, POLLIN, 100) <= 0) continue;
-    ssize_t n = 0;
-    do {
-      n = ::recv(fd, sink.data(), sink.size(), 0);
-    } while (n < 0 && errno == EINTR);
-    if (n <= 0) return;
-    dropped += static_cast<std::size_t>(n);
   }
 }
 

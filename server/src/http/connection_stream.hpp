@@ -14,17 +14,21 @@
 // And it checks the head's syntax as it hands it out (RequestHeadCheck): a head that breaks a
 // rule fails the read that brought the offending byte, and `headRefusal` says why.
 //
-// Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; bytes are
-// read through a 4 KiB buffer (cpp-httplib reads a head one byte at a time); a write first checks
-// that the peer has not gone; the buffer lives as long as the stream, one request.
+// Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; the head is
+// read through a 4 KiB buffer (cpp-httplib reads it one byte at a time); a write first checks
+// that the peer can still read. The buffer lives as long as the stream, one request, so no read
+// takes a byte past the request's own: the next request on the connection (pipelined) stays in
+// the socket. cpp-httplib's stream filled its buffer whole, and with it lost that request.
 
 #include <httplib.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "request_head_check.hpp"
 
@@ -57,6 +61,16 @@ class ConnectionStream final : public httplib::Stream {
   /// True once a read was refused because a line of the body ran past kMaxBodyLineBytes.
   bool bodyLineTooLong() const { return body_line_too_long_; }
 
+  /// Why the last read that failed on the socket failed: no byte within the read timeout, the
+  /// peer closed its sending side, or the socket failed (kNone: none did).
+  enum class ReadEnd { kNone, kTimedOut, kClosed, kFailed };
+  ReadEnd readEnd() const { return read_end_; }
+
+  /// The answer leaves up to `bytes` of the body unread, which the client may still send: the
+  /// connection is drained of that much before it is closed (IdleConnections::drain).
+  void leavesUnread(std::size_t bytes) { unread_ = std::max(unread_, bytes); }
+  std::size_t unread() const { return unread_; }
+
   /// An answer was written (the logger saw it), and whether it asked to close the connection.
   void answered(bool close) {
     answered_ = true;
@@ -66,6 +80,10 @@ class ConnectionStream final : public httplib::Stream {
   bool closeAfterAnswer() const { return close_; }
 
  private:
+  /// How many of `peeked`, the bytes waiting in the socket, a read of the head takes: all, or
+  /// through the blank line that ends the head.
+  std::size_t headBytesToTake(std::string_view peeked);
+
   int fd_;
   int read_timeout_ms_;
   int write_timeout_ms_;
@@ -74,18 +92,18 @@ class ConnectionStream final : public httplib::Stream {
   bool head_read_ = false;
   bool over_budget_ = false;
   RequestHeadCheck head_check_;
+  bool head_ended_ = false;          ///< the head's blank line has been taken from the socket
+  std::size_t head_line_bytes_ = 0;  ///< bytes taken of the head's current line, its LF not yet
+  char head_line_last_ = 0;          ///< the last of them
   std::size_t body_line_bytes_ = 0;  ///< bytes of the body's current line read one at a time
   bool body_line_too_long_ = false;
+  ReadEnd read_end_ = ReadEnd::kNone;
+  std::size_t unread_ = 0;
   bool answered_ = false;
   bool close_ = false;
   std::array<char, 4096> buffer_{};
   std::size_t buffered_begin_ = 0;
   std::size_t buffered_end_ = 0;
 };
-
-/// Closing a socket with unread bytes resets the connection, and a reset may reach the client
-/// before it has read the answer it was sent. So: no more writes, then what the client is still
-/// sending is read and dropped, up to 1 MiB or 1 s. The caller closes the socket after.
-void LingerBeforeClosing(int fd);
 
 }  // namespace pintag::server

@@ -158,8 +158,9 @@ class Server : public httplib::Server {
       // An answer that asked to close (a refusal that left a body unread, a refused head):
       // cpp-httplib would have read on, taking the unread bytes for the next request.
       if (head_refused || stream.closeAfterAnswer()) {
-        LingerBeforeClosing(sock);
-        break;
+        // Closed there, once the client has stopped sending.
+        idle->drain(sock, std::max(kDrainAfterRefusedHead, stream.unread()));
+        return;
       }
       if (!ok || closed) break;
     }
@@ -375,7 +376,7 @@ struct HttpServer::Impl {
     }
     Apply(*t_state.admission.rejection, res);
     // The body, if any, is left unread: close the connection after answering.
-    if (AnnouncesBody(req)) res.set_header("Connection", "close");
+    if (AnnouncesBody(req)) leaveBodyUnread(req, res);
     return httplib::Server::HandlerResponse::Handled;
   }
 
@@ -439,12 +440,12 @@ struct HttpServer::Impl {
       Apply(ProblemResponse(413, "a multipart body may have at most " +
                                      std::to_string(kMaxFormParts) + " parts"),
             res);
-      res.set_header("Connection", "close");
+      leaveBodyUnread(req, res);
       return;
     }
     if (too_large) {
       Apply(tooLarge(), res);
-      res.set_header("Connection", "close");
+      leaveBodyUnread(req, res);
       return;
     }
     if (!ok && t_connection != nullptr && t_connection->bodyLineTooLong()) {
@@ -457,11 +458,50 @@ struct HttpServer::Impl {
       return;
     }
     if (!ok) {
-      Apply(ProblemResponse(400, "the request body could not be read"), res);
+      Apply(bodyNotRead(), res);
       res.set_header("Connection", "close");
       return;
     }
     Apply(api->invoke(t_state.admission, std::move(request)), res);
+  }
+
+  /// Answers with the rest of the request's body unread: the connection is closed after the
+  /// answer, and drained first of as much as the client may still send of a body the server
+  /// would have taken (its declared length, else the body limit), so that it reads the answer
+  /// instead of a reset. At least 64 MiB, so that a photo of any size a phone makes is covered.
+  void leaveBodyUnread(const httplib::Request& req, httplib::Response& res) const {
+    res.set_header("Connection", "close");
+    if (t_connection == nullptr) return;
+    const std::uint64_t cap =
+        std::max<std::uint64_t>(std::uint64_t{64} << 20, api->options().max_body_bytes);
+    std::uint64_t unread = cap;
+    if (req.has_header("Content-Length") && !req.has_header("Transfer-Encoding")) {
+      unread = std::min(cap, req.get_header_value<std::uint64_t>("Content-Length"));
+    }
+    t_connection->leavesUnread(static_cast<std::size_t>(unread) + (std::size_t{64} << 10));
+  }
+
+  /// Why a request's body could not be read, as far as the connection tells: a client on a
+  /// failing mobile link must be able to tell a stalled upload from a malformed one.
+  HttpResponse bodyNotRead() const {
+    const auto end =
+        t_connection != nullptr ? t_connection->readEnd() : ConnectionStream::ReadEnd::kNone;
+    switch (end) {
+      case ConnectionStream::ReadEnd::kTimedOut:
+        return ProblemResponse(408, "the request body stopped arriving: no byte of it came for " +
+                                        std::to_string(options.read_timeout.count()) +
+                                        " s (the read timeout)");
+      case ConnectionStream::ReadEnd::kClosed:
+        return ProblemResponse(400,
+                               "the request body ended early: the client stopped sending before "
+                               "the length it declared");
+      case ConnectionStream::ReadEnd::kFailed:
+      case ConnectionStream::ReadEnd::kNone:
+        break;
+    }
+    return ProblemResponse(400,
+                           "the request body could not be read (a chunked body's coding is "
+                           "malformed, or the connection failed)");
   }
 
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).

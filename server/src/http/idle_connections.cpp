@@ -99,9 +99,68 @@ void IdleConnections::park(int fd, std::size_t requests_left, Clock::time_point 
     ShutAndClose(fd);
     return;
   }
-  waiting_[fd] = Waiting{requests_left, deadline};
+  Waiting waiting;
+  waiting.requests_left = requests_left;
+  waiting.deadline = deadline;
+  waiting_[fd] = waiting;
   const std::uint64_t one = 1;  // the thread's wait may end later than this deadline
   [[maybe_unused]] const ssize_t written = ::write(wake_fd_, &one, sizeof one);
+}
+
+void IdleConnections::drain(int fd, std::size_t max_bytes) {
+  ::shutdown(fd, SHUT_WR);
+  const std::lock_guard lock(mutex_);
+  if (closed_) {
+    ShutAndClose(fd);
+    return;
+  }
+  if (waiting_.size() >= limits_.max_parked) {
+    const auto first_to_end = std::min_element(
+        waiting_.begin(), waiting_.end(),
+        [](const auto& a, const auto& b) { return a.second.deadline < b.second.deadline; });
+    closeLocked(first_to_end->first);
+  }
+  const Clock::time_point now = Clock::now();
+  Waiting waiting;
+  waiting.deadline = now + limits_.drain_quiet;
+  waiting.draining = true;
+  waiting.drain_end = now + limits_.drain_time;
+  waiting.drain_bytes_left = max_bytes;
+  epoll_event event{};
+  event.events = EPOLLIN | EPOLLRDHUP;  // level-triggered: see dropWhatCame
+  event.data.fd = fd;
+  if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) != 0) {
+    ShutAndClose(fd);
+    return;
+  }
+  waiting_[fd] = waiting;
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t written = ::write(wake_fd_, &one, sizeof one);
+}
+
+bool IdleConnections::dropWhatCame(int fd, Waiting& waiting) {
+  constexpr std::size_t kDropPerTurn = std::size_t{256} * 1024;
+  std::array<char, 16384> sink{};
+  bool came = false;
+  for (std::size_t dropped = 0; dropped < kDropPerTurn;) {
+    const std::size_t want = std::min(sink.size(), waiting.drain_bytes_left);
+    if (want == 0) return false;
+    const ssize_t n = ::recv(fd, sink.data(), want, MSG_DONTWAIT);
+    if (n > 0) {
+      waiting.drain_bytes_left -= static_cast<std::size_t>(n);
+      dropped += static_cast<std::size_t>(n);
+      came = true;
+      continue;
+    }
+    if (n == 0) return false;  // the client closed: nothing more to wait for
+    if (errno == EINTR) continue;
+    if (errno != EAGAIN && errno != EWOULDBLOCK) return false;
+    break;
+  }
+  if (came) {
+    waiting.deadline = std::min(Clock::now() + limits_.drain_quiet, waiting.drain_end);
+  }
+  return true;
 }
 
 void IdleConnections::closeAll() {
@@ -124,16 +183,12 @@ void IdleConnections::closeLocked(int fd) {
 }
 
 void IdleConnections::answerTimeoutAndClose(int fd) {
-  if (limits_.answer_head_timeout) {
-    limits_.answer_head_timeout(fd);
-    // What the client sent is read and dropped, so that closing does not reset the connection
-    // under the answer (bytes that arrive later still may).
-    ::shutdown(fd, SHUT_WR);
-    std::array<char, 4096> sink{};
-    while (::recv(fd, sink.data(), sink.size(), MSG_DONTWAIT) > 0) {
-    }
+  if (!limits_.answer_head_timeout) {
+    ShutAndClose(fd);
+    return;
   }
-  ShutAndClose(fd);
+  limits_.answer_head_timeout(fd);
+  drain(fd, kDrainAfterRefusedHead);  // so that closing does not reset it under the answer
 }
 
 void IdleConnections::run() {
@@ -168,6 +223,10 @@ void IdleConnections::run() {
         }
         const auto it = waiting_.find(fd);
         if (it == waiting_.end()) continue;  // closed meanwhile
+        if (it->second.draining) {
+          if (!dropWhatCame(fd, it->second)) closeLocked(fd);
+          continue;
+        }
         const HeadState head = PeekRequestHead(fd, limits_.head_budget);
         if (head != HeadState::kReady) {
           if (head == HeadState::kPart && !it->second.head_began) {
@@ -188,7 +247,7 @@ void IdleConnections::run() {
           continue;
         }
         const int fd = it->first;
-        const bool head_began = it->second.head_began;
+        const bool head_began = it->second.head_began && !it->second.draining;
         ++it;
         if (head_began) {
           ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);

@@ -19,6 +19,10 @@ namespace pintag::server {
 /// (a few hundred bytes to a few KiB), well within any receive queue.
 inline constexpr std::size_t kWorkerTakesHeadBytes = std::size_t{32} * 1024;
 
+/// What drain() drops after refusing a head: a client whose head was refused sends little
+/// after it, and one that keeps sending is not a client to spend the waiting thread on.
+inline constexpr std::size_t kDrainAfterRefusedHead = std::size_t{1} << 20;
+
 /// What has arrived of a connection's next request, read without taking it from the socket.
 enum class HeadState {
   kNothing,  ///< no byte yet
@@ -46,6 +50,9 @@ class IdleConnections {
     /// One that sent nothing is closed without a word when its wait ends.
     std::chrono::milliseconds head_timeout{5000};
     std::function<void(int fd)> answer_head_timeout;
+    /// How long drain() waits for bytes to drop: as nginx's lingering close.
+    std::chrono::milliseconds drain_quiet{5000};
+    std::chrono::milliseconds drain_time{30000};
   };
 
   IdleConnections(Ready ready, Limits limits);
@@ -57,6 +64,14 @@ class IdleConnections {
   /// first bytes come, its head has Limits::head_timeout from then instead, and is answered with
   /// Limits::answer_head_timeout when it runs out. After closeAll() it closes `fd` at once.
   void park(int fd, std::size_t requests_left, Clock::time_point deadline);
+  /// Takes a connection whose answer has been written and whose client may still be sending
+  /// what the server will not read (a body it refused before reading, a head it refused): its
+  /// sending side is shut, what comes is read and dropped here, and it is closed when the client
+  /// closes, when nothing came for Limits::drain_quiet, at Limits::drain_time after this call,
+  /// or after `max_bytes`. Closed with unread bytes, the connection would be reset, and a reset
+  /// can reach the client before it has read the answer: a client sending a refused 6 MB photo
+  /// (one that reads only once it has sent all) saw a broken pipe instead of its 401.
+  void drain(int fd, std::size_t max_bytes);
   /// Closes every parked connection and each one parked from now on (the server is stopping).
   void closeAll();
   /// Connections waiting now.
@@ -66,12 +81,21 @@ class IdleConnections {
   struct Waiting {
     std::size_t requests_left = 0;
     Clock::time_point deadline;
-    bool head_began = false;  ///< its deadline is then the head's
+    bool head_began = false;           ///< its deadline is then the head's
+    bool draining = false;             ///< drain(): read and dropped, never handed to a worker
+    Clock::time_point drain_end;       ///< drain(): Limits::drain_time after it began
+    std::size_t drain_bytes_left = 0;  ///< drain(): bytes still to drop before closing
   };
+  /// Reads and drops what has come on a draining connection, at most kDropPerTurn a call so
+  /// that one fast sender does not keep this thread from the others (a draining connection is
+  /// watched level-triggered: what is left is reported again). False when it is to be closed
+  /// (the client closed, the socket failed, or the byte limit was reached). mutex_ held.
+  bool dropWhatCame(int fd, Waiting& waiting);
   void run();
   /// Takes `fd` out of the set and closes it without a word; mutex_ held.
   void closeLocked(int fd);
-  /// Answers a head that ran out of time (Limits::answer_head_timeout) and closes; no lock held.
+  /// Answers a head that ran out of time (Limits::answer_head_timeout), then drains the
+  /// connection (drain()); no lock held.
   void answerTimeoutAndClose(int fd);
 
   Ready ready_;
