@@ -41,6 +41,21 @@ TEST_F(ApiTest, RoutesWithPathAndQueryParameters) {
   EXPECT_EQ(Json(r)["q"], "world");
 }
 
+// A misspelt query parameter was ignored (a label printed the default plan's bins), and of one
+// given twice the first was taken. A route takes the parameters it documents, each once.
+TEST_F(ApiTest, QueryParametersARouteDoesNotTakeOrGivenTwiceAreRefused) {
+  HttpResponse r = api_.handle(Get("/api/v1/echo/hello?qq=world"));
+  expectProblem(r, 400);
+  EXPECT_EQ(Json(r)["detail"], "unknown query parameter 'qq'; this route takes q");
+  r = api_.handle(Get("/api/v1/echo/hello?q=a&q=b"));
+  expectProblem(r, 400);
+  EXPECT_EQ(Json(r)["detail"], "the query parameter 'q' is given 2 times; give it once");
+  r = api_.handle(Get("/livez?verbose=1"));
+  expectProblem(r, 400);
+  EXPECT_EQ(Json(r)["detail"], "unknown query parameter 'verbose'; this route takes none");
+  EXPECT_EQ(api_.handle(Get("/api/v1/echo/hello?q=")).status, 200);
+}
+
 TEST_F(ApiTest, UnknownPathIs404Problem) {
   expectProblem(api_.handle(Get("/api/v1/nope")), 404);
 }

@@ -383,7 +383,32 @@ TEST_F(ServeTest, DetectRefusesBadUploadsWithProblems) {
   ExpectProblem(client().Post("/api/v1/detect", scanner(), jpeg, "application/json"), 415);
   ExpectProblem(client().Post("/api/v1/detect", scanner(), "", "image/jpeg"), 400);
   httplib::MultipartFormDataItems wrong_field = {{"photo", jpeg, "a.jpg", "image/jpeg"}};
-  ExpectProblem(client().Post("/api/v1/detect", scanner(), wrong_field), 400);
+  json missing = ExpectProblem(client().Post("/api/v1/detect", scanner(), wrong_field), 400);
+  EXPECT_EQ(missing["title"], "No Image");
+  EXPECT_NE(missing["detail"].get<std::string>().find("its parts are named 'photo'"),
+            std::string::npos)
+      << missing;
+  // A part whose name cpp-httplib does not read (the filename first): the answer says how a part
+  // must be named, where it said only that no part was named 'image'.
+  const std::string boundary = "b0undary";
+  const std::string reordered =
+      "--" + boundary +
+      "\r\nContent-Disposition: form-data; filename=\"a.jpg\"; name=\"image\"\r\n"
+      "Content-Type: image/jpeg\r\n\r\n" +
+      jpeg + "\r\n--" + boundary + "--\r\n";
+  missing = ExpectProblem(client().Post("/api/v1/detect", scanner(), reordered,
+                                        "multipart/form-data; boundary=" + boundary),
+                          400);
+  EXPECT_EQ(missing["title"], "No Image");
+  EXPECT_NE(missing["detail"].get<std::string>().find("with the name quoted and first"),
+            std::string::npos)
+      << missing;
+  const httplib::MultipartFormDataItems empty_image = {{"image", "", "a.jpg", "image/jpeg"}};
+  missing = ExpectProblem(client().Post("/api/v1/detect", scanner(), empty_image), 400);
+  EXPECT_EQ(missing["title"], "No Image");
+  EXPECT_NE(missing["detail"].get<std::string>().find("the part named 'image' is empty"),
+            std::string::npos)
+      << missing;
   // Query parameters.
   ExpectProblem(client().Post("/api/v1/detect?tag_size_mm=0", scanner(), jpeg, "image/jpeg"), 400);
   ExpectProblem(client().Post("/api/v1/detect?fx=1000", scanner(), jpeg, "image/jpeg"), 400);

@@ -381,14 +381,15 @@ TEST_F(HostileCatalogue, DeeplyNestedJsonBody) {
                           {counterAuth(), "Content-Type: application/json"}, nested),
                   400, "Malformed JSON");
   }
-  // Brackets inside strings are text, not nesting: the body is read, its unknown "note" field
-  // ignored, and the label printed.
+  // Brackets inside strings are text, not nesting: the body is parsed, and what is refused is
+  // its unknown "note" field, not its depth.
   const Answer answer =
       Send(server_->port(),
            Request("POST", "/api/v1/labels", {counterAuth(), "Content-Type: application/json"},
                    R"({"pincodes": ["110001"], "note": ")" + std::string(1000, '[') + R"("})"));
-  EXPECT_EQ(answer.status, 200) << answer.head << answer.body.substr(0, 300);
-  EXPECT_EQ(answer.body.rfind("%PDF-", 0), 0U) << answer.body.substr(0, 300);
+  EXPECT_EQ(answer.status, 400) << answer.head << answer.body.substr(0, 300);
+  EXPECT_NE(answer.body.find("unknown field 'note'"), std::string::npos)
+      << answer.body.substr(0, 300);
   expectHealthy();
 }
 

@@ -145,6 +145,9 @@ TEST_F(ServeTest, BatchProblemsNameTheBadInput) {
   expect(R"({"pincodes": ["110001", "abc"]})", 400, "pincodes[1]");
   expect(R"({"pincodes": ["110001"], "size": 5})", 400, "'size' must be a string");
   expect(R"({"pincodes": ["110001"], "plan": "nope"})", 404, "Unknown Sort Plan");
+  // A misspelt field printed the default plan's bins or size unnoticed (a reviewer's "Plan").
+  expect(R"({"pincodes": ["110001"], "Plan": "default"})", 400, "unknown field 'Plan'");
+  expect(R"({"pincodes": ["110001"], "szie": "a6"})", 400, "unknown field 'szie'");
   // A bare list of pincodes (strings or numbers) is a batch too.
   const auto r =
       client().Post("/api/v1/labels", counter(), R"(["110001", 560001])", "application/json");
@@ -371,6 +374,30 @@ TEST_F(ServeTest, ALabelPrintsThePlaceOfTheOfficeItNames) {
   ASSERT_TRUE(batched);
   ASSERT_EQ(batched->status, 200) << batched->body.substr(0, 300);
   EXPECT_TRUE(HasLine(PdfLines(dir_, batched->body, 1), "Ropar, Punjab"));
+}
+
+// Office names are told apart by case when stored, so the office named exactly is printed before
+// one that matches only without case (a label printed "Twin, District A" when "TWIN" was asked).
+TEST_F(ServeTest, ALabelPrintsTheOfficeNamedExactlyBeforeOneThatDiffersInCase) {
+  ASSERT_EQ(std::system("command -v pdftotext > /dev/null 2>&1"), 0)
+      << "pdftotext is missing: install poppler-utils (scripts/debian-packages-test.txt)";
+  const std::string body = R"({"pincode": "999004", "offices": [
+      {"name": "Twin", "branch_type": "BO", "district": "Ropar", "state": "Punjab",
+       "circle": "Punjab", "region": "Chandigarh", "division": "Ropar"},
+      {"name": "TWIN", "branch_type": "HO", "district": "Mohali", "state": "Haryana",
+       "circle": "Haryana", "region": "Ambala", "division": "Mohali"}]})";
+  ExpectJson(client().Post("/api/v1/pincodes", admin(), body, "application/json"), 201);
+  for (const auto& [asked, place] :
+       {std::pair{"Twin", "Ropar, Punjab"}, std::pair{"TWIN", "Mohali, Haryana"}}) {
+    auto label = client().Get(std::string("/api/v1/labels/999004.pdf?office=") + asked, counter());
+    ASSERT_TRUE(label);
+    ASSERT_EQ(label->status, 200) << label->body.substr(0, 300);
+    EXPECT_TRUE(HasLine(PdfLines(dir_, label->body, 1), place)) << asked;
+  }
+  // Without an exact match, the name still matches without case.
+  auto typed = client().Get("/api/v1/labels/999004.pdf?office=twin", counter());
+  ASSERT_TRUE(typed);
+  EXPECT_EQ(typed->status, 200) << typed->body.substr(0, 300);
 }
 
 TEST_F(ServeTest, BatchPdfOf50LabelsHas50PagesOfTheRightSize) {

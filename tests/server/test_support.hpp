@@ -34,13 +34,15 @@ inline constexpr std::string_view kFilesServedCounter = "test_files_served_total
 /// file with a suffixed path parameter that counts in kFilesServedCounter), a thrower.
 inline Router TestRouter(const std::shared_ptr<Metrics>& metrics) {
   Router router;
-  router.add(MakeRoute(
+  Route echo = MakeRoute(
       "GET", "/api/v1/echo/{word}", Access::kOpen,
       [](const HttpRequest& r) {
         nlohmann::json out = {{"word", r.pathParam("word")}, {"q", r.queryParam("q").value_or("")}};
         return HttpResponse::Json(out.dump());
       },
-      "echo"));
+      "echo");
+  echo.query = {{"q", "echoed back"}};
+  router.add(std::move(echo));
   Route upload = MakeRoute(
       "POST", "/api/v1/upload", Access::kScanner,
       [](const HttpRequest& r) {

@@ -255,6 +255,29 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   return HttpResponse::Json(out.dump());
 }
 
+/// Why a multipart body has no photo, naming the parts it has. cpp-httplib 0.11.4 reads a part's
+/// name only from `Content-Disposition: form-data; name="…"`, optionally followed by
+/// `; filename="…"`; a part written otherwise (parameters in another order, a name unquoted)
+/// comes with no name, and the client should be told that rather than that it sent no photo.
+std::string NoImagePart(const HttpRequest& request) {
+  std::string detail = "the multipart body needs a part named 'image'";
+  if (request.parts.empty()) return detail + ", and it has no part";
+  std::string names;
+  bool unnamed = false;
+  for (const server::FormPart& p : request.parts) {
+    names += (names.empty() ? "'" : ", '") + p.name.substr(0, 64) + "'";
+    unnamed = unnamed || p.name.empty();
+  }
+  detail += "; its parts are named " + names;
+  if (unnamed) {
+    detail +=
+        ". A part's name is read only from a Content-Disposition of the form "
+        "'form-data; name=\"image\"; filename=\"photo.jpg\"' (the filename optional), with the "
+        "name quoted and first";
+  }
+  return detail;
+}
+
 }  // namespace
 
 HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
@@ -262,7 +285,7 @@ HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
   std::string_view bytes = request.body;
   if (request.content_type == "multipart/form-data") {
     const server::FormPart* part = request.part("image");
-    if (part == nullptr) throw HttpError(400, "the multipart body needs a part named 'image'");
+    if (part == nullptr) throw HttpError(400, NoImagePart(request), "No Image");
     // One photo per call: reading the first of several would answer for photos never read.
     const auto images = std::count_if(request.parts.begin(), request.parts.end(),
                                       [](const server::FormPart& p) { return p.name == "image"; });
@@ -271,6 +294,8 @@ HttpResponse PostDetect(const AppContext& context, const HttpRequest& request) {
                                " parts named 'image'; send one photo per request");
     }
     bytes = part->content;
+    if (bytes.empty())
+      throw HttpError(400, "no photo: the part named 'image' is empty", "No Image");
   }
   if (bytes.empty()) throw HttpError(400, "no photo: the body is empty", "No Image");
   Outcome outcome;

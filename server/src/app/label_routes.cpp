@@ -43,6 +43,10 @@ bool SameName(std::string_view a, std::string_view b) {
 const db::PostOffice* ChosenOffice(const db::PincodeRecord& record,
                                    const std::optional<std::string>& name) {
   if (!name || db::TrimSpaces(*name).empty()) return db::MainOffice(record);
+  // The office of exactly that name first: two offices may differ only in case ("Twin", "TWIN").
+  for (const db::PostOffice& office : record.offices) {
+    if (office.name == *name) return &office;
+  }
   for (const db::PostOffice& office : record.offices) {
     if (SameName(office.name, *name)) return &office;
   }
@@ -176,6 +180,11 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   if (body.is_array()) body = json{{"pincodes", body}};
   if (!body.is_object() || !body.contains("pincodes") || !body["pincodes"].is_array()) {
     throw HttpError(400, R"(expected {"pincodes": ["110001", …], "size": "a6", "plan": "…"})");
+  }
+  // A misspelt "plan" must not print the default plan's bins unnoticed.
+  if (const std::optional<std::string> field = UnknownField(body, {"pincodes", "size", "plan"})) {
+    throw HttpError(400, "unknown field '" + field->substr(0, 40) +
+                             "'; a batch takes 'pincodes', 'size' and 'plan'");
   }
   const json& pins = body["pincodes"];
   if (pins.empty()) throw HttpError(400, "'pincodes' is empty");

@@ -31,6 +31,33 @@ HttpResponse Unauthorized(std::string detail, bool invalid_token) {
   return response;
 }
 
+/// A query parameter the route does not take, or one given twice, is refused: a misspelt
+/// `?pln=hub` printed the default plan's bins unnoticed, and of `?fx=1400&fx=2800` the first was
+/// taken without a word. What a route takes is what /openapi.json documents for it.
+std::optional<HttpResponse> RefuseQuery(const Route& route, const HttpRequest& request) {
+  const auto takes = [&route](const std::string& name) {
+    return std::any_of(route.query.begin(), route.query.end(),
+                       [&name](const QueryParamDoc& doc) { return doc.name == name; });
+  };
+  for (auto it = request.query.begin(); it != request.query.end();
+       it = request.query.upper_bound(it->first)) {
+    const std::string name = it->first.substr(0, 40);
+    if (!takes(it->first)) {
+      std::string known;
+      for (const QueryParamDoc& doc : route.query) known += (known.empty() ? "" : ", ") + doc.name;
+      return ProblemResponse(
+          400, "unknown query parameter '" + name + "'; " +
+                   (known.empty() ? "this route takes none" : "this route takes " + known));
+    }
+    if (request.query.count(it->first) > 1) {
+      return ProblemResponse(400, "the query parameter '" + name + "' is given " +
+                                      std::to_string(request.query.count(it->first)) +
+                                      " times; give it once");
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Api::Api(Router router, TokenVerifier verifier, HealthCheck health,
@@ -196,6 +223,9 @@ Admission Api::admit(std::string_view method, std::string_view path,
 HttpResponse Api::invoke(const Admission& admission, HttpRequest request) const {
   if (admission.rejection) return *admission.rejection;
   if (admission.is_static) return static_files_->serve(request.path);
+  if (std::optional<HttpResponse> refused = RefuseQuery(*admission.match.route, request)) {
+    return *refused;
+  }
   request.path_params = admission.match.params;
   request.principal = admission.principal;
   if (request.content_type.empty()) {
