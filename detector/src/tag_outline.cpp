@@ -33,7 +33,17 @@ void DrawTagOutline(cv::Mat& image, const Detection& detection, const cv::Scalar
   if (caption.empty()) return;
   // White on a black halo: readable on any photo.
   const double font = 0.7 * Scale(image);
-  const cv::Point at = ToPixel(corners[0]) + cv::Point(0, -5 * thickness);
+  // Above the first corner, moved inside the photo where it would run off an edge (a tag near
+  // the right edge had its caption cut to "key 102 u…").
+  int baseline = 0;
+  const cv::Size text =
+      cv::getTextSize(caption, cv::FONT_HERSHEY_SIMPLEX, font, 3 * thickness, &baseline);
+  const cv::Point wanted = ToPixel(corners[0]) + cv::Point(0, -5 * thickness);
+  const int margin = 2 * thickness;
+  const cv::Point at(
+      std::clamp(wanted.x, margin, std::max(margin, image.cols - text.width - margin)),
+      std::clamp(wanted.y, text.height + margin,
+                 std::max(text.height + margin, image.rows - baseline - margin)));
   cv::putText(image, caption, at, cv::FONT_HERSHEY_SIMPLEX, font, {0, 0, 0}, 3 * thickness,
               cv::LINE_AA);
   cv::putText(image, caption, at, cv::FONT_HERSHEY_SIMPLEX, font, {255, 255, 255}, thickness,
