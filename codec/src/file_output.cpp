@@ -1,21 +1,94 @@
 #include "pintag/codec/file_output.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
-#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <vector>
 
 namespace pintag {
+namespace {
+
+/// Writes all of `bytes` to `fd` and closes it: 0, or the errno of the first failure.
+int WriteAndClose(int fd, std::string_view bytes) {
+  int failure = 0;
+  for (std::size_t written = 0; written < bytes.size() && failure == 0;) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n > 0) {
+      written += static_cast<std::size_t>(n);
+    } else if (n < 0 && errno != EINTR) {
+      failure = errno;
+    } else if (n == 0) {
+      failure = EIO;  // a write that took nothing and said nothing is still a failure
+    }
+  }
+  if (::close(fd) != 0 && failure == 0) failure = errno;
+  return failure;
+}
+
+/// The process's file mode creation mask, read without changing it (umask() sets it, and other
+/// threads may be creating files meanwhile).
+mode_t CurrentUmask() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("Umask:", 0) == 0) {
+      return static_cast<mode_t>(std::strtoul(line.c_str() + 6, nullptr, 8));
+    }
+  }
+  return 022;
+}
+
+}  // namespace
 
 std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) return std::strerror(errno);
-  errno = 0;
-  int failure = 0;
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) {
-    failure = errno != 0 ? errno : EIO;  // a short write that set no errno is still a failure
+  struct stat target {};
+  const bool exists = ::stat(path.c_str(), &target) == 0;
+  struct stat link {};
+  const bool dangling = !exists && ::lstat(path.c_str(), &link) == 0;
+  const auto in_place = [&]() -> std::string {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) return std::strerror(errno);
+    const int failure = WriteAndClose(fd, bytes);
+    return failure == 0 ? std::string() : std::strerror(failure);
+  };
+  if ((exists && !S_ISREG(target.st_mode)) || dangling) return in_place();
+  // Through a link, the file it names is replaced and the link kept.
+  std::string destination = path;
+  if (exists) {
+    if (char* resolved = ::realpath(path.c_str(), nullptr)) {
+      destination = resolved;
+      std::free(resolved);
+    }
   }
-  if (std::fclose(file) != 0 && failure == 0) failure = errno != 0 ? errno : EIO;
-  return failure == 0 ? std::string() : std::strerror(failure);
+  std::vector<char> temporary(destination.begin(), destination.end());
+  const std::string suffix = ".tmp-XXXXXX";
+  temporary.insert(temporary.end(), suffix.begin(), suffix.end());
+  temporary.push_back('\0');
+  const int fd = ::mkostemp(temporary.data(), O_CLOEXEC);
+  if (fd < 0) {
+    // A file that may be written in a directory that may not: written in place, as before.
+    if (exists && (errno == EACCES || errno == EPERM || errno == EROFS)) return in_place();
+    return std::strerror(errno);
+  }
+  // mkostemp makes the file 0600: give it the mode the file had, or a new file would get.
+  const mode_t mode = exists ? (target.st_mode & 07777) : (0666 & ~CurrentUmask());
+  int failure = ::fchmod(fd, mode) == 0 ? 0 : errno;
+  if (failure != 0) {
+    ::close(fd);
+  } else {
+    failure = WriteAndClose(fd, bytes);
+  }
+  if (failure == 0 && ::rename(temporary.data(), destination.c_str()) != 0) failure = errno;
+  if (failure != 0) {
+    ::unlink(temporary.data());
+    return std::strerror(failure);
+  }
+  return {};
 }
 
 }  // namespace pintag

@@ -40,6 +40,39 @@ TEST(CliWrites, RenderToAFullDiskFailsForPngAsForSvg) {
   EXPECT_EQ(ReadFile(png).substr(0, 8), "\x89PNG\r\n\x1a\n");
 }
 
+// A write that failed partway left the output cut short where a good file had been. It is
+// written beside and renamed over, so the file before stays whole, and nothing is left beside it.
+TEST(CliWrites, AWriteThatFailsLeavesTheFileThereBeforeWhole) {
+  const TempDir dir;
+  const std::string png = dir.file("tag.png");
+  ASSERT_EQ(RunPintag("render --key 1 --size-px 400 -o " + png).status, 0);
+  std::filesystem::permissions(png, std::filesystem::perms(0640));
+  const std::string before = ReadFile(png);
+  ASSERT_GT(before.size(), std::size_t{4096});
+  // A file size limit of 4 KiB (ulimit -f counts 512-byte blocks), its signal ignored: a write
+  // past it fails with EFBIG, as one on a full disk fails.
+  const CommandResult cut = RunShell("trap '' XFSZ; ulimit -f 8; " + PintagExe() +
+                                     " render --key 2 --size-px 400 -o " + png + " 2>&1");
+  EXPECT_EQ(cut.status, 1) << cut.out;
+  EXPECT_NE(cut.out.find("cannot write"), std::string::npos) << cut.out;
+  EXPECT_EQ(ReadFile(png), before);
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+  }
+  EXPECT_EQ(files, 1U) << "a temporary file was left beside the output";
+  // Written whole, through a link: the file it names is replaced with its mode, the link kept.
+  const std::string link = dir.file("link.png");
+  std::filesystem::create_symlink(png, link);
+  const CommandResult written = RunPintag("render --key 3 --size-px 400 -o " + link);
+  ASSERT_EQ(written.status, 0) << written.out;
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_NE(ReadFile(png), before);
+  EXPECT_EQ(ReadFile(link), ReadFile(png));
+  EXPECT_EQ(std::filesystem::status(png).permissions() & std::filesystem::perms::all,
+            std::filesystem::perms(0640));
+}
+
 TEST(CliWrites, KeysExportToAFullDiskFails) {
   ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
   const TempDir dir;

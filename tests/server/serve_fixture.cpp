@@ -53,8 +53,6 @@ double Metric(const std::string& text, const std::string& series) {
   return 0;
 }
 
-namespace {
-
 CommandResult RunShell(const std::string& line) {
   CommandResult result;
   FILE* pipe = ::popen(line.c_str(), "r");
@@ -67,8 +65,6 @@ CommandResult RunShell(const std::string& line) {
   if (WIFEXITED(raw)) result.status = WEXITSTATUS(raw);
   return result;
 }
-
-}  // namespace
 
 CommandResult RunPintag(const std::string& arguments) {
   return RunShell(PintagExe() + " " + arguments + " 2>&1");

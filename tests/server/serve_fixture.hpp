@@ -65,6 +65,8 @@ struct CommandResult {
 };
 /// Runs `pintag <arguments>` (a shell command line) and waits for it.
 CommandResult RunPintag(const std::string& arguments);
+/// Runs `line` with sh -c: its exit status and what it wrote to stdout.
+CommandResult RunShell(const std::string& line);
 /// As RunPintag, with stdout sent to `stdout_path` instead (stderr alone is in `out`).
 CommandResult RunPintagWithStdoutTo(const std::string& arguments, const std::string& stdout_path);
 /// The path of a seeded database made once per build (do not modify it).
