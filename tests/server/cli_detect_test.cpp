@@ -175,6 +175,13 @@ TEST(CliDetect, ADebugDirThatIsAFileIsRefusedAndAGoodOneGetsEveryStage) {
   EXPECT_NE(refused.out.find("is not a directory"), std::string::npos) << refused.out;
   EXPECT_EQ(ReadFile(file), "not a directory\n");
 
+  // A photo that cannot be read leaves no directory behind (it was made before the photo).
+  const std::string unmade = dir.file("unmade");
+  const CommandResult unread =
+      RunPintag("detect " + dir.file("no-such-photo.jpg") + " --debug-dir " + unmade);
+  EXPECT_EQ(unread.status, 1) << unread.out;
+  EXPECT_FALSE(std::filesystem::exists(unmade));
+
   const std::string debug = dir.file("stages/deeper");
   const CommandResult written = RunPintag("detect " + photo.path + " --debug-dir " + debug);
   EXPECT_EQ(written.status, 0) << written.out;

@@ -120,6 +120,9 @@ void CheckOptions(const DetectArgs& args) {
 
 void Run(const DetectArgs& args) {
   CheckOptions(args);
+  const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
+  if (!loaded.image) throw std::runtime_error(loaded.error);
+  // Made once the photo is read, so a photo that cannot be leaves no directory behind.
   if (!args.debug_dir.empty()) {
     // The detector writes its stage images without a word when it cannot: say so here instead.
     std::error_code ec;
@@ -132,8 +135,6 @@ void Run(const DetectArgs& args) {
                                std::strerror(errno));
     }
   }
-  const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
-  if (!loaded.image) throw std::runtime_error(loaded.error);
 
   DetectorOptions options;
   options.tag_size_m = args.tag_size_mm / 1000.0;
