@@ -80,61 +80,45 @@ IdleConnections::~IdleConnections() {
 }
 
 void IdleConnections::park(int fd, std::size_t requests_left, Clock::time_point deadline) {
-  const std::lock_guard lock(mutex_);
-  if (closed_) {
-    ShutAndClose(fd);
-    return;
-  }
-  if (waiting_.size() >= limits_.max_parked) {
-    const auto first_to_end = std::min_element(
-        waiting_.begin(), waiting_.end(),
-        [](const auto& a, const auto& b) { return a.second.deadline < b.second.deadline; });
-    closeLocked(first_to_end->first);
-  }
-  epoll_event event{};
-  // Edge-triggered: part of a head that stays unread is reported again only when more comes.
-  event.events = EPOLLIN | EPOLLRDHUP | EPOLLET;
-  event.data.fd = fd;
-  if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) != 0) {
-    ShutAndClose(fd);
-    return;
-  }
   Waiting waiting;
   waiting.requests_left = requests_left;
   waiting.deadline = deadline;
-  waiting_[fd] = waiting;
-  const std::uint64_t one = 1;  // the thread's wait may end later than this deadline
-  [[maybe_unused]] const ssize_t written = ::write(wake_fd_, &one, sizeof one);
+  // Edge-triggered: part of a head that stays unread is reported again only when more comes.
+  add(fd, waiting, EPOLLIN | EPOLLRDHUP | EPOLLET);
 }
 
 void IdleConnections::drain(int fd, std::size_t max_bytes) {
   ::shutdown(fd, SHUT_WR);
-  const std::lock_guard lock(mutex_);
-  if (closed_) {
-    ShutAndClose(fd);
-    return;
-  }
-  if (waiting_.size() >= limits_.max_parked) {
-    const auto first_to_end = std::min_element(
-        waiting_.begin(), waiting_.end(),
-        [](const auto& a, const auto& b) { return a.second.deadline < b.second.deadline; });
-    closeLocked(first_to_end->first);
-  }
   const Clock::time_point now = Clock::now();
   Waiting waiting;
   waiting.deadline = now + limits_.drain_quiet;
   waiting.draining = true;
   waiting.drain_end = now + limits_.drain_time;
   waiting.drain_bytes_left = max_bytes;
+  add(fd, waiting, EPOLLIN | EPOLLRDHUP);  // level-triggered: see dropWhatCame
+}
+
+void IdleConnections::add(int fd, const Waiting& waiting, std::uint32_t events) {
+  const std::lock_guard lock(mutex_);
+  if (closed_) {
+    ShutAndClose(fd);
+    return;
+  }
+  if (waiting_.size() >= limits_.max_parked) {
+    const auto first_to_end = std::min_element(
+        waiting_.begin(), waiting_.end(),
+        [](const auto& a, const auto& b) { return a.second.deadline < b.second.deadline; });
+    closeLocked(first_to_end->first);
+  }
   epoll_event event{};
-  event.events = EPOLLIN | EPOLLRDHUP;  // level-triggered: see dropWhatCame
+  event.events = events;
   event.data.fd = fd;
   if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) != 0) {
     ShutAndClose(fd);
     return;
   }
   waiting_[fd] = waiting;
-  const std::uint64_t one = 1;
+  const std::uint64_t one = 1;  // the thread's wait may end later than this deadline
   [[maybe_unused]] const ssize_t written = ::write(wake_fd_, &one, sizeof one);
 }
 

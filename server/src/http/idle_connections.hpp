@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -91,6 +92,8 @@ class IdleConnections {
   /// watched level-triggered: what is left is reported again). False when it is to be closed
   /// (the client closed, the socket failed, or the byte limit was reached). mutex_ held.
   bool dropWhatCame(int fd, Waiting& waiting);
+  /// Watches `fd` for `events` as `waiting`, closing the one whose wait ends first when full.
+  void add(int fd, const Waiting& waiting, std::uint32_t events);
   void run();
   /// Takes `fd` out of the set and closes it without a word; mutex_ held.
   void closeLocked(int fd);
