@@ -157,11 +157,12 @@ class Server : public httplib::Server {
       }
       // An answer that asked to close (a refusal that left a body unread, a refused head):
       // cpp-httplib would have read on, taking the unread bytes for the next request.
-      if (head_refused || stream.closeAfterAnswer()) {
+      if (head_refused || stream.unread() > 0) {
         // Closed there, once the client has stopped sending.
         idle->drain(sock, std::max(kDrainAfterRefusedHead, stream.unread()));
         return;
       }
+      if (stream.closeAfterAnswer()) break;  // everything sent was read: nothing to drain
       if (!ok || closed) break;
     }
     ::shutdown(sock, SHUT_RDWR);
@@ -216,6 +217,8 @@ bool AnnouncesBody(const httplib::Request& req) {
 /// the read timeout and then answers 400; RFC 9112 (section 6.1) asks for 501 at once.
 bool UnknownTransferCoding(const httplib::Request& req) {
   if (!req.has_header("Transfer-Encoding")) return false;
+  // Two of them ("chunked", then "gzip") name a coding besides chunked: refused as one would be.
+  if (req.get_header_value_count("Transfer-Encoding") > 1) return true;
   std::string coding = req.get_header_value("Transfer-Encoding");
   std::transform(coding.begin(), coding.end(), coding.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -465,16 +468,18 @@ struct HttpServer::Impl {
     Apply(api->invoke(t_state.admission, std::move(request)), res);
   }
 
-  /// Answers with the rest of the request's body unread: the connection is closed after the
-  /// answer, and drained first of as much as the client may still send of a body the server
-  /// would have taken (its declared length, else the body limit), so that it reads the answer
-  /// instead of a reset. At least 64 MiB, so that a photo of any size a phone makes is covered.
+  /// Answers with the rest of the request unread: the connection is closed after the answer,
+  /// and drained first of as much as the client may still send of a body the server would have
+  /// taken (its declared length; a chunked one's up to the body limit, at least 64 MiB so that a
+  /// photo of any size a phone makes is covered), so that it reads the answer, not a reset.
   void leaveBodyUnread(const httplib::Request& req, httplib::Response& res) const {
     res.set_header("Connection", "close");
     if (t_connection == nullptr) return;
     const std::uint64_t cap =
         std::max<std::uint64_t>(std::uint64_t{64} << 20, api->options().max_body_bytes);
-    std::uint64_t unread = cap;
+    // A chunked body says nothing of its length; a request that declares no body may still be
+    // followed by bytes (the 64 KiB below, and at least kDrainAfterRefusedHead, cover those).
+    std::uint64_t unread = req.has_header("Transfer-Encoding") ? cap : 0;
     if (req.has_header("Content-Length") && !req.has_header("Transfer-Encoding")) {
       unread = std::min(cap, req.get_header_value<std::uint64_t>("Content-Length"));
     }
@@ -494,7 +499,7 @@ struct HttpServer::Impl {
       case ConnectionStream::ReadEnd::kClosed:
         return ProblemResponse(400,
                                "the request body ended early: the client stopped sending before "
-                               "the length it declared");
+                               "the body's end");
       case ConnectionStream::ReadEnd::kFailed:
       case ConnectionStream::ReadEnd::kNone:
         break;
@@ -516,6 +521,13 @@ struct HttpServer::Impl {
       Apply(HeadRefusal(*t_connection), res);
       res.set_header("Connection", "close");
       return httplib::Server::HandlerResponse::Handled;
+    }
+    if (!t_state.active) {
+      // cpp-httplib answered before routing (a request line it cannot parse, 414, a Range it
+      // cannot parse, 416) and would keep the connection: whatever body followed would then be
+      // read as the next request, one a proxy in front never saw (a reviewer had nginx hand one
+      // client's answer to another). Close it, draining what the client may still send.
+      leaveBodyUnread(req, res);
     }
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     if (res.status == 400 && UnknownMethod(req)) {

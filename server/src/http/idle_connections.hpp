@@ -32,6 +32,8 @@ enum class HeadState {
              ///< kWorkerTakesHeadBytes of it (the worker reads the rest within the budget), or the
              ///< peer stopped sending, or the socket failed
 };
+/// Empty lines before a request are taken from the socket first (RFC 9112, 2.2, asks a server
+/// to ignore them).
 HeadState PeekRequestHead(int fd, std::size_t head_budget);
 
 class IdleConnections {

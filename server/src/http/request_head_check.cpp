@@ -1,5 +1,6 @@
 #include "request_head_check.hpp"
 
+#include <cctype>
 #include <cstdio>
 
 namespace pintag::server {
@@ -39,6 +40,15 @@ std::string Hex(char c) {
   return text;
 }
 
+/// Which of the headers that frame a body `name` is, told without case.
+RequestHeadCheck::Value ValueKind(const std::string& name) {
+  std::string lower = name;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower == "content-length") return RequestHeadCheck::Value::kLength;
+  if (lower == "transfer-encoding") return RequestHeadCheck::Value::kCoding;
+  return RequestHeadCheck::Value::kOther;
+}
+
 }  // namespace
 
 bool RequestHeadCheck::take(std::string_view bytes) {
@@ -70,6 +80,10 @@ bool RequestHeadCheck::takeByte(char c) {
       case Where::kName:
         return refuse(400, "the header line" + nameSoFar() + " has no colon");
       case Where::kValue:
+        if (value_ == Value::kLength && !length_digit_) {
+          return refuse(400, "the header \"Content-Length\" has no value");
+        }
+        break;
       case Where::kEnded:
         break;
     }
@@ -98,6 +112,8 @@ bool RequestHeadCheck::takeByte(char c) {
     case Where::kName:
       if (c == ':') {
         where_ = Where::kValue;
+        value_ = ValueKind(name_);
+        length_digit_ = false;
       } else if (c == ' ' || c == '\t') {
         return refuse(400, "the header" + nameSoFar() + " has whitespace between its name and " +
                                "its colon");
@@ -110,10 +126,39 @@ bool RequestHeadCheck::takeByte(char c) {
         name_ += c;
       }
       return true;
-    case Where::kRequestLine:
     case Where::kValue:
+      return takeValueByte(c);
+    case Where::kRequestLine:
     case Where::kEnded:
       return true;
+  }
+  return true;
+}
+
+bool RequestHeadCheck::takeValueByte(char c) {
+  const auto byte = static_cast<unsigned char>(c);
+  if ((byte < 0x20 && c != '\t') || byte == 0x7F) {
+    return refuse(400, "the header" + nameSoFar() + " holds the control byte " + Hex(c));
+  }
+  // cpp-httplib 0.11.4 percent-decodes header values, so "%32%33" would be read as a length of
+  // 23 and "%63hunked" as chunked, where a proxy reads neither: the two headers that frame the
+  // body may hold only what their grammar allows.
+  switch (value_) {
+    case Value::kLength:
+      if (c >= '0' && c <= '9') {
+        length_digit_ = true;
+      } else if (c != ' ' && c != '\t') {
+        return refuse(400, "the header \"Content-Length\" may hold only digits, not " + Hex(c));
+      }
+      break;
+    case Value::kCoding:
+      if (c == '%' || (!IsTokenChar(c) && c != ' ' && c != '\t' && c != ',' && c != ';' &&
+                       c != '=' && c != '"')) {
+        return refuse(400, "the header \"Transfer-Encoding\" may not hold " + Hex(c));
+      }
+      break;
+    case Value::kOther:
+      break;
   }
   return true;
 }

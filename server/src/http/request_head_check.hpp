@@ -9,7 +9,9 @@
 //   - a header line that starts with a space or tab (obs-fold, a line folded onto the last);
 //   - whitespace between a header's name and its colon; a name that is empty or holds a
 //     character a name may not hold; a header line without a colon;
-//   - a NUL anywhere in the head.
+//   - a NUL anywhere in the head, a control byte (other than tab) in a header's value;
+//   - a Content-Length that is not digits (or is empty), a Transfer-Encoding holding `%` or what
+//     its grammar does not allow: cpp-httplib percent-decodes header values.
 // A header line longer than kMaxHeaderLineBytes is refused with 431 naming the limit (cpp-httplib
 // would answer 400 without a reason). The request line is left to cpp-httplib (414 past 8 KiB).
 
@@ -24,6 +26,9 @@ class RequestHeadCheck {
  public:
   /// cpp-httplib's own bound on a header line (CPPHTTPLIB_HEADER_MAX_LENGTH), its CRLF counted.
   static constexpr std::size_t kMaxHeaderLineBytes = std::size_t{8} * 1024;
+
+  /// The headers that frame a request's body, whose values are held to their grammar.
+  enum class Value { kOther, kLength, kCoding };
 
   struct Refusal {
     int status = 400;
@@ -42,13 +47,16 @@ class RequestHeadCheck {
   enum class Where { kRequestLine, kLineStart, kName, kValue, kEnded };
 
   bool takeByte(char c);
+  bool takeValueByte(char c);
   bool refuse(int status, std::string detail);
   std::string nameSoFar() const;
 
   Where where_ = Where::kRequestLine;
-  bool after_cr_ = false;       ///< the last byte was a CR, so this one must be LF
-  std::size_t line_bytes_ = 0;  ///< bytes of the current line, its terminator counted
-  std::string name_;            ///< the current header's name, as far as it is kept
+  bool after_cr_ = false;        ///< the last byte was a CR, so this one must be LF
+  std::size_t line_bytes_ = 0;   ///< bytes of the current line, its terminator counted
+  std::string name_;             ///< the current header's name, as far as it is kept
+  Value value_ = Value::kOther;  ///< which header the current value belongs to
+  bool length_digit_ = false;    ///< a digit of the current Content-Length has come
   std::optional<Refusal> refusal_;
 };
 
