@@ -130,14 +130,23 @@ test('scanner shows the problem for a non-image file and for a token of the wron
   await alert.filter({ hasText: 'HTTP 403' }).waitFor();
 });
 
+// A file committed as a seed of the image fuzz target.
+const corpusFile = (name) => join(dirname(fileURLToPath(import.meta.url)), '../../fuzz/corpus/image_detect', name);
+
+// A new scanner page, the scanner token given, reading `file`.
+async function scannerReading(file) {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/scanner.html`);
+  await page.locator('#token').fill(scannerToken);
+  await page.locator('#photo').setInputFiles(file);
+  return page;
+}
+
 test('a photo without colour is answered with what to change, not the general advice', async () => {
   // The label as a greyscale PNG, as a camera's black-and-white mode would save it.
   const grey = join(dir, 'label-110001-grey.png');
   await promisify(execFile)('oiiotool', [labelPng, '--chsum:weight=0.2126,0.7152,0.0722', '-o', grey]);
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/scanner.html`);
-  await page.locator('#token').fill(scannerToken);
-  await page.locator('#photo').setInputFiles(grey);
+  const page = await scannerReading(grey);
   const note = page.locator('#tags .alert-info');
   await note.waitFor();
   assert.match(await note.textContent(), /^No PinTag found: the photo has no colour.*take the photo in colour/);
@@ -149,11 +158,7 @@ test('a photo without colour is answered with what to change, not the general ad
 
 test('a TIFF the browser cannot draw is still read, and the page says why no photo is shown', async () => {
   // A committed 8-bit RGB TIFF holding one tag (also a seed of the image fuzz target).
-  const tiff = join(dirname(fileURLToPath(import.meta.url)), '../../fuzz/corpus/image_detect/tag.tif');
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/scanner.html`);
-  await page.locator('#token').fill(scannerToken);
-  await page.locator('#photo').setInputFiles(tiff);
+  const page = await scannerReading(corpusFile('tag.tif'));
   await page.locator('.tag-card').first().waitFor();
   const summary = page.locator('#summary');
   await summary.filter({ hasText: 'cannot show the photo itself' }).waitFor();
@@ -168,11 +173,7 @@ test('the outline sits on the tag of a WebP whose EXIF orientation the browser d
   // A committed 450 × 800 WebP holding the tag of 110001, stored turned a quarter with EXIF
   // Orientation 6 (also a seed of the image fuzz target). The server reads it upright
   // (800 × 450); Chromium shows a WebP as stored, so the page must place the corners itself.
-  const webp = join(dirname(fileURLToPath(import.meta.url)), '../../fuzz/corpus/image_detect/tag-exif6.webp');
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/scanner.html`);
-  await page.locator('#token').fill(scannerToken);
-  await page.locator('#photo').setInputFiles(webp);
+  const page = await scannerReading(corpusFile('tag-exif6.webp'));
   await page.locator('#scan-photo[data-outlined="1"]').waitFor();
   assert.match(await page.locator('#summary').textContent(), /^1 tag read.*photo 800 × 450/);
   const outline = await page.evaluate(() => {
