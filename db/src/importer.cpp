@@ -122,10 +122,18 @@ std::optional<std::string> NormalizeType(std::optional<std::string> type) {
   return type;
 }
 
-/// Drops " B.O", " S.O.", " HO" and the like when they repeat the office type's letter.
+/// The letters a name's type suffix may have for an office of type "<letter>O": its own, and for
+/// PO also S, since the newer layout types sub offices PO but still names them "... SO"/"... S.O".
+std::string SuffixLetters(char letter) {
+  return letter == 'P' ? "PS" : std::string(1, letter);
+}
+
+/// Drops " B.O", " S.O.", " HO" and the like when they repeat the office type's letter (or say
+/// S.O of a PO: SuffixLetters).
 std::string StripTypeSuffix(std::string name, const std::optional<std::string>& type) {
   if (!type || type->size() != 2 || (type->back() != 'O' && type->back() != 'o')) return name;
-  const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(type->front())));
+  const std::string letters =
+      SuffixLetters(static_cast<char>(std::toupper(static_cast<unsigned char>(type->front()))));
   std::string upper = name;
   for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   // Longest first: " X.O.", " X.O", " XO".
@@ -135,7 +143,8 @@ std::string StripTypeSuffix(std::string name, const std::optional<std::string>& 
     const std::string_view tail = std::string_view(upper).substr(upper.size() - pattern.size());
     bool match = true;
     for (std::size_t i = 0; i < pattern.size(); ++i) {
-      match = match && (pattern[i] == '?' ? tail[i] == letter : tail[i] == pattern[i]);
+      match = match && (pattern[i] == '?' ? letters.find(tail[i]) != std::string::npos
+                                          : tail[i] == pattern[i]);
     }
     if (match) {
       name.resize(name.size() - pattern.size());

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
 
 #include "db_test_util.hpp"
 #include "pintag/codec/key_allocation.hpp"
@@ -35,6 +36,10 @@ const std::string kOlderCsv =
     "Bengali Market S.O,110001,SO,Delivery,New Delhi Central,Delhi,Delhi,New Delhi,Central "
     "Delhi,Delhi\n"
     "Zeta Camp B.O,999021,B.O,Delivery,APS,APS,Army Postal Service,Zeta Taluk,APS,APS\n";
+
+const std::string kNewerHeader =
+    "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,statename,"
+    "latitude,longitude\n";
 
 class Importer : public ::testing::Test {
  protected:
@@ -170,6 +175,36 @@ TEST_F(Importer, FoldsATwinStoredWithASpaceAtAnEndIntoTheOffice) {
             1);
   EXPECT_EQ(
       db_.queryInt64("SELECT branch_type = 'SO' FROM offices WHERE id = " + std::to_string(id)), 1);
+}
+
+// The newer layout types sub offices PO but still names them "... SO", "... S.O" or "... S.O.":
+// the suffix goes, so each row fills in its seeded office instead of adding "Connaught Place SO"
+// beside it.
+TEST_F(Importer, APostOfficeNamedAsASubOfficeMatchesItsSeededName) {
+  const std::string place = "Delhi Circle,Delhi Region,New Delhi Central,";
+  const std::string csv =
+      kNewerHeader + place +
+      "Connaught Place SO,110001,PO,Non Delivery,NEW DELHI,DELHI,28.63,77.21\n" + place +
+      "Janpath S.O,110001,PO,Delivery,NEW DELHI,DELHI,NA,NA\n" + place +
+      "Krishi Bhawan S.O.,110001,PO,Delivery,NEW DELHI,DELHI,NA,NA\n" + place +
+      "Rail Bhawan P.O,110001,PO,Delivery,NEW DELHI,DELHI,NA,NA\n" + place +
+      // A branch office whose name says SO: not its type's suffix, kept.
+      "Shastri Bhawan SO,110001,BO,Delivery,NEW DELHI,DELHI,NA,NA\n";
+  const std::size_t offices_before = LookupPincode(db_, Pincode(110001)).value().offices.size();
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_TRUE(report->problems.empty()) << report->problems.front().message;
+  EXPECT_EQ(report->offices_updated, 4);
+  EXPECT_EQ(report->offices_added, 1);
+  const auto delhi = LookupPincode(db_, Pincode(110001)).value();
+  EXPECT_EQ(delhi.offices.size(), offices_before + 1);
+  std::map<std::string, std::optional<std::string>> type_of;
+  for (const PostOffice& office : delhi.offices) type_of[office.name] = office.branch_type;
+  for (const char* name : {"Connaught Place", "Janpath", "Krishi Bhawan", "Rail Bhawan"}) {
+    EXPECT_EQ(type_of[name], "PO") << name;
+  }
+  EXPECT_EQ(type_of.count("Connaught Place SO"), 0u);
+  EXPECT_EQ(type_of["Shastri Bhawan SO"], "BO");
 }
 
 TEST_F(Importer, ReadsTheOlderLayout) {

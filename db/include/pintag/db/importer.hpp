@@ -6,8 +6,9 @@
 //   older:  officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,
 //           Taluk,Districtname,statename
 // An office is identified by (pincode, office name); re-importing a file changes nothing. A
-// trailing " B.O"/" S.O"/" H.O" (or "BO"...) matching the office type is dropped from the name,
-// so India Post rows match the seed's names and fill in their branch type ("B.O" is stored "BO").
+// trailing " B.O"/" S.O"/" H.O" (or "BO"...) matching the office type is dropped from the name
+// (" S.O" of a PO too: the newer layout types sub offices PO), so India Post rows match the seed's
+// names and fill in their branch type ("B.O" is stored "BO").
 // New pincodes get new keys (probing past every key ever allocated, retired ones included);
 // existing keys never change; a retired pincode stays retired. The whole import is one transaction.
 
