@@ -210,6 +210,17 @@ Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   office.district = field(kDistrict);
   office.state = field(kState);
   office.taluk = optional(kTaluk);
+  // India Post writes NA for what it does not know. An optional field is then left unknown; a
+  // required one would be stored as the place "NA" and printed on labels ("NA, NA").
+  const std::pair<const char*, const std::string*> required[] = {
+      {"office name", &office.name}, {"division", &office.division}, {"region", &office.region},
+      {"circle", &office.circle},    {"district", &office.district}, {"state", &office.state}};
+  for (const auto& [name, value] : required) {
+    if (!value->empty() && IsUnknown(*value)) {
+      return Error{ErrorCode::kInvalid,
+                   std::string(name) + " is '" + *value + "', which means unknown; it is required"};
+    }
+  }
   for (const auto& [column, target, name] :
        {std::tuple{kLatitude, &office.latitude, "latitude"},
         std::tuple{kLongitude, &office.longitude, "longitude"}}) {

@@ -40,6 +40,9 @@ const std::string kOlderCsv =
 const std::string kNewerHeader =
     "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,statename,"
     "latitude,longitude\n";
+const std::string kOlderHeader =
+    "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+    "Districtname,statename\n";
 
 class Importer : public ::testing::Test {
  protected:
@@ -205,6 +208,35 @@ TEST_F(Importer, APostOfficeNamedAsASubOfficeMatchesItsSeededName) {
   }
   EXPECT_EQ(type_of.count("Connaught Place SO"), 0u);
   EXPECT_EQ(type_of["Shastri Bhawan SO"], "BO");
+}
+
+// India Post writes NA for what it does not know. In an optional field that is unknown; in a
+// required one (a place a label prints) it is a bad row, as an empty field is.
+TEST_F(Importer, ARequiredFieldThatSaysNaIsABadRow) {
+  const std::string csv = kOlderHeader +
+                          "Alpha B.O,999061,BO,Delivery,APS,APS,APS,NA,NA,APS\n"   // district
+                          "Beta B.O,999062,BO,Delivery,APS,APS,APS,T,APS,n/a\n"    // state
+                          "Gamma B.O,999063,BO,Delivery,Null,APS,APS,T,APS,APS\n"  // division
+                          "NA,999064,BO,Delivery,APS,APS,APS,T,APS,APS\n"          // office name
+                          "Delta B.O,999065,BO,NA,APS,APS,APS,NA,APS,APS\n";       // optional NA
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_EQ(report->problems.size(), 4u);
+  const std::pair<std::int64_t, const char*> expected[] = {
+      {2, "district is 'NA', which means unknown; it is required"},
+      {3, "state is 'n/a', which means unknown; it is required"},
+      {4, "division is 'Null', which means unknown; it is required"},
+      {5, "office name is 'NA', which means unknown; it is required"}};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(report->problems[i].line, expected[i].first);
+    EXPECT_EQ(report->problems[i].message, expected[i].second);
+  }
+  ASSERT_EQ(report->pincodes_added.size(), 1u);
+  const PincodeRecord delta = LookupPincode(db_, Pincode(999065)).value();
+  ASSERT_EQ(delta.offices.size(), 1u);
+  EXPECT_FALSE(delta.offices[0].delivery.has_value());
+  EXPECT_FALSE(delta.offices[0].taluk.has_value());
+  EXPECT_EQ(LookupPincode(db_, Pincode(999061)).error().code, ErrorCode::kNotFound);
 }
 
 TEST_F(Importer, ReadsTheOlderLayout) {
