@@ -302,6 +302,9 @@ Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions
     rows.push_back(std::move(row).value());
     if (report.rows % kProgressEvery == 0) progress("parse", reader.position(), csv.size());
   }
+  if (report.rows == 0) {
+    return Error{ErrorCode::kInvalid, "the file has a header and no data rows; nothing to import"};
+  }
   progress("parse", csv.size(), csv.size());
   return parsed;
 }

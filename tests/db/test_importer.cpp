@@ -328,6 +328,16 @@ TEST_F(Importer, RefusesAnUnknownHeader) {
             ErrorCode::kNotFound);
 }
 
+// A header and nothing else is an import with nothing in it: refused, as an empty file is.
+TEST_F(Importer, AHeaderWithoutRowsIsRefused) {
+  for (const std::string& csv : {kNewerHeader, kOlderHeader + "\r\n\n"}) {
+    const auto report = ImportDirectoryCsv(db_, csv);
+    ASSERT_FALSE(report.ok());
+    EXPECT_EQ(report.error().code, ErrorCode::kInvalid);
+    EXPECT_EQ(report.error().message, "the file has a header and no data rows; nothing to import");
+  }
+}
+
 TEST_F(Importer, AQuoteNeverClosedRefusesTheWholeFile) {
   // The reader runs to the end of the file inside the quote: the rows after it are not rows.
   const std::string csv =

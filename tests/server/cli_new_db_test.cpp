@@ -58,6 +58,8 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
       {"quote.csv", header + "\"Delhi,Delhi\n", "", "never closed"},
       {"all_bad.csv", header + bad_row + bad_row, "", "none of its 2 rows could be imported"},
       {"strict.csv", header + bad_row, "--strict", "--strict: 1 bad rows, nothing imported"},
+      {"header_only.csv", header + "\n", "",
+       "header_only.csv: the file has a header and no data rows; nothing to import"},
       {"unknown_places.csv",
        header + "Delhi,Delhi,New Delhi,Nowhere,110001,PO,Delivery,NA,NA,NA,NA\n", "",
        "unknown_places.csv:2: district is 'NA', which means unknown; it is required"},
