@@ -1,12 +1,46 @@
 #include "pintag/db/database.hpp"
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "guard.hpp"
 #include "schema.hpp"
 
 namespace pintag::db {
+namespace {
+
+/// What a file holds before it is taken as a registry.
+struct FileSchema {
+  int version = 0;           ///< PRAGMA user_version
+  std::int64_t objects = 0;  ///< tables, indexes, views and triggers; none in a new or empty file
+  std::string names;         ///< the first few table and view names, for a message
+};
+
+/// Read in one statement, so that a pintag creating the file at the same moment (its schema and
+/// version in one transaction) is seen before or after that, never halfway.
+FileSchema ReadFileSchema(Connection& connection) {
+  Statement read = connection.prepare(
+      "SELECT user_version, (SELECT count(*) FROM sqlite_master), "
+      "(SELECT group_concat(name, ', ') FROM (SELECT name FROM sqlite_master "
+      "WHERE type IN ('table', 'view') ORDER BY name LIMIT 3)) FROM pragma_user_version");
+  read.step();
+  return {read.getInt(0), read.getInt64(1), read.getText(2)};
+}
+
+/// Version 0 and yet tables: an SQLite file PinTag did not write (each migration step sets the
+/// version in the transaction that creates its tables). Seeding it would put PinTag's schema
+/// and 154,874 offices into someone else's data.
+std::optional<Error> RefuseForeignFile(const std::string& path, const FileSchema& schema) {
+  if (schema.version != 0 || schema.objects == 0) return std::nullopt;
+  return Error{ErrorCode::kConflict,
+               "database " + path + " is not a PinTag database: it already holds " +
+                   (schema.names.empty() ? "a schema" : "tables (" + schema.names + ")") +
+                   " and no PinTag schema version; give a PinTag database, or a new or empty "
+                   "file to create one in"};
+}
+
+}  // namespace
 
 Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& options) {
   try {
@@ -16,9 +50,13 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
     }
     OpenedDatabase opened{Connection(path, {.create = options.create,
                                             .read_only = options.read_only,
-                                            .busy_timeout_ms = options.busy_timeout_ms})};
+                                            .busy_timeout_ms = options.busy_timeout_ms,
+                                            .wal = false})};
     Connection& connection = opened.connection;
-    const int version = SchemaVersion(connection);
+    const FileSchema schema = ReadFileSchema(connection);
+    if (auto foreign = RefuseForeignFile(path, schema)) return *foreign;
+    if (!options.read_only) connection.execute("PRAGMA journal_mode=WAL");
+    const int version = schema.version;
     opened.upgraded_from = version;
     if (version > kSchemaVersion) {
       return Error{ErrorCode::kConflict,
@@ -38,7 +76,9 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
       // seeded file lets each page reach the WAL once instead of spilling repeatedly.
       connection.execute("PRAGMA cache_size = -131072");  // KiB
       Transaction transaction(connection);
-      if (SchemaVersion(connection) == 0) {  // re-checked under the write lock
+      const FileSchema locked = ReadFileSchema(connection);  // re-read under the write lock
+      if (auto foreign = RefuseForeignFile(path, locked)) return *foreign;
+      if (locked.version == 0) {
         detail::ApplyMigrations(connection, 0, kSchemaVersion);
         SeedDatabase(connection);
         opened.created = true;

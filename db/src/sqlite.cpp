@@ -150,7 +150,7 @@ Connection::Connection(const std::string& path, const ConnectionOptions& options
   db_.reset(raw);
   if (code != SQLITE_OK) Throw(raw, code, "cannot open database " + path);
   sqlite3_busy_timeout(raw, options.busy_timeout_ms);
-  if (!options.read_only) execute("PRAGMA journal_mode=WAL");
+  if (!options.read_only && options.wal) execute("PRAGMA journal_mode=WAL");
   // Statement journals in memory: a statement that fires the registry-version triggers (one per
   // row written) would otherwise write a temporary file per row, which made seeding 2x slower.
   execute("PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON; PRAGMA temp_store=MEMORY;");

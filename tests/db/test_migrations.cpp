@@ -111,6 +111,40 @@ TEST(Migrations, NotADatabaseAndMissingFilesAreErrors) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("missing.db")));
 }
 
+// An SQLite file with tables and user_version 0 is another application's (each migration sets the
+// version with its tables): refused, naming it, and left byte for byte as it was, journal mode
+// included. An empty file is still a new database, created and seeded.
+TEST(Migrations, AnotherApplicationsFileIsRefusedAndLeftAsItWas) {
+  TempDir dir;
+  const std::string other = dir.file("other.db");
+  {
+    Connection connection(other);
+    connection.execute(  // in a rollback journal, as the sqlite3 shell leaves a new file
+        "PRAGMA journal_mode=DELETE; CREATE TABLE x (a); CREATE TABLE y (b); "
+        "INSERT INTO x VALUES (1);");
+  }
+  const std::string bytes = test::ReadFile(other);
+  for (const OpenOptions& options :
+       {OpenOptions{}, OpenOptions{.seed = false}, OpenOptions{.read_only = true}}) {
+    const auto opened = OpenDatabase(other, options);
+    ASSERT_FALSE(opened.ok());
+    EXPECT_EQ(opened.error().code, ErrorCode::kConflict);
+    EXPECT_EQ(opened.error().message,
+              "database " + other +
+                  " is not a PinTag database: it already holds tables (x, y) and no PinTag "
+                  "schema version; give a PinTag database, or a new or empty file to create one "
+                  "in");
+  }
+  EXPECT_EQ(test::ReadFile(other), bytes);
+  EXPECT_FALSE(std::filesystem::exists(other + "-wal"));
+
+  const std::string empty = test::WriteFile(dir.file("empty.db"), "");
+  auto created = OpenDatabase(empty);
+  ASSERT_TRUE(created.ok()) << created.error().message;
+  EXPECT_TRUE(created->created);
+  EXPECT_EQ(CountRegistry(created.value().connection).value().pincodes_active, 19159);
+}
+
 TEST(Migrations, ReadOnlyOpenWorksOnCurrentFiles) {
   TempDir dir;
   const std::string path = test::CopyOfSeeded(dir);

@@ -5,7 +5,9 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
+#include "pintag/db/sqlite.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -75,6 +77,44 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
     EXPECT_EQ(run.out.find("created"), std::string::npos) << c.name << ": " << run.out;
     EXPECT_FALSE(std::filesystem::exists(db)) << c.name;
   }
+}
+
+// An SQLite file of another application's (user_version 0, tables of its own) is not seeded in
+// place: every command that opens a --db refuses it, naming it, and leaves it as it was, where
+// `pintag import basic.csv --db other.db` wrote PinTag's schema and 154,874 offices into it.
+TEST(CliNewDb, AnotherApplicationsDatabaseIsRefusedAndLeftAsItWas) {
+  const TempDir dir;
+  const std::string other = dir.file("other.db");
+  {
+    db::Connection connection(other);
+    // In a rollback journal, as `sqlite3 other.db "create table x(a)"` leaves it.
+    connection.execute("PRAGMA journal_mode=DELETE; CREATE TABLE x (a); INSERT INTO x VALUES (1);");
+  }
+  const std::string bytes = ReadFile(other);
+  const std::string csv = WriteFile(
+      dir.path() / "basic.csv",
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n"
+      "Delhi,Delhi,New Delhi,Somewhere,110001,BO,Delivery,X,Y,NA,NA\n");
+  const std::string says = other + " is not a PinTag database: it already holds tables (x)";
+  const std::vector<std::string> commands = {
+      "import " + csv + " --db " + other, "token create --role admin --db " + other,
+      "keys lookup 110001 --db " + other,
+      "snapshot --db " + other + " --out " + dir.file("snapshot.db")};
+  for (const std::string& command : commands) {
+    const CommandResult run = RunPintag(command);
+    EXPECT_EQ(run.status, 1) << command << ": " << run.out;
+    EXPECT_NE(run.out.find(says), std::string::npos) << command << ": " << run.out;
+    EXPECT_EQ(run.out.find("created"), std::string::npos) << command << ": " << run.out;
+  }
+  const std::string serve_err = dir.file("serve.err");
+  ServerProcess server({"--db", other}, serve_err, 60);
+  EXPECT_FALSE(server.ok()) << "served another application's database";
+  EXPECT_EQ(server.stop(), 1) << ReadFile(serve_err);
+  EXPECT_NE(ReadFile(serve_err).find(says), std::string::npos) << ReadFile(serve_err);
+  EXPECT_EQ(ReadFile(other), bytes);
+  EXPECT_FALSE(std::filesystem::exists(other + "-wal"));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("snapshot.db")));
 }
 
 }  // namespace

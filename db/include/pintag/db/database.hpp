@@ -30,7 +30,9 @@ struct OpenedDatabase {
 /// Opens `path`, migrating an older file to kSchemaVersion (each step and its version bump in one
 /// transaction). A new file is created, migrated and seeded in a single transaction, so a crash
 /// leaves an empty file that the next open seeds again. A file newer than this build is refused
-/// (kConflict) with a message naming both versions; a file that is not SQLite is kStorage.
+/// (kConflict) with a message naming both versions; a file that is not SQLite is kStorage. An
+/// SQLite file of another application's (version 0, yet tables in it) is refused (kConflict,
+/// naming it) before anything is written to it: it is never seeded in place.
 Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& options = {});
 
 /// PRAGMA user_version of an open connection.

@@ -101,10 +101,13 @@ struct ConnectionOptions {
   bool create = true;          ///< create the file when missing (else fail)
   bool read_only = false;      ///< open read-only
   int busy_timeout_ms = 5000;  ///< how long a statement waits for a lock before SQLITE_BUSY
+  /// Switch the file to WAL on open (never when read-only). OpenDatabase switches it itself once
+  /// it knows the file is its own, so that a file it refuses is left as it was.
+  bool wal = true;
 };
 
 /// One open database file. Move-only; closed in its destructor. Opening sets WAL (unless
-/// read-only), synchronous=NORMAL, busy_timeout and foreign_keys=ON.
+/// read-only or not `wal`), synchronous=NORMAL, busy_timeout and foreign_keys=ON.
 class Connection {
  public:
   explicit Connection(const std::string& path, const ConnectionOptions& options = {});
