@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <unordered_set>
 
@@ -38,19 +39,31 @@ enum Column {
   kColumnCount
 };
 
-struct LayoutSpec {
-  CsvLayout layout;
-  std::array<const char*, kColumnCount> names;  ///< lower-case header name, nullptr: absent
+/// A header name as India Post publishes it (compared case-insensitively) and what it holds.
+struct NamedColumn {
+  std::string_view name;
+  Column column;
 };
 
-constexpr LayoutSpec kLayouts[] = {
-    {CsvLayout::kNewer,
-     {"officename", "pincode", "officetype", "delivery", "divisionname", "regionname", "circlename",
-      "district", "statename", nullptr, "latitude", "longitude"}},
-    {CsvLayout::kOlder,
-     {"officename", "pincode", "officetype", "deliverystatus", "divisionname", "regionname",
-      "circlename", "districtname", "statename", "taluk", nullptr, nullptr}},
+constexpr NamedColumn kNewerColumns[] = {
+    {"circlename", kCircle}, {"regionname", kRegion},  {"divisionname", kDivision},
+    {"officename", kOffice}, {"pincode", kPincode},    {"officetype", kType},
+    {"delivery", kDelivery}, {"district", kDistrict},  {"statename", kState},
+    {"latitude", kLatitude}, {"longitude", kLongitude}};
+constexpr NamedColumn kOlderColumns[] = {{"officename", kOffice},     {"pincode", kPincode},
+                                         {"officeType", kType},       {"Deliverystatus", kDelivery},
+                                         {"divisionname", kDivision}, {"regionname", kRegion},
+                                         {"circlename", kCircle},     {"Taluk", kTaluk},
+                                         {"Districtname", kDistrict}, {"statename", kState}};
+
+struct LayoutSpec {
+  CsvLayout layout;
+  const char* label;                     ///< for messages
+  std::span<const NamedColumn> columns;  ///< in the published order
 };
+
+constexpr LayoutSpec kLayouts[] = {{CsvLayout::kNewer, "newer", kNewerColumns},
+                                   {CsvLayout::kOlder, "older", kOlderColumns}};
 
 std::string Lower(std::string_view text) {
   std::string out(text);
@@ -64,33 +77,76 @@ std::string_view Trim(std::string_view text) {
   return text;
 }
 
+/// "a, b and c" (or "a,b,c" with both separators ",").
+template <typename Range>
+std::string Join(const Range& items, std::string_view separator = ", ",
+                 std::string_view last_separator = " and ") {
+  std::string out;
+  const std::size_t count = std::size(items);
+  std::size_t i = 0;
+  for (const auto& item : items) {
+    if (i > 0) out += i + 1 == count ? last_separator : separator;
+    out += item;
+    ++i;
+  }
+  return out;
+}
+
 struct Mapping {
   CsvLayout layout;
   std::array<int, kColumnCount> index;  ///< field index per column, -1 when absent
   std::size_t width;
 };
 
-std::optional<Mapping> Detect(const std::vector<std::string>& header) {
-  std::map<std::string, int> positions;
+/// The layout a header is, or why it is neither: the columns missing from the nearer layout, or
+/// one of its columns given twice (which of the two holds the value cannot be told).
+Result<Mapping> Detect(const std::vector<std::string>& header) {
+  std::map<std::string, std::vector<std::size_t>> fields_named;  // lower-case name -> 1-based
   for (std::size_t i = 0; i < header.size(); ++i) {
-    positions.emplace(Lower(Trim(header[i])), static_cast<int>(i));
+    fields_named[Lower(Trim(header[i]))].push_back(i + 1);
   }
+  const LayoutSpec* nearest = nullptr;
+  std::vector<std::string_view> missing;
   for (const LayoutSpec& spec : kLayouts) {
-    Mapping mapping{spec.layout, {}, header.size()};
-    bool all = true;
-    for (int c = 0; c < kColumnCount; ++c) {
-      mapping.index[c] = -1;
-      if (spec.names[c] == nullptr) continue;
-      const auto found = positions.find(spec.names[c]);
-      if (found == positions.end()) {
-        all = false;
-        break;
-      }
-      mapping.index[c] = found->second;
+    std::vector<std::string_view> lacking;
+    for (const NamedColumn& column : spec.columns) {
+      if (!fields_named.contains(Lower(column.name))) lacking.push_back(column.name);
     }
-    if (all) return mapping;
+    if (nearest == nullptr || lacking.size() < missing.size()) {
+      nearest = &spec;
+      missing = std::move(lacking);
+    }
   }
-  return std::nullopt;
+  if (!missing.empty()) {
+    std::string layouts;
+    for (const LayoutSpec& spec : kLayouts) {
+      std::vector<std::string_view> names;
+      names.reserve(spec.columns.size());
+      for (const NamedColumn& column : spec.columns) names.push_back(column.name);
+      layouts +=
+          (layouts.empty() ? "" : "; ") + std::string(spec.label) + ": " + Join(names, ",", ",");
+    }
+    return Error{ErrorCode::kInvalid,
+                 "line 1: not an All India Pincode Directory header: missing the " +
+                     std::string(nearest->label) + " layout's " + Join(missing) +
+                     " (the layouts' columns, " + layouts + ")"};
+  }
+  Mapping mapping{nearest->layout, {}, header.size()};
+  mapping.index.fill(-1);
+  for (const NamedColumn& column : nearest->columns) {
+    const std::vector<std::size_t>& fields = fields_named.at(Lower(column.name));
+    if (fields.size() > 1) {
+      std::vector<std::string> numbers;
+      numbers.reserve(fields.size());
+      for (const std::size_t field : fields) numbers.push_back(std::to_string(field));
+      return Error{ErrorCode::kInvalid,
+                   "line 1: the header has the column " + std::string(column.name) + " " +
+                       std::to_string(fields.size()) + " times (fields " + Join(numbers) +
+                       "); which one holds the value cannot be told"};
+    }
+    mapping.index[column.column] = static_cast<int>(fields.front() - 1);
+  }
+  return mapping;
 }
 
 /// "NA", "" and similar mean unknown.
@@ -248,14 +304,12 @@ Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions
   std::string error;
   const auto header = reader.next(&error);
   if (!header) return Error{ErrorCode::kInvalid, "the file is empty"};
-  const auto mapping = Detect(header->fields);
-  if (!mapping || !error.empty()) {
+  if (!error.empty()) {
     return Error{ErrorCode::kInvalid,
-                 "line 1: not an All India Pincode Directory header (expected the columns "
-                 "circlename,regionname,divisionname,officename,pincode,officetype,delivery,"
-                 "district,statename,latitude,longitude or officename,pincode,officeType,"
-                 "Deliverystatus,divisionname,regionname,circlename,Taluk,Districtname,statename)"};
+                 "line 1: not an All India Pincode Directory header (" + error + ")"};
   }
+  const Result<Mapping> mapping = Detect(header->fields);
+  if (!mapping) return mapping.error();
 
   // Parse and check everything before touching the database.
   ParsedImport parsed;

@@ -328,6 +328,51 @@ TEST_F(Importer, RefusesAnUnknownHeader) {
             ErrorCode::kNotFound);
 }
 
+// A header that lacks a column names the ones it lacks; one that has a column twice (names are
+// compared case-insensitively) names it, since which field holds the value cannot be told.
+TEST_F(Importer, AHeaderNamesTheColumnsItLacksOrRepeats) {
+  const std::string row = "APS,APS,APS,Camp,999091,BO,Delivery,APS,APS,NA,NA\n";
+  const auto without_district = ImportDirectoryCsv(
+      db_,
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,statename,"
+      "latitude,longitude\n" +
+          row);
+  ASSERT_FALSE(without_district.ok());
+  EXPECT_NE(without_district.error().message.find(
+                "line 1: not an All India Pincode Directory header: missing the newer layout's "
+                "district ("),
+            std::string::npos)
+      << without_district.error().message;
+  const auto older_without_two = ImportDirectoryCsv(
+      db_,
+      "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,"
+      "statename\nA,999092,BO,Delivery,APS,APS,APS,APS\n");
+  ASSERT_FALSE(older_without_two.ok());
+  EXPECT_NE(
+      older_without_two.error().message.find("missing the older layout's Taluk and Districtname"),
+      std::string::npos)
+      << older_without_two.error().message;
+
+  const std::int64_t changes = db_.queryInt64("SELECT total_changes()");
+  const auto twice = ImportDirectoryCsv(db_,
+                                        "circlename,regionname,divisionname,officename,"
+                                        "pincode,officetype,delivery,district,statename,"
+                                        "latitude,longitude, PINCODE\n"
+                                        "APS,APS,APS,Camp,999093,BO,Delivery,APS,APS,NA,NA,"
+                                        "999094\n");
+  ASSERT_FALSE(twice.ok());
+  EXPECT_EQ(twice.error().code, ErrorCode::kInvalid);
+  EXPECT_EQ(twice.error().message,
+            "line 1: the header has the column pincode 2 times (fields 5 and 12); which one holds "
+            "the value cannot be told");
+  EXPECT_EQ(db_.queryInt64("SELECT total_changes()"), changes);
+  // A column the importer does not read may repeat (a spreadsheet's empty trailing columns).
+  const auto extra = ImportDirectoryCsv(db_, kNewerHeader.substr(0, kNewerHeader.size() - 1) +
+                                                 ",,\n" + row.substr(0, row.size() - 1) + ",,\n");
+  ASSERT_TRUE(extra.ok()) << extra.error().message;
+  EXPECT_EQ(extra->offices_added, 1);
+}
+
 // A header and nothing else is an import with nothing in it: refused, as an empty file is.
 TEST_F(Importer, AHeaderWithoutRowsIsRefused) {
   for (const std::string& csv : {kNewerHeader, kOlderHeader + "\r\n\n"}) {

@@ -48,6 +48,9 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
       "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
       "statename,latitude,longitude\n";
   const std::string bad_row = "Delhi,Delhi,New Delhi,Nowhere,12345,BO,Delivery,X,Y,NA,NA\n";
+  const std::string good_row = "Delhi,Delhi,New Delhi,Somewhere,110001,BO,Delivery,X,Y,NA,NA\n";
+  std::string lacking_district = header;
+  lacking_district.erase(lacking_district.find("district,"), 9);
   struct Case {
     const char* name;
     std::string content;
@@ -65,6 +68,10 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
       {"unknown_places.csv",
        header + "Delhi,Delhi,New Delhi,Nowhere,110001,PO,Delivery,NA,NA,NA,NA\n", "",
        "unknown_places.csv:2: district is 'NA', which means unknown; it is required"},
+      {"pincode_twice.csv", "pincode," + header + "110001," + good_row, "",
+       "the header has the column pincode 2 times (fields 1 and 6)"},
+      {"lacking_district.csv", lacking_district + good_row, "",
+       "missing the newer layout's district ("},
   };
   for (const Case& c : cases) {
     const std::string file = WriteFile(dir.path() / c.name, c.content);

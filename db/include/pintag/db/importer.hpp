@@ -82,10 +82,11 @@ Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport pars
                                        const ImportOptions& options = {});
 
 /// Imports CSV text (ParseDirectoryCsv, then ApplyDirectoryCsv). Errors (nothing applied): kInvalid
-/// for an empty file, an unrecognised header, a header and no rows, or a quoted field never closed
-/// (the rest of the file is then one field), kFull when the keys run out, kBusy/kStorage from
-/// SQLite. Bad rows are reported in the report instead; an office (pincode and name) a second
-/// time is a bad row unless the row is the same as the first, which is kept.
+/// for an empty file, a header of neither layout (naming the columns it lacks) or with a column
+/// twice (naming it), a header and no rows, or a quoted field never closed (the rest of the file
+/// is then one field), kFull when the keys run out, kBusy/kStorage from SQLite. Bad rows are
+/// reported in the report instead; an office (pincode and name) a second time is a bad row unless
+/// the row is the same as the first, which is kept.
 Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
                                         const ImportOptions& options = {});
 /// The whole file, read before any database is opened; kNotFound when it cannot be read,
