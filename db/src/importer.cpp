@@ -16,6 +16,7 @@
 
 #include "guard.hpp"
 #include "pintag/db/csv.hpp"
+#include "pintag/db/text.hpp"
 #include "registry_internal.hpp"
 
 namespace pintag::db {
@@ -71,12 +72,6 @@ std::string Lower(std::string_view text) {
   return out;
 }
 
-std::string_view Trim(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  return text;
-}
-
 /// "a, b and c" (or "a,b,c" with both separators ",").
 template <typename Range>
 std::string Join(const Range& items, std::string_view separator = ", ",
@@ -103,7 +98,7 @@ struct Mapping {
 Result<Mapping> Detect(const std::vector<std::string>& header) {
   std::map<std::string, std::vector<std::size_t>> fields_named;  // lower-case name -> 1-based
   for (std::size_t i = 0; i < header.size(); ++i) {
-    fields_named[Lower(Trim(header[i]))].push_back(i + 1);
+    fields_named[Lower(TrimUnicodeSpaces(header[i]))].push_back(i + 1);
   }
   const LayoutSpec* nearest = nullptr;
   std::vector<std::string_view> missing;
@@ -204,7 +199,7 @@ std::string StripTypeSuffix(std::string name, const std::optional<std::string>& 
     }
     if (match) {
       name.resize(name.size() - pattern.size());
-      return std::string(Trim(name));
+      return std::string(TrimUnicodeSpaces(name));
     }
   }
   return name;
@@ -243,9 +238,11 @@ Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
     return Error{ErrorCode::kInvalid, "expected " + std::to_string(mapping.width) +
                                           " fields, got " + std::to_string(record.fields.size())};
   }
+  // Trimmed of Unicode spaces, not only ASCII ones: a field that passed through a spreadsheet may
+  // end in U+00A0, and a name stored with one would not match its seeded self.
   const auto field = [&](Column c) -> std::string {
     return mapping.index[c] < 0 ? std::string()
-                                : std::string(Trim(record.fields[mapping.index[c]]));
+                                : std::string(TrimUnicodeSpaces(record.fields[mapping.index[c]]));
   };
   const auto optional = [&](Column c) -> std::optional<std::string> {
     if (mapping.index[c] < 0) return std::nullopt;

@@ -37,7 +37,34 @@ bool IsInvisible(char32_t c) {
   return false;
 }
 
+/// What TrimUnicodeSpaces drops: the tab (CheckText refuses it inside text) and the characters
+/// that stand for a space, each of them also invisible to IsBlank.
+bool IsTrimmedSpace(char32_t c) {
+  return c == U'\t' || c == U' ' || c == 0x00A0 || c == 0x1680 || (c >= 0x2000 && c <= 0x200B) ||
+         c == 0x202F || c == 0x205F || c == 0x2060 || c == 0x3000 || c == 0xFEFF;
+}
+
 }  // namespace
+
+std::string_view TrimUnicodeSpaces(std::string_view text) {
+  while (!text.empty()) {
+    const Utf8CodePoint first = DecodeUtf8(text, 0);
+    if (first.length == 0 || !IsTrimmedSpace(first.value)) break;
+    text.remove_prefix(first.length);
+  }
+  while (!text.empty()) {
+    // The last code point starts at the last byte that is not a continuation byte (10xxxxxx).
+    std::size_t start = text.size() - 1;
+    while (start > 0 && text.size() - start < 4 &&
+           (static_cast<unsigned char>(text[start]) & 0xC0) == 0x80) {
+      --start;
+    }
+    const Utf8CodePoint last = DecodeUtf8(text, start);
+    if (last.length != text.size() - start || !IsTrimmedSpace(last.value)) break;
+    text.remove_suffix(last.length);
+  }
+  return text;
+}
 
 bool IsBlank(std::string_view text) {
   for (std::size_t i = 0; i < text.size();) {

@@ -239,6 +239,33 @@ TEST_F(Importer, ARequiredFieldThatSaysNaIsABadRow) {
   EXPECT_EQ(LookupPincode(db_, Pincode(999061)).error().code, ErrorCode::kNotFound);
 }
 
+// Fields are trimmed of Unicode spaces as of ASCII ones (U+00A0 from a spreadsheet, U+3000,
+// zero-width spaces): a no-break space after "S.O" no longer keeps the suffix, nor adds an office.
+TEST_F(Importer, UnicodeSpacesAroundAFieldAreTrimmed) {
+  const std::string nbsp = "\u00a0";
+  const std::string csv =
+      kNewerHeader + "Delhi Circle,Delhi Region,New Delhi Central,Connaught Place S.O" + nbsp +
+      ",110001" + nbsp + ",SO,Delivery,Central Delhi" + nbsp + ",Delhi,NA,NA\n" + "APS,APS,APS," +
+      nbsp + "Nbsp" + nbsp + "Camp\u200b,999071,BO,Delivery,\u3000Apsdist," + "APS\ufeff,NA,NA\n" +
+      // A variation selector at the end belongs to the emoji before it: kept.
+      "APS,APS,APS,Heart \u2764\ufe0f,999072,BO,Delivery,APS,APS,NA,NA\n" +
+      "APS,APS,APS,Blank District,999073,BO,Delivery," + nbsp + nbsp + ",APS,NA,NA\n";
+  const std::size_t offices_before = LookupPincode(db_, Pincode(110001)).value().offices.size();
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_EQ(report->problems.size(), 1u);
+  EXPECT_EQ(report->problems[0].line, 5);
+  EXPECT_EQ(report->problems[0].message, "district is empty");
+  EXPECT_EQ(report->offices_updated, 1);
+  EXPECT_EQ(LookupPincode(db_, Pincode(110001)).value().offices.size(), offices_before);
+  const PincodeRecord camp = LookupPincode(db_, Pincode(999071)).value();
+  ASSERT_EQ(camp.offices.size(), 1u);
+  EXPECT_EQ(camp.offices[0].name, "Nbsp" + nbsp + "Camp");  // inside, it stays
+  EXPECT_EQ(camp.offices[0].district, "Apsdist");
+  EXPECT_EQ(camp.offices[0].state, "APS");
+  EXPECT_EQ(LookupPincode(db_, Pincode(999072)).value().offices.at(0).name, "Heart \u2764\ufe0f");
+}
+
 TEST_F(Importer, ReadsTheOlderLayout) {
   const auto report = ImportDirectoryCsv(db_, kOlderCsv);
   ASSERT_TRUE(report.ok()) << report.error().message;

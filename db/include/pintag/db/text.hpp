@@ -20,6 +20,13 @@ inline constexpr std::size_t kMaxJsonBytes = 1 << 20;  ///< a scan log entry's J
 /// and, from the seed and imports, stored ("New Delhi " and "New Delhi" are one office).
 std::string_view TrimSpaces(std::string_view text);
 
+/// `text` without tabs and Unicode spaces at either end: the space separators (Zs: U+0020, U+00A0
+/// no-break space, U+1680, U+2000–U+200A, U+202F, U+205F, U+3000) and the zero-width spaces
+/// U+200B, U+2060 and U+FEFF, all of them blank to IsBlank. How the importer trims a CSV field, so
+/// a field of nothing else trims to "". Joiners, variation selectors and bidi controls stay: at
+/// an end they still belong to the visible text beside them.
+std::string_view TrimUnicodeSpaces(std::string_view text);
+
 /// True when `text` shows nothing: it is empty or holds only spaces and invisible characters —
 /// Unicode's space separators (Zs: U+0020, U+00A0 no-break space, U+2000–U+200A, U+3000, …),
 /// line and paragraph separators, format characters (Cf: U+200B zero-width space, U+200C/D,
