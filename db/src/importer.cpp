@@ -150,7 +150,13 @@ bool IsUnknown(std::string_view text) {
   return lower.empty() || lower == "na" || lower == "n/a" || lower == "null";
 }
 
+/// A decimal number. from_chars refuses a leading '+', which a spreadsheet may write: it is taken
+/// before a digit or a point (so "+-5" and "++5" stay bad).
 std::optional<double> ParseNumber(std::string_view text) {
+  if (text.size() > 1 && text[0] == '+' &&
+      (std::isdigit(static_cast<unsigned char>(text[1])) != 0 || text[1] == '.')) {
+    text.remove_prefix(1);
+  }
   double value = 0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {

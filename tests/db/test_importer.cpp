@@ -266,6 +266,25 @@ TEST_F(Importer, UnicodeSpacesAroundAFieldAreTrimmed) {
   EXPECT_EQ(LookupPincode(db_, Pincode(999072)).value().offices.at(0).name, "Heart \u2764\ufe0f");
 }
 
+// A spreadsheet may write a coordinate with its sign: "+77.5" is 77.5; "+-5" is still not a number.
+TEST_F(Importer, ACoordinateWithALeadingPlusIsANumber) {
+  const std::string csv = kNewerHeader +
+                          "APS,APS,APS,Plus Camp,999081,BO,Delivery,APS,APS,+12.5,+77.5\n"
+                          "APS,APS,APS,Point Camp,999082,BO,Delivery,APS,APS,+.5,77\n"
+                          "APS,APS,APS,Twice Camp,999083,BO,Delivery,APS,APS,+-5,77\n"
+                          "APS,APS,APS,Bare Camp,999084,BO,Delivery,APS,APS,12,+\n";
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  ASSERT_EQ(report->problems.size(), 2u);
+  EXPECT_EQ(report->problems[0].message, "latitude '+-5' is not a number");
+  EXPECT_EQ(report->problems[1].message, "longitude '+' is not a number");
+  const PostOffice plus = LookupPincode(db_, Pincode(999081)).value().offices.at(0);
+  EXPECT_DOUBLE_EQ(plus.latitude.value_or(0), 12.5);
+  EXPECT_DOUBLE_EQ(plus.longitude.value_or(0), 77.5);
+  EXPECT_DOUBLE_EQ(LookupPincode(db_, Pincode(999082)).value().offices.at(0).latitude.value_or(0),
+                   0.5);
+}
+
 TEST_F(Importer, ReadsTheOlderLayout) {
   const auto report = ImportDirectoryCsv(db_, kOlderCsv);
   ASSERT_TRUE(report.ok()) << report.error().message;
