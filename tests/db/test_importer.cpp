@@ -554,6 +554,22 @@ TEST_F(Importer, CommandLineImportCreatesTheDatabaseAndLooksUp) {
   EXPECT_NE(none.out.find("none of its 1 rows could be imported"), std::string::npos) << none.out;
 }
 
+// On a terminal the progress bar is erased before the database is said to be created: the message
+// was written onto the bar's line ("...] 100%created fresh.db and seeded it").
+TEST_F(Importer, CommandLineImportOnATerminalSaysItCreatedTheDatabaseOnALineOfItsOwn) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  const std::string csv = test::WriteFile(dir_.file("newer.csv"), kNewerCsv);
+  const std::string db = dir_.file("fresh.db");
+  // script(1) runs the command on a pseudo-terminal and copies what it shows to stdout.
+  const auto shown = test::RunCommand("script -qec '" + test::PintagExe() + " import " + csv +
+                                      " --db " + db + "' /dev/null < /dev/null");
+  EXPECT_EQ(shown.exit_code, 0) << shown.out;
+  EXPECT_NE(shown.out.find("parse ["), std::string::npos) << shown.out;  // a terminal: a bar
+  EXPECT_NE(shown.out.find("\r\033[Kcreated " + db + " and seeded it"), std::string::npos)
+      << shown.out;
+  EXPECT_EQ(shown.out.find("%created"), std::string::npos) << shown.out;
+}
+
 // A file that cannot be read leaves no database behind, and says why it cannot be read.
 TEST_F(Importer, CommandLineImportOfAMissingFileCreatesNoDatabase) {
   if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";

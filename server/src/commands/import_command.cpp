@@ -40,9 +40,12 @@ class ProgressBar {
               << "%" << std::flush;
     drawn_ = true;
   }
-  ~ProgressBar() {
+  /// Erases the bar, so that what is said next starts a line of its own; the next call redraws it.
+  void clear() {
     if (drawn_) std::cerr << "\r\033[K" << std::flush;
+    drawn_ = false;
   }
+  ~ProgressBar() { clear(); }
 
  private:
   std::chrono::steady_clock::time_point last_{};
@@ -88,6 +91,7 @@ void Run(const ImportArgs& args) {
     throw std::runtime_error(args.file + ": none of its " + std::to_string(parsed->report.rows) +
                              " rows could be imported");
   }
+  bar->clear();  // OpenDb may say it created the database
   db::Connection connection = OpenDb(args.db);
   auto result = db::ApplyDirectoryCsv(connection, std::move(parsed).value(), options);
   bar.reset();
