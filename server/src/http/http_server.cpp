@@ -505,8 +505,8 @@ struct HttpServer::Impl {
         break;
     }
     return ProblemResponse(400,
-                           "the request body could not be read (a chunked body's coding is "
-                           "malformed, or the connection failed)");
+                           "the request body could not be read as its headers describe it (a "
+                           "malformed chunked or multipart body, or a failed connection)");
   }
 
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).

@@ -24,26 +24,26 @@ void ShutAndClose(int fd) {
 
 /// Takes the empty lines a client may send before a request (RFC 9112, 2.2: a stray CRLF after a
 /// body): cpp-httplib would answer such a line 400, and the client would take that for the
-/// answer to its next request.
+/// answer to its next request. At most kMaxEmptyLineBytes, in one read: a client that sends
+/// nothing but empty lines kept this loop (on a worker, or on the waiting thread under its lock)
+/// taking them as fast as they came, and the server stalled; past that many, its next "request
+/// line" is empty, answered 400, and the connection closed.
 void DropEmptyLinesBeforeARequest(int fd) {
-  std::array<char, 64> peeked{};
-  for (;;) {
-    ssize_t n = 0;
-    do {
-      n = ::recv(fd, peeked.data(), peeked.size(), MSG_PEEK | MSG_DONTWAIT);
-    } while (n < 0 && errno == EINTR);
-    if (n <= 0) return;
-    std::size_t empty = 0;
-    while (empty < static_cast<std::size_t>(n) &&
-           (peeked[empty] == '\r' || peeked[empty] == '\n')) {
-      ++empty;
-    }
-    if (empty == 0) return;
-    do {
-      n = ::recv(fd, peeked.data(), empty, MSG_DONTWAIT);
-    } while (n < 0 && errno == EINTR);
-    if (n <= 0) return;
+  constexpr std::size_t kMaxEmptyLineBytes = 64;
+  std::array<char, kMaxEmptyLineBytes> peeked{};
+  ssize_t n = 0;
+  do {
+    n = ::recv(fd, peeked.data(), peeked.size(), MSG_PEEK | MSG_DONTWAIT);
+  } while (n < 0 && errno == EINTR);
+  if (n <= 0) return;
+  std::size_t empty = 0;
+  while (empty < static_cast<std::size_t>(n) && (peeked[empty] == '\r' || peeked[empty] == '\n')) {
+    ++empty;
   }
+  if (empty == 0) return;
+  do {
+    n = ::recv(fd, peeked.data(), empty, MSG_DONTWAIT);
+  } while (n < 0 && errno == EINTR);
 }
 
 }  // namespace
