@@ -476,6 +476,20 @@ TEST_F(LoopbackTest, AFloodOfEmptyLinesHoldsNoWorker) {
   for (std::thread& flooder : flooders) flooder.join();
 }
 
+// The limit is 100 of the client's headers: cpp-httplib's four of its own (REMOTE_ADDR and the
+// like) were counted with them, so the 97th was refused.
+TEST_F(LoopbackTest, AHundredHeadersAreTakenAndTheHundredAndFirstRefused) {
+  const auto with_headers = [](int count) {
+    std::string request = "GET /livez HTTP/1.1\r\nHost: x\r\nConnection: close\r\n";
+    for (int i = 2; i < count; ++i) request += "X-H" + std::to_string(i) + ": v\r\n";
+    return request + "\r\n";
+  };
+  std::string answer = raw(with_headers(100));
+  EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
+  answer = raw(with_headers(101));
+  EXPECT_EQ(answer.rfind("HTTP/1.1 431", 0), 0U) << answer.substr(0, 300);
+}
+
 TEST_F(LoopbackTest, MultipartPartsReachTheHandler) {
   const httplib::MultipartFormDataItems items = {{"image", "JPEGBYTES", "photo.jpg", "image/jpeg"},
                                                  {"note", "hi", "", ""}};

@@ -32,6 +32,7 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <string_view>
 #include <thread>
 
 #include "connection_stream.hpp"
@@ -58,9 +59,17 @@ void Apply(const HttpResponse& from, httplib::Response& to) {
   to.set_content(from.body, from.content_type);
 }
 
+/// The headers the client sent. cpp-httplib 0.11.4 adds four of its own (REMOTE_ADDR and the
+/// like) to a request's headers, which made the 100-header limit 96 of the client's.
 HeaderMap Headers(const httplib::Request& req) {
+  static const std::array<std::string_view, 4> kAddedByHttplib = {"REMOTE_ADDR", "REMOTE_PORT",
+                                                                  "LOCAL_ADDR", "LOCAL_PORT"};
   HeaderMap headers;
-  for (const auto& [name, value] : req.headers) headers.emplace(name, value);
+  for (const auto& [name, value] : req.headers) {
+    if (std::find(kAddedByHttplib.begin(), kAddedByHttplib.end(), name) == kAddedByHttplib.end()) {
+      headers.emplace(name, value);
+    }
+  }
   return headers;
 }
 
