@@ -98,7 +98,7 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
       return -1;
     }
     ssize_t got = 0;
-    if (head_read_ || head_ended_) {
+    if (head_read_ || head_check_.ended()) {
       // The body: exactly the bytes asked for, which cpp-httplib bounds by the body's length (a
       // chunk-size line it reads one byte at a time).
       do {
@@ -111,9 +111,9 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
       n = static_cast<std::size_t>(got);
     } else {
       // The head, which cpp-httplib reads a byte at a time: one peek, then what it holds of the
-      // head is taken into the buffer, never a byte past the head's blank line. A byte past it
-      // could be the next request on the connection (pipelined), and the buffer ends with this
-      // request.
+      // head is checked and taken into the buffer, never a byte past the head's blank line. A
+      // byte past it could be the next request on the connection (pipelined), and the buffer
+      // ends with this request.
       do {
         got = ::recv(fd_, buffer_.data(), buffer_.size(), MSG_PEEK);
       } while (got < 0 && errno == EINTR);
@@ -126,7 +126,7 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
       do {
         got = ::recv(fd_, buffer_.data(), take, 0);
       } while (got < 0 && errno == EINTR);
-      if (got <= 0) return got;
+      if (got <= 0 || head_check_.refusal()) return -1;
       n = std::min(size, static_cast<std::size_t>(got));
       std::memcpy(ptr, buffer_.data(), n);
       buffered_begin_ = n;
@@ -135,7 +135,6 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
   }
   if (!head_read_) {
     handed_out_ += n;
-    if (!head_check_.take(std::string_view(ptr, n))) return -1;
   } else if (size == 1 && *ptr != '\n') {
     ++body_line_bytes_;  // a line being read byte by byte; a larger read is content, not a line
   } else {
@@ -145,20 +144,10 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
 }
 
 std::size_t ConnectionStream::headBytesToTake(std::string_view peeked) {
-  // The head: all of what was peeked, unless the blank line that ends the head is in it.
+  // Checked as they are taken, a byte at a time: the check says where the head ends (its blank
+  // line) and where it breaks a rule, and no byte past either is taken.
   for (std::size_t i = 0; i < peeked.size(); ++i) {
-    const char c = peeked[i];
-    if (c != '\n') {
-      ++head_line_bytes_;
-      head_line_last_ = c;
-      continue;
-    }
-    const bool blank = head_line_bytes_ == 0 || (head_line_bytes_ == 1 && head_line_last_ == '\r');
-    head_line_bytes_ = 0;
-    if (blank) {
-      head_ended_ = true;
-      return i + 1;
-    }
+    if (!head_check_.take(peeked.substr(i, 1)) || head_check_.ended()) return i + 1;
   }
   return peeked.size();
 }

@@ -80,8 +80,8 @@ class ConnectionStream final : public httplib::Stream {
   bool closeAfterAnswer() const { return close_; }
 
  private:
-  /// How many of `peeked`, the bytes waiting in the socket, a read of the head takes: all, or
-  /// through the blank line that ends the head.
+  /// How many of `peeked`, the bytes waiting in the socket, a read of the head takes, checking
+  /// them: all, or through the blank line that ends the head, or the byte the check refused.
   std::size_t headBytesToTake(std::string_view peeked);
 
   int fd_;
@@ -91,10 +91,7 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t handed_out_ = 0;  ///< bytes read() has returned while the head was being read
   bool head_read_ = false;
   bool over_budget_ = false;
-  RequestHeadCheck head_check_;
-  bool head_ended_ = false;          ///< the head's blank line has been taken from the socket
-  std::size_t head_line_bytes_ = 0;  ///< bytes taken of the head's current line, its LF not yet
-  char head_line_last_ = 0;          ///< the last of them
+  RequestHeadCheck head_check_;      ///< fed the head's bytes as they are taken from the socket
   std::size_t body_line_bytes_ = 0;  ///< bytes of the body's current line read one at a time
   bool body_line_too_long_ = false;
   ReadEnd read_end_ = ReadEnd::kNone;
