@@ -1,7 +1,8 @@
 #include "request_head_check.hpp"
 
-#include <cctype>
 #include <cstdio>
+
+#include "header_text.hpp"
 
 namespace pintag::server {
 namespace {
@@ -42,8 +43,7 @@ std::string Hex(char c) {
 
 /// Which of the headers that frame a body `name` is, told without case.
 RequestHeadCheck::Value ValueKind(const std::string& name) {
-  std::string lower = name;
-  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string lower = Lower(name);
   if (lower == "content-length") return RequestHeadCheck::Value::kLength;
   if (lower == "transfer-encoding") return RequestHeadCheck::Value::kCoding;
   return RequestHeadCheck::Value::kOther;
