@@ -7,8 +7,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <vector>
+#include <random>
 
 namespace pintag {
 namespace {
@@ -30,17 +29,17 @@ int WriteAndClose(int fd, std::string_view bytes) {
   return failure;
 }
 
-/// The process's file mode creation mask, read without changing it (umask() sets it, and other
-/// threads may be creating files meanwhile).
-mode_t CurrentUmask() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("Umask:", 0) == 0) {
-      return static_cast<mode_t>(std::strtoul(line.c_str() + 6, nullptr, 8));
-    }
+/// Creates a new file beside `destination` as open() creates one (0666 less the umask), and
+/// names it in `name`: its descriptor, or -1 with errno set.
+int CreateBeside(const std::string& destination, std::string& name) {
+  std::random_device random;
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    name = destination + ".tmp-" + std::to_string(random());
+    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0 || errno != EEXIST) return fd;
   }
-  return 022;
+  errno = EEXIST;
+  return -1;
 }
 
 }  // namespace
@@ -65,27 +64,23 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
       std::free(resolved);
     }
   }
-  std::vector<char> temporary(destination.begin(), destination.end());
-  const std::string suffix = ".tmp-XXXXXX";
-  temporary.insert(temporary.end(), suffix.begin(), suffix.end());
-  temporary.push_back('\0');
-  const int fd = ::mkostemp(temporary.data(), O_CLOEXEC);
+  std::string temporary;
+  const int fd = CreateBeside(destination, temporary);
   if (fd < 0) {
     // A file that may be written in a directory that may not: written in place, as before.
     if (exists && (errno == EACCES || errno == EPERM || errno == EROFS)) return in_place();
     return std::strerror(errno);
   }
-  // mkostemp makes the file 0600: give it the mode the file had, or a new file would get.
-  const mode_t mode = exists ? (target.st_mode & 07777) : (0666 & ~CurrentUmask());
-  int failure = ::fchmod(fd, mode) == 0 ? 0 : errno;
+  // A file replaced keeps its mode; a new one has the umask's, as open() gave it.
+  int failure = exists && ::fchmod(fd, target.st_mode & 07777) != 0 ? errno : 0;
   if (failure != 0) {
     ::close(fd);
   } else {
     failure = WriteAndClose(fd, bytes);
   }
-  if (failure == 0 && ::rename(temporary.data(), destination.c_str()) != 0) failure = errno;
+  if (failure == 0 && ::rename(temporary.c_str(), destination.c_str()) != 0) failure = errno;
   if (failure != 0) {
-    ::unlink(temporary.data());
+    ::unlink(temporary.c_str());
     return std::strerror(failure);
   }
   return {};
