@@ -62,37 +62,12 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.match(await page.locator('#scan-photo').getAttribute('alt'), /outlined: 110001/);
   // The outline is drawn from the answer's corners: it must sit on the tag in the picture, i.e.
   // inside the photo and around its dark square (the tag is the darkest thing on a label).
-  const outline = await page.evaluate(() => {
-    const img = document.getElementById('scan-photo');
-    const polygon = document.querySelector('#outlines g[data-pincode="110001"] polygon');
-    const box = polygon.getBoundingClientRect();
-    const frame = img.getBoundingClientRect();
-    const canvas = document.createElement('canvas');
-    canvas.width = img.naturalWidth;
-    canvas.height = img.naturalHeight;
-    const context = canvas.getContext('2d');
-    context.drawImage(img, 0, 0);
-    const sx = img.naturalWidth / frame.width;
-    const sy = img.naturalHeight / frame.height;
-    const luma = (x, y) => {
-      const [r, g, b] = context.getImageData(Math.round(x * sx), Math.round(y * sy), 1, 1).data;
-      return 0.2126 * r + 0.7152 * g + 0.0722 * b;
-    };
-    const cy = box.top + box.height / 2 - frame.top;
-    return {
-      inside: box.left >= frame.left - 1 && box.right <= frame.right + 1
-        && box.top >= frame.top - 1 && box.bottom <= frame.bottom + 1,
-      size: box.width / frame.width,
-      // just inside the outline's left edge (black square) and just outside it (quiet zone)
-      darkInside: luma(box.left - frame.left + box.width * 0.06, cy),
-      lightOutside: luma(box.left - frame.left - box.width * 0.06, cy),
-      groups: document.querySelectorAll('#outlines g').length,
-    };
-  });
+  const outline = await outlineOnPicture(page, '110001');
   assert.equal(outline.groups, 1);
-  assert.ok(outline.inside, JSON.stringify(outline));
+  assert.ok(outline.withinPicture, JSON.stringify(outline));
   assert.ok(outline.size > 0.2 && outline.size < 1, JSON.stringify(outline));
-  assert.ok(outline.darkInside < 80 && outline.lightOutside > 170, JSON.stringify(outline));
+  // just inside the outline's left edge (black square) and just outside it (quiet zone)
+  assert.ok(outline.inside[0] < 80 && outline.outside[0] > 170, JSON.stringify(outline));
   assert.equal(uploads.length, 1, `one upload per scan, got ${uploads.join(', ')}`);
   assert.match(uploads[0], /^POST /);
   // The server saw one photo too (the handler counts it before it answers).
@@ -142,6 +117,41 @@ async function scannerReading(file) {
   return page;
 }
 
+// Where the outline of `pincode`'s tag lies on the picture shown: whether it is inside the
+// picture, its width as a share of it, how many outlines there are, and the luma of the picture
+// just inside each edge of the outline (left, right, top, bottom: the black square) and just
+// outside it (the quiet zone), 6 % of its side from the edge.
+function outlineOnPicture(page, pincode) {
+  return page.evaluate((pin) => {
+    const img = document.getElementById('scan-photo');
+    const box = document.querySelector(`#outlines g[data-pincode="${pin}"] polygon`).getBoundingClientRect();
+    const frame = img.getBoundingClientRect();
+    const canvas = document.createElement('canvas');
+    canvas.width = img.naturalWidth;
+    canvas.height = img.naturalHeight;
+    const context = canvas.getContext('2d');
+    context.drawImage(img, 0, 0);
+    const luma = (x, y) => {
+      const px = Math.round((x - frame.left) * img.naturalWidth / frame.width);
+      const py = Math.round((y - frame.top) * img.naturalHeight / frame.height);
+      const [r, g, b] = context.getImageData(px, py, 1, 1).data;
+      return 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    };
+    const cx = box.left + box.width / 2;
+    const cy = box.top + box.height / 2;
+    const dx = box.width * 0.06;
+    const dy = box.height * 0.06;
+    return {
+      withinPicture: box.left >= frame.left - 1 && box.right <= frame.right + 1
+        && box.top >= frame.top - 1 && box.bottom <= frame.bottom + 1,
+      size: box.width / frame.width,
+      groups: document.querySelectorAll('#outlines g').length,
+      inside: [luma(box.left + dx, cy), luma(box.right - dx, cy), luma(cx, box.top + dy), luma(cx, box.bottom - dy)],
+      outside: [luma(box.left - dx, cy), luma(box.right + dx, cy), luma(cx, box.top - dy), luma(cx, box.bottom + dy)],
+    };
+  }, pincode);
+}
+
 test('a photo without colour is answered with what to change, not the general advice', async () => {
   // The label as a greyscale PNG, as a camera's black-and-white mode would save it.
   const grey = join(dir, 'label-110001-grey.png');
@@ -176,32 +186,8 @@ test('the outline sits on the tag of a WebP whose EXIF orientation the browser d
   const page = await scannerReading(corpusFile('tag-exif6.webp'));
   await page.locator('#scan-photo[data-outlined="1"]').waitFor();
   assert.match(await page.locator('#summary').textContent(), /^1 tag read.*photo 800 × 450/);
-  const outline = await page.evaluate(() => {
-    const img = document.getElementById('scan-photo');
-    const box = document.querySelector('#outlines g[data-pincode="110001"] polygon').getBoundingClientRect();
-    const frame = img.getBoundingClientRect();
-    const canvas = document.createElement('canvas');
-    canvas.width = img.naturalWidth;
-    canvas.height = img.naturalHeight;
-    const context = canvas.getContext('2d');
-    context.drawImage(img, 0, 0);
-    const luma = (x, y) => {
-      const px = Math.round((x - frame.left) * img.naturalWidth / frame.width);
-      const py = Math.round((y - frame.top) * img.naturalHeight / frame.height);
-      const [r, g, b] = context.getImageData(px, py, 1, 1).data;
-      return 0.2126 * r + 0.7152 * g + 0.0722 * b;
-    };
-    const cx = box.left + box.width / 2;
-    const cy = box.top + box.height / 2;
-    return {
-      natural: [img.naturalWidth, img.naturalHeight],
-      // just inside each edge of the outline (black square) and just outside it (background)
-      inside: [luma(box.left + box.width * 0.06, cy), luma(box.right - box.width * 0.06, cy),
-        luma(cx, box.top + box.height * 0.06), luma(cx, box.bottom - box.height * 0.06)],
-      outside: [luma(box.left - box.width * 0.1, cy), luma(box.right + box.width * 0.1, cy),
-        luma(cx, box.top - box.height * 0.1), luma(cx, box.bottom + box.height * 0.1)],
-    };
-  });
+  // Every edge of the outline lies on the black square's edge: inside dark, outside light.
+  const outline = await outlineOnPicture(page, '110001');
   const shown = JSON.stringify(outline);
   for (const value of outline.inside) assert.ok(value < 80, shown);
   for (const value of outline.outside) assert.ok(value > 170, shown);
