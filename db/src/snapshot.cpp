@@ -2,11 +2,14 @@
 
 #include <fcntl.h>
 #include <pthread.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -96,8 +99,58 @@ class DeferredEndingSignals {
   sigset_t previous_{};
 };
 
+/// Takes the flock on the temporary file `fd` was just created as, which marks it as being
+/// written until `fd` is closed. False (and `fd` closed) when another process's
+/// RemoveAbandonedTemporaries took it first, between its creation and now, and removes it.
+bool HoldWhileWriting(int fd, const std::string& path) {
+  struct stat opened {};
+  struct stat named {};
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &opened) == 0 &&
+      ::stat(path.c_str(), &named) == 0 && opened.st_ino == named.st_ino &&
+      opened.st_dev == named.st_dev) {
+    return true;
+  }
+  ::close(fd);
+  return false;
+}
+
+/// Whether `name` is `prefix` and six letters or digits, as TemporaryBeside names its files.
+bool IsTemporaryName(const std::string& name, const std::string& prefix) {
+  if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) {
+    return false;
+  }
+  return std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()), name.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; });
+}
+
+/// Removes the temporary files beside `target` that no process is writing: left by one that
+/// was killed (SIGKILL, a power cut) before it could remove them. A file being written holds a
+/// flock (HoldWhileWriting), so taking it here means its writer is gone.
+void RemoveAbandonedTemporaries(const std::string& target) {
+  const std::filesystem::path target_path(target);
+  const std::string prefix = target_path.filename().string() + ".tmp-";
+  const std::filesystem::path directory =
+      target_path.has_parent_path() ? target_path.parent_path() : std::filesystem::path(".");
+  std::error_code error;
+  for (std::filesystem::directory_iterator it(directory, error), end; !error && it != end;
+       it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (!IsTemporaryName(name, prefix)) continue;
+    const std::string path = (directory / name).string();
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd < 0) continue;
+    // Unlinked while the flock is held, so that a writer that creates the file just now and
+    // takes the flock after this sees it gone (HoldWhileWriting) instead of writing into it.
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+      for (const char* suffix : kSideSuffixes) ::unlink((path + suffix).c_str());
+    }
+    ::close(fd);
+  }
+}
+
 /// A fresh empty file beside `target`, removed (with any SQLite side files) unless kept, and
-/// removed by RemoveSnapshotTemporariesOnSignal while it exists.
+/// removed by RemoveSnapshotTemporariesOnSignal while it exists. It holds a flock until then, and
+/// makes way for it by removing the temporary files of `target` whose writers are gone.
 class TemporaryBeside {
  public:
   explicit TemporaryBeside(const std::string& target) {
@@ -117,9 +170,11 @@ class TemporaryBeside {
       if (fd < 0) {
         throw std::runtime_error(SystemError("cannot create a temporary file beside " + target));
       }
-      ::close(fd);
+      if (!HoldWhileWriting(fd, name)) continue;
+      lock_fd_ = fd;
       path_ = std::move(name);
       pending_ = Register(path_);
+      RemoveAbandonedTemporaries(target);
       return;
     }
     throw std::runtime_error("cannot create a temporary file beside " + target +
@@ -131,6 +186,7 @@ class TemporaryBeside {
     for (const char* suffix : {"-journal", "-wal", "-shm"}) ::unlink((path_ + suffix).c_str());
     if (!kept_) ::unlink(path_.c_str());
     Unregister(pending_);
+    ::close(lock_fd_);
   }
   const std::string& path() const { return path_; }
   /// Renamed into place: nothing to remove any more.
@@ -144,6 +200,7 @@ class TemporaryBeside {
   std::string path_;
   bool kept_ = false;
   PendingTemporary* pending_ = nullptr;
+  int lock_fd_ = -1;  ///< holds the flock that tells RemoveAbandonedTemporaries it is in use
 };
 
 std::string Directory(const std::string& path) {

@@ -36,6 +36,9 @@ std::string LiveDatabaseAt(const std::string& path);
 /// directory cannot be written; the temporary file is removed on every failure. kConflict, with
 /// nothing written, when `out_path` is the source database itself or any other live database (a
 /// write-ahead log beside it).
+/// Temporary files beside `out_path` that no process is writing (left by one killed with SIGKILL)
+/// are removed: a temporary file holds a flock while it is written. The same holds for
+/// InstallSnapshot.
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path);
 
 /// Puts a snapshot received as bytes (from a primary) at `path`: written to a temporary file
