@@ -323,6 +323,24 @@ TEST_F(LoopbackTest, PipelinedRequestsAreEachAnswered) {
   EXPECT_EQ(statuses, 4U) << answers;
 }
 
+// RFC 9112 (3.2.2) has a server accept a target in absolute form, as a client configured with a
+// proxy sends it; it was answered 404.
+TEST_F(LoopbackTest, AnAbsoluteFormTargetIsRoutedByItsPath) {
+  for (const char* target :
+       {"http://127.0.0.1/livez", "HTTP://pintag.example:8080/livez", "https://x/livez"}) {
+    const std::string answer =
+        raw(std::string("GET ") + target + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+    EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << target << ":\n" << answer;
+    EXPECT_NE(answer.find(R"({"status":"ok"})"), std::string::npos) << target << ":\n" << answer;
+  }
+  const std::string missing =
+      raw("GET http://x/api/v1/nothing HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(missing.rfind("HTTP/1.1 404", 0), 0U) << missing;
+  const std::string bare = raw("GET http://x HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(bare.rfind("HTTP/1.1 200", 0), 0U) << bare;
+  EXPECT_NE(bare.find("<h1>PinTag</h1>"), std::string::npos) << bare;
+}
+
 // A client may shut its sending side once its requests are sent (`nc -N`) and then read. The
 // server took the end of the stream for a client gone and wrote it nothing.
 TEST_F(LoopbackTest, AClientThatShutsItsSendingSideIsAnswered) {

@@ -73,6 +73,19 @@ HeaderMap Headers(const httplib::Request& req) {
   return headers;
 }
 
+/// The path of an absolute-form target ("http://host:8080/api/v1/keys/1" -> "/api/v1/keys/1"),
+/// or nothing when `target` is not one. The authority is not kept: nothing here is routed by host.
+std::optional<std::string> OriginFormPath(std::string_view target) {
+  for (const std::string_view scheme : {"http://", "https://"}) {
+    if (target.size() >= scheme.size() && Lower(target.substr(0, scheme.size())) == scheme) {
+      const std::string_view rest = target.substr(scheme.size());
+      const std::size_t slash = rest.find('/');
+      return slash == std::string_view::npos ? std::string("/") : std::string(rest.substr(slash));
+    }
+  }
+  return std::nullopt;
+}
+
 HttpRequest ToRequest(const httplib::Request& req) {
   HttpRequest request;
   request.request_id = t_state.request_id;
@@ -355,6 +368,9 @@ struct HttpServer::Impl {
     // Every answer is whole: cpp-httplib 0.11.4 cut API answers to a Range with status 200, and
     // answered an unsatisfiable one without a body. Ignoring Range is allowed (RFC 9110, 14.2).
     const_cast<httplib::Request&>(req).ranges.clear();  // cpp-httplib's own object, not const
+    // A server must accept the absolute form of a request's target (RFC 9112, 3.2.2), which
+    // cpp-httplib keeps whole as the path: routed by the path it names.
+    if (auto path = OriginFormPath(req.path)) const_cast<std::string&>(req.path) = std::move(*path);
     if (const auto type = req.headers.find("Content-Type"); type != req.headers.end()) {
       if (auto multipart = MultipartContentType(type->second)) {
         const_cast<std::string&>(type->second) = std::move(*multipart);
