@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -43,6 +45,33 @@ TEST(CliKeys, KeysOutsideTheRangeAreRefusedAsTheApiRefusesThem) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
+}
+
+// CLI11 read integers with strtoll's base 0: `--key 010` was key 8, a tag for another pincode.
+// Leading zeros are decimal, as the {key} route reads them; hex is refused on every integer.
+TEST(CliKeys, LeadingZerosAreDecimalOnEveryIntegerOption) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult plain = RunPintag("keys lookup --key 10 --db " + db);
+  ASSERT_EQ(plain.status, 0) << plain.out;
+  for (const char* key : {"010", "0010", "000000010"}) {
+    const CommandResult padded = RunPintag(std::string("keys lookup --key ") + key + " --db " + db);
+    EXPECT_EQ(padded.out, plain.out) << key;
+  }
+  // The tag drawn for --key 010 is read back by the detector as key 10.
+  const std::string png = dir.file("tag.png");
+  ASSERT_EQ(RunPintag("render --key 010 --size-px 0256 -o " + png).status, 0);
+  const CommandResult read = RunPintag("detect --json " + png);
+  ASSERT_EQ(read.status, 0) << read.out;
+  const nlohmann::json detections = nlohmann::json::parse(read.out)["detections"];
+  ASSERT_EQ(detections.size(), 1U) << read.out;
+  EXPECT_EQ(detections[0]["key"], 10) << read.out;
+  const CommandResult hex = RunPintag("render --key 5 --size-px 0x100 -o " + png);
+  EXPECT_EQ(hex.status, 2) << hex.out;
+  EXPECT_NE(hex.out.find("must be a whole number in decimal digits, got '0x100'"),
+            std::string::npos)
+      << hex.out;
 }
 
 TEST(CliKeys, RenderSaysWhyASizeInMillimetresIsRefusedInTheUsersNumbers) {

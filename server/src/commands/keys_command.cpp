@@ -75,7 +75,7 @@ void AddKeysCommand(CLI::App& app) {
   CLI::App* lookup =
       keys->add_subcommand("lookup", "Show a pincode's key and offices, or a key's pincode");
   lookup->add_option("pincode", args->pincode, "six-digit pincode");
-  lookup->add_option("--key", args->key, "tag key, 0-32767")->check(TagKeyCheck());
+  lookup->add_option("--key", args->key, "tag key, 0-32767")->transform(TagKeyText());
   lookup->add_option("--db", args->db, "database file (created and seeded when missing)")
       ->capture_default_str();
   lookup->callback([args] { Lookup(*args); });

@@ -5,6 +5,7 @@
 // where the HTTP tag routes take 5 to 500 mm at 72 to 1200 dpi (docs/API.md).
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -27,9 +28,41 @@ inline CLI::Validator FiniteNumber() {
           "NUMBER"};
 }
 
-/// A tag key as ParseTagKey reads it (the routes' {key}): 0 to 32767.
-inline CLI::Validator TagKeyCheck() {
-  return {[](std::string& text) { return ParseTagKey(text).error; }, "KEY(0-32767)"};
+/// Integer text read as decimal, as the HTTP routes read it. CLI11 2.1 converts with strtoll's
+/// base 0, so `--key 010` was key 8 and `--port 0x1f90` port 8080: a label for another key. This
+/// transform refuses what is not decimal digits (after an optional minus) and drops leading
+/// zeros; AddRegisteredCommands puts it first on every integer option but those that read their
+/// text themselves (a transform named kReadsItsText, such as TagKeyText).
+inline CLI::Validator DecimalInteger() {
+  return {[](std::string& text) -> std::string {
+            const std::size_t sign = !text.empty() && text.front() == '-' ? 1 : 0;
+            const std::size_t digits = text.find_first_not_of("0123456789", sign);
+            if (text.size() == sign || digits != std::string::npos) {
+              return "must be a whole number in decimal digits, got '" + text + "'";
+            }
+            const std::size_t first = std::min(text.find_first_not_of('0', sign), text.size() - 1);
+            text.erase(sign, first - sign);
+            return {};
+          },
+          ""};
+}
+
+/// The name of a transform that reads an integer option's text whole, in decimal, and leaves it
+/// as its number's plain decimal digits.
+inline constexpr const char* kReadsItsText = "reads-its-text";
+
+/// A tag key as ParseTagKey reads it (the routes' {key}): 0 to 32767, refused in the route's
+/// words. Put on with transform(): it leaves the key's plain digits for CLI11 to convert.
+inline CLI::Validator TagKeyText() {
+  CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        const ParsedTagKey parsed = ParseTagKey(text);
+        if (parsed) text = std::to_string(parsed.key->value());
+        return parsed.error;
+      },
+      "KEY(0-32767)");
+  validator.name(kReadsItsText);
+  return validator;
 }
 
 }  // namespace pintag::cli

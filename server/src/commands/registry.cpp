@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "commands/option_checks.hpp"
 
 namespace pintag::cli {
 namespace {
@@ -12,6 +13,21 @@ namespace {
 std::vector<std::pair<std::string, AddCommand>>& Registered() {
   static std::vector<std::pair<std::string, AddCommand>> commands;
   return commands;
+}
+
+/// Puts DecimalInteger first on every integer option of `app` and its subcommands.
+void ReadIntegersAsDecimal(CLI::App& app) {
+  for (CLI::Option* option : app.get_options()) {
+    const std::string type = option->get_type_name();
+    const std::string base = type.substr(0, type.find(':'));
+    if (base != "INT" && base != "UINT") continue;
+    try {
+      option->get_validator(kReadsItsText);
+    } catch (const CLI::OptionNotFound&) {
+      option->transform(DecimalInteger());
+    }
+  }
+  for (CLI::App* command : app.get_subcommands({})) ReadIntegersAsDecimal(*command);
 }
 
 }  // namespace
@@ -24,6 +40,7 @@ void AddRegisteredCommands(CLI::App& app) {
   auto commands = Registered();
   std::sort(commands.begin(), commands.end());
   for (const auto& [name, add] : commands) add(app);
+  ReadIntegersAsDecimal(app);
 }
 
 }  // namespace pintag::cli

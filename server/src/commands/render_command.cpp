@@ -79,7 +79,7 @@ void Run(const RenderArgs& args) {
 void AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render one tag as PNG or SVG");
-  cmd->add_option("--key", args->key, "tag key, 0-32767")->required()->check(TagKeyCheck());
+  cmd->add_option("--key", args->key, "tag key, 0-32767")->required()->transform(TagKeyText());
   cmd->add_option("--size-px", args->size_px, "black square side in pixels (quiet zone added)")
       ->check(CLI::Range(kMinTagSquarePx, kMaxSquarePx));
   cmd->add_option("--size-mm", args->size_mm, "black square side in millimetres (quiet zone added)")

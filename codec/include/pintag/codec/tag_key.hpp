@@ -35,7 +35,8 @@ struct ParsedTagKey {
   explicit operator bool() const { return key.has_value(); }
 };
 
-/// Accepts a decimal integer 0 … 32767 in ASCII digits; no sign, spaces or other characters.
+/// Accepts a decimal integer 0 … 32767 in ASCII digits, with any number of leading zeros; no
+/// sign, spaces or other characters.
 ParsedTagKey ParseTagKey(std::string_view text);
 
 }  // namespace pintag
