@@ -42,6 +42,24 @@ TEST(CliNewDb, ABadTokenLabelIsAUsageErrorBeforeTheDatabaseIsCreated) {
   EXPECT_TRUE(std::filesystem::exists(db));
 }
 
+// Listing or revoking the tokens of a database that is not there is a mistyped path: it was
+// created and seeded, then said "no token -3".
+TEST(CliNewDb, TokenListAndRevokeNeedAnExistingDatabase) {
+  const TempDir dir;
+  const std::string db = dir.file("new.db");
+  for (const char* id : {"-3", "0", "00", "x"}) {
+    const CommandResult run = RunPintag(std::string("token revoke --db ") + db + " -- " + id);
+    EXPECT_EQ(run.status, 2) << id << ": " << run.out;
+    EXPECT_NE(run.out.find(std::string("got '")), std::string::npos) << run.out;
+  }
+  for (const std::string& command : {"token revoke 3 --db " + db, "token list --db " + db}) {
+    const CommandResult run = RunPintag(command);
+    EXPECT_EQ(run.status, 1) << command << ": " << run.out;
+    EXPECT_NE(run.out.find("no database at " + db), std::string::npos) << run.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
 TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
   const TempDir dir;
   const std::string header =

@@ -11,4 +11,9 @@ namespace pintag::cli {
 /// bundled registry, which is said on stderr. Throws std::runtime_error when it cannot open.
 db::Connection OpenDb(const std::string& path);
 
+/// Opens and migrates the database at `path`, which must exist: for commands that only make sense
+/// on a registry in use (listing or revoking its tokens), where a mistyped path must not create
+/// and seed a new one. Throws std::runtime_error naming the path when it is missing.
+db::Connection OpenExistingDb(const std::string& path);
+
 }  // namespace pintag::cli

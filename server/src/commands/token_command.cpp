@@ -51,7 +51,7 @@ void Create(const TokenArgs& args) {
 }
 
 void List(const TokenArgs& args) {
-  db::Connection connection = OpenDb(args.db);
+  db::Connection connection = OpenExistingDb(args.db);
   auto tokens = db::ListTokens(connection);
   if (!tokens) throw std::runtime_error(tokens.error().message);
   std::cout << "id,role,label,created_at,revoked_at\n";
@@ -62,7 +62,7 @@ void List(const TokenArgs& args) {
 }
 
 void Revoke(const TokenArgs& args) {
-  db::Connection connection = OpenDb(args.db);
+  db::Connection connection = OpenExistingDb(args.db);
   auto token = db::RevokeToken(connection, args.id);
   if (!token) throw std::runtime_error(token.error().message);
   std::cout << "token " << token->id << " revoked at " << token->revoked_at.value_or("?") << "\n";
@@ -72,24 +72,33 @@ void AddTokenCommand(CLI::App& app) {
   auto args = std::make_shared<TokenArgs>();
   CLI::App* token = app.add_subcommand("token", "API tokens for the HTTP server");
   token->require_subcommand(1);
-  const auto add_db = [&](CLI::App* cmd) {
-    cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
-        ->capture_default_str();
+  const auto add_db = [&](CLI::App* cmd, const char* description) {
+    cmd->add_option("--db", args->db, description)->capture_default_str();
   };
 
   CLI::App* create = token->add_subcommand("create", "Create a token and print its secret once");
   create->add_option("--role", args->role, "admin, counter, scanner or replica")->required();
   create->add_option("--label", args->label, "a note on who or what uses it");
-  add_db(create);
+  add_db(create, "database file (created and seeded when missing)");
   create->callback([args] { Create(*args); });
 
   CLI::App* list = token->add_subcommand("list", "List tokens (never their secrets) as CSV");
-  add_db(list);
+  add_db(list, "database file (must exist)");
   list->callback([args] { List(*args); });
 
   CLI::App* revoke = token->add_subcommand("revoke", "Revoke a token by id");
-  revoke->add_option("id", args->id, "token id")->required();
-  add_db(revoke);
+  // Checked before the database is opened, as the HTTP route checks it: a token id is positive.
+  revoke->add_option("id", args->id, "token id")
+      ->required()
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            return text.empty() || text.front() == '-' ||
+                           text.find_first_not_of('0') == std::string::npos
+                       ? "a token id is a positive integer, got '" + text + "'"
+                       : "";
+          },
+          ""));
+  add_db(revoke, "database file (must exist)");
   revoke->callback([args] { Revoke(*args); });
 }
 
