@@ -357,6 +357,17 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
   }
 }
 
+std::optional<Error> KeysNotKeptBy(const std::string& received, const std::string& current) {
+  try {
+    const std::string lost = KeysNotKept(current, received);
+    if (lost.empty()) return std::nullopt;
+    return Error{ErrorCode::kConflict, "it does not keep the keys of the registry served now: " +
+                                           lost + ". Labels printed with them would be misrouted"};
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::kStorage, std::string("cannot compare the keys: ") + e.what()};
+  }
+}
+
 void RemoveSnapshotTemporariesOnSignal() noexcept {
   for (PendingTemporary& slot : g_pending) {
     if (!slot.in_use.load(std::memory_order_acquire)) continue;

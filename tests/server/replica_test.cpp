@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "label_photo.hpp"
+#include "pintag/codec/key_allocation.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/registry.hpp"
 #include "pintag/db/scan_log.hpp"
@@ -423,6 +424,70 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
   EXPECT_NE(refused.status, 0);
   EXPECT_NE(refused.out.find("cannot serve " + snapshot + ":"), std::string::npos) << refused.out;
   EXPECT_EQ(ServingFiles(snapshot), before);
+}
+
+// The manual way to update a --read-only replica is `pintag snapshot` and a rename. A file from
+// a registry that gave a served key to another pincode (an older backup run as a primary) was
+// taken: every label printed with that key then read as the other pincode.
+TEST_F(ReplicaSetTest, AReadOnlyReplicaRefusesAFileThatGivesAServedKeyToAnotherPincode) {
+  const std::string older = publishTo("older.db");
+  httplib::Client primary = LoopbackClient(primary_->port());
+  addPincode(primary, "999301");
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess& replica = startReadOnly(0, snapshot);
+  ASSERT_TRUE(replica.ok());
+  httplib::Client client = LoopbackClient(replica.port());
+  const json served = Body(client.Get("/api/v1/pincodes/999301"));
+  ASSERT_TRUE(served.contains("key")) << served.dump();
+  const std::string key = std::to_string(served["key"].get<std::int64_t>());
+  const std::int64_t version = RegistryVersionAt(replica.port());
+
+  // The fork: the older registry, given another pincode that takes the same key (999301's key is
+  // free there, so a pincode whose probe starts at it gets it).
+  const std::string fork_db = dir_.file("fork.db");
+  std::filesystem::copy_file(older, fork_db);
+  std::string given_to;
+  {
+    db::Connection fork(fork_db, {.create = false});
+    int other = 0;
+    for (int pin = 999999; pin >= 100000 && other == 0; --pin) {
+      if (pin != 999301 && StartSlot(Pincode(pin)).value() == served["key"].get<int>() &&
+          !db::LookupPincode(fork, Pincode(pin)).ok()) {
+        other = pin;
+      }
+    }
+    ASSERT_NE(other, 0);
+    db::PostOffice office;
+    office.name = "Fork Nagar";
+    office.district = "Testpur";
+    office.state = "Test State";
+    office.circle = "Test";
+    office.region = "T";
+    office.division = "TD";
+    ASSERT_TRUE(db::AddPincode(fork, Pincode(other), {office}).ok());
+    ASSERT_EQ(db::LookupPincode(fork, Pincode(other))->key.value(), served["key"].get<int>());
+    ASSERT_TRUE(db::WriteSnapshot(fork, dir_.file("fork-snapshot.db")).ok());
+    given_to = std::to_string(other);
+  }
+  std::filesystem::rename(dir_.file("fork-snapshot.db"), snapshot);
+  replica.signal(SIGHUP);
+  ASSERT_TRUE(WaitUntil([&] {
+    return stderrOf("replica-0").find("ignoring the new file") != std::string::npos;
+  })) << stderrOf("replica-0");
+  const std::string log = stderrOf("replica-0");
+  EXPECT_NE(log.find("key " + key + " (pincode 999301) is given to " + given_to), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("misrouted"), std::string::npos) << log;
+  EXPECT_EQ(Body(client.Get("/api/v1/keys/" + key)).value("pincode", ""), "999301");
+  EXPECT_EQ(RegistryVersionAt(replica.port()), version);
+  EXPECT_EQ(StatusOf(client.Get("/readyz")), 200);
+
+  // A newer snapshot of the primary, which keeps every key, is still taken.
+  addPincode(primary, "999303");
+  const std::string newer = publishTo("newer.db");
+  std::filesystem::rename(newer, snapshot);
+  replica.signal(SIGHUP);
+  EXPECT_EQ(WaitForStatus(client, "/api/v1/pincodes/999303", 200), 200) << stderrOf("replica-0");
 }
 
 // Both commands default to --db pintag.db: a follower started in its primary's directory was

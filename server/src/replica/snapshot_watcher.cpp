@@ -182,10 +182,18 @@ bool SnapshotWatcher::check() {
   std::optional<Identity> linked;
   const db::Result<db::SnapshotInfo> verified = linkAndVerify(&linked);
   seen_ = linked ? linked : now;
+  // A --follow replica's install refuses a registry that gives a served key to another pincode
+  // (a primary restored from an older backup); a file renamed into place is held to the same.
+  std::optional<db::Error> refusal;
   if (!verified) {
-    std::cerr << "pintag serve: ignoring the new file at " << path_ << ": "
-              << verified.error().message << "; still serving registry version "
-              << loaded_->registry_version << "\n";
+    refusal = verified.error();
+  } else {
+    refusal = db::KeysNotKeptBy(verified->path, loaded_->path);
+    if (refusal) ::unlink(verified->path.c_str());
+  }
+  if (refusal) {
+    std::cerr << "pintag serve: ignoring the new file at " << path_ << ": " << refusal->message
+              << "; still serving registry version " << loaded_->registry_version << "\n";
     return false;
   }
   const std::string previous = loaded_->path;

@@ -5,6 +5,7 @@
 // version of the instant it copies, so two files with the same version hold the same registry.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -50,6 +51,12 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
 /// give to the same pincodes (a primary restored from an older backup reuses the keys it lost,
 /// and labels printed with them would be misrouted).
 Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& path);
+
+/// Nothing when the snapshot at `received` gives every key of the registry at `current` to the
+/// same pincode; else kConflict naming what it loses or gives to another pincode (labels printed
+/// with such a key would be misrouted), or kStorage when either file cannot be read. The check
+/// InstallSnapshot makes, for a replica that takes a file renamed into place (--read-only).
+std::optional<Error> KeysNotKeptBy(const std::string& received, const std::string& current);
 
 /// Removes the temporary files that WriteSnapshot and InstallSnapshot are writing at this moment.
 /// For a signal handler about to end the process, which would otherwise leave them beside their
