@@ -10,6 +10,7 @@
 
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <set>
@@ -488,6 +489,81 @@ TEST_F(ReplicaSetTest, AReadOnlyReplicaRefusesAFileThatGivesAServedKeyToAnotherP
   std::filesystem::rename(newer, snapshot);
   replica.signal(SIGHUP);
   EXPECT_EQ(WaitForStatus(client, "/api/v1/pincodes/999303", 200), 200) << stderrOf("replica-0");
+}
+
+// The primary trusted the version it remembered: a published file removed or overwritten by
+// another process was served as it was (5 bytes of junk with the live ETag) or answered 503 until
+// the next write. And a publication that failed was tried again, whole, every half second.
+TEST_F(ReplicaSetTest, ThePrimaryRepublishesASnapshotOthersChangedAndBacksOffWhileItCannot) {
+  const std::string published = dir_.file("published.db");
+  httplib::Client primary = LoopbackClient(primary_->port());
+  const auto snapshot = [&] {
+    return primary.Get("/api/v1/registry/snapshot", Auth(replica_token_));
+  };
+  const auto is_whole_snapshot = [](const httplib::Result& r) {
+    return r && r->status == 200 && r->body.size() > 1'000'000 &&
+           r->body.rfind("SQLite format 3", 0) == 0;
+  };
+  ASSERT_TRUE(is_whole_snapshot(snapshot()));
+  const json status = Body(primary.Get("/api/v1/registry"));
+  EXPECT_EQ(status["snapshot"]["published_version"], status["registry_version"]) << status.dump();
+  EXPECT_TRUE(status["snapshot"]["error"].is_null()) << status.dump();
+
+  std::filesystem::remove(published);
+  EXPECT_TRUE(is_whole_snapshot(snapshot()));
+  WriteFile(published, "junk\n");
+  EXPECT_TRUE(is_whole_snapshot(snapshot()));
+  EXPECT_NE(stderrOf("primary").find("was removed or changed by another process"),
+            std::string::npos);
+
+  // The path taken by a directory: each write makes a publication fail. They are tried at most
+  // once a retry delay (1 s, then 2 s, …), each logged, and the primary says so.
+  std::filesystem::remove(published);
+  std::filesystem::create_directory(published);
+  const auto failures_logged = [&] {
+    const std::string log = stderrOf("primary");
+    std::size_t count = 0;
+    for (std::size_t at = log.find("cannot publish a snapshot"); at != std::string::npos;
+         at = log.find("cannot publish a snapshot", at + 1)) {
+      ++count;
+    }
+    return count;
+  };
+  const auto started = std::chrono::steady_clock::now();
+  addPincode(primary, "999311");
+  ASSERT_TRUE(WaitUntil([&] { return failures_logged() >= 1; }));
+  for (int i = 0; i < 10; ++i) {
+    const auto r = snapshot();
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 503) << r->body;
+    EXPECT_NE(r->body.find("cannot rename the snapshot"), std::string::npos) << r->body;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  // Without the delay, 2 tries a second from the thread and one per request: over 15 here.
+  EXPECT_LE(failures_logged(), static_cast<std::size_t>(std::log2(seconds + 1)) + 2)
+      << seconds << " s:\n"
+      << stderrOf("primary");
+  const json failing = Body(primary.Get("/api/v1/registry"));
+  EXPECT_NE(failing["snapshot"]["error"].get<std::string>().find("in a row; next try in"),
+            std::string::npos)
+      << failing.dump();
+  EXPECT_TRUE(failing["snapshot"]["failing_since"].is_string()) << failing.dump();
+  const auto metrics = [&] {
+    const auto r = primary.Get("/metrics");
+    return r ? r->body : std::string();
+  };
+  EXPECT_NE(metrics().find("\npintag_snapshot_publish_failing 1\n"), std::string::npos);
+
+  // The path free again: the next try publishes, and the status clears.
+  std::filesystem::remove(published);
+  EXPECT_TRUE(WaitUntil([&] { return is_whole_snapshot(snapshot()); })) << stderrOf("primary");
+  const json recovered = Body(primary.Get("/api/v1/registry"));
+  EXPECT_EQ(recovered["snapshot"]["published_version"], recovered["registry_version"])
+      << recovered.dump();
+  EXPECT_TRUE(recovered["snapshot"]["error"].is_null()) << recovered.dump();
+  EXPECT_NE(metrics().find("\npintag_snapshot_publish_failing 0\n"), std::string::npos);
 }
 
 // Both commands default to --db pintag.db: a follower started in its primary's directory was

@@ -82,6 +82,19 @@ void AddFollowGauges(server::Metrics& metrics,
   });
 }
 
+/// A primary's snapshot publication as a gauge: replicas keep serving an older registry while it
+/// fails, and the primary stays ready (GET /api/v1/registry says why).
+void AddPublishGauges(server::Metrics& metrics,
+                      std::shared_ptr<replica::SnapshotPublisher> publisher) {
+  metrics.addGaugeSource([publisher = std::move(publisher)] {
+    const replica::SnapshotPublisher::Status status = publisher->status();
+    return std::vector<server::Metrics::Gauge>{
+        {"pintag_snapshot_publish_failing",
+         "1 while this primary's snapshot for its replicas cannot be published, else 0.",
+         status.failing_since ? 1.0 : 0.0}};
+  });
+}
+
 }  // namespace
 
 // /readyz is open: its answers say what is wrong without the --db path (the operator knows it),
@@ -149,6 +162,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->follow_status = config.follow_status;
   DefineCounters(*context->metrics);
   if (config.follow_status) AddFollowGauges(*context->metrics, config.follow_status);
+  if (config.publisher) AddPublishGauges(*context->metrics, config.publisher);
   server::Router router = AppRouter(context);
   if (config.read_only) router = replica::ReadOnlyRouter(router, config.primary_url);
 

@@ -12,6 +12,7 @@
 #include "app/routes.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "replica/snapshot_follower.hpp"
+#include "replica/snapshot_publisher.hpp"
 
 namespace pintag::app {
 namespace {
@@ -56,6 +57,16 @@ HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& /*r
                       {"error", follow.error.empty() ? json(nullptr) : json(follow.error)},
                       {"failing_since", when(follow.failing_since)}};
   }
+  if (context.publisher) {
+    // What replicas can be given: the snapshot kept for them, and why it lags when it does.
+    const replica::SnapshotPublisher::Status published = context.publisher->status();
+    body["snapshot"] = {
+        {"published_version",
+         published.published_version ? json(*published.published_version) : json(nullptr)},
+        {"error", published.error.empty() ? json(nullptr) : json(published.error)},
+        {"failing_since",
+         published.failing_since ? json(UtcTimestamp(*published.failing_since)) : json(nullptr)}};
+  }
   return HttpResponse::Json(body.dump());
 }
 
@@ -93,7 +104,9 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
     return busy;
   }
   db::Result<replica::PublishedSnapshot> published = context.publisher->read();
-  if (!published) throw HttpError(503, "no snapshot could be published; see the server's log");
+  if (!published) {
+    throw HttpError(503, "no snapshot could be published: " + published.error().message);
+  }
   const std::int64_t version = published->info.registry_version;
   HttpResponse response =
       HttpResponse::Bytes("application/vnd.sqlite3", std::move(published.value().bytes));

@@ -1,5 +1,8 @@
 #include "replica/snapshot_publisher.hpp"
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -52,13 +55,63 @@ db::Result<db::SnapshotInfo> SnapshotPublisher::publishLocked() {
   }
   const db::Result<std::int64_t> version = db::RegistryVersion(*live_);
   if (!version) return version.error();
-  if (published_ && published_->registry_version == *version) return *published_;
+  const bool ours = publishedFileIsOurs();
+  if (published_ && published_->registry_version == *version && ours) return *published_;
+  if (failure_ && Clock::now() < retry_at_) return *failure_;
+  if (published_ && !ours && !failure_) {
+    std::cerr << "pintag serve: the published snapshot " << out_path_
+              << " was removed or changed by another process; publishing it again\n";
+  }
   db::Result<db::SnapshotInfo> written = db::WriteSnapshot(*live_, out_path_);
-  if (!written) return written.error();
+  if (!written) {
+    // 1, 2, 4, … s, at most kMaxRetryDelay.
+    const std::chrono::seconds delay =
+        std::min(kMaxRetryDelay, kFirstRetryDelay * (1 << std::min(failures_in_a_row_, 6)));
+    ++failures_in_a_row_;
+    retry_at_ = Clock::now() + delay;
+    if (!failing_since_) failing_since_ = std::chrono::system_clock::now();
+    failure_ = written.error();
+    failure_->message += " (" + std::to_string(failures_in_a_row_) + " in a row; next try in " +
+                         std::to_string(delay.count()) + " s)";
+    std::cerr << "pintag serve: cannot publish a snapshot: " << failure_->message << "\n";
+    updateStatus();
+    return *failure_;
+  }
+  failure_.reset();
+  failures_in_a_row_ = 0;
+  failing_since_.reset();
   published_ = *written;
+  published_file_ = Identify(out_path_);
+  updateStatus();
   std::cerr << "pintag serve: published snapshot " << out_path_ << " (registry version "
             << written->registry_version << ", " << written->bytes << " bytes)\n";
   return *written;
+}
+
+std::optional<SnapshotPublisher::FileIdentity> SnapshotPublisher::Identify(
+    const std::string& path) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) return std::nullopt;
+  return FileIdentity{status.st_dev, status.st_ino, status.st_size,
+                      std::int64_t{status.st_mtim.tv_sec} * 1'000'000'000 + status.st_mtim.tv_nsec};
+}
+
+bool SnapshotPublisher::publishedFileIsOurs() const {
+  return published_file_ && Identify(out_path_) == published_file_;
+}
+
+SnapshotPublisher::Status SnapshotPublisher::status() const {
+  const std::lock_guard lock(status_mutex_);
+  return status_;
+}
+
+void SnapshotPublisher::updateStatus() {
+  Status status;
+  if (published_) status.published_version = published_->registry_version;
+  if (failure_) status.error = failure_->message;
+  status.failing_since = failing_since_;
+  const std::lock_guard lock(status_mutex_);
+  status_ = std::move(status);
 }
 
 db::Result<db::SnapshotInfo> SnapshotPublisher::publish() {
@@ -79,13 +132,8 @@ db::Result<PublishedSnapshot> SnapshotPublisher::read() {
 }
 
 void SnapshotPublisher::start(std::chrono::milliseconds interval) {
-  thread_.start(interval, [this, last_error = std::string()]() mutable {
-    const db::Result<db::SnapshotInfo> published = publish();
-    if (!published && published.error().message != last_error) {
-      std::cerr << "pintag serve: cannot publish a snapshot: " << published.error().message << "\n";
-    }
-    last_error = published ? "" : published.error().message;
-  });
+  // Each failed try is logged where it is made (publishLocked), at most once a retry delay.
+  thread_.start(interval, [this] { publish(); });
 }
 
 }  // namespace pintag::replica

@@ -70,8 +70,35 @@ class SnapshotPublisher {
   /// Checks every `interval` on a thread of its own, until destroyed.
   void start(std::chrono::milliseconds interval);
 
+  using Clock = std::chrono::steady_clock;
+  /// After a failed publication, the next is tried no sooner than this after it; the wait doubles
+  /// with each failure in a row, up to kMaxRetryDelay. A whole snapshot tried every half second
+  /// on a full disk took the writes' space (and 200 MB/s of writes) from the live database.
+  static constexpr std::chrono::seconds kFirstRetryDelay{1};
+  static constexpr std::chrono::seconds kMaxRetryDelay{60};
+
+  struct Status {
+    std::optional<std::int64_t> published_version;  ///< of the file kept now, if any
+    std::string error;                              ///< the last publication's, when it failed
+    std::optional<std::chrono::system_clock::time_point> failing_since;
+  };
+  /// Never waits for a publication in progress (a /metrics scrape asks).
+  Status status() const;
+
  private:
   db::Result<db::SnapshotInfo> publishLocked();
+  /// The published file is still the one written: a file removed or replaced by someone else is
+  /// published again (it was served as it was, or the route answered 503, until the next write).
+  bool publishedFileIsOurs() const;
+
+  /// What identifies a file's contents as written: device, inode, size, modification time.
+  struct FileIdentity {
+    std::uint64_t device = 0, inode = 0;
+    std::int64_t size = 0, modified_ns = 0;
+    bool operator==(const FileIdentity&) const = default;
+  };
+  static std::optional<FileIdentity> Identify(const std::string& path);
+  void updateStatus();  ///< status_ from what mutex_ guards; called holding mutex_
 
   std::string live_path_;
   std::string out_path_;
@@ -82,6 +109,13 @@ class SnapshotPublisher {
   std::optional<db::Connection> version_connection_;
   std::atomic<int> readers_{0};
   std::optional<db::SnapshotInfo> published_;
+  std::optional<FileIdentity> published_file_;
+  std::optional<db::Error> failure_;  // the last publication's, while they fail
+  int failures_in_a_row_ = 0;
+  Clock::time_point retry_at_{};
+  std::optional<std::chrono::system_clock::time_point> failing_since_;
+  mutable std::mutex status_mutex_;  // guards status_, so that reading it never waits on mutex_
+  Status status_;
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
