@@ -9,6 +9,26 @@ const token = bindToken({
 
 let search = null;  // {q, district, state, limit, offset}
 
+// The pincode fields have no maxlength: a browser cuts a pasted value to it before the page sees
+// it, so a pasted 5600012 became 560001, another real pincode, and " 560001" lost its last digit.
+// What was typed or pasted is checked whole instead.
+function notAPincode(text) {
+  return { title: 'Not a pincode',
+    message: `“${text}” is not a pincode: a pincode is six digits, the first 1–9 (this is ${[...text].length} characters).` };
+}
+
+// Keys as the server reads them: digits, 0–32767 (leading zeros allowed).
+function notAKey(text) {
+  if (/^[0-9]+$/.test(text) && Number(text) <= 32767) return null;
+  return { title: 'Not a key',
+    message: text ? `“${text}” is not a key: a key is a whole number from 0 to 32767.` : 'Fill in a key, 0–32767.' };
+}
+
+// A search shown while a pincode is added or retired would show its old status: drawn again.
+function refreshSearch() {
+  if (search && !$('search-results').hidden) runSearch();
+}
+
 function showRecord(record, note) {
   const offices = record.offices || [];
   show($('detail'),
@@ -17,7 +37,7 @@ function showRecord(record, note) {
       el('span', { class: 'big-pin', id: 'detail-pincode' }, record.pincode), badge(record.status)),
     el('dl', { class: 'kv' },
       [['Key', el('span', { id: 'detail-key', class: 'mono' }, String(record.key))], ['Office', record.office || '—'],
-        ['District', record.district], ['State', record.state], ['Division', record.division || '—'],
+        ['District', record.district || '—'], ['State', record.state || '—'], ['Division', record.division || '—'],
         ['Region', record.region || '—'], ['Circle', record.circle || '—'],
         record.retired_at ? ['Retired', record.retired_at] : null]
         .filter(Boolean).map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])),
@@ -85,7 +105,7 @@ $('search-form').addEventListener('submit', (event) => {
   busy($('search'), async () => {
     if (pin) {
       if (!isPincode(pin)) {
-        show($('search-msg'), problemBox({ message: 'A pincode is six digits, the first 1–9.' }));
+        show($('search-msg'), problemBox(notAPincode(pin)));
         return;
       }
       show($('search-msg'));
@@ -122,6 +142,11 @@ $('s-limit').addEventListener('change', (event) => {
 $('key-form').addEventListener('submit', (event) => {
   event.preventDefault();
   const key = $('key').value.trim();
+  const wrong = notAKey(key);
+  if (wrong) {
+    show($('key-msg'), problemBox(wrong));
+    return;
+  }
   busy($('key-lookup'), async () => {
     show($('key-msg'));
     try {
@@ -140,6 +165,10 @@ $('add-form').addEventListener('submit', (event) => {
   busy($('add'), async () => {
     show($('add-msg'));
     const value = (id) => $(id).value.trim();
+    if (!isPincode(value('a-pin'))) {
+      show($('add-msg'), problemBox(notAPincode(value('a-pin'))));
+      return;
+    }
     const body = { pincode: value('a-pin') };
     // Any office field filled sends the office with every required field, blank ones too: the
     // server then names each one missing, and nothing typed is dropped.
@@ -155,6 +184,7 @@ $('add-form').addEventListener('submit', (event) => {
       show($('add-msg'), messageBox('ok', 'Added ', el('strong', {}, record.pincode), ' with key ',
         el('strong', { id: 'added-key' }, String(record.key)), '.'));
       showRecord(record, `Pincode ${record.pincode} added.`);
+      refreshSearch();
     } catch (error) {
       show($('add-msg'), problemBox(error));
     }
@@ -166,6 +196,10 @@ $('retire-form').addEventListener('submit', (event) => {
   const pin = $('r-pin').value.trim();
   show($('retire-msg'));
   show($('retire-confirm'));
+  if (!isPincode(pin)) {
+    show($('retire-msg'), problemBox(notAPincode(pin)));
+    return;
+  }
   busy($('retire'), async () => {
     let record;
     try {
@@ -190,6 +224,7 @@ $('retire-form').addEventListener('submit', (event) => {
         show($('retire-confirm'));
         show($('retire-msg'), messageBox('ok', `${pin} is retired. It keeps key ${retired.key}.`));
         showRecord(retired);
+        refreshSearch();
         $('r-pin').focus();
       } catch (error) {
         show($('retire-msg'), problemBox(error));

@@ -68,12 +68,64 @@ test('registry looks up a key, and shows the problem for an unknown one', async 
   await page.getByRole('button', { name: 'Look up' }).click();
   await page.locator('#detail-pincode').filter({ hasText: '110001' }).waitFor();
   assert.match(await page.locator('#key-msg').textContent(), /Key 11684 belongs to 110001/);
-  await page.locator('#key').fill('40000');
-  await page.getByRole('button', { name: 'Look up' }).click();
+  // What is not a key is said before anything is asked (an empty field was "no route for GET
+  // /api/v1/keys/").
   const alert = page.locator('#key-msg [role="alert"]');
-  await alert.waitFor();
-  assert.match(await alert.textContent(), /Malformed Key/);
-  assert.match(await alert.textContent(), /0 to 32767/);
+  for (const [typed, words] of [['40000', /Not a key.*“40000” is not a key: .*0 to 32767/], ['', /Fill in a key/], ['1/2', /“1\/2” is not a key/]]) {
+    await page.locator('#key').fill(typed);
+    await page.getByRole('button', { name: 'Look up' }).click();
+    await alert.filter({ hasText: words }).waitFor();
+  }
+  // A key no pincode holds is the server's 404, shown as it says it.
+  let unallocated = 32767;
+  while ((await fetch(`${server.url}/api/v1/keys/${unallocated}`)).status !== 404) unallocated -= 1;
+  await page.locator('#key').fill(`000${unallocated}`);
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await alert.filter({ hasText: 'HTTP 404' }).waitFor();
+  assert.deepEqual(page.problems, []);
+});
+
+test('a pasted pincode is checked whole, never cut to six characters', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#token').fill(server.adminToken);
+  // A mistyped 7-digit pincode was cut to 560001, a real one, and offered for retiring.
+  await page.locator('#r-pin').fill('5600012');
+  await page.getByRole('button', { name: 'Retire…' }).click();
+  await page.locator('#retire-msg [role="alert"]').filter({ hasText: /Not a pincode.*“5600012”.*7 characters/ }).waitFor();
+  assert.equal(await page.locator('#retire-yes').count(), 0);
+  assert.equal((await (await fetch(`${server.url}/api/v1/pincodes/560001`)).json()).status, 'active');
+  // Copied from a spreadsheet with spaces around it: all six digits kept.
+  await page.locator('#s-pin').fill(' 560001 ');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  await page.locator('#detail-pincode').filter({ hasText: '560001' }).waitFor();
+  await page.locator('#a-pin').fill('9990123');
+  await page.getByRole('button', { name: 'Add pincode' }).click();
+  await page.locator('#add-msg [role="alert"]').filter({ hasText: /Not a pincode/ }).waitFor();
+  assert.equal((await fetch(`${server.url}/api/v1/pincodes/999012`)).status, 404);
+  assert.deepEqual(page.problems, []);
+});
+
+test('a search shown while a pincode is retired shows it retired', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#a-pin').fill('999021');
+  await page.locator('#a-office').fill('Refresh Nagar');
+  for (const [id, value] of [['#a-district', 'Refreshpur'], ['#a-state', 'Test State'], ['#a-division', 'TD'], ['#a-region', 'T'], ['#a-circle', 'Test']]) {
+    await page.locator(id).fill(value);
+  }
+  await page.getByRole('button', { name: 'Add pincode' }).click();
+  await page.locator('#added-key').waitFor();
+  await page.getByLabel('District').first().fill('Refreshpur');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  const row = page.locator('#results-body tr').filter({ hasText: '999021' });
+  await row.filter({ hasText: 'active' }).waitFor();
+  await page.locator('#r-pin').fill('999021');
+  await page.getByRole('button', { name: 'Retire…' }).click();
+  await page.getByRole('button', { name: 'Retire 999021' }).click();
+  await row.filter({ hasText: 'retired' }).waitFor();
+  assert.deepEqual(page.problems, []);
 });
 
 test('admin adds a pincode, gets its key, then retires it', async () => {
