@@ -104,12 +104,20 @@ std::optional<Error> CheckRule(const SortRule& rule) {
                                           "' starts with 0, as no pincode does: the rule could "
                                           "never match"};
   }
-  return CheckText("bin for prefix " + rule.prefix, rule.bin, kMaxBinBytes);
+  return CheckShownName("bin for prefix " + rule.prefix, rule.bin, kMaxBinBytes);
 }
 
 std::optional<Error> CheckPlan(const SortPlan& plan) {
-  if (auto error = CheckText("plan name", plan.name, kMaxBinBytes)) return error;
-  if (auto error = CheckText("fallback bin", plan.fallback_bin, kMaxBinBytes)) return error;
+  if (auto error = CheckShownName("plan name", plan.name, kMaxBinBytes)) return error;
+  // A name is a path segment (/api/v1/sortplans/{name}, ?plan=): "." and ".." would be read as
+  // steps of the path by every client, and these characters must be percent-encoded in a URL.
+  if (plan.name == "." || plan.name == ".." ||
+      plan.name.find_first_of("/?#%\\") != std::string::npos) {
+    return Error{ErrorCode::kInvalid, "plan name '" + plan.name.substr(0, 64) +
+                                          "' is '.' or '..' or holds one of / ? # % \\, which a "
+                                          "URL would have to encode"};
+  }
+  if (auto error = CheckShownName("fallback bin", plan.fallback_bin, kMaxBinBytes)) return error;
   if (auto error = CheckText("description", plan.description, kMaxLabelBytes, true)) return error;
   if (plan.rules.size() > kMaxPlanRules) {
     return Error{ErrorCode::kTooLarge, "the plan has " + std::to_string(plan.rules.size()) +

@@ -1,5 +1,6 @@
 #include "pintag/db/text.hpp"
 
+#include <cstdio>
 #include <string>
 
 #include "pintag/codec/utf8.hpp"
@@ -97,6 +98,29 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
     const std::size_t length = DecodeUtf8(value, i).length;
     if (length == 0) return invalid("is not valid UTF-8 at byte " + std::to_string(i));
     i += length;
+  }
+  return std::nullopt;
+}
+
+std::optional<Error> CheckShownName(std::string_view field, std::string_view value,
+                                    std::size_t max_bytes) {
+  if (auto error = CheckText(field, value, max_bytes)) return error;
+  for (std::size_t i = 0; i < value.size();) {
+    const Utf8CodePoint decoded = DecodeUtf8(value, i);
+    const bool at_an_end = i == 0 || i + decoded.length == value.size();
+    const bool kept_inside =
+        decoded.value == U' ' || decoded.value == 0x200C || decoded.value == 0x200D;
+    if (IsInvisible(decoded.value) && (at_an_end || !kept_inside)) {
+      char code[16];
+      std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(decoded.value));
+      return Error{ErrorCode::kInvalid,
+                   std::string(field) + " '" + std::string(value.substr(0, 64)) + "' " +
+                       (at_an_end ? "starts or ends with a space or an invisible character ("
+                                  : "holds an invisible character (") +
+                       code + " at byte " + std::to_string(i) +
+                       "): it would read like another name"};
+    }
+    i += decoded.length;
   }
   return std::nullopt;
 }

@@ -162,6 +162,39 @@ TEST_F(SortPlans, RejectsMalformedPlans) {
   EXPECT_EQ(GetPlan(db_, "hub-a").error().code, ErrorCode::kNotFound);
 }
 
+// Plans listed as four "default"s (" default", "default ", "default" and one ending in a
+// zero-width space), a bin " delhi" beside "delhi", and a plan called ".." that a URL cannot
+// name: refused, each saying why. Names and bins that read as they are still save.
+TEST_F(SortPlans, NamesAndBinsMustReadAsWhatTheyAre) {
+  const auto refusal = [&](const std::string& name, const std::string& bin) {
+    SortPlan plan = HubPlan();
+    plan.name = name;
+    plan.rules.push_back({"560", bin});
+    const auto saved = SavePlan(db_, plan);
+    return saved ? std::string() : saved.error().message;
+  };
+  for (const std::string& name :
+       {std::string(" default"), std::string("default "), std::string("default\u200b"),
+        std::string("de\u00a0fault"), std::string("\ufeffdefault")}) {
+    EXPECT_NE(refusal(name, "south").find("it would read like another name"), std::string::npos)
+        << name;
+  }
+  for (const std::string& name :
+       {std::string("."), std::string(".."), std::string("a/b"), std::string("hub?x=1"),
+        std::string("h#x"), std::string("p%"), std::string("a\\b")}) {
+    EXPECT_NE(refusal(name, "south").find("which a URL would have to encode"), std::string::npos)
+        << name;
+  }
+  for (const std::string& bin : {std::string(" delhi"), std::string("delhi\t"),
+                                 std::string("del\u200bhi"), std::string("\u2060delhi")}) {
+    EXPECT_FALSE(refusal("hub-b", bin).empty()) << bin;
+  }
+  EXPECT_EQ(GetPlan(db_, "hub-b").error().code, ErrorCode::kNotFound);
+  // Inner spaces, dots and the joiners of Indic words are names as they read.
+  EXPECT_EQ(refusal("hub b.2", "south zone"), "");
+  EXPECT_EQ(refusal("hub-c", "\u0926\u093f\u200d\u0932\u094d\u0932\u0940"), "");
+}
+
 TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
   const SortPlan plan = HubPlan();
   const std::string csv = PlanToCsv(plan);

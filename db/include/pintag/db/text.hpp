@@ -39,4 +39,11 @@ bool IsBlank(std::string_view text);
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty = false);
 
+/// CheckText, and more for a name people tell apart by how it reads (a sort plan's name, a bin):
+/// no space or invisible character (IsBlank's) at either end, nor one inside but the plain space
+/// and the zero-width joiners Indic words need (U+200C, U+200D). " delhi", "delhi" and
+/// "del<U+200B>hi" print alike, so three plans of those names all read "delhi" in a list.
+std::optional<Error> CheckShownName(std::string_view field, std::string_view value,
+                                    std::size_t max_bytes);
+
 }  // namespace pintag::db
