@@ -148,6 +148,22 @@ TEST_F(ServeTest, BatchProblemsNameTheBadInput) {
   // A misspelt field printed the default plan's bins or size unnoticed (a reviewer's "Plan").
   expect(R"({"pincodes": ["110001"], "Plan": "default"})", 400, "unknown field 'Plan'");
   expect(R"({"pincodes": ["110001"], "szie": "a6"})", 400, "unknown field 'szie'");
+  // Given in the body and the query, a plan or a size must be the same: the body's won silently.
+  for (const auto& [query, body, fragment] :
+       {std::tuple{"?plan=default", R"({"pincodes": ["110001"], "plan": "ov"})",
+                   "'plan' is given twice: 'ov' in the body and 'default' in the query"},
+        std::tuple{"?size=a6", R"({"pincodes": ["110001"], "size": "100x150mm"})",
+                   "'size' is given twice"}}) {
+    const json problem = ExpectProblem(
+        client().Post(std::string("/api/v1/labels") + query, counter(), body, "application/json"),
+        400);
+    EXPECT_NE(problem.dump().find(fragment), std::string::npos) << problem;
+  }
+  const auto same =
+      client().Post("/api/v1/labels?plan=default", counter(),
+                    R"({"pincodes": ["110001"], "plan": "default"})", "application/json");
+  ASSERT_TRUE(same);
+  EXPECT_EQ(same->status, 200);
   // A bare list of pincodes (strings or numbers) is a batch too.
   const auto r =
       client().Post("/api/v1/labels", counter(), R"(["110001", 560001])", "application/json");

@@ -198,6 +198,17 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
     if (!body[key].is_string()) throw HttpError(400, std::string("'") + key + "' must be a string");
     return body[key].get<std::string>();
   };
+  // Given in both places, they must agree: which one printed would be a guess the clerk never
+  // sees (a body's "plan" won over ?plan= silently).
+  for (const char* key : {"size", "plan"}) {
+    const std::optional<std::string> in_body = text(key);
+    const std::optional<std::string> in_query = request.queryParam(key);
+    if (in_body && in_query && *in_body != *in_query) {
+      throw HttpError(400, std::string("'") + key + "' is given twice: " + Quoted(*in_body) +
+                               " in the body and " + Quoted(*in_query) +
+                               " in the query; give it once");
+    }
+  }
   LabelOptions options;
   const std::optional<std::string> size = text("size");
   options.size = size ? LabelSizeValue(*size) : LabelSizeQuery(request);

@@ -16,12 +16,11 @@ namespace pintag::app {
 using server::HttpError;
 using server::HttpRequest;
 
-namespace {
-
-// Untrusted text quoted back in a problem, cut so a huge parameter does not make a huge answer.
 std::string Quoted(std::string_view text) {
   return "'" + std::string(text.substr(0, 40)) + (text.size() > 40 ? "…'" : "'");
 }
+
+namespace {
 
 std::string Number(double value) {
   char text[32];

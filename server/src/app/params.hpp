@@ -19,6 +19,10 @@
 
 namespace pintag::app {
 
+/// Untrusted text quoted back in a problem ('…'), cut at 40 bytes so that a huge parameter does
+/// not make a huge answer.
+std::string Quoted(std::string_view text);
+
 // --- Path parameters -----------------------------------------------------------------------------
 
 /// {pin}: six digits, the first 1-9; else 400 "Malformed Pincode".
