@@ -179,6 +179,31 @@ TEST_F(ReplicaSetTest, AReplicaLogsScansInItsOwnFileAndTheSnapshotStaysUntouched
   EXPECT_EQ(CountRows(primary_db_, "scan_log"), 0);
 }
 
+// A scan log that cannot be written loses scans while every answer stays 200: the count says so.
+TEST_F(ReplicaSetTest, ScansTheLogCannotKeepAreCounted) {
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess& replica = startReadOnly(0, snapshot);
+  ASSERT_TRUE(replica.ok());
+  // Overwritten in place while the replica holds it open (a replica refuses to start on junk).
+  WriteFile(replicaScanLog(0), std::string(1 << 16, 'x'));
+  httplib::Client primary = LoopbackClient(primary_->port());
+  const Photo photo = PhotographLabel(primary, Auth(counter_token_), "110001", 20,
+                                      scene::Camera{700, 700, 400, 300, 800, 600});
+  ASSERT_FALSE(photo.jpeg.empty());
+  httplib::Client client = LoopbackClient(replica.port());
+  for (int i = 0; i < 2; ++i) {
+    const auto r = client.Post("/api/v1/detect", Auth(scanner_token_), photo.jpeg, "image/jpeg");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << r->body;
+  }
+  const auto metrics = client.Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_NE(metrics->body.find("\npintag_scan_log_failures_total 2\n"), std::string::npos)
+      << metrics->body;
+  EXPECT_NE(metrics->body.find("\npintag_scans_total 2\n"), std::string::npos);
+  EXPECT_NE(stderrOf("replica-0").find("scan log: "), std::string::npos);
+}
+
 TEST_F(ReplicaSetTest, AFollowerServesAPincodeAddedOnThePrimary) {
   ServerProcess& replica = startFollower(0);
   ASSERT_TRUE(replica.ok());

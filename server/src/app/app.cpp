@@ -49,6 +49,8 @@ void DefineCounters(server::Metrics& metrics) {
   metrics.defineCounter(kLabelsRenderedCounter, "Labels rendered (PDF pages, PNGs, SVGs).");
   metrics.defineCounter(kTagsRenderedCounter, "Tag images rendered.");
   metrics.defineCounter(kScansCounter, "POST /api/v1/detect calls that sent a photo.");
+  metrics.defineCounter(kScanLogFailuresCounter,
+                        "Scans answered but not written to the scan log (the error is logged).");
   metrics.defineCounter(kDetectionsCounter, "Tags decoded in uploaded photos.");
   metrics.defineCounter(kUnknownKeysCounter, "Decoded tags whose key no pincode holds.");
   metrics.defineCounter(kPixelBudgetWaitsCounter,

@@ -18,6 +18,7 @@ namespace pintag::app {
 inline constexpr std::string_view kLabelsRenderedCounter = "pintag_labels_rendered_total";
 inline constexpr std::string_view kTagsRenderedCounter = "pintag_tags_rendered_total";
 inline constexpr std::string_view kScansCounter = "pintag_scans_total";
+inline constexpr std::string_view kScanLogFailuresCounter = "pintag_scan_log_failures_total";
 inline constexpr std::string_view kDetectionsCounter = "pintag_detections_total";
 inline constexpr std::string_view kUnknownKeysCounter = "pintag_detections_unknown_key_total";
 inline constexpr std::string_view kPixelBudgetWaitsCounter = "pintag_pixel_budget_waits_total";

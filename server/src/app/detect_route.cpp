@@ -117,12 +117,16 @@ void Log(const AppContext& context, const HttpRequest& request, std::size_t byte
   scan.image_width = outcome.width;
   scan.image_height = outcome.height;
   scan.result_json = outcome.result_json;
+  // The answer stands when the log cannot be written: the count shows a log that loses scans.
   try {
     auto connection = context.scan_log->acquire();
     auto appended = db::AppendScan(*connection, scan);
-    if (!appended)
+    if (!appended) {
+      context.metrics->increment(kScanLogFailuresCounter);
       server::LogRequestError(request.request_id, "scan log: " + appended.error().message);
+    }
   } catch (const std::exception& e) {
+    context.metrics->increment(kScanLogFailuresCounter);
     server::LogRequestError(request.request_id, std::string("scan log: ") + e.what());
   }
 }
