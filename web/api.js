@@ -149,16 +149,32 @@ export function badge(status, text) {
   return el('span', { class: `badge badge-${status}` }, words);
 }
 
-/** Marks a button busy while `work` runs; returns what `work` returns. */
+// The buttons busy() holds: how many calls hold each one, and whether it was disabled before the
+// first of them.
+const held = new WeakMap();
+
+/**
+ * Marks a button busy while `work` runs; returns what `work` returns. Calls may overlap (a form
+ * submitted again by keyboard while its button is busy): the button stays busy until the last
+ * one ends and then gets back what it was before the first began, never the busy state itself.
+ */
 export async function busy(button, work) {
-  const was = button.disabled;
+  let hold = held.get(button);
+  if (!hold) {
+    hold = { count: 0, was: button.disabled };
+    held.set(button, hold);
+  }
+  ++hold.count;
   button.disabled = true;
   button.setAttribute('aria-busy', 'true');
   try {
     return await work();
   } finally {
-    button.disabled = was;
-    button.removeAttribute('aria-busy');
+    if (--hold.count === 0) {
+      held.delete(button);
+      button.disabled = hold.was;
+      button.removeAttribute('aria-busy');
+    }
   }
 }
 

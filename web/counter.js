@@ -20,6 +20,9 @@ let selected = null;
 let selectedRow = -1;
 let previewUrl = null;
 let previewRequest = 0;
+/** Only the latest lookup's answer is drawn; `lookupStop` stops the requests of the one running. */
+let lookupRequest = 0;
+let lookupStop = null;
 
 const sizeValue = () => document.querySelector('input[name="size"]:checked').value;
 const planValue = () => $('plan').value;
@@ -29,14 +32,14 @@ function labelQuery(extra = {}) {
   return query({ size: sizeValue(), plan: planValue(), ...extra });
 }
 
-async function lookupAll(pins) {
+async function lookupAll(pins, signal) {
   const answers = new Map();
   const queue = [...pins];
   const worker = async () => {
-    while (queue.length) {
+    while (queue.length && !signal.aborted) {
       const pin = queue.shift();
       try {
-        answers.set(pin, { record: await api(`/api/v1/pincodes/${pin}`) });
+        answers.set(pin, { record: await api(`/api/v1/pincodes/${pin}`, { signal }) });
       } catch (error) {
         answers.set(pin, { error });
       }
@@ -115,6 +118,12 @@ function renderTable() {
 }
 
 async function lookup() {
+  // A list submitted while another is still being looked up (Ctrl+Enter submits whatever the
+  // button's state) replaces it: the older lookup stops asking and its answers are dropped.
+  const request = ++lookupRequest;
+  if (lookupStop) lookupStop.abort();
+  const stop = new AbortController();
+  lookupStop = stop;
   const parsed = parsePincodes($('pins').value);
   show($('lookup-msg'));
   if (parsed.length === 0) {
@@ -123,7 +132,9 @@ async function lookup() {
     return;
   }
   const unique = [...new Set(parsed.filter((p) => p.valid).map((p) => p.text))];
-  const answers = await lookupAll(unique);
+  const answers = await lookupAll(unique, stop.signal);
+  if (request !== lookupRequest) return;
+  lookupStop = null;
   rows = parsed.map((p) => ({ ...p, ...(answers.get(p.text) || {}), include: true, office: null }));
   // A failure that is not about the pincode itself (server down, busy) is worth saying once.
   const general = [...answers.values()].find((a) => a.error && ![400, 404].includes(a.error.status));

@@ -200,3 +200,86 @@ test('the counter page fits a phone screen', async () => {
   assert.equal(await page.getByText('A pincode listed twice prints twice.').isVisible(), true);
   await screenshot(page, 'counter-phone');
 });
+
+test('a list looked up again while the first lookup runs shows only the latest list', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  // The long list's last lookup is held back until the short list has been drawn, so the long
+  // one is surely still running when the clerk submits the short one.
+  let reached;
+  const atEnd = new Promise((resolveAtEnd) => { reached = resolveAtEnd; });
+  let release;
+  const held = new Promise((resolveHeld) => { release = resolveHeld; });
+  await page.route('**/api/v1/pincodes/110600', async (route) => {
+    reached();
+    await held;
+    await route.continue().catch(() => {});  // the page may have stopped asking meanwhile
+  });
+  const pins = page.locator('#pins');
+  await pins.fill(Array.from({ length: 600 }, (_, i) => String(110001 + i)).join('\n'));
+  await pins.press('Control+Enter');
+  await atEnd;
+  await pins.fill('560001');
+  await pins.press('Control+Enter');
+  await page.locator('#preview figcaption').filter({ hasText: '560001' }).waitFor();
+  release();
+  const lookupButton = page.getByRole('button', { name: 'Look up' });
+  // Both lookups over, the button is free again.
+  await page.waitForFunction(() => {
+    const button = document.getElementById('lookup');
+    return !button.disabled && !button.hasAttribute('aria-busy');
+  });
+  assert.equal(await lookupButton.isEnabled(), true);
+  assert.equal(await page.locator('#results-body tr').count(), 1);
+  assert.equal(await page.locator('#results-body tr').getAttribute('data-pincode'), '560001');
+  assert.match(await page.locator('#results-caption').textContent(), /^1 pincode, 1 found/);
+  assert.match(await page.locator('#label-preview').getAttribute('alt'), /^Label for 560001/);
+  const [single] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: 'Download PDF' }).click()]);
+  assert.equal(single.suggestedFilename(), 'label-560001.pdf');
+  assert.ok(pdfLines(await single.path()).includes('560 001'));
+  assert.deepEqual(page.problems, []);
+});
+
+test('Look up is free again after a lookup replaced another that was still running', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  // Each lookup's request is held until the test lets it go: the first list's, then the second's.
+  const gates = new Map();
+  const gate = (pin) => {
+    let open;
+    const opened = new Promise((resolveOpen) => { open = resolveOpen; });
+    let reached;
+    const arrived = new Promise((resolveArrived) => { reached = resolveArrived; });
+    gates.set(pin, { open, opened, reached, arrived });
+  };
+  gate('110001');
+  gate('560001');
+  await page.route(/\/api\/v1\/pincodes\/(110001|560001)$/, async (route) => {
+    const held = gates.get(route.request().url().slice(-6));
+    held.reached(route.request());
+    await held.opened;
+    await route.continue().catch(() => {});  // the page may have stopped asking meanwhile
+  });
+  const firstFailed = new Promise((resolveFailed) => {
+    page.on('requestfailed', (request) => { if (request.url().endsWith('/pincodes/110001')) resolveFailed(); });
+  });
+  const pins = page.locator('#pins');
+  await pins.fill('110001');
+  await pins.press('Control+Enter');
+  await gates.get('110001').arrived;
+  await pins.fill('560001');
+  await pins.press('Control+Enter');
+  await gates.get('560001').arrived;
+  // The first lookup ends first: drawn (the old page drew it), or stopped by the second.
+  gates.get('110001').open();
+  await Promise.race([firstFailed, page.locator('#preview figcaption').filter({ hasText: '110001' }).waitFor()]);
+  gates.get('560001').open();
+  await page.locator('#preview figcaption').filter({ hasText: '560001' }).waitFor();
+  await page.waitForFunction(() => !document.getElementById('lookup').hasAttribute('aria-busy'));
+  assert.equal(await page.getByRole('button', { name: 'Look up' }).isEnabled(), true, 'Look up is not left disabled');
+  assert.equal(await page.locator('#results-body tr').count(), 1);
+  assert.equal(await page.locator('#results-body tr').getAttribute('data-pincode'), '560001');
+  assert.deepEqual(page.problems, []);
+});
