@@ -126,6 +126,7 @@ async function lookup() {
   lookupStop = stop;
   const parsed = parsePincodes($('pins').value);
   show($('lookup-msg'));
+  show($('print-msg'));  // news of the last list's labels would read as news of this one's
   if (parsed.length === 0) {
     show($('lookup-msg'), messageBox('info', 'Type or paste at least one pincode, e.g. 110001.'));
     $('pins').focus();

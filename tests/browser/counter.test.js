@@ -283,3 +283,19 @@ test('Look up is free again after a lookup replaced another that was still runni
   assert.equal(await page.locator('#results-body tr').getAttribute('data-pincode'), '560001');
   assert.deepEqual(page.problems, []);
 });
+
+test('a new lookup clears the message about the previous list\'s labels', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).click()]);
+  await page.getByText('2 labels in one PDF downloaded').waitFor();
+  await page.locator('#pins').fill('400001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#preview figcaption').filter({ hasText: '400001' }).waitFor();
+  assert.equal(await page.locator('#print-msg').textContent(), '');
+  assert.deepEqual(page.problems, []);
+});
