@@ -197,11 +197,14 @@ export function isPincode(text) {
 
 /**
  * The pincodes in pasted text: separated by spaces, commas, semicolons or new lines; "110 001"
- * (three and three digits) is read as one. Returns [{text, valid}] in order, duplicates kept.
+ * (three and three digits) is read as one. Any Unicode space (a no-break space from a web page or
+ * spreadsheet) counts as a space, and zero-width characters (U+200B, a byte order mark, …) are
+ * dropped, since the clerk cannot see them. Returns [{text, valid}] in order, duplicates kept.
  */
 export function parsePincodes(text) {
-  const joined = text.replace(/(^|[^0-9])([0-9]{3}) ([0-9]{3})(?![0-9])/g, '$1$2$3');
-  return joined.split(/[\s,;]+/).filter(Boolean).map((item) => ({ text: item, valid: isPincode(item) }));
+  const visible = text.replace(/[\u00ad\u180e\u200b-\u200d\u2060\ufeff]/g, '');
+  const joined = visible.replace(/(^|[^0-9])([0-9]{3})\p{Zs}([0-9]{3})(?![0-9])/gu, '$1$2$3');
+  return joined.split(/[\s,;]+/u).filter(Boolean).map((item) => ({ text: item, valid: isPincode(item) }));
 }
 
 // ---------- tokens ----------

@@ -299,3 +299,18 @@ test('a new lookup clears the message about the previous list\'s labels', async 
   assert.equal(await page.locator('#print-msg').textContent(), '');
   assert.deepEqual(page.problems, []);
 });
+
+test('pincodes pasted with no-break or zero-width spaces are read as typed', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  // A no-break space inside "110 001" and between two pincodes; zero-width spaces and a byte
+  // order mark around and inside others (as text copied from web pages and spreadsheets has).
+  await page.locator('#pins').fill('110\u00a0001\u00a0560001\u200b\n\ufeff400001, 140\u200b119\u2003600001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  const listed = await page.locator('#results-body tr').evaluateAll((trs) => trs.map((tr) => tr.dataset.pincode || tr.textContent));
+  assert.deepEqual(listed, ['110001', '560001', '400001', '140119', '600001']);
+  assert.equal(await page.locator('tr.is-error').count(), 0);
+  assert.deepEqual(page.problems, []);
+});
