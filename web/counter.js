@@ -114,6 +114,7 @@ function renderTable() {
       el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
   }));
   $('results').hidden = rows.length === 0;
+  markSelected();
   updateButtons();
 }
 
@@ -160,15 +161,20 @@ function clearPreview(text) {
   show($('preview'), el('p', { class: 'placeholder' }, text));
 }
 
-async function select(index) {
-  selectedRow = index;
-  selected = rows[index].text;
+// Marks the row whose label is shown (none when nothing is selected).
+function markSelected() {
   for (const tr of $('results-body').rows) {
-    const chosen = Number(tr.dataset.row) === index;
+    const chosen = Number(tr.dataset.row) === selectedRow;
     tr.classList.toggle('is-selected', chosen);
     if (chosen) tr.setAttribute('aria-current', 'true');
     else tr.removeAttribute('aria-current');
   }
+}
+
+async function select(index) {
+  selectedRow = index;
+  selected = rows[index].text;
+  markSelected();
   updateButtons();
   await refreshPreview();
 }
@@ -236,6 +242,37 @@ async function refreshPreview() {
 // The pincode is taken when the request starts: the clerk may pick another row before it ends.
 async function labelPdf(pincode, office) {
   return api(`/api/v1/labels/${pincode}.pdf${labelQuery({ office })}`, { token: token(), as: 'blob' });
+}
+
+// The server names a refused batch item by its place in the list sent ("pincodes[2]: …"), which
+// leaves out the rows not printed; the clerk sees the table's row numbers. Returns the row sent
+// and the detail naming it ("row 5: …"), or null when the problem is not about one item.
+function refusedItem(error, sent) {
+  if (!(error instanceof ApiError) || !error.detail) return null;
+  const match = /^pincodes\[(\d+)\](?:\.\w+)?(?=:)/.exec(error.detail);
+  const row = match ? sent[Number(match[1])] : undefined;
+  if (!row) return null;
+  const rest = error.detail.slice(match[0].length);
+  const number = rows.indexOf(row);
+  // A lookup since may have replaced the table; the detail names the pincode itself.
+  return { row, detail: number >= 0 ? `row ${number + 1}${rest}` : rest.replace(/^:\s*/, '') };
+}
+
+// A pincode the server says is retired (410) since it was looked up: every row of it is shown
+// retired and left out of the batch; its label, when shown, goes.
+function markRetired(pincode) {
+  for (const row of rows) {
+    if (row.text === pincode && row.record) {
+      row.record = { ...row.record, status: 'retired' };
+      row.include = false;
+    }
+  }
+  if (selected === pincode) {
+    selected = null;
+    selectedRow = -1;
+    clearPreview(`${pincode} is retired: no new labels are issued for it.`);
+  }
+  renderTable();
 }
 
 function needToken() {
@@ -311,8 +348,10 @@ $('batch-pdf').addEventListener('click', (event) => printing(event.currentTarget
     show($('print-msg'), messageBox('ok', `${pins.length} ${pins.length === 1 ? 'label' : 'labels'} in one PDF downloaded (${name}).`));
   } catch (error) {
     const tooMany = error instanceof ApiError && error.status === 413;
-    show($('print-msg'), problemBox(error, tooMany
+    const refused = refusedItem(error, chosen);
+    show($('print-msg'), problemBox(refused ? new ApiError(error.status, error.title, refused.detail) : error, tooMany
       ? { hint: 'Untick some labels and download this batch, then tick the rest for a second one.' } : {}));
+    if (refused && error.status === 410) markRetired(refused.row.text);
   }
 }));
 

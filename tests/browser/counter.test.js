@@ -314,3 +314,34 @@ test('pincodes pasted with no-break or zero-width spaces are read as typed', asy
   assert.equal(await page.locator('tr.is-error').count(), 0);
   assert.deepEqual(page.problems, []);
 });
+
+test('a batch refused for one pincode names that pincode\'s row and marks it retired', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  // Rows 1 and 2 are not printed, so the server's pincodes[2] is the table's row 5.
+  await page.locator('#pins').fill('12345\n999999\n110001\n400001\n700001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  // Retired by an admin elsewhere after the clerk looked it up.
+  const retired = await fetch(`${server.url}/api/v1/pincodes/700001/retire`,
+    { method: 'POST', headers: { Authorization: `Bearer ${server.adminToken}` } });
+  assert.equal(retired.status, 200);
+  await page.getByRole('button', { name: /Batch PDF \(3 labels\)/ }).click();
+  const alert = page.locator('#print-msg [role="alert"]');
+  await alert.waitFor();
+  const text = await alert.textContent();
+  assert.match(text, /HTTP 410/);
+  assert.match(text, /row 5: pincode 700001 was retired/);
+  assert.doesNotMatch(text, /pincodes\[/);
+  const row = page.locator('tr[data-pincode="700001"]');
+  assert.match(await row.textContent(), /retired/i);
+  assert.equal(await row.getByRole('checkbox').isChecked(), false);
+  assert.equal(await row.getByRole('checkbox').isDisabled(), true);
+  assert.equal(await page.locator('tr.is-selected').getAttribute('data-pincode'), '110001');  // still previewed
+  // The rest print without it.
+  const [batch] = await Promise.all([page.waitForEvent('download'),
+    page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).click()]);
+  assert.deepEqual(pdfPageSize(await batch.path()), { pages: 2, size: '283.465 x 425.197' });
+  assert.deepEqual(page.problems, []);
+});
