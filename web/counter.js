@@ -92,7 +92,7 @@ function renderTable() {
       return el('tr', { class: 'is-error' },
         el('td', {}, el('input', { type: 'checkbox', disabled: true, 'aria-label': `${which} cannot be printed` })),
         el('td', { class: 'mono' }, pin),
-        el('td', { colspan: 4 }, badge('error', !row.valid ? 'invalid' : notFound(row) ? 'not found' : 'not checked'), ' ', why));
+        el('td', {}, badge('error', !row.valid ? 'invalid' : notFound(row) ? 'not found' : 'not checked'), ' ', why));
     }
     const r = row.record;
     const retired = r.status !== 'active';
@@ -105,13 +105,16 @@ function renderTable() {
       type: 'button', class: 'link', 'aria-label': `Preview the label for ${which}`, disabled: retired,
       onclick: () => select(index),
     }, 'Preview');
+    // Preview goes under the pincode, and the district and state under the office, rather than
+    // in columns of their own: the table then fits its card at every width, Preview in view, and
+    // the office's name has the room left.
     return el('tr', { 'data-pincode': pin, 'data-row': index },
       el('td', {}, check),
-      el('td', { class: 'mono nowrap' }, pin),
-      el('td', {}, officeCell(row, index, which, retired), retired ? [' ', badge(r.status)] : null),
-      el('td', { class: 'district' }, place.district),
-      el('td', { class: 'state hide-narrow' }, place.state),
-      el('td', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton));
+      el('td', { class: 'pin' }, el('span', { class: 'mono nowrap' }, pin),
+        el('div', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton)),
+      el('td', { class: 'office' }, officeCell(row, index, which, retired), retired ? [' ', badge(r.status)] : null,
+        el('div', { class: 'place small' },
+          el('span', { class: 'district' }, place.district), ', ', el('span', { class: 'state' }, place.state))));
   }));
   $('results').hidden = rows.length === 0;
   markSelected();
@@ -201,8 +204,8 @@ function officeCell(row, index, which, retired) {
       row.office = event.target.value === r.office ? null : event.target.value;
       const tr = event.target.closest('tr');
       const place = placeOf(row);
-      tr.querySelector('td.district').textContent = place.district;
-      tr.querySelector('td.state').textContent = place.state;
+      tr.querySelector('.district').textContent = place.district;
+      tr.querySelector('.state').textContent = place.state;
       if (index === selectedRow) refreshPreview();
     },
   }, ordered.map((name) => el('option', { value: name, selected: name === (row.office || r.office) ? true : null }, name)));

@@ -40,7 +40,7 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   const row = page.locator('tr[data-pincode="110001"]');
   await row.waitFor();
   assert.match(await row.textContent(), /Bengali Market/);
-  assert.equal((await row.locator('td.district').textContent()).trim(), 'Central Delhi');
+  assert.equal((await row.locator('.district').textContent()).trim(), 'Central Delhi');
   assert.match(await page.locator('tr.is-error').first().textContent(), /not found.*999999 is not in the registry/);
   assert.match(await page.locator('tr.is-error').nth(1).textContent(), /Not a pincode/);
 
@@ -144,16 +144,16 @@ test('a clerk picks the office a label prints, row by row', async () => {
   await page.getByRole('button', { name: 'Look up' }).click();
   const row = page.locator('tr[data-pincode="140119"]');
   await row.waitFor();
-  assert.equal((await row.locator('td.district').textContent()).trim(), 'Chandigarh');
+  assert.equal((await row.locator('.district').textContent()).trim(), 'Chandigarh');
   await row.getByLabel('Office printed on the label for 140119').selectOption('Bajrur');
-  assert.equal((await row.locator('td.district').textContent()).trim(), 'Ropar');
-  assert.equal((await row.locator('td.state').textContent()).trim(), 'Punjab');
+  assert.equal((await row.locator('.district').textContent()).trim(), 'Ropar');
+  assert.equal((await row.locator('.state').textContent()).trim(), 'Punjab');
   await page.waitForFunction(() => /Bajrur/.test(document.getElementById('label-preview')?.alt || ''));
   const [bajrur] = await Promise.all([page.waitForEvent('download'), page.getByRole('button', { name: 'Download PDF' }).click()]);
   const bajrurLines = pdfLines(await bajrur.path());
   assert.ok(bajrurLines.includes('Ropar, Punjab'), bajrurLines.join(' | '));
   await row.getByLabel('Office printed on the label for 140119').selectOption('Abiana');
-  assert.equal((await row.locator('td.district').textContent()).trim(), 'Chandigarh');
+  assert.equal((await row.locator('.district').textContent()).trim(), 'Chandigarh');
   assert.deepEqual(page.problems, []);
 });
 
@@ -339,9 +339,62 @@ test('a batch refused for one pincode names that pincode\'s row and marks it ret
   assert.equal(await row.getByRole('checkbox').isChecked(), false);
   assert.equal(await row.getByRole('checkbox').isDisabled(), true);
   assert.equal(await page.locator('tr.is-selected').getAttribute('data-pincode'), '110001');  // still previewed
+  await screenshot(page, 'counter-retired');
   // The rest print without it.
   const [batch] = await Promise.all([page.waitForEvent('download'),
     page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).click()]);
   assert.deepEqual(pdfPageSize(await batch.path()), { pages: 2, size: '283.465 x 425.197' });
   assert.deepEqual(page.problems, []);
 });
+
+// Where each row's Preview button and office choice lie, against the table's visible box.
+async function tableFit(page) {
+  return page.evaluate(() => {
+    const wrap = document.getElementById('results');
+    const box = wrap.getBoundingClientRect();
+    const left = box.left + wrap.clientLeft;
+    const right = left + wrap.clientWidth;
+    const previews = [...wrap.querySelectorAll('tbody button')].map((button) => {
+      const r = button.getBoundingClientRect();
+      return { name: button.getAttribute('aria-label'), inside: r.left >= left && r.right <= right + 0.5 };
+    });
+    // The width each office choice needs to show its chosen name whole.
+    const offices = [...wrap.querySelectorAll('select')].map((select) => {
+      const probe = select.cloneNode(false);
+      probe.append(new Option(select.value));
+      probe.style.cssText = 'position:absolute; visibility:hidden; width:auto; min-width:0; max-width:none';
+      select.parentElement.append(probe);
+      const need = probe.offsetWidth;
+      probe.remove();
+      return { name: select.value, whole: select.offsetWidth >= need, width: select.offsetWidth, need };
+    });
+    return { overflow: wrap.scrollWidth - wrap.clientWidth, previews, offices };
+  });
+}
+
+for (const [width, options] of [[1280, {}], [390, { isMobile: true, hasTouch: true }]]) {
+  test(`every row's Preview and office name are in view at ${width} px`, async () => {
+    const page = await newPage(browser, { viewport: { width, height: 900 }, ...options });
+    await page.goto(`${server.url}/counter.html`);
+    await page.locator('#token').fill(counterToken);
+    // 140119's and 400001's districts and states are long single words; 999999 is an error row.
+    await page.locator('#pins').fill('110001\n140119\n560001 400001 999999');
+    await page.getByRole('button', { name: 'Look up' }).click();
+    await page.locator('#label-preview').waitFor();
+    await page.locator('tr[data-pincode="140119"]').getByLabel('Office printed on the label for 140119')
+      .selectOption('Tibba Taparian');
+    const fit = await tableFit(page);
+    assert.equal(fit.previews.length, 4);
+    assert.deepEqual(fit.previews.filter((p) => !p.inside), [], `Preview cut off (table ${fit.overflow} px too wide)`);
+    assert.ok(fit.overflow <= 0, `table is ${fit.overflow} px wider than its card`);
+    assert.deepEqual(fit.offices.filter((o) => !o.whole), [], 'office names cut short');
+    // The district and state the label prints are still shown for each row.
+    const row = page.locator('tr[data-pincode="140119"]');
+    assert.equal((await row.locator('.district').textContent()).trim(), 'Rupnagar');
+    assert.equal(await row.locator('.state').isVisible(), true);
+    await page.getByRole('button', { name: 'Preview the label for 400001' }).click();
+    await page.locator('#preview figcaption').filter({ hasText: '400001' }).waitFor();
+    await screenshot(page, `counter-table-${width}`);
+    assert.deepEqual(page.problems, []);
+  });
+}
