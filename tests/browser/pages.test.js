@@ -45,3 +45,25 @@ for (const name of ['counter', 'scanner', 'registry']) {
     assert.deepEqual(page.problems, []);
   });
 }
+
+// The pages act with the token typed into them, and retiring cannot be undone: a page of another
+// site that framed the registry could lead an admin's click onto a button it hides.
+test('another site cannot frame the pages; the server\'s own pages still can', async () => {
+  // The registry framed by a page at `host`; whether the frame drew it.
+  const drawnInAFrameOf = async (host) => {
+    const page = await newPage(browser);
+    await page.goto(`${host}/index.html`);
+    await page.evaluate((src) => new Promise((resolve) => {
+      const frame = document.createElement('iframe');
+      frame.src = src;
+      frame.onload = resolve;
+      document.body.appendChild(frame);
+    }), `${server.url}/registry.html`);
+    const frame = page.frames().find((f) => f !== page.mainFrame());
+    assert.ok(frame, 'the frame was made');
+    return (await frame.locator('#retire').count()) === 1;
+  };
+  // localhost and 127.0.0.1 are two origins: a page of localhost stands for another site.
+  assert.equal(await drawnInAFrameOf(server.url.replace('127.0.0.1', 'localhost')), false);
+  assert.equal(await drawnInAFrameOf(server.url), true);
+});

@@ -82,6 +82,10 @@ HttpResponse StaticFiles::serve(std::string_view url_path) const {
   HttpResponse response = HttpResponse::Bytes(std::string(MediaTypeFor(*real)), std::move(body));
   response.headers.emplace_back("X-Content-Type-Options", "nosniff");
   response.headers.emplace_back("Cache-Control", "no-cache");
+  // The pages act with the token typed into them (retiring a pincode cannot be undone): another
+  // site must not frame them and lead a click onto a button it hides.
+  response.headers.emplace_back("Content-Security-Policy", "frame-ancestors 'self'");
+  response.headers.emplace_back("X-Frame-Options", "SAMEORIGIN");
   return response;
 }
 
