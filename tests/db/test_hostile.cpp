@@ -168,19 +168,30 @@ TEST_F(Hostile, InvisibleTextIsBlank) {
 
 TEST_F(Hostile, SortPlanNamesBinsAndCsv) {
   for (const std::string& text : kAccepted) {
-    const SortPlan plan{text, text, text, {{"1", text}, {"22", "plain"}}};
+    // A name or bin must read as what it is (no space at an end), and a plan name must be a
+    // path segment a URL can carry as it is (test_sort_plan: NamesAndBinsMustReadAsWhatTheyAre).
+    const bool reads_as_is = text.front() != ' ' && text.back() != ' ';
+    const bool url_safe = text.find_first_of("/?#%\\") == std::string::npos;
+    const std::string name = reads_as_is && url_safe ? text : "plan";
+    const std::string bin = reads_as_is ? text : "bin";
+    const SortPlan plan{name, bin, text, {{"1", bin}, {"22", "plain"}}};
     ASSERT_TRUE(SavePlan(db_, plan).ok()) << text;
-    const SortPlan stored = GetPlan(db_, text).value();
-    EXPECT_EQ(stored.name, text);
-    EXPECT_EQ(stored.fallback_bin, text);
+    const SortPlan stored = GetPlan(db_, name).value();
+    EXPECT_EQ(stored.name, name);
+    EXPECT_EQ(stored.fallback_bin, bin);
     EXPECT_EQ(stored.description, text);
-    EXPECT_EQ(stored.rules.at(0).bin, text);
-    EXPECT_EQ(Route(db_, Pincode(110001), text).value().bin, text);
-    const auto parsed = ParsePlanCsv(text, PlanToCsv(plan));
+    EXPECT_EQ(stored.rules.at(0).bin, bin);
+    EXPECT_EQ(Route(db_, Pincode(110001), name).value().bin, bin);
+    const auto parsed = ParsePlanCsv(name, PlanToCsv(plan));
     ASSERT_TRUE(parsed.ok()) << text << ": " << parsed.error().message;
     EXPECT_EQ(parsed->rules, plan.rules);
-    EXPECT_EQ(parsed->fallback_bin, text);
-    EXPECT_TRUE(DeletePlan(db_, text).ok());
+    EXPECT_EQ(parsed->fallback_bin, bin);
+    EXPECT_TRUE(DeletePlan(db_, name).ok());
+    if (!reads_as_is || !url_safe) {
+      EXPECT_EQ(SavePlan(db_, SortPlan{text, "bin", "", {{"1", "ok"}}}).error().code,
+                ErrorCode::kInvalid)
+          << text;
+    }
   }
   for (const std::string& text : kRejected) {
     const SortPlan good{"ok", "ok", "", {{"1", "ok"}}};
