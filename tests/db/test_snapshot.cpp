@@ -23,6 +23,7 @@
 #include "pintag/db/snapshot.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/db/tokens.hpp"
+#include "pintag/test/test_office.hpp"
 
 namespace pintag::db {
 namespace {
@@ -47,16 +48,7 @@ std::string KeysCsv(Connection& connection) {
   return out;
 }
 
-PostOffice TestOffice(const std::string& name) {
-  PostOffice office;
-  office.name = name;
-  office.district = "Testpur";
-  office.state = "Test State";
-  office.circle = "Test";
-  office.region = "T";
-  office.division = "TD";
-  return office;
-}
+using pintag::test::TestOffice;
 
 TEST(RegistryVersion, EveryChangeAReplicaServesIncreasesIt) {
   TempDir dir;

@@ -10,10 +10,16 @@
 namespace pintag::serve_test {
 namespace {
 
-TEST(CliKeys, LookupByKeyFindsItsPincode) {
-  const TempDir dir;
+// A copy of the seeded registry in `dir`, for a command to read; its path.
+std::string SeededCopy(const TempDir& dir) {
   const std::string db = dir.file("copy.db");
   std::filesystem::copy_file(SeededTemplate(), db);
+  return db;
+}
+
+TEST(CliKeys, LookupByKeyFindsItsPincode) {
+  const TempDir dir;
+  const std::string db = SeededCopy(dir);
   const CommandResult found = RunPintag("keys lookup --key 11684 --db " + db);
   EXPECT_EQ(found.status, 0) << found.out;
   EXPECT_NE(found.out.find("pincode  110001"), std::string::npos) << found.out;
@@ -21,8 +27,7 @@ TEST(CliKeys, LookupByKeyFindsItsPincode) {
 
 TEST(CliKeys, LookupSaysWhatIsMissingOrTooMuch) {
   const TempDir dir;
-  const std::string db = dir.file("copy.db");
-  std::filesystem::copy_file(SeededTemplate(), db);
+  const std::string db = SeededCopy(dir);
   const CommandResult neither = RunPintag("keys lookup --db " + db);
   EXPECT_EQ(neither.status, 2);
   EXPECT_NE(neither.out.find("give a pincode or --key KEY"), std::string::npos) << neither.out;
@@ -51,8 +56,7 @@ TEST(CliKeys, KeysOutsideTheRangeAreRefusedAsTheApiRefusesThem) {
 // Leading zeros are decimal, as the {key} route reads them; hex is refused on every integer.
 TEST(CliKeys, LeadingZerosAreDecimalOnEveryIntegerOption) {
   const TempDir dir;
-  const std::string db = dir.file("copy.db");
-  std::filesystem::copy_file(SeededTemplate(), db);
+  const std::string db = SeededCopy(dir);
   const CommandResult plain = RunPintag("keys lookup --key 10 --db " + db);
   ASSERT_EQ(plain.status, 0) << plain.out;
   for (const char* key : {"010", "0010", "000000010"}) {

@@ -23,6 +23,7 @@
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "pintag/test/loopback_socket.hpp"
+#include "pintag/test/test_office.hpp"
 #include "replica_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -81,6 +82,8 @@ int LookupsFromManyClients(int port) {
     return r && r->status == 200;
   });
 }
+
+using pintag::test::TestOffice;
 
 // The files beside `snapshot` whose names start with its name and ".serving-".
 std::set<std::string> ServingFiles(const std::string& snapshot) {
@@ -483,14 +486,7 @@ TEST_F(ReplicaSetTest, AReadOnlyReplicaRefusesAFileThatGivesAServedKeyToAnotherP
       }
     }
     ASSERT_NE(other, 0);
-    db::PostOffice office;
-    office.name = "Fork Nagar";
-    office.district = "Testpur";
-    office.state = "Test State";
-    office.circle = "Test";
-    office.region = "T";
-    office.division = "TD";
-    ASSERT_TRUE(db::AddPincode(fork, Pincode(other), {office}).ok());
+    ASSERT_TRUE(db::AddPincode(fork, Pincode(other), {TestOffice("Fork Nagar")}).ok());
     ASSERT_EQ(db::LookupPincode(fork, Pincode(other))->key.value(), served["key"].get<int>());
     ASSERT_TRUE(db::WriteSnapshot(fork, dir_.file("fork-snapshot.db")).ok());
     given_to = std::to_string(other);
@@ -699,14 +695,8 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServ
     ASSERT_TRUE(primary_->ok()) << stderrOf(log_name);
   };
   const auto add_directly = [](db::Connection& connection, int pin) {
-    db::PostOffice office;
-    office.name = "Restored Nagar";
-    office.district = "Testpur";
-    office.state = "Test State";
-    office.circle = "Test";
-    office.region = "T";
-    office.division = "TD";
-    ASSERT_TRUE(db::AddPincode(connection, Pincode(pin), {office}).ok()) << pin;
+    ASSERT_TRUE(db::AddPincode(connection, Pincode(pin), {TestOffice("Restored Nagar")}).ok())
+        << pin;
   };
   const std::string before_999202 = publishTo("backup-old.db");
   ServerProcess& follower = startFollower(0);
