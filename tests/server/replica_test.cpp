@@ -920,6 +920,15 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999126", 200), 200) << stderrOf("replica-0");
   EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
   EXPECT_NE(metrics().find("\npintag_follow_failing 0\n"), std::string::npos) << metrics();
+
+  // The primary gone: the status says what failed in words (it said "did not answer: Connection").
+  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+  WaitUntil([&] { return !follow()["error"].is_null(); });
+  EXPECT_NE(
+      follow()["error"].get<std::string>().find("did not answer: no connection could be made"),
+      std::string::npos)
+      << follow().dump();
+  EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {

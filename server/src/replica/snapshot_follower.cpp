@@ -20,6 +20,29 @@ std::string RegistryETag(std::int64_t version, const std::string& epoch) {
   return tag;
 }
 
+namespace {
+
+/// What went wrong with a request to the primary, in words an operator can act on; cpp-httplib's
+/// own names ("Connection", "Read") said little in a log line or the follow status.
+std::string FailureText(httplib::Error error) {
+  switch (error) {
+    case httplib::Error::Connection:
+      return "no connection could be made (is it running, at that address and port?)";
+    case httplib::Error::ConnectionTimeout:
+      return "the connection was not made within 5 s";
+    case httplib::Error::Read:
+      return "its answer broke off or did not come within the read timeout";
+    case httplib::Error::Write:
+      return "the request could not be sent (the connection was closed)";
+    case httplib::Error::Canceled:
+      return "the request was cancelled";
+    default:
+      return "the request failed (" + httplib::to_string(error) + ")";
+  }
+}
+
+}  // namespace
+
 SnapshotFollower::SnapshotFollower(FollowOptions options, OnInstalled on_installed)
     : options_(std::move(options)), on_installed_(std::move(on_installed)) {}
 
@@ -96,8 +119,8 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
                          std::to_string(options_.max_bytes >> 20) + " MiB; refused"};
   }
   if (!answer) {
-    return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url + " did not answer: " +
-                                               httplib::to_string(answer.error())};
+    return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url +
+                                               " did not answer: " + FailureText(answer.error())};
   }
   if (answer->status == 304) {
     if (!refused_etag_.empty() && answer->get_header_value("ETag") == refused_etag_) {
