@@ -445,14 +445,21 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
   client.set_read_timeout(30, 0);
   EXPECT_EQ(StatusOf(client.Get("/readyz")), 200);
 
+  // The refusal outlasts the replica: the junk is kept aside and the file is the registry served
+  // again, for a restart or another replica to serve.
+  EXPECT_EQ(ReadFile(snapshot + ".refused"), std::string(1 << 16, 'x'));
+  ASSERT_TRUE(db::VerifySnapshot(snapshot).ok());
+  EXPECT_EQ(db::VerifySnapshot(snapshot)->registry_version, version);
+
   // A replica started on the junk refuses to, says why, and leaves no files of its own beside it.
-  const std::set<std::string> before = ServingFiles(snapshot);
+  const std::string junk_again = snapshot + ".refused";
+  const std::set<std::string> before = ServingFiles(junk_again);
   const CommandResult refused =
-      RunPintag("serve --read-only --port 0 --bind 127.0.0.1 --db " + snapshot + " --scan-log " +
+      RunPintag("serve --read-only --port 0 --bind 127.0.0.1 --db " + junk_again + " --scan-log " +
                 dir_.file("refused-scans.db"));
   EXPECT_NE(refused.status, 0);
-  EXPECT_NE(refused.out.find("cannot serve " + snapshot + ":"), std::string::npos) << refused.out;
-  EXPECT_EQ(ServingFiles(snapshot), before);
+  EXPECT_NE(refused.out.find("cannot serve " + junk_again + ":"), std::string::npos) << refused.out;
+  EXPECT_EQ(ServingFiles(junk_again), before);
 }
 
 // The manual way to update a --read-only replica is `pintag snapshot` and a rename. A file from
@@ -503,6 +510,15 @@ TEST_F(ReplicaSetTest, AReadOnlyReplicaRefusesAFileThatGivesAServedKeyToAnotherP
   EXPECT_EQ(Body(client.Get("/api/v1/keys/" + key)).value("pincode", ""), "999301");
   EXPECT_EQ(RegistryVersionAt(replica.port()), version);
   EXPECT_EQ(StatusOf(client.Get("/readyz")), 200);
+  // The refusal outlasts this replica: the fork is kept aside, and a replica started on the file
+  // now (a restart, another host sharing it) serves the registry served before, not the fork.
+  EXPECT_NE(log.find("kept as " + snapshot + ".refused"), std::string::npos) << log;
+  ASSERT_TRUE(db::VerifySnapshot(snapshot + ".refused").ok());
+  ServerProcess& second = startReadOnly(1, snapshot);
+  ASSERT_TRUE(second.ok());
+  EXPECT_EQ(RegistryVersionAt(second.port()), version);
+  httplib::Client second_client = LoopbackClient(second.port());
+  EXPECT_EQ(Body(second_client.Get("/api/v1/keys/" + key)).value("pincode", ""), "999301");
 
   // A newer snapshot of the primary, which keeps every key, is still taken.
   addPincode(primary, "999303");

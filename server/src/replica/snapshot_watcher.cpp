@@ -53,9 +53,13 @@ SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
     removeEndedRuns();
     const std::lock_guard lock(mutex_);
     std::optional<Identity> linked;
-    const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked);
+    std::string link;
+    const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked, &link);
     seen_ = linked;
-    if (!loaded) throw std::runtime_error("cannot serve " + path_ + ": " + loaded.error().message);
+    if (!loaded) {
+      if (!link.empty()) ::unlink(link.c_str());
+      throw std::runtime_error("cannot serve " + path_ + ": " + loaded.error().message);
+    }
     loaded_ = *loaded;
   } catch (...) {
     releaseTag();  // no destructor runs for a constructor that throws
@@ -157,7 +161,8 @@ std::optional<SnapshotWatcher::Identity> SnapshotWatcher::Stat(const std::string
                   std::int64_t{status.st_mtim.tv_sec} * 1'000'000'000 + status.st_mtim.tv_nsec};
 }
 
-db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<Identity>* linked) {
+db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<Identity>* linked,
+                                                            std::string* link_made) {
   std::string number = "-";
   number += std::to_string(++links_made_);
   const std::string link = servingName(tag_, number);
@@ -167,12 +172,11 @@ db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<Identi
     return db::Error{db::ErrorCode::kStorage,
                      "cannot link " + path_ + " to " + link + ": " + std::strerror(errno)};
   }
+  *link_made = link;
   // What was linked, not what was at the path a moment before: a file renamed into place in
   // between is looked at once, now, and not taken for a change again.
   *linked = Stat(link);
-  db::Result<db::SnapshotInfo> verified = db::VerifySnapshot(link);
-  if (!verified) ::unlink(link.c_str());
-  return verified;
+  return db::VerifySnapshot(link);
 }
 
 bool SnapshotWatcher::check() {
@@ -180,7 +184,8 @@ bool SnapshotWatcher::check() {
   const std::optional<Identity> now = Stat(path_);
   if (!now || now == seen_) return false;  // gone (keep serving) or unchanged
   std::optional<Identity> linked;
-  const db::Result<db::SnapshotInfo> verified = linkAndVerify(&linked);
+  std::string link;
+  const db::Result<db::SnapshotInfo> verified = linkAndVerify(&linked, &link);
   seen_ = linked ? linked : now;
   // A --follow replica's install refuses a registry that gives a served key to another pincode
   // (a primary restored from an older backup); a file renamed into place is held to the same.
@@ -189,11 +194,11 @@ bool SnapshotWatcher::check() {
     refusal = verified.error();
   } else {
     refusal = db::KeysNotKeptBy(verified->path, loaded_->path);
-    if (refusal) ::unlink(verified->path.c_str());
   }
   if (refusal) {
+    const std::string kept = putBackServed(link);
     std::cerr << "pintag serve: ignoring the new file at " << path_ << ": " << refusal->message
-              << "; still serving registry version " << loaded_->registry_version << "\n";
+              << "; still serving registry version " << loaded_->registry_version << kept << "\n";
     return false;
   }
   const std::string previous = loaded_->path;
@@ -203,6 +208,32 @@ bool SnapshotWatcher::check() {
   std::cerr << "pintag serve: loaded snapshot " << path_ << " (registry version "
             << loaded_->registry_version << ")\n";
   return true;
+}
+
+std::string SnapshotWatcher::putBackServed(const std::string& refused_link) {
+  // A refusal must outlast this process: left at the path, the refused file was served by the
+  // next replica started on it, or by this one after a restart, with no check to refuse it.
+  const std::string refused = path_ + ".refused";
+  const std::string staged = servingName(tag_, "-staged");
+  std::string kept;
+  ::unlink(staged.c_str());
+  if (!refused_link.empty() && ::link(refused_link.c_str(), staged.c_str()) == 0 &&
+      ::rename(staged.c_str(), refused.c_str()) == 0) {
+    kept = "; the refused file is kept as " + refused;
+  }
+  if (!refused_link.empty()) ::unlink(refused_link.c_str());
+  ::unlink(staged.c_str());
+  // The served registry put back at the path by one rename: a reader of the path sees one file
+  // or the other, never none.
+  if (::link(loaded_->path.c_str(), staged.c_str()) == 0 &&
+      ::rename(staged.c_str(), path_.c_str()) == 0) {
+    seen_ = Stat(path_);
+    return kept + ", and " + path_ + " is that registry again";
+  }
+  const std::string error = std::strerror(errno);
+  ::unlink(staged.c_str());
+  return kept + "; " + path_ + " could not be put back to it (" + error +
+         "): a replica started on it would serve the refused file";
 }
 
 void SnapshotWatcher::start(std::chrono::milliseconds interval) {

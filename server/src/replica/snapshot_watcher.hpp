@@ -3,7 +3,9 @@
 // (renamed into place by `pintag snapshot --out`, or by the follower), checks it is a whole
 // snapshot, and hands it on. What is served is a hard link to the file that was checked
 // (`<path>.serving-<process tag>-N`), so a damaged file renamed into place later is never opened:
-// it is reported once and ignored, and the replica goes on serving what it has.
+// it is reported once and ignored, and the replica goes on serving what it has. So is a snapshot
+// that does not keep the keys served; either refused file is kept as `<path>.refused` and the
+// registry served is put back at the path.
 //
 // Several replicas may serve one file. Each names its links by a tag of its own and holds an
 // exclusive lock on `<path>.serving-<tag>.lock` while it lives; a starting replica removes only
@@ -65,9 +67,16 @@ class SnapshotWatcher {
   /// Removes the links and lock files of tags whose lock nobody holds.
   void removeEndedRuns() const;
   /// Links the file now at path_ to a new serving name and checks it; the error when it is not
-  /// a whole snapshot. `linked` is the identity of the file linked, even when refused. Requires
+  /// a whole snapshot. `linked` is the identity of the file linked, even when refused;
+  /// `link_made` the link's name, when one was made (the caller removes a refused one). Requires
   /// mutex_.
-  db::Result<db::SnapshotInfo> linkAndVerify(std::optional<Identity>* linked);
+  db::Result<db::SnapshotInfo> linkAndVerify(std::optional<Identity>* linked,
+                                             std::string* link_made);
+  /// After a refusal: keeps the refused file (its serving link `refused_link`, when it was
+  /// linked) as `<path>.refused`, and puts the registry served back at the path, so that a
+  /// restart or another replica on the path serves it too. What was done, for the log line.
+  /// Requires mutex_.
+  std::string putBackServed(const std::string& refused_link);
 
   std::string path_;
   OnLoaded on_loaded_;
