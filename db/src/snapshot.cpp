@@ -137,8 +137,15 @@ void RemoveAbandonedTemporaries(const std::string& target) {
     const std::string name = it->path().filename().string();
     if (!IsTemporaryName(name, prefix)) continue;
     const std::string path = (directory / name).string();
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    // Not waiting on what is not a plain file: opening a FIFO of that name blocked for good,
+    // with the ending signals held back (DeferredEndingSignals).
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
     if (fd < 0) continue;
+    struct stat status {};
+    if (::fstat(fd, &status) != 0 || !S_ISREG(status.st_mode)) {
+      ::close(fd);
+      continue;
+    }
     // Unlinked while the flock is held, so that a writer that creates the file just now and
     // takes the flock after this sees it gone (HoldWhileWriting) instead of writing into it.
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {

@@ -426,13 +426,16 @@ TEST(Snapshot, TemporaryFilesOfAKilledWriterAreRemovedByTheNext) {
   ASSERT_GE(held_fd, 0);
   ASSERT_EQ(::flock(held_fd, LOCK_EX | LOCK_NB), 0);
   const std::string short_name = test::WriteFile(dir.file("published.db.tmp-abc"), "mine");
+  // A FIFO of a temporary file's name: opened to look at it, it blocked the sweep for good.
+  ASSERT_EQ(::mkfifo(dir.file("published.db.tmp-fifo01").c_str(), 0600), 0);
   const std::string other_target = test::WriteFile(dir.file("other.db.tmp-abc123"), "mine");
 
   Connection source = test::OpenExisting(live);
   const auto written = WriteSnapshot(source, out);
   ASSERT_TRUE(written.ok()) << written.error().message;
   EXPECT_EQ(temporaries(),
-            (std::vector<std::string>{"published.db.tmp-HeLd01", "published.db.tmp-abc"}));
+            (std::vector<std::string>{"published.db.tmp-HeLd01", "published.db.tmp-abc",
+                                      "published.db.tmp-fifo01"}));
   for (const char* side : {"-journal", "-wal", "-shm"}) {
     EXPECT_FALSE(std::filesystem::exists(dir.file(killed.front() + side))) << side;
   }
@@ -442,7 +445,8 @@ TEST(Snapshot, TemporaryFilesOfAKilledWriterAreRemovedByTheNext) {
   ::close(held_fd);
   const std::string bytes = test::ReadFile(out);
   ASSERT_TRUE(InstallSnapshot(bytes, out).ok());
-  EXPECT_EQ(temporaries(), std::vector<std::string>{"published.db.tmp-abc"});
+  EXPECT_EQ(temporaries(),
+            (std::vector<std::string>{"published.db.tmp-abc", "published.db.tmp-fifo01"}));
   EXPECT_EQ(test::ReadFile(short_name), "mine");
 }
 
