@@ -587,6 +587,7 @@ TEST_F(ReplicaSetTest, ThePrimaryRepublishesASnapshotOthersChangedAndBacksOffWhi
             std::string::npos)
       << failing.dump();
   EXPECT_TRUE(failing["snapshot"]["failing_since"].is_string()) << failing.dump();
+  EXPECT_TRUE(failing["snapshot"]["published_version"].is_null()) << failing.dump();
   const auto metrics = [&] {
     const auto r = primary.Get("/metrics");
     return r ? r->body : std::string();

@@ -48,6 +48,19 @@ std::optional<SnapshotPublisher::ReaderSlot> SnapshotPublisher::tryReader() {
 }
 
 db::Result<db::SnapshotInfo> SnapshotPublisher::publishLocked() {
+  if (failure_ && Clock::now() < retry_at_) return *failure_;
+  db::Result<db::SnapshotInfo> written = writeIfChanged();
+  if (!written) return failed(written.error());
+  if (failure_) {
+    failure_.reset();
+    failures_in_a_row_ = 0;
+    failing_since_.reset();
+    updateStatus();
+  }
+  return written;
+}
+
+db::Result<db::SnapshotInfo> SnapshotPublisher::writeIfChanged() {
   try {
     if (!live_) live_.emplace(live_path_, db::ConnectionOptions{.create = false});
   } catch (const db::SqliteError& e) {
@@ -57,35 +70,33 @@ db::Result<db::SnapshotInfo> SnapshotPublisher::publishLocked() {
   if (!version) return version.error();
   const bool ours = publishedFileIsOurs();
   if (published_ && published_->registry_version == *version && ours) return *published_;
-  if (failure_ && Clock::now() < retry_at_) return *failure_;
   if (published_ && !ours && !failure_) {
     std::cerr << "pintag serve: the published snapshot " << out_path_
               << " was removed or changed by another process; publishing it again\n";
   }
   db::Result<db::SnapshotInfo> written = db::WriteSnapshot(*live_, out_path_);
-  if (!written) {
-    // 1, 2, 4, … s, at most kMaxRetryDelay.
-    const std::chrono::seconds delay =
-        std::min(kMaxRetryDelay, kFirstRetryDelay * (1 << std::min(failures_in_a_row_, 6)));
-    ++failures_in_a_row_;
-    retry_at_ = Clock::now() + delay;
-    if (!failing_since_) failing_since_ = std::chrono::system_clock::now();
-    failure_ = written.error();
-    failure_->message += " (" + std::to_string(failures_in_a_row_) + " in a row; next try in " +
-                         std::to_string(delay.count()) + " s)";
-    std::cerr << "pintag serve: cannot publish a snapshot: " << failure_->message << "\n";
-    updateStatus();
-    return *failure_;
-  }
-  failure_.reset();
-  failures_in_a_row_ = 0;
-  failing_since_.reset();
+  if (!written) return written.error();
   published_ = *written;
   published_file_ = Identify(out_path_);
   updateStatus();
   std::cerr << "pintag serve: published snapshot " << out_path_ << " (registry version "
             << written->registry_version << ", " << written->bytes << " bytes)\n";
   return *written;
+}
+
+db::Error SnapshotPublisher::failed(db::Error error) {
+  // 1, 2, 4, … s, at most kMaxRetryDelay.
+  const std::chrono::seconds delay =
+      std::min(kMaxRetryDelay, kFirstRetryDelay * (1 << std::min(failures_in_a_row_, 6)));
+  ++failures_in_a_row_;
+  retry_at_ = Clock::now() + delay;
+  if (!failing_since_) failing_since_ = std::chrono::system_clock::now();
+  error.message += " (" + std::to_string(failures_in_a_row_) + " in a row; next try in " +
+                   std::to_string(delay.count()) + " s)";
+  failure_ = error;
+  std::cerr << "pintag serve: cannot publish a snapshot: " << error.message << "\n";
+  updateStatus();
+  return error;
 }
 
 std::optional<SnapshotPublisher::FileIdentity> SnapshotPublisher::Identify(
@@ -107,7 +118,9 @@ SnapshotPublisher::Status SnapshotPublisher::status() const {
 
 void SnapshotPublisher::updateStatus() {
   Status status;
-  if (published_) status.published_version = published_->registry_version;
+  // The version replicas are given: none while the file is not the one written (removed,
+  // replaced, or a publication failed after it went).
+  if (published_ && publishedFileIsOurs()) status.published_version = published_->registry_version;
   if (failure_) status.error = failure_->message;
   status.failing_since = failing_since_;
   const std::lock_guard lock(status_mutex_);

@@ -86,7 +86,13 @@ class SnapshotPublisher {
   Status status() const;
 
  private:
+  /// Publishes when needed, unless a failure's retry delay still runs; records the outcome.
   db::Result<db::SnapshotInfo> publishLocked();
+  /// Writes the snapshot when the live version or the file changed; the published info.
+  db::Result<db::SnapshotInfo> writeIfChanged();
+  /// Records a failed publication (its retry delay, the status, the log line); the error, saying
+  /// how many failed in a row and when the next try is.
+  db::Error failed(db::Error error);
   /// The published file is still the one written: a file removed or replaced by someone else is
   /// published again (it was served as it was, or the route answered 503, until the next write).
   bool publishedFileIsOurs() const;
