@@ -203,7 +203,12 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   for (const char* key : {"size", "plan"}) {
     const std::optional<std::string> in_body = text(key);
     const std::optional<std::string> in_query = request.queryParam(key);
-    if (in_body && in_query && *in_body != *in_query) {
+    // Sizes are compared as sizes ("A6" is "a6"); plan names as they are written.
+    const bool same =
+        !in_body || !in_query ||
+        (std::string_view(key) == "size" ? LabelSizeValue(*in_body) == LabelSizeValue(*in_query)
+                                         : *in_body == *in_query);
+    if (!same) {
       throw HttpError(400, std::string("'") + key + "' is given twice: " + Quoted(*in_body) +
                                " in the body and " + Quoted(*in_query) +
                                " in the query; give it once");
