@@ -107,10 +107,12 @@ std::optional<Error> CheckShownName(std::string_view field, std::string_view val
   if (auto error = CheckText(field, value, max_bytes)) return error;
   for (std::size_t i = 0; i < value.size();) {
     const Utf8CodePoint decoded = DecodeUtf8(value, i);
-    const bool at_an_end = i == 0 || i + decoded.length == value.size();
-    const bool kept_inside =
-        decoded.value == U' ' || decoded.value == 0x200C || decoded.value == 0x200D;
-    if (IsInvisible(decoded.value) && (at_an_end || !kept_inside)) {
+    const bool at_start = i == 0;
+    const bool at_an_end = at_start || i + decoded.length == value.size();
+    // A joiner may end a word (Malayalam's older chillu forms end in U+200D), not start one.
+    const bool joiner = decoded.value == 0x200C || decoded.value == 0x200D;
+    const bool kept = joiner ? !at_start : decoded.value == U' ' && !at_an_end;
+    if (IsInvisible(decoded.value) && !kept) {
       char code[16];
       std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(decoded.value));
       return Error{ErrorCode::kInvalid,

@@ -193,6 +193,9 @@ TEST_F(SortPlans, NamesAndBinsMustReadAsWhatTheyAre) {
   // Inner spaces, dots and the joiners of Indic words are names as they read.
   EXPECT_EQ(refusal("hub b.2", "south zone"), "");
   EXPECT_EQ(refusal("hub-c", "\u0926\u093f\u200d\u0932\u094d\u0932\u0940"), "");
+  // Kannur in Malayalam's older chillu form ends in a zero-width joiner.
+  EXPECT_EQ(refusal("hub-d", "\u0d15\u0d23\u0d4d\u0d23\u0d42\u0d30\u0d4d\u200d"), "");
+  EXPECT_FALSE(refusal("hub-e", "\u200dkannur").empty());
 }
 
 TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {

@@ -41,7 +41,8 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
 
 /// CheckText, and more for a name people tell apart by how it reads (a sort plan's name, a bin):
 /// no space or invisible character (IsBlank's) at either end, nor one inside but the plain space
-/// and the zero-width joiners Indic words need (U+200C, U+200D). " delhi", "delhi" and
+/// and the zero-width joiners Indic words need (U+200C, U+200D, which may also end a word, as in
+/// Malayalam's older chillu forms). " delhi", "delhi" and
 /// "del<U+200B>hi" print alike, so three plans of those names all read "delhi" in a list.
 std::optional<Error> CheckShownName(std::string_view field, std::string_view value,
                                     std::size_t max_bytes);
