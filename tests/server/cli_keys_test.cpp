@@ -71,6 +71,10 @@ TEST(CliKeys, LeadingZerosAreDecimalOnEveryIntegerOption) {
   const nlohmann::json detections = nlohmann::json::parse(read.out)["detections"];
   ASSERT_EQ(detections.size(), 1U) << read.out;
   EXPECT_EQ(detections[0]["key"], 10) << read.out;
+  // Past 18 digits CLI11 took strtoll's clamped answer: refused instead.
+  const CommandResult huge = RunPintag("token revoke 99999999999999999999 --db " + db);
+  EXPECT_EQ(huge.status, 2) << huge.out;
+  EXPECT_NE(huge.out.find("is too large: '99999999999999999999'"), std::string::npos) << huge.out;
   const CommandResult hex = RunPintag("render --key 5 --size-px 0x100 -o " + png);
   EXPECT_EQ(hex.status, 2) << hex.out;
   EXPECT_NE(hex.out.find("must be a whole number in decimal digits, got '0x100'"),

@@ -42,6 +42,9 @@ inline CLI::Validator DecimalInteger() {
             }
             const std::size_t first = std::min(text.find_first_not_of('0', sign), text.size() - 1);
             text.erase(sign, first - sign);
+            // CLI11 takes strtoll's answer without its range error: 99999999999999999999 was
+            // read as 9223372036854775807. No option takes a number of 19 digits.
+            if (text.size() - sign > 18) return "is too large: '" + text + "'";
             return {};
           },
           ""};
