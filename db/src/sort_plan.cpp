@@ -152,8 +152,13 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv) {
   CsvReader reader(csv);
   std::string error;
   const auto header = reader.next(&error);
-  if (!header || !error.empty() || header->fields.size() != 2 || header->fields[0] != "prefix" ||
-      header->fields[1] != "bin") {
+  // Spaces around a field are dropped ("11, delhi", as people write CSV by hand): no prefix or
+  // bin may hold them at an end (CheckShownName).
+  const auto field = [](const auto& record, std::size_t i) {
+    return std::string(TrimSpaces(record->fields[i]));
+  };
+  if (!header || !error.empty() || header->fields.size() != 2 || field(header, 0) != "prefix" ||
+      field(header, 1) != "bin") {
     return Error{ErrorCode::kInvalid, "line 1: expected the header 'prefix,bin'"};
   }
   bool have_fallback = false;
@@ -165,18 +170,18 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv) {
       return Error{ErrorCode::kInvalid,
                    at + "expected 2 fields, got " + std::to_string(record->fields.size())};
     }
-    if (record->fields[0] == "*") {
+    if (field(record, 0) == "*") {
       if (have_fallback) return Error{ErrorCode::kInvalid, at + "a second fallback row '*'"};
       have_fallback = true;
-      plan.fallback_bin = record->fields[1];
-      if (auto problem = CheckText("fallback bin", plan.fallback_bin, kMaxBinBytes)) {
+      plan.fallback_bin = field(record, 1);
+      if (auto problem = CheckShownName("fallback bin", plan.fallback_bin, kMaxBinBytes)) {
         return At(at, *problem);
       }
       continue;
     }
     // Stopped at the first rule too many: the rest is not read into memory.
     if (plan.rules.size() == kMaxPlanRules) return TooManyRules(at);
-    SortRule rule{record->fields[0], record->fields[1]};
+    SortRule rule{field(record, 0), field(record, 1)};
     if (auto problem = CheckRule(rule)) return At(at, *problem);
     const auto [first, inserted] = line_of.try_emplace(rule.prefix, record->line);
     if (!inserted) {

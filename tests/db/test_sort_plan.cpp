@@ -213,6 +213,11 @@ TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
   EXPECT_EQ(quoted->fallback_bin, "bin, with comma");
   EXPECT_EQ(quoted->rules[0].bin, "say \"hi\"");
   EXPECT_EQ(ParsePlanCsv("q", PlanToCsv(*quoted)).value().rules, quoted->rules);
+  // Written by hand with spaces after the commas: read as the fields they surround.
+  const auto spaced = ParsePlanCsv("s", "prefix, bin\n*, floor\n11, delhi \n 56 ,south zone\n");
+  ASSERT_TRUE(spaced.ok()) << spaced.error().message;
+  EXPECT_EQ(spaced->fallback_bin, "floor");
+  EXPECT_EQ(spaced->rules, (std::vector<SortRule>{{"11", "delhi"}, {"56", "south zone"}}));
 
   const auto no_fallback = ParsePlanCsv("x", "prefix,bin\n1,a\n");
   ASSERT_FALSE(no_fallback.ok());
