@@ -1,7 +1,5 @@
 #include "replica/snapshot_publisher.hpp"
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <fstream>
 #include <iomanip>
@@ -77,7 +75,7 @@ db::Result<db::SnapshotInfo> SnapshotPublisher::writeIfChanged() {
   db::Result<db::SnapshotInfo> written = db::WriteSnapshot(*live_, out_path_);
   if (!written) return written.error();
   published_ = *written;
-  published_file_ = Identify(out_path_);
+  published_file_ = IdentifyFile(out_path_);
   updateStatus();
   std::cerr << "pintag serve: published snapshot " << out_path_ << " (registry version "
             << written->registry_version << ", " << written->bytes << " bytes)\n";
@@ -99,16 +97,8 @@ db::Error SnapshotPublisher::failed(db::Error error) {
   return error;
 }
 
-std::optional<SnapshotPublisher::FileIdentity> SnapshotPublisher::Identify(
-    const std::string& path) {
-  struct stat status {};
-  if (::stat(path.c_str(), &status) != 0) return std::nullopt;
-  return FileIdentity{status.st_dev, status.st_ino, status.st_size,
-                      std::int64_t{status.st_mtim.tv_sec} * 1'000'000'000 + status.st_mtim.tv_nsec};
-}
-
 bool SnapshotPublisher::publishedFileIsOurs() const {
-  return published_file_ && Identify(out_path_) == published_file_;
+  return published_file_ && IdentifyFile(out_path_) == published_file_;
 }
 
 SnapshotPublisher::Status SnapshotPublisher::status() const {

@@ -16,6 +16,7 @@
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "pintag/db/sqlite.hpp"
+#include "replica/file_identity.hpp"
 #include "replica/periodic_thread.hpp"
 
 namespace pintag::replica {
@@ -97,13 +98,6 @@ class SnapshotPublisher {
   /// published again (it was served as it was, or the route answered 503, until the next write).
   bool publishedFileIsOurs() const;
 
-  /// What identifies a file's contents as written: device, inode, size, modification time.
-  struct FileIdentity {
-    std::uint64_t device = 0, inode = 0;
-    std::int64_t size = 0, modified_ns = 0;
-    bool operator==(const FileIdentity&) const = default;
-  };
-  static std::optional<FileIdentity> Identify(const std::string& path);
   void updateStatus();  ///< status_ from what mutex_ guards; called holding mutex_
 
   std::string live_path_;

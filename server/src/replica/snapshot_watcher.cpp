@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -52,7 +51,7 @@ SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
   try {
     removeEndedRuns();
     const std::lock_guard lock(mutex_);
-    std::optional<Identity> linked;
+    std::optional<FileIdentity> linked;
     std::string link;
     const db::Result<db::SnapshotInfo> loaded = linkAndVerify(&linked, &link);
     seen_ = linked;
@@ -154,36 +153,29 @@ void SnapshotWatcher::removeEndedRuns() const {
   }
 }
 
-std::optional<SnapshotWatcher::Identity> SnapshotWatcher::Stat(const std::string& path) {
-  struct stat status {};
-  if (::stat(path.c_str(), &status) != 0) return std::nullopt;
-  return Identity{status.st_dev, status.st_ino, status.st_size,
-                  std::int64_t{status.st_mtim.tv_sec} * 1'000'000'000 + status.st_mtim.tv_nsec};
-}
-
-db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<Identity>* linked,
+db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<FileIdentity>* linked,
                                                             std::string* link_made) {
   std::string number = "-";
   number += std::to_string(++links_made_);
   const std::string link = servingName(tag_, number);
   ::unlink(link.c_str());
   if (::link(path_.c_str(), link.c_str()) != 0) {
-    *linked = Stat(path_);
+    *linked = IdentifyFile(path_);
     return db::Error{db::ErrorCode::kStorage,
                      "cannot link " + path_ + " to " + link + ": " + std::strerror(errno)};
   }
   *link_made = link;
   // What was linked, not what was at the path a moment before: a file renamed into place in
   // between is looked at once, now, and not taken for a change again.
-  *linked = Stat(link);
+  *linked = IdentifyFile(link);
   return db::VerifySnapshot(link);
 }
 
 bool SnapshotWatcher::check() {
   const std::lock_guard lock(mutex_);
-  const std::optional<Identity> now = Stat(path_);
+  const std::optional<FileIdentity> now = IdentifyFile(path_);
   if (!now || now == seen_) return false;  // gone (keep serving) or unchanged
-  std::optional<Identity> linked;
+  std::optional<FileIdentity> linked;
   std::string link;
   const db::Result<db::SnapshotInfo> verified = linkAndVerify(&linked, &link);
   seen_ = linked ? linked : now;
@@ -227,7 +219,7 @@ std::string SnapshotWatcher::putBackServed(const std::string& refused_link) {
   // or the other, never none.
   if (::link(loaded_->path.c_str(), staged.c_str()) == 0 &&
       ::rename(staged.c_str(), path_.c_str()) == 0) {
-    seen_ = Stat(path_);
+    seen_ = IdentifyFile(path_);
     return kept + ", and " + path_ + " is that registry again";
   }
   const std::string error = std::strerror(errno);

@@ -11,8 +11,6 @@
 // exclusive lock on `<path>.serving-<tag>.lock` while it lives; a starting replica removes only
 // the links whose lock nobody holds (a run that ended or crashed).
 
-#include <sys/types.h>
-
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -22,6 +20,7 @@
 #include <string_view>
 
 #include "pintag/db/snapshot.hpp"
+#include "replica/file_identity.hpp"
 #include "replica/periodic_thread.hpp"
 
 namespace pintag::replica {
@@ -50,14 +49,6 @@ class SnapshotWatcher {
   db::SnapshotInfo loaded() const;
 
  private:
-  struct Identity {
-    dev_t device = 0;
-    ino_t inode = 0;
-    off_t size = 0;
-    std::int64_t mtime_ns = 0;
-    bool operator==(const Identity&) const = default;
-  };
-  static std::optional<Identity> Stat(const std::string& path);
   /// `<path>.serving-<tag><suffix>`: every name of a tag's files (links "-N", ".lock").
   std::string servingName(const std::string& tag, std::string_view suffix) const;
   /// Makes this process's tag and holds its lock file.
@@ -70,7 +61,7 @@ class SnapshotWatcher {
   /// a whole snapshot. `linked` is the identity of the file linked, even when refused;
   /// `link_made` the link's name, when one was made (the caller removes a refused one). Requires
   /// mutex_.
-  db::Result<db::SnapshotInfo> linkAndVerify(std::optional<Identity>* linked,
+  db::Result<db::SnapshotInfo> linkAndVerify(std::optional<FileIdentity>* linked,
                                              std::string* link_made);
   /// After a refusal: keeps the refused file (its serving link `refused_link`, when it was
   /// linked) as `<path>.refused`, and puts the registry served back at the path, so that a
@@ -85,8 +76,8 @@ class SnapshotWatcher {
   mutable std::mutex mutex_;  // one check at a time; guards the fields below
   std::uint64_t links_made_ = 0;
   std::optional<db::SnapshotInfo> loaded_;
-  std::optional<Identity> seen_;  // the file last looked at, loaded or refused
-  PeriodicThread thread_;         // last: stopped before the members it uses go
+  std::optional<FileIdentity> seen_;  // the file last looked at, loaded or refused
+  PeriodicThread thread_;             // last: stopped before the members it uses go
 };
 
 }  // namespace pintag::replica
