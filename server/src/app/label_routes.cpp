@@ -199,26 +199,23 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
     return body[key].get<std::string>();
   };
   // Given in both places, they must agree: which one printed would be a guess the clerk never
-  // sees (a body's "plan" won over ?plan= silently).
-  for (const char* key : {"size", "plan"}) {
-    const std::optional<std::string> in_body = text(key);
-    const std::optional<std::string> in_query = request.queryParam(key);
-    // Sizes are compared as sizes ("A6" is "a6"); plan names as they are written.
-    const bool same =
-        !in_body || !in_query ||
-        (std::string_view(key) == "size" ? LabelSizeValue(*in_body) == LabelSizeValue(*in_query)
-                                         : *in_body == *in_query);
-    if (!same) {
-      throw HttpError(400, std::string("'") + key + "' is given twice: " + Quoted(*in_body) +
-                               " in the body and " + Quoted(*in_query) +
-                               " in the query; give it once");
-    }
-  }
+  // sees (a body's "plan" won over ?plan= silently). Sizes are compared as sizes ("A6" is "a6").
+  const auto given_twice = [&](const char* key, const std::string& in_body) {
+    return HttpError(400, std::string("'") + key + "' is given twice: " + Quoted(in_body) +
+                              " in the body and " + Quoted(*request.queryParam(key)) +
+                              " in the query; give it once");
+  };
   LabelOptions options;
   const std::optional<std::string> size = text("size");
   options.size = size ? LabelSizeValue(*size) : LabelSizeQuery(request);
+  if (size && request.queryParam("size") && LabelSizeQuery(request) != options.size) {
+    throw given_twice("size", *size);
+  }
   const std::optional<std::string> plan_name = text("plan");
   const std::string plan = plan_name ? PlanNameValue(*plan_name) : PlanQuery(request);
+  if (plan_name && request.queryParam("plan") && PlanQuery(request) != plan) {
+    throw given_twice("plan", *plan_name);
+  }
   // Each item is a pincode, or {"pincode": …, "office": …} to print that office's name.
   struct Item {
     Pincode pincode;
