@@ -88,12 +88,13 @@ void AddTokenCommand(CLI::App& app) {
 
   CLI::App* revoke = token->add_subcommand("revoke", "Revoke a token by id");
   // Checked before the database is opened, as the HTTP route checks it: a token id is positive.
+  // DecimalInteger has read the text before this check (AddRegisteredCommands), so it is plain
+  // decimal digits, a minus perhaps, and 0 is "0".
   revoke->add_option("id", args->id, "token id")
       ->required()
       ->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            return text.empty() || text.front() == '-' ||
-                           text.find_first_not_of('0') == std::string::npos
+          [](const std::string& text) -> std::string {
+            return text.front() == '-' || text == "0"
                        ? "a token id is a positive integer, got '" + text + "'"
                        : "";
           },
