@@ -125,8 +125,8 @@ const kReplicaHint = 'This server is a read-only copy of the registry: make the 
 
 /** An alert box for an error: the problem's title, HTTP status and detail, plus a hint for auth errors. */
 export function problemBox(error, { hint } = {}) {
-  // A check the page makes itself may give its own title ({ title, message }).
-  const title = error instanceof ApiError || (error && error.title) ? error.title : 'Something went wrong';
+  // The server's problem, or a check the page makes itself ({ title, message }), names itself.
+  const title = error && error.title ? error.title : 'Something went wrong';
   const detail = error instanceof ApiError ? error.detail : String(error && error.message ? error.message : error);
   const status = error instanceof ApiError && error.status ? el('span', { class: 'code' }, `HTTP ${error.status}`) : null;
   // A replica refuses a change before it looks at the token: the role hint would mislead.
