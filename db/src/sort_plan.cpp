@@ -282,6 +282,12 @@ Result<SortPlan> GetPlan(Connection& connection, std::string_view name) {
   });
 }
 
+Result<bool> HasPlan(Connection& connection, std::string_view name) {
+  return Guard([&]() -> Result<bool> {
+    return connection.prepare("SELECT 1 FROM sort_plans WHERE name = ?1").bind(1, name).step();
+  });
+}
+
 Result<std::vector<std::string>> ListPlans(Connection& connection) {
   return Guard([&]() -> Result<std::vector<std::string>> {
     Statement s = connection.prepare("SELECT name FROM sort_plans ORDER BY name");

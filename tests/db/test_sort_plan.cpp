@@ -60,6 +60,8 @@ TEST_F(SortPlans, UnknownPlanIsAnErrorValue) {
   EXPECT_NE(routed.error().message.find("no-such-plan"), std::string::npos);
   EXPECT_EQ(GetPlan(db_, "no-such-plan").error().code, ErrorCode::kNotFound);
   EXPECT_EQ(DeletePlan(db_, "no-such-plan").error().code, ErrorCode::kNotFound);
+  EXPECT_FALSE(HasPlan(db_, "no-such-plan").value());
+  EXPECT_TRUE(HasPlan(db_, "default").value());
 }
 
 TEST_F(SortPlans, SavingReplacesAndDeletingRemoves) {
@@ -74,7 +76,9 @@ TEST_F(SortPlans, SavingReplacesAndDeletingRemoves) {
   EXPECT_EQ(stored.rules, smaller.rules);
   EXPECT_EQ(stored.fallback_bin, "other");
   EXPECT_EQ(ListPlans(db_).value(), (std::vector<std::string>{"default", "hub-a"}));
+  EXPECT_TRUE(HasPlan(db_, "hub-a").value());
   ASSERT_TRUE(DeletePlan(db_, "hub-a").ok());
+  EXPECT_FALSE(HasPlan(db_, "hub-a").value());
   EXPECT_EQ(db_.queryInt64("SELECT count(*) FROM sort_rules WHERE bin = 'two'"), 0);
 }
 

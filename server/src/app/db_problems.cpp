@@ -44,6 +44,16 @@ db::SortPlan LoadPlan(db::Connection& connection, std::string_view name) {
   return Unwrap(std::move(plan));
 }
 
+void RequirePlan(db::Connection& connection, std::string_view name) {
+  if (!Unwrap(db::HasPlan(connection, name))) ThrowUnknownPlan(name);
+}
+
+db::Routing RouteUnder(db::Connection& connection, Pincode pincode, std::string_view name) {
+  auto routing = db::Route(connection, pincode, name);
+  if (!routing && routing.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(name);
+  return Unwrap(std::move(routing));
+}
+
 db::PincodeRecord LoadActivePincode(db::Connection& connection, Pincode pincode) {
   db::PincodeRecord record = Unwrap(db::LookupPincode(connection, pincode), "Unknown Pincode");
   if (record.status == db::PincodeStatus::kRetired) {

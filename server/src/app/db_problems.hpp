@@ -29,8 +29,14 @@ inline void Unwrap(const db::Result<void>& result, std::string title = {}) {
 
 /// 404 "Unknown Sort Plan" for the plan called `name`.
 [[noreturn]] void ThrowUnknownPlan(std::string_view name);
-/// The sort plan called `name`; 404 "Unknown Sort Plan" when there is none.
+/// The sort plan called `name`, rules and all; 404 "Unknown Sort Plan" when there is none. For
+/// the plan's own routes and for work that routes many pincodes under one version of it.
 db::SortPlan LoadPlan(db::Connection& connection, std::string_view name);
+/// 404 "Unknown Sort Plan" unless a plan called `name` is stored; reads none of its rules.
+void RequirePlan(db::Connection& connection, std::string_view name);
+/// Where `pincode` goes under the plan called `name`, read by its prefixes alone (a plan may hold
+/// 100,000 rules: loading them for one pincode costs ~20 ms); 404 "Unknown Sort Plan".
+db::Routing RouteUnder(db::Connection& connection, Pincode pincode, std::string_view name);
 
 /// The record of a pincode labels may be printed for: 404 "Unknown Pincode" when the registry
 /// does not hold it, 410 "Retired Pincode" when it was retired (its printed labels still decode).

@@ -145,10 +145,10 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   if ((cx || cy) && !fx) throw HttpError(400, "cx and cy need fx and fy");
   const Overlay overlay = OverlayQuery(request);
 
-  db::SortPlan plan;
   {
+    // An unknown plan is refused before the photo costs a decode; each tag is routed after.
     auto connection = context.pool->acquire();
-    plan = LoadPlan(*connection, plan_name);
+    RequirePlan(*connection, plan_name);
   }
 
   // The loader tells the format from the first bytes, checks the header's size against the pixel
@@ -207,7 +207,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
       if (d.key) {
         auto record = db::LookupKey(*connection, *d.key);
         if (record) {
-          r.routing = db::RouteWith(plan, record->pincode);
+          r.routing = RouteUnder(*connection, record->pincode, plan_name);
           r.record = std::move(record).value();
         } else if (record.error().code != db::ErrorCode::kNotFound) {
           ThrowDbError(record.error());
@@ -235,7 +235,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
                        {"cx", result.intrinsics.cx},
                        {"cy", result.intrinsics.cy}};
   out["tag_size_mm"] = tag_size_mm;
-  out["plan"] = plan.name;
+  out["plan"] = plan_name;
   out["tag_count"] = tags.size();
   out["tags"] = std::move(tags);
   out["warnings"] = ToJson(result.warnings);

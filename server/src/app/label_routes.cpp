@@ -63,8 +63,9 @@ const db::PostOffice* ChosenOffice(const db::PincodeRecord& record,
                   "Unknown Office");
 }
 
-// What a label prints for an active pincode under `plan`, naming `office` or the main one.
-LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan,
+// What a label prints for an active pincode going to `bin` of the plan `plan_name`, naming
+// `office` or the main one.
+LabelContent LabelFor(const db::PincodeRecord& record, std::string plan_name, std::string bin,
                       const std::optional<std::string>& office_name = std::nullopt) {
   LabelContent label;
   label.pincode = record.pincode;
@@ -77,8 +78,8 @@ LabelContent LabelFor(const db::PincodeRecord& record, const db::SortPlan& plan,
     label.district = office->district;
     label.state = office->state;
   }
-  label.plan = plan.name;
-  label.bin = db::RouteWith(plan, record.pincode).bin;
+  label.plan = std::move(plan_name);
+  label.bin = std::move(bin);
   return label;
 }
 
@@ -109,7 +110,8 @@ LabelRequest ReadLabelRequest(const AppContext& context, const HttpRequest& requ
   const std::string plan_name = PlanQuery(request);
   auto connection = context.pool->acquire();
   const db::PincodeRecord record = LoadActivePincode(*connection, pincode);
-  label.content = LabelFor(record, LoadPlan(*connection, plan_name), request.queryParam("office"));
+  std::string bin = RouteUnder(*connection, pincode, plan_name).bin;
+  label.content = LabelFor(record, plan_name, std::move(bin), request.queryParam("office"));
   return label;
 }
 
@@ -249,11 +251,12 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   labels.reserve(items.size());
   {
     auto connection = context.pool->acquire();
+    // Read whole once, so every label of the batch comes from one version of the plan.
     const db::SortPlan sort_plan = LoadPlan(*connection, plan);
     for (std::size_t i = 0; i < items.size(); ++i) {
       try {
-        labels.push_back(
-            LabelFor(LoadActivePincode(*connection, items[i].pincode), sort_plan, items[i].office));
+        labels.push_back(LabelFor(LoadActivePincode(*connection, items[i].pincode), sort_plan.name,
+                                  db::RouteWith(sort_plan, items[i].pincode).bin, items[i].office));
       } catch (const HttpError& e) {
         // Which item of the batch, so a clerk finds the line to fix; a server fault is not
         // the item's.

@@ -107,6 +107,8 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
                              StoredDescription description = StoredDescription::kReplace);
 /// kNotFound for an unknown plan.
 Result<SortPlan> GetPlan(Connection& connection, std::string_view name);
+/// Whether a plan called `name` is stored (its rules are not read).
+Result<bool> HasPlan(Connection& connection, std::string_view name);
 Result<std::vector<std::string>> ListPlans(Connection& connection);  ///< names, ascending
 Result<void> DeletePlan(Connection& connection, std::string_view name);
 
