@@ -162,6 +162,48 @@ TEST(LabelSvg, IsSizedInMillimetresWithAPointViewBox) {
   EXPECT_NE(text.find("</svg>"), std::string::npos);
 }
 
+TEST(LabelText, IndianScriptsPrintInTheirOwnFacesAndReadBack) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // DejaVu Sans has no Indian script: a Hindi bin printed as a row of boxes before.
+  LabelContent label = test::SampleLabel();
+  label.office =
+      "\u0928\u0908 \u0926\u093F\u0932\u094D\u0932\u0940 \u092E\u0941\u0916\u094D\u092F "
+      "\u0921\u093E\u0915\u0918\u0930";  // नई दिल्ली मुख्य डाकघर
+  label.district = "\u0B9A\u0BC6\u0BA9\u0BCD\u0BA9\u0BC8";     // சென்னை
+  label.state = "\u0C95\u0CB0\u0CCD\u0CA8\u0CBE\u0C9F\u0C95";  // ಕರ್ನಾಟಕ
+  label.bin =
+      "\u0995\u09B2\u0995\u09BE\u09A4\u09BE \u0989\u09A4\u09CD\u09A4\u09B0 7";  // কলকাতা উত্তর 7
+  for (const LabelSize& size : {kLabel100x150, LabelSize{50, 75}}) {
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << pdf.error;
+    const auto fonts = Poppler("pdffonts", pdf);
+    ASSERT_TRUE(fonts.has_value());
+    for (const char* face : {"NotoSansDevanagari", "NotoSansTamil", "NotoSansKannada",
+                             "NotoSansBengali", "DejaVuSans"}) {
+      EXPECT_NE(fonts->find(face), std::string::npos)
+          << ToString(size) << ": " << face << " not used (scripts/setup.sh installs "
+          << "fonts-noto-core)\n"
+          << *fonts;
+    }
+    // The words read back as written: each glyph run carries the text it was shaped from.
+    const auto text = Poppler("pdftotext", pdf);
+    ASSERT_TRUE(text.has_value());
+    std::string words;
+    for (const char c : *text) {
+      if (std::isspace(static_cast<unsigned char>(c))) {
+        if (!words.empty() && words.back() != ' ') words += ' ';
+      } else {
+        words += c;
+      }
+    }
+    for (const std::string& written :
+         {label.office, label.district + ", " + label.state, *label.bin}) {
+      EXPECT_NE(words.find(written), std::string::npos)
+          << ToString(size) << ": " << written << " not in: " << words;
+    }
+  }
+}
+
 TEST(LabelText, ALongBinIsPrintedWholeOnTwoLines) {
   if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
   // Cut to one line, "Mumbai West Sorting Chute…" lost the chute's number, the part that sorts.

@@ -38,17 +38,13 @@ void Rule(cairo_t* cr, double x0, double y0, double x1, double y1) {
 }
 
 // Ink height of a digit at font size 1: scales the pincode to its box.
-double DigitHeightPerSize(cairo_t* cr) {
-  SelectFont(cr, true, 1.0);
-  cairo_text_extents_t e;
-  cairo_text_extents(cr, "0", &e);
-  return e.height;
+double DigitHeightPerSize(LabelFont& font) {
+  constexpr double kSize = 16.0;
+  return font.measure("0", true, kSize).ink_height / kSize;
 }
 
-void DrawPin(cairo_t* cr, const LabelContent& label, const Box& box) {
-  SelectFont(cr, true, kCaptionMm);
-  cairo_move_to(cr, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
-  cairo_show_text(cr, "PIN CODE");
+void DrawPin(LabelFont& font, const LabelContent& label, const Box& box) {
+  font.show("PIN CODE", true, kCaptionMm, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
 
   // Written as India Post prints it, "110 001"; the digits fill the box below the caption.
   const std::string digits = label.pincode.str();
@@ -56,28 +52,16 @@ void DrawPin(cairo_t* cr, const LabelContent& label, const Box& box) {
   const double top = box.y + kPadMm + kCaptionMm + 1.0;
   const double height = box.bottom() - kPadMm - top;
   const double width = box.w - 4 * kPadMm;
-  double size = height * 0.88 / DigitHeightPerSize(cr);
-  SelectFont(cr, true, size);
-  cairo_text_extents_t e;
-  cairo_text_extents(cr, text.c_str(), &e);
-  if (e.width > width) {
-    size *= width / e.width;
-    SelectFont(cr, true, size);
-    cairo_text_extents(cr, text.c_str(), &e);
+  double size = height * 0.88 / DigitHeightPerSize(font);
+  TextExtents e = font.measure(text, true, size);
+  if (e.ink_width > width) {
+    size *= width / e.ink_width;
+    e = font.measure(text, true, size);
   }
   // Centre the ink, not the advance box, so the digits sit visually centred.
-  const double x = box.x + (box.w - e.width) / 2 - e.x_bearing;
-  const double y = top + (height - e.height) / 2 - e.y_bearing;
-  cairo_move_to(cr, x, y);
-  cairo_show_text(cr, text.c_str());
-}
-
-// Advance of `text` at font size 1; advances scale linearly since metrics hinting is off.
-double AdvancePerSize(cairo_t* cr, const std::string& text, bool bold) {
-  SelectFont(cr, bold, 1.0);
-  cairo_text_extents_t e;
-  cairo_text_extents(cr, text.c_str(), &e);
-  return e.x_advance;
+  const double x = box.x + (box.w - e.ink_width) / 2 - e.ink_x;
+  const double y = top + (height - e.ink_height) / 2 - e.ink_y;
+  font.show(text, true, size, x, y);
 }
 
 struct TextLine {
@@ -88,23 +72,23 @@ struct TextLine {
 
 // The office on one line when it fits at 3/4 of the preferred size or more, else wrapped at a word
 // boundary onto two lines (the second shrinks, then ellipsizes, if still too long).
-void AddOfficeLines(cairo_t* cr, const std::string& office, double width, double size,
+void AddOfficeLines(LabelFont& font, const std::string& office, double width, double size,
                     double two_line_size, std::vector<TextLine>& lines) {
-  const double fit = width / std::max(AdvancePerSize(cr, office, true), 1e-9);
+  const double fit = width / std::max(font.advancePerSize(office, true), 1e-9);
   if (fit >= 0.75 * size || office.find(' ') == std::string::npos) {
     lines.push_back({office, size, true});
     return;
   }
   std::size_t cut = office.find(' ');
   for (std::size_t next = cut; next != std::string::npos; next = office.find(' ', next + 1)) {
-    if (AdvancePerSize(cr, office.substr(0, next), true) * two_line_size > width) break;
+    if (font.advancePerSize(office.substr(0, next), true) * two_line_size > width) break;
     cut = next;
   }
   lines.push_back({office.substr(0, cut), two_line_size, true});
   lines.push_back({office.substr(cut + 1), two_line_size, true});
 }
 
-void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
+void DrawAddress(LabelFont& font, const LabelContent& label, const Box& box) {
   const double width = box.w - 2 * kPadMm;
   const double office_size = std::min(box.h * 0.36, 7.0);
   const double line2_size = std::min(box.h * 0.24, 4.6);
@@ -113,7 +97,7 @@ void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
 
   std::vector<TextLine> lines;
   const std::string office = SanitizeUtf8(label.office);
-  AddOfficeLines(cr, office.empty() ? std::string("\u2014") : office, width, office_size,
+  AddOfficeLines(font, office.empty() ? std::string("\u2014") : office, width, office_size,
                  two_line_size, lines);
   const std::string district = SanitizeUtf8(label.district);
   const std::string state = SanitizeUtf8(label.state);
@@ -128,7 +112,7 @@ void DrawAddress(cairo_t* cr, const LabelContent& label, const Box& box) {
   const double gap = (box.h - total) / static_cast<double>(lines.size() + 1);
   double top = box.y + gap;
   for (const TextLine& line : lines) {
-    DrawLine(cr, line.text, box.x + kPadMm, width, top + line.size * 0.76,
+    DrawLine(font, line.text, box.x + kPadMm, width, top + line.size * 0.76,
              {.bold = line.bold, .size = line.size, .min_size = kMinNameMm, .align = Align::kLeft});
     top += line.size + gap;
   }
@@ -143,21 +127,10 @@ struct LineBreak {
   double penalty;
 };
 
-bool StartsCodePoint(const std::string& text, std::size_t i) {
-  return i >= text.size() || (static_cast<unsigned char>(text[i]) & 0xC0) != 0x80;
-}
-
-// U+0300–U+036F, the combining diacritics: a line must not start with one.
-bool StartsWithCombiningMark(const std::string& text, std::size_t i) {
-  if (i + 1 >= text.size()) return false;
-  const auto lead = static_cast<unsigned char>(text[i]);
-  const auto next = static_cast<unsigned char>(text[i + 1]);
-  return (lead == 0xCC && next >= 0x80) || (lead == 0xCD && next <= 0xAF);
-}
-
 // At a space (dropped) and after a '-', '_', '/', '.' or ':'; when there is neither, between any
-// two characters ("CHUTE12" must still show its number).
-std::vector<LineBreak> BinBreaks(const std::string& bin) {
+// two characters as a reader counts them ("CHUTE12" must still show its number; a vowel sign or
+// a combining mark stays with its letter).
+std::vector<LineBreak> BinBreaks(LabelFont& font, const std::string& bin) {
   constexpr double kPunctuationPenalty = 1.15;
   std::vector<LineBreak> breaks;
   for (std::size_t i = 0; i + 1 < bin.size(); ++i) {
@@ -169,8 +142,8 @@ std::vector<LineBreak> BinBreaks(const std::string& bin) {
     }
   }
   if (!breaks.empty()) return breaks;
-  for (std::size_t i = 1; i < bin.size(); ++i) {
-    if (StartsCodePoint(bin, i) && !StartsWithCombiningMark(bin, i)) breaks.push_back({i, i, 1.0});
+  for (const std::size_t i : font.cutPoints(bin)) {
+    if (i > 0 && i < bin.size()) breaks.push_back({i, i, 1.0});
   }
   return breaks;
 }
@@ -180,20 +153,20 @@ std::vector<LineBreak> BinBreaks(const std::string& bin) {
 // start, so it is not cut off while a break can show it. When even that does not fit at the
 // 2.2 mm floor, the second line keeps the longest end that fits and the first is ellipsized:
 // two bins that differ in their number never print alike.
-void DrawBinValue(cairo_t* cr, const std::string& bin, double x, double width, double baseline,
+void DrawBinValue(LabelFont& font, const std::string& bin, double x, double width, double baseline,
                   double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
-  const std::vector<LineBreak> breaks = BinBreaks(bin);
-  if (AdvancePerSize(cr, bin, true) * kOneLineMinMm <= width || breaks.empty()) {
-    DrawLine(cr, bin, x, width, baseline, {.bold = true, .size = size, .min_size = kMinNameMm});
+  const std::vector<LineBreak> breaks = BinBreaks(font, bin);
+  if (font.advancePerSize(bin, true) * kOneLineMinMm <= width || breaks.empty()) {
+    DrawLine(font, bin, x, width, baseline, {.bold = true, .size = size, .min_size = kMinNameMm});
     return;
   }
   LineBreak cut = breaks.front();
   double longer = std::numeric_limits<double>::infinity();
   double best = std::numeric_limits<double>::infinity();
   for (const LineBreak& at : breaks) {
-    const double advance = std::max(AdvancePerSize(cr, bin.substr(0, at.first_end), true),
-                                    AdvancePerSize(cr, bin.substr(at.second_begin), true));
+    const double advance = std::max(font.advancePerSize(bin.substr(0, at.first_end), true),
+                                    font.advancePerSize(bin.substr(at.second_begin), true));
     if (advance * at.penalty < best) {
       best = advance * at.penalty;
       longer = advance;
@@ -201,11 +174,11 @@ void DrawBinValue(cairo_t* cr, const std::string& bin, double x, double width, d
     }
   }
   if (longer * kMinNameMm > width) {
-    // The longest end that fits on the second line, starting at a character (not a space or a
-    // combining mark).
-    for (std::size_t i = 1; i < bin.size(); ++i) {
-      if (!StartsCodePoint(bin, i) || bin[i] == ' ' || StartsWithCombiningMark(bin, i)) continue;
-      if (AdvancePerSize(cr, bin.substr(i), true) * kMinNameMm <= width) {
+    // The longest end that fits on the second line, starting at a character (not a space, a
+    // vowel sign or a combining mark).
+    for (const std::size_t i : font.cutPoints(bin)) {
+      if (i == 0 || i >= bin.size() || bin[i] == ' ') continue;
+      if (font.advancePerSize(bin.substr(i), true) * kMinNameMm <= width) {
         cut = {i, i, 1.0};
         break;
       }
@@ -214,14 +187,12 @@ void DrawBinValue(cairo_t* cr, const std::string& bin, double x, double width, d
   }
   const double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
   const LineStyle style{.bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm};
-  DrawLine(cr, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style);
-  DrawLine(cr, bin.substr(cut.second_begin), x, width, baseline, style);
+  DrawLine(font, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style);
+  DrawLine(font, bin.substr(cut.second_begin), x, width, baseline, style);
 }
 
-void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
-  SelectFont(cr, true, kCaptionMm);
-  cairo_move_to(cr, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
-  cairo_show_text(cr, "SORT BIN");
+void DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
+  font.show("SORT BIN", true, kCaptionMm, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
 
   // The bin value big on the left half; the plan and the key in small print on the right.
   const double value_top = box.y + kPadMm + kCaptionMm + 0.8;
@@ -231,10 +202,10 @@ void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
   const std::string bin = label.bin ? SanitizeUtf8(*label.bin) : std::string();
   if (bin.empty()) {
     // No plan chosen (or the plan has no bin for this pincode): say so quietly.
-    DrawLine(cr, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
+    DrawLine(font, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
              {.bold = false, .size = std::min(value_size, 5.0), .min_size = 2.0});
   } else {
-    DrawBinValue(cr, bin, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
+    DrawBinValue(font, bin, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
                  value_size, value_h);
   }
 
@@ -243,14 +214,14 @@ void DrawBin(cairo_t* cr, const LabelContent& label, const Box& box) {
   if (label.plan) {
     const std::string plan = SanitizeUtf8(*label.plan);
     if (!plan.empty()) {
-      DrawLine(cr, "plan " + plan, right_x, right_w, box.y + kPadMm + kCaptionMm * 0.75,
+      DrawLine(font, "plan " + plan, right_x, right_w, box.y + kPadMm + kCaptionMm * 0.75,
                {.bold = false, .size = kCaptionMm, .min_size = 1.8, .align = Align::kRight});
     }
   }
-  DrawLine(cr, "key " + std::to_string(label.key.value()), right_x, right_w,
+  DrawLine(font, "key " + std::to_string(label.key.value()), right_x, right_w,
            box.bottom() - kPadMm - kSmallPrintMm * 1.2,
            {.bold = false, .size = kSmallPrintMm, .min_size = 1.6, .align = Align::kRight});
-  DrawLine(cr, "PinTag v1", right_x, right_w, box.bottom() - kPadMm,
+  DrawLine(font, "PinTag v1", right_x, right_w, box.bottom() - kPadMm,
            {.bold = false, .size = kSmallPrintMm * 0.85, .min_size = 1.4, .align = Align::kRight});
 }
 
@@ -330,9 +301,10 @@ void DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout
     Rule(cr, layout.bin.x, layout.bin.y, layout.bin.right(), layout.bin.y);
   }
 
-  DrawPin(cr, label, layout.pin);
-  DrawAddress(cr, label, layout.address);
-  DrawBin(cr, label, layout.bin);
+  LabelFont font(cr);
+  DrawPin(font, label, layout.pin);
+  DrawAddress(font, label, layout.address);
+  DrawBin(font, label, layout.bin);
   cairo_restore(cr);
 
   if (with_tag) DrawTagVector(cr, label.key, layout.placement);

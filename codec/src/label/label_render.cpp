@@ -35,16 +35,6 @@ cairo_status_t AppendBytes(void* closure, const unsigned char* data, unsigned in
   return CAIRO_STATUS_SUCCESS;
 }
 
-// The same glyph advances on every surface, so a line fits identically in PDF, SVG and PNG.
-void SetFontOptions(cairo_t* cr) {
-  cairo_font_options_t* options = cairo_font_options_create();
-  cairo_font_options_set_hint_metrics(options, CAIRO_HINT_METRICS_OFF);
-  cairo_font_options_set_hint_style(options, CAIRO_HINT_STYLE_NONE);
-  cairo_font_options_set_antialias(options, CAIRO_ANTIALIAS_GRAY);
-  cairo_set_font_options(cr, options);
-  cairo_font_options_destroy(options);
-}
-
 std::string CairoError(const char* what, cairo_status_t status) {
   return std::string(what) + ": " + cairo_status_to_string(status);
 }
@@ -58,7 +48,6 @@ std::string DrawPages(cairo_surface_t* surface, std::span<const LabelContent> la
                       const label::LabelLayout& layout) {
   Context cr(cairo_create(surface));
   cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
-  SetFontOptions(cr.get());
   for (const LabelContent& content : labels) {
     label::DrawLabel(cr.get(), content, layout, true);
     cairo_show_page(cr.get());
@@ -154,7 +143,6 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
     Context cr(cairo_create(surface.get()));
     const double scale = options.dpi / kMmPerInch;
     cairo_scale(cr.get(), scale, scale);
-    SetFontOptions(cr.get());
     label::LabelLayout layout = label::ComputeLayout(options.size);
     if (paste_tag) {
       layout.placement = {tag.square_x / scale, tag.square_y / scale, tag.square_side / scale};

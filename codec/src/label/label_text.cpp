@@ -37,22 +37,6 @@ bool IsControl(char32_t c) {
          (c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069) || c == 0xFEFF;
 }
 
-// Byte offsets where each code point of valid UTF-8 starts, plus the end.
-std::vector<std::size_t> Boundaries(std::string_view text) {
-  std::vector<std::size_t> at;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (!IsContinuation(text[i])) at.push_back(i);
-  }
-  at.push_back(text.size());
-  return at;
-}
-
-double Advance(cairo_t* cr, const std::string& text) {
-  cairo_text_extents_t extents;
-  cairo_text_extents(cr, text.c_str(), &extents);
-  return extents.x_advance;
-}
-
 }  // namespace
 
 std::string SanitizeUtf8(std::string_view text) {
@@ -78,34 +62,26 @@ std::string SanitizeUtf8(std::string_view text) {
   return out;
 }
 
-void SelectFont(cairo_t* cr, bool bold, double size) {
-  cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL,
-                         bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
-  cairo_set_font_size(cr, size);
-}
-
-double DrawLine(cairo_t* cr, std::string_view text, double x, double width, double baseline,
+double DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
                 const LineStyle& style) {
   std::string line(text);
-  SelectFont(cr, style.bold, style.size);
   double size = style.size;
-  double advance = Advance(cr, line);
+  double advance = font.measure(line, style.bold, size).advance;
   if (advance > width && advance > 0) {
-    // Advances scale linearly with the size (metrics hinting is off), so one step suffices.
+    // Advances scale linearly with the size (hinting is off), so one step suffices.
     size = std::max(style.min_size, style.size * width / advance * 0.999);
-    cairo_set_font_size(cr, size);
-    advance = Advance(cr, line);
+    advance = font.measure(line, style.bold, size).advance;
   }
   if (advance > width) {
     // Still too wide at the smallest size: keep the longest prefix that fits with an ellipsis.
-    const std::vector<std::size_t> at = Boundaries(line);
+    const std::vector<std::size_t> at = font.cutPoints(line);
     std::size_t lo = 0;
     std::size_t hi = at.size() - 1;
     while (lo < hi) {
       const std::size_t mid = (lo + hi + 1) / 2;
       std::string candidate = line.substr(0, at[mid]);
       while (!candidate.empty() && candidate.back() == ' ') candidate.pop_back();
-      if (Advance(cr, candidate + "\u2026") <= width) {
+      if (font.measure(candidate + "\u2026", style.bold, size).advance <= width) {
         lo = mid;
       } else {
         hi = mid - 1;
@@ -114,13 +90,12 @@ double DrawLine(cairo_t* cr, std::string_view text, double x, double width, doub
     line = line.substr(0, at[lo]);
     while (!line.empty() && (line.back() == ' ' || line.back() == ',')) line.pop_back();
     line += "\u2026";
-    advance = Advance(cr, line);
+    advance = font.measure(line, style.bold, size).advance;
   }
   double left = x;
   if (style.align == Align::kCentre) left = x + (width - advance) / 2;
   if (style.align == Align::kRight) left = x + width - advance;
-  cairo_move_to(cr, left, baseline);
-  cairo_show_text(cr, line.c_str());
+  font.show(line, style.bold, size, left, baseline);
   return size;
 }
 

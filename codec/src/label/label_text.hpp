@@ -1,10 +1,9 @@
 #pragma once
 // Text handling for labels: untrusted UTF-8 made safe to draw, and lines fitted to a width.
 
-#include <cairo.h>
-
 #include <string_view>
 
+#include "label/label_font.hpp"
 #include "label/label_utf8.hpp"
 
 namespace pintag::label {
@@ -19,12 +18,9 @@ struct LineStyle {
 };
 
 /// Draws one line of sanitized text with its baseline at `baseline`, inside [x, x + width]:
-/// shrinks the font down to style.min_size to fit, then cuts code points and appends "…".
-/// Returns the font size used.
-double DrawLine(cairo_t* cr, std::string_view text, double x, double width, double baseline,
+/// shrinks the font down to style.min_size to fit, then cuts whole characters (as a reader
+/// counts them) from the end and appends "…". Returns the font size used.
+double DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
                 const LineStyle& style);
-
-/// Selects the label font (DejaVu Sans via fontconfig), regular or bold, at `size`.
-void SelectFont(cairo_t* cr, bool bold, double size);
 
 }  // namespace pintag::label

@@ -1,0 +1,101 @@
+#include "label/label_font.hpp"
+
+#include <pango/pangocairo.h>
+
+#include <string>
+
+namespace pintag::label {
+namespace {
+
+// DejaVu Sans first (Latin, digits, Greek, Cyrillic, the "…"), then a face for each script of
+// India's official languages it lacks; fontconfig's own fallback comes after these.
+constexpr const char* kFamilies =
+    "DejaVu Sans,Noto Sans Devanagari,Noto Sans Bengali,Noto Sans Gurmukhi,Noto Sans Gujarati,"
+    "Noto Sans Oriya,Noto Sans Tamil,Noto Sans Telugu,Noto Sans Kannada,Noto Sans Malayalam,"
+    "Noto Sans Ol Chiki,Noto Sans Meetei Mayek,Noto Naskh Arabic";
+
+// Advances are measured at this size and scaled: Pango's units are 1/1024 of a user unit.
+constexpr double kMeasureSize = 16.0;
+
+}  // namespace
+
+struct LabelFont::Pango {
+  PangoContext* context = nullptr;
+  PangoLayout* layout = nullptr;
+  PangoFontDescription* description = nullptr;
+
+  ~Pango() {
+    if (description) pango_font_description_free(description);
+    if (layout) g_object_unref(layout);
+    if (context) g_object_unref(context);
+  }
+
+  void set(std::string_view text, bool bold, double size) {
+    pango_font_description_set_weight(description, bold ? PANGO_WEIGHT_BOLD : PANGO_WEIGHT_NORMAL);
+    pango_font_description_set_absolute_size(description, size * PANGO_SCALE);
+    pango_layout_set_font_description(layout, description);
+    pango_layout_set_text(layout, text.data(), static_cast<int>(text.size()));
+  }
+};
+
+LabelFont::LabelFont(cairo_t* cr) : cr_(cr), pango_(std::make_unique<Pango>()) {
+  pango_->context = pango_cairo_create_context(cr);
+  cairo_font_options_t* options = cairo_font_options_create();
+  cairo_font_options_set_hint_metrics(options, CAIRO_HINT_METRICS_OFF);
+  cairo_font_options_set_hint_style(options, CAIRO_HINT_STYLE_NONE);
+  cairo_font_options_set_antialias(options, CAIRO_ANTIALIAS_GRAY);
+  pango_cairo_context_set_font_options(pango_->context, options);
+  cairo_font_options_destroy(options);
+  pango_context_set_round_glyph_positions(pango_->context, FALSE);
+  pango_->layout = pango_layout_new(pango_->context);
+  pango_layout_set_single_paragraph_mode(pango_->layout, TRUE);
+  pango_->description = pango_font_description_new();
+  pango_font_description_set_family(pango_->description, kFamilies);
+}
+
+LabelFont::~LabelFont() = default;
+
+TextExtents LabelFont::measure(std::string_view text, bool bold, double size) {
+  pango_->set(text, bold, size);
+  PangoRectangle ink;
+  PangoRectangle logical;
+  pango_layout_get_extents(pango_->layout, &ink, &logical);
+  const double baseline = pango_layout_get_baseline(pango_->layout);
+  TextExtents extents;
+  extents.advance = logical.width / static_cast<double>(PANGO_SCALE);
+  extents.ink_x = ink.x / static_cast<double>(PANGO_SCALE);
+  extents.ink_y = (ink.y - baseline) / PANGO_SCALE;
+  extents.ink_width = ink.width / static_cast<double>(PANGO_SCALE);
+  extents.ink_height = ink.height / static_cast<double>(PANGO_SCALE);
+  return extents;
+}
+
+double LabelFont::advancePerSize(std::string_view text, bool bold) {
+  return measure(text, bold, kMeasureSize).advance / kMeasureSize;
+}
+
+void LabelFont::show(std::string_view text, bool bold, double size, double x, double baseline) {
+  pango_->set(text, bold, size);
+  const double above = pango_layout_get_baseline(pango_->layout) / static_cast<double>(PANGO_SCALE);
+  cairo_move_to(cr_, x, baseline - above);
+  pango_cairo_show_layout(cr_, pango_->layout);
+}
+
+std::vector<std::size_t> LabelFont::cutPoints(std::string_view text) {
+  pango_layout_set_text(pango_->layout, text.data(), static_cast<int>(text.size()));
+  int count = 0;
+  const PangoLogAttr* attrs = pango_layout_get_log_attrs_readonly(pango_->layout, &count);
+  // attrs[i] describes the position before the i-th character (count = characters + 1).
+  std::vector<std::size_t> cuts;
+  std::size_t byte = 0;
+  for (int i = 0; i < count; ++i) {
+    if (i == 0 || i == count - 1 || attrs[i].is_cursor_position) cuts.push_back(byte);
+    if (byte < text.size()) {
+      byte = static_cast<std::size_t>(g_utf8_next_char(text.data() + byte) - text.data());
+    }
+  }
+  if (cuts.empty() || cuts.back() != text.size()) cuts.push_back(text.size());
+  return cuts;
+}
+
+}  // namespace pintag::label
