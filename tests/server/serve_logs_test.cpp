@@ -129,14 +129,14 @@ TEST_F(ServeLogTest, JsonFormatWritesOneObjectPerLine) {
 }
 
 TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLog) {
-  // A real storage failure under the running server: the sort rules table disappears, so
-  // loading the plan for /detect fails with an SQLite error the client must not see.
+  // A real storage failure under the running server: the sort plans table disappears, so
+  // looking up the plan for /detect fails with an SQLite error the client must not see.
   {
     sqlite3* raw = nullptr;
     ASSERT_EQ(sqlite3_open(db_path_.c_str(), &raw), SQLITE_OK);
     sqlite3_busy_timeout(raw, 5000);
     char* message = nullptr;
-    const int rc = sqlite3_exec(raw, "PRAGMA foreign_keys=OFF; DROP TABLE sort_rules;", nullptr,
+    const int rc = sqlite3_exec(raw, "PRAGMA foreign_keys=OFF; DROP TABLE sort_plans;", nullptr,
                                 nullptr, &message);
     sqlite3_free(message);
     sqlite3_close(raw);
@@ -147,7 +147,7 @@ TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLo
   headers.emplace("X-Request-Id", "detect-fails-1");
   auto r = client().Post("/api/v1/detect", headers, form);
   const json problem = ExpectProblem(r, 500);
-  EXPECT_EQ(problem["detail"].get<std::string>().find("sort_rules"), std::string::npos)
+  EXPECT_EQ(problem["detail"].get<std::string>().find("sort_plans"), std::string::npos)
       << "the SQL error reached the client: " << problem.dump();
 
   const auto lines = LogLines(stderrFile(), "detect-fails-1", 2);
@@ -155,7 +155,7 @@ TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLo
   EXPECT_NE(lines[0].find(" error error id=detect-fails-1"), std::string::npos) << lines[0];
   EXPECT_NE(lines[0].find("POST /api/v1/detect: 500"), std::string::npos) << lines[0];
   EXPECT_NE(lines[1].find("status=500"), std::string::npos) << lines[1];
-  EXPECT_NE(ReadFile(stderrFile()).find("sort_rules"), std::string::npos)
+  EXPECT_NE(ReadFile(stderrFile()).find("sort_plans"), std::string::npos)
       << "the operator should see SQLite's message";
 
   auto opened = db::OpenDatabase(db_path_, {.create = false});
