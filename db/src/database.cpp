@@ -45,8 +45,24 @@ std::optional<Error> RefuseForeignFile(const std::string& path, const FileSchema
 Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& options) {
   try {
     std::error_code ignored;
-    if (!options.create && !std::filesystem::exists(path, ignored)) {
+    const bool exists = std::filesystem::exists(path, ignored);
+    if (!options.create && !exists) {
       return Error{ErrorCode::kNotFound, "database " + path + " does not exist"};
+    }
+    if (!exists) {
+      // A write-ahead log without its database holds writes of a file that was moved or deleted
+      // while a server had it open. A database made here would take that log as its own.
+      const std::string wal = path + "-wal";
+      const auto wal_bytes = std::filesystem::file_size(wal, ignored);
+      if (!ignored && wal_bytes > 0) {
+        return Error{ErrorCode::kConflict,
+                     "database " + path + " is missing but its write-ahead log " + wal + " (" +
+                         std::to_string(wal_bytes) +
+                         " bytes) is there: the database was moved or deleted while it was open. "
+                         "Put the database file back at " +
+                         path + ", or move " + wal + " and " + path +
+                         "-shm aside to start a new registry"};
+      }
     }
     OpenedDatabase opened{Connection(path, {.create = options.create,
                                             .read_only = options.read_only,

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "db_test_util.hpp"
 #include "pintag/db/registry.hpp"
 #include "pintag/db/sort_plan.hpp"
@@ -109,6 +111,31 @@ TEST(Migrations, NotADatabaseAndMissingFilesAreErrors) {
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
   EXPECT_FALSE(std::filesystem::exists(dir.file("missing.db")));
+}
+
+// A database moved away while a connection wrote to it leaves its write-ahead log at the old
+// path (SQLite does not checkpoint a moved file on close). A database made there would take that
+// log as its own; the open is refused, naming the log, until it is moved aside.
+TEST(Migrations, AMissingFileWithALogLeftBehindIsNotRecreated) {
+  TempDir dir;
+  const std::string path = dir.file("registry.db");
+  {
+    Connection writer(path);
+    writer.execute("CREATE TABLE t (x INTEGER); INSERT INTO t VALUES (1);");
+    std::filesystem::rename(path, dir.file("moved.db"));
+  }
+  ASSERT_GT(std::filesystem::file_size(path + "-wal"), 0U);
+  const auto refused = OpenDatabase(path, {.seed = false});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+  EXPECT_NE(refused.error().message.find(path + "-wal"), std::string::npos)
+      << refused.error().message;
+  EXPECT_FALSE(std::filesystem::exists(path));
+
+  std::filesystem::rename(path + "-wal", dir.file("aside-wal"));
+  std::filesystem::remove(path + "-shm");
+  const auto created = OpenDatabase(path, {.seed = false});
+  ASSERT_TRUE(created.ok()) << created.error().message;
 }
 
 // An SQLite file with tables and user_version 0 is another application's (each migration sets the

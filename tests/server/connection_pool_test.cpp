@@ -1,6 +1,8 @@
 // The connection pool of a read-only replica while its snapshot is swapped under it, the way
 // SnapshotWatcher does: the new file is handed to renew() and the previous file's name removed
-// at once. A lease taken at any moment of that must open a file that is there.
+// at once. A lease taken at any moment of that must open a file that is there. And a primary's
+// pool when its file is replaced under it: it must stop writing, and leave no log behind that
+// the new file would take as its own.
 
 #include "app/connection_pool.hpp"
 
@@ -9,6 +11,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
@@ -72,6 +75,72 @@ TEST(ConnectionPool, LeasesTakenWhileTheFileIsSwappedAndUnlinkedAllOpen) {
   EXPECT_EQ(refused.load(), 0) << "of " << leases.load() << " leases";
   EXPECT_EQ(wrong.load(), 0);
   EXPECT_GE(leases.load() + refused.load(), kSwaps) << "the deadline ran out";
+}
+
+std::int64_t Rows(const std::string& path) {
+  db::ConnectionOptions options;
+  options.create = false;
+  db::Connection connection(path, options);
+  db::Statement check = connection.prepare("PRAGMA integrity_check");
+  EXPECT_TRUE(check.step());
+  EXPECT_EQ(check.getText(0), "ok") << path;
+  return connection.queryInt64("SELECT count(*) FROM t");
+}
+
+TEST(ConnectionPool, AFileReplacedUnderAWritablePoolIsNotWrittenAndLeavesNoLog) {
+  const test::TempDir dir;
+  const std::string served = dir.file("registry.db");
+  const std::string backup = dir.file("backup.db");
+  for (const std::string& path : {served, backup}) {
+    db::Connection create(path);
+    create.execute("CREATE TABLE t (x INTEGER)");
+  }
+  ConnectionPool pool(served);
+  {
+    const ConnectionPool::Lease lease = pool.acquire();
+    for (int i = 0; i < 5; ++i) lease->execute("INSERT INTO t VALUES (1)");
+  }
+  ASSERT_GT(std::filesystem::file_size(served + "-wal"), 0U) << "the rows must be in the log";
+
+  // An operator restores a backup by renaming it over the served file.
+  std::filesystem::rename(served, dir.file("before-restore.db"));
+  std::filesystem::rename(backup, served);
+  try {
+    const ConnectionPool::Lease lease = pool.acquire();
+    ADD_FAILURE() << "a lease on a replaced file was given";
+  } catch (const server::HttpError& e) {
+    EXPECT_EQ(e.problem().status, 503);
+    EXPECT_NE(e.problem().detail.find("replaced"), std::string::npos) << e.problem().detail;
+  }
+  EXPECT_FALSE(pool.servesFileAtPath());
+  // The log at the path is empty, its rows in the file they were written to; the restored file
+  // opens as it was restored.
+  EXPECT_EQ(std::filesystem::file_size(served + "-wal"), 0U);
+  EXPECT_EQ(Rows(dir.file("before-restore.db")), 5);
+  EXPECT_EQ(Rows(served), 0);
+
+  // Put back, the served file is served again.
+  std::filesystem::rename(served, backup);
+  std::filesystem::rename(dir.file("before-restore.db"), served);
+  EXPECT_TRUE(pool.servesFileAtPath());
+  const ConnectionPool::Lease lease = pool.acquire();
+  lease->execute("INSERT INTO t VALUES (1)");
+  EXPECT_EQ(lease->queryInt64("SELECT count(*) FROM t"), 6);
+}
+
+TEST(ConnectionPool, AReadOnlyPoolServesWhateverFileIsAtItsPath) {
+  // A replica's file is replaced by design (SnapshotWatcher renews the pool after).
+  const test::TempDir dir;
+  const std::string served = dir.file("snapshot.db");
+  for (const std::string& path : {served, dir.file("next.db")}) {
+    db::Connection create(path);
+    create.execute("CREATE TABLE t (x INTEGER); PRAGMA journal_mode=DELETE");
+  }
+  ConnectionPool pool(served, 5000, /*read_only=*/true);
+  (void)pool.acquire();
+  std::filesystem::rename(dir.file("next.db"), served);
+  EXPECT_TRUE(pool.servesFileAtPath());
+  EXPECT_EQ(pool.acquire()->queryInt64("SELECT count(*) FROM t"), 0);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "pintag/db/database.hpp"
+#include "pintag/db/registry.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/test/loopback_socket.hpp"
@@ -189,6 +190,44 @@ TEST_F(ServeTest, ReadyzFailsWhenTheDatabaseIsUnreachable) {
   std::filesystem::remove(db_path_);
   std::filesystem::rename(db_path_ + ".away", db_path_);
   ExpectJson(client().Get("/readyz"));
+}
+
+TEST_F(ServeTest, ABackupRestoredUnderARunningServerIsNotUndoneByItsLog) {
+  // The operator renames a backup over the served file. The server's connections keep the old
+  // file, whose write-ahead log stays beside the new one: writes went on into it (201), and the
+  // next open replayed it into the backup (rows it never held, or a corrupt file).
+  const auto add = [&](const char* pincode) {
+    const auto r =
+        client().Post("/api/v1/pincodes", admin(),
+                      std::string(R"({"pincode": ")") + pincode + R"("})", "application/json");
+    return r ? r->status : -1;
+  };
+  ASSERT_EQ(add("999030"), 201);
+  const std::string backup = dir_.file("backup.db");
+  {
+    db::Connection live(db_path_, {.create = false});
+    live.execute("VACUUM INTO '" + backup + "'");
+  }
+  ASSERT_EQ(add("999031"), 201);
+  std::filesystem::rename(backup, db_path_);
+
+  const auto refused =
+      client().Post("/api/v1/pincodes", admin(), R"({"pincode": "999032"})", "application/json");
+  EXPECT_EQ(ExpectProblem(refused, 503)["title"], "Database File Replaced");
+  ExpectProblem(client().Get("/api/v1/pincodes/110001"), 503);
+  ExpectProblem(client().Get("/readyz"), 503);
+  EXPECT_EQ(server_->stop(), 0);
+
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened) << opened.error().message;
+  db::Connection& restored = opened.value().connection;
+  db::Statement check = restored.prepare("PRAGMA integrity_check");
+  ASSERT_TRUE(check.step());
+  EXPECT_EQ(check.getText(0), "ok");
+  EXPECT_TRUE(db::LookupPincode(restored, Pincode(999030)));
+  for (const std::uint32_t lost : {999031U, 999032U}) {
+    EXPECT_FALSE(db::LookupPincode(restored, Pincode(lost))) << lost;
+  }
 }
 
 TEST_F(ServeTest, ATokenThatCannotBeCheckedIsUnavailableNotInvalid) {

@@ -101,10 +101,14 @@ void AddPublishGauges(server::Metrics& metrics,
 
 // /readyz is open: its answers say what is wrong without the --db path (the operator knows it),
 // as the storage problems of db_problems.cpp keep file names to the log.
-server::HealthCheck DatabaseHealthCheck(const std::string& path) {
+server::HealthCheck DatabaseHealthCheck(const std::string& path,
+                                        std::shared_ptr<ConnectionPool> pool) {
   struct stat at_start {};
   const bool known = ::stat(path.c_str(), &at_start) == 0;
-  return [path, at_start, known]() -> std::optional<std::string> {
+  return [path, at_start, known, pool = std::move(pool)]() -> std::optional<std::string> {
+    // The pool stops serving a file that left its path (and empties its log) as soon as it
+    // learns of it; a probe is how it learns when no request comes.
+    if (pool) pool->servesFileAtPath();
     struct stat now {};
     if (::stat(path.c_str(), &now) != 0) return "database unreachable: its file is missing";
     if (known && (now.st_dev != at_start.st_dev || now.st_ino != at_start.st_ino)) {
@@ -176,8 +180,9 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
       "(RFC 9457). Roles: admin (everything), counter (labels), scanner (detect); lookups are "
       "open.";
   // A replica's file is replaced by design; its readiness is the snapshot it serves now.
-  server::HealthCheck health =
-      config.read_only ? SnapshotHealthCheck(context->pool) : DatabaseHealthCheck(config.db_path);
+  server::HealthCheck health = config.read_only
+                                   ? SnapshotHealthCheck(context->pool)
+                                   : DatabaseHealthCheck(config.db_path, context->pool);
   return std::make_shared<const server::Api>(
       std::move(router), RegistryTokenVerifier(context->pool), std::move(health), context->metrics,
       std::move(options));

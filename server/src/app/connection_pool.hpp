@@ -4,6 +4,13 @@
 // connections are opened on demand and kept (at most one per concurrent request). renew() makes
 // later leases open the file now at the path (a replica's new snapshot) while leases in flight
 // finish on the file they opened.
+//
+// A writable pool serves the file that was at its path when it was made. When that file is moved,
+// deleted or replaced while the server runs, SQLite's connections keep the old file but its
+// write-ahead log stays at the path, where a database put there later would take it as its own
+// (a restored backup undone, or corrupted). So while another file or none is at the path the
+// pool refuses every lease (503), and when the file leaves it moves what the log holds into the
+// file it belongs to (a checkpoint) and empties the log. Put back, the file is served again.
 
 #include <cstdint>
 #include <memory>
@@ -19,6 +26,11 @@ class ConnectionPool {
  public:
   /// `path` must be an existing database (the serve command opened and migrated it first).
   explicit ConnectionPool(std::string path, int busy_timeout_ms = 5000, bool read_only = false);
+  /// Checkpoints the log of a served file that was moved away (closing does not: SQLite leaves
+  /// the log of a moved database as it is).
+  ~ConnectionPool();
+  ConnectionPool(const ConnectionPool&) = delete;
+  ConnectionPool& operator=(const ConnectionPool&) = delete;
 
   /// A connection for the calling thread until the lease ends.
   class Lease {
@@ -41,8 +53,15 @@ class ConnectionPool {
   };
 
   /// Throws server::HttpError 503 when the database cannot be opened (an open that failed
-  /// because renew() changed the file meanwhile is tried again on the new one).
+  /// because renew() changed the file meanwhile is tried again on the new one), or when a
+  /// writable pool's file is no longer at its path.
   Lease acquire();
+
+  /// For a writable pool: whether the file it serves is still the one at its path (always true
+  /// for a read-only pool, whose file is replaced by design). When the file has just left, its
+  /// log is checkpointed into it. One stat; the readiness check calls it, so a moved file is
+  /// found within a probe interval even when no request comes.
+  bool servesFileAtPath();
 
   /// Closes the idle connections; later leases open `path` (a replica's newly loaded snapshot),
   /// and connections leased before are closed when they come back.
@@ -55,6 +74,15 @@ class ConnectionPool {
   std::mutex mutex_;
   std::uint64_t generation_ = 0;
   std::vector<std::unique_ptr<db::Connection>> idle_;
+  // The served file's device and inode (writable pools); `moved_` while it is not at the path,
+  // and `log_emptied_` once its log was checkpointed and truncated since it left.
+  bool identified_ = false;
+  std::uint64_t device_ = 0;
+  std::uint64_t inode_ = 0;
+  bool moved_ = false;
+  bool log_emptied_ = false;
+
+  void emptyLogOfMovedFile();
 };
 
 }  // namespace pintag::app
