@@ -134,6 +134,11 @@ bool ServerProcess::running() const {
 int ServerProcess::stop(int signal, int timeout_s) {
   if (pid_ <= 0) return -1;
   ::kill(pid_, signal);
+  return wait(timeout_s);
+}
+
+int ServerProcess::wait(int timeout_s) {
+  if (pid_ <= 0) return -1;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_s);
   int status = 0;
   while (std::chrono::steady_clock::now() < deadline) {

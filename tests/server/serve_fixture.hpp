@@ -42,6 +42,8 @@ class ServerProcess {
   const std::string& out() const { return out_; }
   /// Sends `signal` and waits for the exit; the exit status (or 128 + signal), -1 on timeout.
   int stop(int signal = SIGTERM, int timeout_s = 10);
+  /// Waits for the exit (a signal sent before): as stop() without sending one.
+  int wait(int timeout_s = 10);
   /// Sends `signal` without waiting.
   void signal(int signal) const;
   /// True while the process has not exited (it is not reaped: stop() still gets its status).

@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <set>
 #include <thread>
@@ -459,11 +460,73 @@ TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
   ::close(fd);
   EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
   EXPECT_NE(answer.find("%PDF-"), std::string::npos);
-  EXPECT_EQ(server_->stop(SIGTERM, 30), 0);
+  EXPECT_EQ(server_->wait(30), 0);  // a second SIGTERM would cut the drain short
   EXPECT_NE(ReadFile(dir_.file("stderr.log")).find("stopped"), std::string::npos);
   httplib::Client after("127.0.0.1", server_->port());
   after.set_connection_timeout(1, 0);
   EXPECT_FALSE(after.Get("/livez"));
+}
+
+// A stop waits for requests in flight, but not for ever: a second SIGTERM or SIGINT ends the
+// process at once, and --drain-timeout bounds the wait. A client sending its upload slowly held
+// the exit for as long as it kept sending, and further signals were ignored.
+class SlowUploadWhileStopping : public ServeTest {
+ protected:
+  // Starts an upload the server is reading (it asked for the body), then SIGTERM; returns the
+  // connection, the body never finished.
+  int startUploadThenStop() {
+    const int fd = test::ConnectLoopback(server_->port());
+    EXPECT_GE(fd, 0);
+    test::SendAll(fd, "POST /api/v1/detect HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " +
+                          scanner_token_ +
+                          "\r\nContent-Type: image/jpeg\r\nExpect: 100-continue\r\n"
+                          "Content-Length: 100000\r\n\r\n");
+    const std::string go_on = test::ReceiveUntil(
+        fd, 30, [](const std::string& out) { return out.find("\r\n\r\n") != std::string::npos; });
+    EXPECT_EQ(go_on.rfind("HTTP/1.1 100", 0), 0U) << go_on;
+    test::SendAll(fd, std::string(100, 'x'));
+    server_->signal(SIGTERM);
+    return fd;
+  }
+  // Keeps the upload alive, a little at a time, while `until` does not hold (at most 60 s).
+  void trickle(int fd, const std::function<bool()>& until) {
+    for (const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+         !until() && std::chrono::steady_clock::now() < deadline;) {
+      test::SendAll(fd, std::string(10, 'x'));
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
+};
+
+TEST_F(SlowUploadWhileStopping, ASecondSignalStopsAtOnce) {
+  const int fd = startUploadThenStop();
+  // The first signal was taken (the drain began) once the port refuses connections.
+  trickle(fd, [&] {
+    const int probe = test::ConnectLoopback(server_->port());
+    if (probe >= 0) ::close(probe);
+    return probe < 0;
+  });
+  EXPECT_TRUE(server_->running()) << "the upload in flight is still being read";
+  const auto sent = std::chrono::steady_clock::now();
+  EXPECT_EQ(server_->stop(SIGINT, 20), 128 + SIGINT);
+  EXPECT_LT(std::chrono::steady_clock::now() - sent, std::chrono::seconds(5));
+  ::close(fd);
+  EXPECT_NE(ReadFile(dir_.file("stderr.log")).find("SIGINT again: stopping now"), std::string::npos)
+      << ReadFile(dir_.file("stderr.log"));
+}
+
+TEST_F(SlowUploadWhileStopping, TheDrainTimeoutEndsTheWait) {
+  startServer({"--drain-timeout", "2"});
+  const int fd = startUploadThenStop();
+  const auto signalled = std::chrono::steady_clock::now();
+  trickle(fd, [&] { return !server_->running(); });
+  const auto waited = std::chrono::steady_clock::now() - signalled;
+  ::close(fd);
+  EXPECT_EQ(server_->wait(5), 1);
+  EXPECT_GE(waited, std::chrono::milliseconds(1900));
+  EXPECT_LT(waited, std::chrono::seconds(15)) << "the upload held the exit";
+  EXPECT_NE(ReadFile(dir_.file("stderr.log")).find("still in flight after 2 s"), std::string::npos)
+      << ReadFile(dir_.file("stderr.log"));
 }
 
 // A client that stops sending mid-request is answered 400 after the read timeout

@@ -7,7 +7,9 @@
 #include <signal.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -44,6 +46,7 @@ struct ServeArgs {
   int max_tag_px = 4096;
   int read_timeout_s = 5;
   int write_timeout_s = 5;
+  int drain_timeout_s = 30;
   std::string log_format = "text";
   ReplicationArgs replication;
 };
@@ -170,18 +173,42 @@ void Run(const ServeArgs& args) {
   std::cout << "Stop with Ctrl-C.\n" << std::flush;
 
   std::atomic<bool> finished{false};
-  std::thread waiter([&http, &finished, &replication, &signals] {
+  const std::chrono::seconds drain_timeout(args.drain_timeout_s);
+  std::thread waiter([&http, &finished, &replication, &signals, drain_timeout] {
     int signal = signals.wait();
     while (signal == SIGHUP && !finished) {
       replication.reload();
       signal = signals.wait();
     }
     if (finished || signal == 0) return;
-    server::LogEvent(std::string(signal == SIGINT ? "SIGINT" : "SIGTERM") +
-                     ", finishing requests in flight");
+    const auto name = [](int s) { return std::string(s == SIGINT ? "SIGINT" : "SIGTERM"); };
+    server::LogEvent(name(signal) + ", finishing requests in flight (a second signal, or " +
+                     std::to_string(drain_timeout.count()) + " s, stops at once)");
     // A signal right after start may come before serve() runs; cpp-httplib ignores stop() then.
     while (!http.running() && !finished) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     http.stop();
+    // The drain has a bound: a client sending its upload slowly, or a second Ctrl-C, must not
+    // hold the process. Cut short, requests in flight get no answer; what they wrote to the
+    // database is committed or not, as after a crash (SQLite's log keeps it whole).
+    const auto deadline = std::chrono::steady_clock::now() + drain_timeout;
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      const int next = signals.waitFor(std::max(left, std::chrono::milliseconds(0)));
+      if (finished) return;
+      if (next == SIGINT || next == SIGTERM) {
+        server::LogEvent(name(next) + " again: stopping now, requests in flight are cut off",
+                         /*warning=*/true);
+        std::_Exit(128 + next);
+      }
+      if (next == -1) {
+        server::LogEvent("requests still in flight after " + std::to_string(drain_timeout.count()) +
+                             " s (--drain-timeout): stopping now, they are cut off",
+                         /*warning=*/true);
+        std::_Exit(1);
+      }
+      // SIGHUP while stopping: nothing to reload.
+    }
   });
   const bool served = http.serve();
   // serve() returned: stop() ran from the waiter, or serving failed; then wake the waiter.
@@ -246,6 +273,11 @@ void AddServeCommand(CLI::App& app) {
       ->check(CLI::Range(1, 3600))
       ->capture_default_str()
       ->envname("PINTAG_WRITE_TIMEOUT");
+  cmd->add_option("--drain-timeout", args->drain_timeout_s,
+                  "seconds a stop waits for requests in flight before cutting them off")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str()
+      ->envname("PINTAG_DRAIN_TIMEOUT");
   cmd->add_option("--log-format", args->log_format,
                   "server log on stderr: text (key=value lines) or json (one object a line)")
       ->check(CLI::IsMember({"text", "json"}))

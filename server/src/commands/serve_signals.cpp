@@ -1,6 +1,7 @@
 #include "commands/serve_signals.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <pthread.h>
 #include <unistd.h>
 
@@ -78,6 +79,27 @@ int ServeSignals::wait() {
     if (n == 1) return byte;
     if (n < 0 && errno == EINTR) continue;  // the handler ran in this thread; its byte is next
     return 0;  // the pipe failed (it is never closed): nothing more will arrive
+  }
+}
+
+int ServeSignals::waitFor(std::chrono::milliseconds timeout) {
+  const sigset_t served = Served();
+  pthread_sigmask(SIG_UNBLOCK, &served, nullptr);
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return -1;
+    pollfd readable{g_pipe[0], POLLIN, 0};
+    const int ready = ::poll(&readable, 1, static_cast<int>(left.count()));
+    if (ready < 0 && errno == EINTR) continue;  // the handler ran in this thread
+    if (ready < 0) return 0;
+    if (ready == 0) return -1;
+    unsigned char byte = 0;
+    const ssize_t n = ::read(g_pipe[0], &byte, 1);
+    if (n == 1) return byte;
+    if (n < 0 && errno == EINTR) continue;
+    return 0;
   }
 }
 

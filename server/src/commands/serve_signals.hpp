@@ -11,6 +11,7 @@
 // writes the signal's number to a pipe; the waiter reads the pipe. The server's own threads still
 // block the signals, so that their system calls are not interrupted.
 
+#include <chrono>
 #include <csignal>
 
 namespace pintag::cli {
@@ -33,6 +34,8 @@ class ServeSignals {
   /// should the pipe fail).
   /// Only the waiter thread calls it: it lets the signals through to that thread.
   int wait();
+  /// As wait(), but gives up after `timeout`: then -1.
+  int waitFor(std::chrono::milliseconds timeout);
 
   /// Makes wait() return 0.
   void wake();
