@@ -94,7 +94,14 @@ function tagCard(tag, approximate) {
       ['Bin', el('span', { class: 'bin' }, tag.bin ?? '—')], ['Distance', distance], ['Key', tag.key]]
     : [['Key', tag.key], ['Distance', distance],
       ['Note', 'This key belongs to no pincode in the registry. Sort the parcel by hand.']];
-  return el('li', { class: `tag-card ${tag.status}`, 'data-pincode': tag.pincode || '' },
+  // The format cannot tell a mirrored tag from another key's (docs/FORMAT.md, "Mirror images").
+  if (tag.mirror_pincode) {
+    rows.push(['Mirror', el('span', { class: 'mirror-note' },
+      `In a mirrored photo (a front camera's mirror setting) this tag reads as ${tag.mirror_pincode}. ` +
+      'Check the pincode printed on the label.')]);
+  }
+  return el('li', { class: `tag-card ${tag.status}`, 'data-pincode': tag.pincode || '',
+    'data-mirror-pincode': tag.mirror_pincode || '' },
     el('header', {},
       el('span', { class: 'big-pin' }, known ? tag.pincode : 'Unknown'),
       badge(tag.status)),

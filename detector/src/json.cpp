@@ -1,5 +1,6 @@
 #include "pintag/detector/json.hpp"
 
+#include "pintag/codec/mirror.hpp"
 #include "pintag/detector/detector.hpp"
 
 namespace pintag {
@@ -58,6 +59,10 @@ void VisitOptions(Options& o, Visit&& visit) {
 json ToJson(const Detection& d) {
   json j;
   j["key"] = d.key ? json(d.key->value()) : json(nullptr);
+  // The key this tag reads as in a mirrored photo; the format cannot tell the two apart.
+  std::optional<TagKey> mirror;
+  if (d.key) mirror = MirrorImageKey(*d.key);
+  j["mirror_key"] = mirror ? json(mirror->value()) : json(nullptr);
   if (!d.reject_reason.empty()) j["reject_reason"] = d.reject_reason;
   j["corners_px"] = json::array();
   j["element_centres_px"] = json::array();

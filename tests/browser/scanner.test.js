@@ -194,3 +194,43 @@ test('the outline sits on the tag of a WebP whose EXIF orientation the browser d
   await screenshot(page, 'scanner-webp-exif6');
   assert.deepEqual(page.problems, []);
 });
+
+test('a tag whose mirror image is another pincode\'s says so on its card, mirrored or not', async () => {
+  // The format has no handedness: 609405's tag flipped left to right is exactly another
+  // pincode's tag (docs/FORMAT.md, "Mirror images"). The flip is made by the browser's canvas.
+  const response = await fetch(`${server.url}/api/v1/labels/609405.png?dpi=150`,
+    { headers: { Authorization: `Bearer ${counterToken}` } });
+  assert.equal(response.status, 200);
+  const upright = join(dir, 'label-609405.png');
+  await writeFile(upright, Buffer.from(await response.arrayBuffer()));
+  const page = await scannerReading(upright);
+  const card = page.locator('.tag-card[data-pincode="609405"]');
+  await card.waitFor();
+  const other = await card.getAttribute('data-mirror-pincode');
+  assert.match(other, /^\d{6}$/);
+  assert.notEqual(other, '609405');
+  assert.match(await card.textContent(), new RegExp(`mirrored photo.*reads as ${other}`));
+
+  const flippedBase64 = await page.evaluate(async ([url, token]) => {
+    const blob = await (await fetch(url, { headers: { Authorization: `Bearer ${token}` } })).blob();
+    const bitmap = await createImageBitmap(blob);
+    const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
+    const context = canvas.getContext('2d');
+    context.translate(bitmap.width, 0);
+    context.scale(-1, 1);
+    context.drawImage(bitmap, 0, 0);
+    const bytes = new Uint8Array(await (await canvas.convertToBlob({ type: 'image/png' })).arrayBuffer());
+    let text = '';
+    for (const byte of bytes) text += String.fromCharCode(byte);
+    return btoa(text);
+  }, [`${server.url}/api/v1/labels/609405.png?dpi=150`, counterToken]);
+  const flipped = join(dir, 'label-609405-mirrored.png');
+  await writeFile(flipped, Buffer.from(flippedBase64, 'base64'));
+  await page.locator('#photo').setInputFiles(flipped);
+  const mirroredCard = page.locator(`.tag-card[data-pincode="${other}"]`);
+  await mirroredCard.waitFor();
+  assert.equal(await mirroredCard.getAttribute('data-mirror-pincode'), '609405');
+  assert.match(await mirroredCard.textContent(), /mirrored photo.*reads as 609405/);
+  await screenshot(page, 'scanner-mirror-pair');
+  assert.deepEqual(page.problems, []);
+});

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "pintag/codec/mirror.hpp"
 #include "pintag/detector/detector.hpp"
 #include "synthetic.hpp"
 
@@ -56,6 +57,31 @@ TEST(Detector, FrontalTagAtEveryRoll) {
     EXPECT_EQ(d.unknown_bits, 0);
     EXPECT_EQ(r.intrinsics_source, IntrinsicsSource::kGiven);
   }
+}
+
+TEST(Detector, AMirroredTagReadsAsItsMirrorImageKeyOrAsNothing) {
+  // The format has no handedness (docs/FORMAT.md, "Mirror images"): a flipped photo of key 55
+  // shows key 109's tag exactly. What the codec says a mirror shows is what the detector reads.
+  int mirrored_keys = 0;
+  for (const int key : {55, 109, 12345, 20000, 7, 31000}) {
+    SyntheticOptions s;
+    s.seed = static_cast<std::uint64_t>(key) + 3;
+    const auto scene = MakeScene({{.key = key, .square_px = 100, .roll_deg = 20.0}}, s);
+    cv::Mat flipped;
+    cv::flip(scene.bgr, flipped, 1);
+    const DetectResult r = Detector(OptionsFor(s)).detect(flipped, nullptr, kRendered);
+    std::vector<int> read;
+    for (const Detection& d : r.detections) {
+      if (d.key) read.push_back(d.key->value());
+    }
+    if (const std::optional<TagKey> mirror = MirrorImageKey(TagKey(key))) {
+      ++mirrored_keys;
+      EXPECT_EQ(read, std::vector<int>{mirror->value()}) << "key " << key;
+    } else {
+      EXPECT_TRUE(read.empty()) << "key " << key << " mirrored read as " << read.front();
+    }
+  }
+  EXPECT_GE(mirrored_keys, 2);  // 55 and 109, a pair
 }
 
 TEST(Detector, SteepSeventyDegreesAtFortyEightPixels) {

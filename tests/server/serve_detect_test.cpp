@@ -17,6 +17,7 @@
 
 #include "label_photo.hpp"
 #include "pintag/codec/label.hpp"
+#include "pintag/codec/mirror.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/scene/scene.hpp"
@@ -258,6 +259,48 @@ TEST_F(ServeTest, EveryTagInAFrameActiveRetiredAndUnknownKeys) {
   const std::string metrics = client().Get("/metrics")->body;
   EXPECT_NE(metrics.find("pintag_detections_total 3"), std::string::npos);
   EXPECT_NE(metrics.find("pintag_detections_unknown_key_total 1"), std::string::npos);
+}
+
+// A mirrored photo of a tag whose mirror image is another pincode's tag reads as that pincode
+// (the format cannot tell them apart); both answers name the other pincode, so a scanner that
+// may mirror its photos can send the parcel to be sorted by hand.
+TEST_F(ServeTest, ATagWhoseMirrorImageIsAnotherPincodesNamesIt) {
+  const int key = ExpectJson(client().Get("/api/v1/pincodes/609405"))["key"];
+  const auto mirror = MirrorImageKey(TagKey(static_cast<std::uint16_t>(key)));
+  ASSERT_TRUE(mirror.has_value()) << "609405's key " << key << " has no valid mirror image";
+  const json other = ExpectJson(client().Get("/api/v1/keys/" + std::to_string(mirror->value())));
+  const std::string other_pincode = other["pincode"];
+
+  const auto label = client().Get("/api/v1/labels/609405.png?dpi=150", counter());
+  ASSERT_TRUE(label && label->status == 200);
+  const cv::Mat photo = Decode(label->body);
+  cv::Mat flipped;
+  cv::flip(photo, flipped, 1);
+  const auto detect = [&](const cv::Mat& image) {
+    std::vector<std::uint8_t> png;
+    cv::imencode(".png", image, png);
+    const json out = ExpectJson(client().Post("/api/v1/detect", scanner(),
+                                              std::string(png.begin(), png.end()), "image/png"));
+    EXPECT_EQ(out["tags"].size(), 1U) << out.dump(1);
+    return out["tags"].empty() ? json() : out["tags"][0];
+  };
+  const json upright = detect(photo);
+  EXPECT_EQ(upright["pincode"], "609405");
+  EXPECT_EQ(upright["mirror_key"], mirror->value());
+  EXPECT_EQ(upright["mirror_pincode"], other_pincode);
+  const json mirrored = detect(flipped);
+  EXPECT_EQ(mirrored["pincode"], other_pincode);
+  EXPECT_EQ(mirrored["mirror_key"], key);
+  EXPECT_EQ(mirrored["mirror_pincode"], "609405");
+
+  // A key whose mirror image is no tag names none: 110001's (its mirror fails the parity).
+  ASSERT_FALSE(MirrorImageKey(TagKey(11684)).has_value());
+  const auto plain_label = client().Get("/api/v1/labels/110001.png?dpi=150", counter());
+  ASSERT_TRUE(plain_label && plain_label->status == 200);
+  const json plain = detect(Decode(plain_label->body));
+  EXPECT_EQ(plain["pincode"], "110001");
+  EXPECT_TRUE(plain["mirror_key"].is_null());
+  EXPECT_TRUE(plain["mirror_pincode"].is_null());
 }
 
 // A phone photo carries its focal length in EXIF: pose then uses it ("exif"), not a guess.

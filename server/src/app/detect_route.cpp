@@ -16,6 +16,7 @@
 #include "app/registry_json.hpp"
 #include "app/routes.hpp"
 #include "pintag/codec/label.hpp"
+#include "pintag/codec/mirror.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/detector/detector.hpp"
@@ -36,6 +37,8 @@ double Ms(Clock::time_point since) {
 struct Resolved {
   std::optional<db::PincodeRecord> record;
   std::optional<db::Routing> routing;
+  /// The pincode holding the key the tag reads as when the photo is mirrored, if one does.
+  std::optional<Pincode> mirror_pincode;
 };
 
 /// The detector's JSON of the tag (the CLI prints the same), with what the registry and the plan
@@ -59,6 +62,7 @@ json TagJson(const Detection& d, const Resolved& r) {
     tag["state"] = nullptr;
     tag["bin"] = nullptr;
   }
+  tag["mirror_pincode"] = r.mirror_pincode ? json(r.mirror_pincode->str()) : json(nullptr);
   return tag;
 }
 
@@ -211,6 +215,16 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
           r.record = std::move(record).value();
         } else if (record.error().code != db::ErrorCode::kNotFound) {
           ThrowDbError(record.error());
+        }
+        // A symmetric tag (64 keys) is its own mirror image: no other pincode to name.
+        if (const std::optional<TagKey> mirror = MirrorImageKey(*d.key);
+            mirror && *mirror != *d.key) {
+          auto other = db::LookupKey(*connection, *mirror);
+          if (other) {
+            r.mirror_pincode = other->pincode;
+          } else if (other.error().code != db::ErrorCode::kNotFound) {
+            ThrowDbError(other.error());
+          }
         }
         tags.push_back(TagJson(d, r));
       }
