@@ -11,6 +11,8 @@ namespace pintag::db::detail {
 inline Error ToError(const SqliteError& e) {
   if (e.isBusy()) return {ErrorCode::kBusy, e.what()};
   if (e.isConstraint()) return {ErrorCode::kInvalid, e.what()};
+  if (e.isFull()) return {ErrorCode::kNoSpace, e.what()};
+  if (e.isReadOnly()) return {ErrorCode::kReadOnly, e.what()};
   return {ErrorCode::kStorage, e.what()};
 }
 

@@ -20,6 +20,10 @@ const char* ToString(ErrorCode code) {
       return "full";
     case ErrorCode::kBusy:
       return "busy";
+    case ErrorCode::kNoSpace:
+      return "no_space";
+    case ErrorCode::kReadOnly:
+      return "read_only";
     case ErrorCode::kStorage:
       return "storage";
   }

@@ -145,6 +145,37 @@ TEST_F(Registry, RetiringAndAddingKeepEveryEarlierKey) {
   EXPECT_EQ(counts.offices, 154875);
 }
 
+TEST_F(Registry, AFullDiskAndAReadOnlyFileAreToldApartFromOtherFailures) {
+  // SQLite says SQLITE_FULL when a write finds no room: the disk, or (here, the same code path)
+  // the page limit of this connection, set at the file's current size.
+  const std::int64_t pages = db_.queryInt64("PRAGMA page_count");
+  db_.queryInt64("PRAGMA max_page_count = " + std::to_string(pages));
+  std::vector<PostOffice> offices(1);
+  offices[0].name = std::string(60, 'x');
+  offices[0].district = "D";
+  offices[0].state = "S";
+  offices[0].circle = "C";
+  offices[0].region = "R";
+  offices[0].division = "V";
+  // Added until one finds no room (a few pages: each pincode and office adds rows).
+  Result<PincodeRecord> added = AddPincode(db_, Pincode(999000), offices);
+  for (std::uint32_t pin = 999001; pin < 999400 && added.ok(); ++pin) {
+    added = AddPincode(db_, Pincode(pin), offices);
+  }
+  ASSERT_FALSE(added.ok());
+  EXPECT_EQ(added.error().code, ErrorCode::kNoSpace) << added.error().message;
+  EXPECT_EQ(std::string(ToString(added.error().code)), "no_space");
+
+  // A read-only connection's write: SQLITE_READONLY.
+  ConnectionOptions read_only;
+  read_only.create = false;
+  read_only.read_only = true;
+  Connection reader(db_.path(), read_only);
+  const auto refused = AddPincode(reader, Pincode(999999));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kReadOnly) << refused.error().message;
+}
+
 TEST_F(Registry, AddRejectsBadOfficeText) {
   for (const std::string name : {"", "   ", "bad\x01name"}) {
     PostOffice office{

@@ -25,6 +25,17 @@ void ThrowDbError(const db::Error& error, std::string title) {
       throw HttpError(507, error.message, std::move(title));
     case db::ErrorCode::kBusy:
       throw HttpError(503, "the database is busy; try again", "Service Unavailable");
+    case db::ErrorCode::kNoSpace:
+      // The client learns what it can act on (try later, tell the operator); the log says where.
+      server::LogEvent("database error: " + error.message, /*warning=*/true);
+      throw HttpError(507, "the disk holding the database is full; nothing was written",
+                      "Insufficient Storage");
+    case db::ErrorCode::kReadOnly:
+      server::LogEvent("database error: " + error.message, /*warning=*/true);
+      throw HttpError(503,
+                      "the database cannot be written now (its file or directory is read-only); "
+                      "nothing was written",
+                      "Service Unavailable");
     case db::ErrorCode::kStorage:
       break;
   }

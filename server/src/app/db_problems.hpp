@@ -14,8 +14,9 @@
 namespace pintag::app {
 
 /// Throws the HttpError for a registry error: kInvalid 400, kNotFound 404, kConflict 409,
-/// kPrecondition 412, kTooLarge 413, kUnauthorized 401, kFull 507, kBusy 503, kStorage 500 (its
-/// message goes to stderr only).
+/// kPrecondition 412, kTooLarge 413, kUnauthorized 401, kFull 507, kBusy 503, kNoSpace 507,
+/// kReadOnly 503, kStorage 500 (the last three say what failed in words; SQLite's message, which
+/// names files, goes to stderr only).
 [[noreturn]] void ThrowDbError(const db::Error& error, std::string title = {});
 
 template <typename T>

@@ -136,7 +136,7 @@ db::Result<PublishedSnapshot> SnapshotPublisher::read() {
 
 void SnapshotPublisher::start(std::chrono::milliseconds interval) {
   // Each failed try is logged where it is made (publishLocked), at most once a retry delay.
-  thread_.start(interval, [this] { publish(); });
+  thread_.start(interval, [this] { (void)publish(); });
 }
 
 }  // namespace pintag::replica

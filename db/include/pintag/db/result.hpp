@@ -18,6 +18,8 @@ enum class ErrorCode {
   kUnauthorized,  ///< token unknown, revoked or wrong secret (one message for all)    (401)
   kFull,          ///< all 32,768 keys are allocated                                   (507)
   kBusy,          ///< the database stayed locked longer than the busy timeout         (503)
+  kNoSpace,       ///< the disk holding the database is full; nothing was written       (507)
+  kReadOnly,      ///< the database's file or directory cannot be written now           (503)
   kStorage,       ///< any other SQLite or file failure; the message says which        (500)
 };
 

@@ -33,6 +33,8 @@ class SqliteError : public std::runtime_error {
   int extendedCode() const { return extended_code_; }
   bool isBusy() const { return code_ == 5 || code_ == 6; }  ///< SQLITE_BUSY or SQLITE_LOCKED
   bool isConstraint() const { return code_ == 19; }         ///< SQLITE_CONSTRAINT
+  bool isFull() const { return code_ == 13; }               ///< SQLITE_FULL: no room to write
+  bool isReadOnly() const { return code_ == 8; }            ///< SQLITE_READONLY
 
  private:
   int code_;
