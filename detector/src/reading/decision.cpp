@@ -65,9 +65,11 @@ std::string RefuseCodeword(const ModelReading& reading) {
   if (greens != 0) levels.push_back(kGreen1);
   const double least_red_cr = std::min(c[kRed0][2], c[kRed1][2]);
   double most_green_cr = -1;
+  const double black = c[kBlackLevel][0];
+  const double quiet = c[kQuietLevel][0];
   for (const int level : levels) {
     const double y = c[static_cast<std::size_t>(level)][0];
-    if (!(y > c[kBlackLevel][0] && y < c[kQuietLevel][0]))
+    if (!(y - black >= kMinLevelAboveBlack * (quiet - black) && y < quiet))
       return "codeword's colours are not a tag's";
     if (level == kGreen0 || level == kGreen1) {
       most_green_cr = std::max(most_green_cr, c[static_cast<std::size_t>(level)][2]);

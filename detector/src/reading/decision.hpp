@@ -95,6 +95,14 @@ inline constexpr double kMaxIndependentExcess = 8;
 inline constexpr double kMinSidePx = 16;
 /// Least Cr by which both red levels exceed both green ones (the palette's: 0.41).
 inline constexpr double kMinRedOverGreenCr = 0.1;
+/// Least luminance of every cell level the winner uses above the black's, as a share of the quiet
+/// zone's above it. The palette's darkest level, crimson, sits at 0.136 in linear light. Something
+/// dark over part of an element (tape, a marker stroke) can take a level's place: the fit made
+/// crimson nearly black (0.008) to explain a black patch on one element as a C0, and the tag's
+/// true C0, crimson, as orange: a confident misread (lead 3,276) found by a review. On the tuning
+/// world (pintag_bench --world tuning, seeds 5-7) the least share of any accepted model reading
+/// is 0.056 (docs/DETECTOR-RESEARCH.md, "A level the occluder took").
+inline constexpr double kMinLevelAboveBlack = 0.025;
 
 /// True when a square with these (fitted) corners is narrower than kNarrowExtentPx.
 bool IsNarrow(const Corners& corners);
