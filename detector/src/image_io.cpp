@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstddef>
 #include <cstring>
 #include <filesystem>
@@ -768,8 +769,14 @@ LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels) {
   if (std::filesystem::is_directory(path, error)) {
     return Fail(ImageError::kUnreadable, path + " is a directory, not a photo");
   }
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
-  if (!in) return Fail(ImageError::kUnreadable, "cannot open " + path);
+  if (!in) {
+    // libstdc++ opens with open(2): errno says why (no such file, permission denied).
+    const int why = errno;
+    return Fail(ImageError::kUnreadable,
+                "cannot open " + path + (why != 0 ? std::string(": ") + std::strerror(why) : ""));
+  }
   // Read up to one byte past the limit: a device or a pipe (/dev/zero) has no end to wait for.
   // A 40 MP photo as an uncompressed float RGBA TIFF is 640 MB.
   constexpr std::size_t kMaxFileBytes = std::size_t{1} << 30;

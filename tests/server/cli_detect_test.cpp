@@ -116,7 +116,8 @@ TEST(CliDetect, RefusesWhatIsNotAPhotoWithAClearMessage) {
 
   const CommandResult missing = RunPintag("detect " + (dir.path() / "nowhere.jpg").string());
   EXPECT_NE(missing.status, 0);
-  EXPECT_NE(missing.out.find("nowhere.jpg"), std::string::npos) << missing.out;
+  EXPECT_NE(missing.out.find("nowhere.jpg: No such file or directory"), std::string::npos)
+      << missing.out;
 
   const CommandResult directory = RunPintag("detect " + dir.path().string());
   EXPECT_NE(directory.status, 0);
@@ -148,13 +149,29 @@ TEST(CliDetect, AWrongCommandLineIsExitTwoEvenWhenThePhotoIsMissing) {
   for (const std::string& options :
        {std::string(" --fx 1000 --fy 1000 --distortion 1 2 3 4 5 6"), std::string(" --fx 1000"),
         std::string(" --cx 5"), std::string(" --distortion 0 0 0 0"),
-        " --debug-dir " + WriteFile(dir.path() / "afile", "x")}) {
+        " --debug-dir " + WriteFile(dir.path() / "afile", "x"),
+        " --overlay " + dir.file("overlay.txt"), " --overlay " + dir.file("overlay")}) {
     const CommandResult refused = RunPintag(std::string("detect ").append(missing).append(options));
     EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
     EXPECT_EQ(refused.out.find("cannot open"), std::string::npos) << options << ": " << refused.out;
   }
   // Right options and a missing photo: the job fails (1).
   EXPECT_EQ(RunPintag("detect " + missing + " --fx 1000 --fy 1000 --distortion 0 0 0 0").status, 1);
+}
+
+TEST(CliDetect, ADashReadsThePhotoFromStandardInput) {
+  const test::TempDir dir;
+  const RenderedPhoto photo = RenderPhoto(dir);
+  const CommandResult from_file = RunPintag("detect --json " + photo.path);
+  const CommandResult piped = RunShell(PintagExe() + " detect --json - < " + photo.path);
+  ASSERT_EQ(from_file.status, 0) << from_file.out;
+  ASSERT_EQ(piped.status, 0) << piped.out;
+  const json a = json::parse(from_file.out);
+  const json b = json::parse(piped.out);
+  ASSERT_EQ(a["detections"].size(), 1U);
+  ASSERT_EQ(b["detections"].size(), 1U);
+  EXPECT_EQ(a["detections"][0]["key"], b["detections"][0]["key"]);
+  EXPECT_EQ(a["detections"][0]["corners_px"], b["detections"][0]["corners_px"]);
 }
 
 TEST(CliDetect, HelpSaysHowManyDistortionNumbersItTakes) {

@@ -21,6 +21,7 @@
 #include "commands/option_checks.hpp"
 #include "pintag/codec/file_output.hpp"
 #include "pintag/codec/label.hpp"
+#include "pintag/codec/mirror.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
 #include "pintag/detector/tag_outline.hpp"
@@ -108,6 +109,10 @@ void CheckOptions(const DetectArgs& args) {
                      std::to_string(coefficients));
   }
   if (coefficients != 0 && given != 2) throw UsageError("--distortion needs --fx and --fy");
+  if (!args.overlay.empty() && !cv::haveImageWriter(args.overlay)) {
+    throw UsageError("--overlay " + args.overlay +
+                     ": no image format for its extension; name a .png or .jpg file");
+  }
   std::error_code ec;
   if (!args.overlay.empty() && std::filesystem::equivalent(args.photo, args.overlay, ec)) {
     throw UsageError("--overlay " + args.overlay + " is the photo itself; give another file");
@@ -120,7 +125,9 @@ void CheckOptions(const DetectArgs& args) {
 
 void Run(const DetectArgs& args) {
   CheckOptions(args);
-  const LoadResult loaded = LoadImageFile(args.photo, args.max_pixels);
+  // "-" is the photo on standard input, as for most commands that read a file.
+  const LoadResult loaded =
+      LoadImageFile(args.photo == "-" ? std::string("/dev/stdin") : args.photo, args.max_pixels);
   if (!loaded.image) throw std::runtime_error(loaded.error);
   // Made once the photo is read, so a photo that cannot be leaves no directory behind.
   if (!args.debug_dir.empty()) {
@@ -171,6 +178,11 @@ void Run(const DetectArgs& args) {
           d.pose.distance_m, d.pose.translation[0], d.pose.translation[1], d.pose.translation[2],
           d.pose.rotation_vector[0], d.pose.rotation_vector[1], d.pose.rotation_vector[2],
           d.pose_ambiguous ? "  (pose ambiguous)" : "");
+      // The format has no handedness (docs/FORMAT.md, "Mirror images").
+      if (const std::optional<TagKey> mirror = MirrorImageKey(*d.key);
+          mirror && *mirror != *d.key) {
+        std::printf("             in a mirrored photo this tag reads as key %d\n", mirror->value());
+      }
     }
   }
   if (!args.overlay.empty()) {
@@ -183,7 +195,9 @@ void Run(const DetectArgs& args) {
 void AddDetectCommand(CLI::App& app) {
   auto args = std::make_shared<DetectArgs>();
   CLI::App* cmd = app.add_subcommand("detect", "Find, decode and pose every PinTag in a photo");
-  cmd->add_option("photo", args->photo, "JPEG, PNG, TIFF or WebP photo")->required();
+  cmd->add_option("photo", args->photo,
+                  "JPEG, PNG, TIFF or WebP photo; - reads it from standard input")
+      ->required();
   cmd->add_option("--tag-size-mm", args->tag_size_mm,
                   "side of the black square, millimetres (default: the tag of a 100x150mm label)")
       ->check(FiniteNumber())
