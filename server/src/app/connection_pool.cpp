@@ -2,8 +2,7 @@
 
 #include <sys/stat.h>
 
-#include <iostream>
-
+#include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
 namespace pintag::app {
@@ -45,13 +44,14 @@ bool ConnectionPool::servesFileAtPath() {
     if (back) log_emptied_ = false;
   }
   if (left) {
-    std::cerr << "pintag serve: " << path_
-              << " is no longer the database this server opened (moved, deleted or replaced); "
-                 "requests that need the database are refused until it is back or the server "
-                 "restarts\n";
+    server::LogEvent(path_ +
+                         " is no longer the database this server opened (moved, deleted or "
+                         "replaced); requests that need the database are refused until it is "
+                         "back or the server restarts",
+                     /*warning=*/true);
     emptyLogOfMovedFile();
   } else if (back) {
-    std::cerr << "pintag serve: " << path_ << " is the database this server opened again\n";
+    server::LogEvent(path_ + " is the database this server opened again");
   }
   return here;
 }
@@ -73,8 +73,8 @@ void ConnectionPool::emptyLogOfMovedFile() {
     // One row: busy (1 when readers kept it from finishing), log frames, frames checkpointed.
     emptied = checkpoint.step() && checkpoint.getInt64(0) == 0;
   } catch (const std::exception& e) {
-    std::cerr << "pintag serve: checkpointing the moved database's log failed: " << e.what()
-              << "\n";
+    server::LogEvent(std::string("checkpointing the moved database's log failed: ") + e.what(),
+                     /*warning=*/true);
   }
   if (!emptied) {
     const std::lock_guard lock(mutex_);
@@ -87,8 +87,8 @@ void ConnectionPool::emptyLogOfMovedFile() {
     ++generation_;  // leases out now are closed when they come back
     idle_.clear();
   }
-  std::cerr << "pintag serve: the writes in " << path_
-            << "-wal were moved into the file this server opened, and the log emptied\n";
+  server::LogEvent("the writes in " + path_ +
+                   "-wal were moved into the file this server opened, and the log emptied");
 }
 
 ConnectionPool::Lease::~Lease() {
@@ -136,7 +136,7 @@ ConnectionPool::Lease ConnectionPool::acquire() {
         const std::lock_guard lock(mutex_);
         if (generation_ != generation) continue;
       }
-      std::cerr << "pintag serve: cannot open database " << path << ": " << e.what() << "\n";
+      server::LogEvent("cannot open database " + path + ": " + e.what(), /*warning=*/true);
       throw server::HttpError(503, "the database is not reachable", "Service Unavailable");
     }
   }

@@ -10,6 +10,7 @@
 #include "commands/commands.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "pintag/server/log.hpp"
 
 namespace pintag::cli {
 namespace {
@@ -220,6 +221,10 @@ void Replication::start() {
 }
 
 void Replication::reload() {
+  if (!watcher_ && !follower_) {
+    server::LogEvent("SIGHUP: nothing to reload (a primary reads its database as it changes)");
+    return;
+  }
   if (watcher_) watcher_->check();
   if (!follower_) return;
   // A rotated replica token: written to --follow-token-file, then SIGHUP.
