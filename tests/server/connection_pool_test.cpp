@@ -12,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -126,6 +127,34 @@ TEST(ConnectionPool, AFileReplacedUnderAWritablePoolIsNotWrittenAndLeavesNoLog) 
   const ConnectionPool::Lease lease = pool.acquire();
   lease->execute("INSERT INTO t VALUES (1)");
   EXPECT_EQ(lease->queryInt64("SELECT count(*) FROM t"), 6);
+}
+
+TEST(ConnectionPool, AMovedFilesLogIsEmptiedOnceReadersAndLeasesLetIt) {
+  const test::TempDir dir;
+  const std::string served = dir.file("registry.db");
+  {
+    db::Connection create(served);
+    create.execute("CREATE TABLE t (x INTEGER)");
+  }
+  ConnectionPool pool(served);
+  { (void)pool.acquire()->execute("INSERT INTO t VALUES (1)"); }
+
+  // A reader elsewhere holds the log: the first try cannot empty it.
+  auto reader = std::make_unique<db::Connection>(served);
+  reader->execute("BEGIN");
+  EXPECT_EQ(reader->queryInt64("SELECT count(*) FROM t"), 1);
+  // A lease taken before the move writes after it.
+  std::optional<ConnectionPool::Lease> late(pool.acquire());
+  std::filesystem::rename(served, dir.file("moved.db"));
+  EXPECT_FALSE(pool.servesFileAtPath());
+  (*late)->execute("INSERT INTO t VALUES (2)");
+  EXPECT_GT(std::filesystem::file_size(served + "-wal"), 0U);
+
+  reader->execute("COMMIT");
+  reader.reset();
+  late.reset();  // its connection comes back while the file is away: the log is emptied now
+  EXPECT_EQ(std::filesystem::file_size(served + "-wal"), 0U);
+  EXPECT_EQ(Rows(dir.file("moved.db")), 2);
 }
 
 TEST(ConnectionPool, AReadOnlyPoolServesWhateverFileIsAtItsPath) {

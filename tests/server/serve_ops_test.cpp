@@ -231,6 +231,32 @@ TEST_F(ServeTest, ABackupRestoredUnderARunningServerIsNotUndoneByItsLog) {
   }
 }
 
+TEST_F(ServeTest, ABackupRestoredJustBeforeAStopIsNotUndoneByItsLog) {
+  // No request or probe between the restore and the stop: the stop itself must look.
+  const auto r =
+      client().Post("/api/v1/pincodes", admin(), R"({"pincode": "999030"})", "application/json");
+  ASSERT_TRUE(r && r->status == 201);
+  const std::string backup = dir_.file("backup.db");
+  {
+    db::Connection live(db_path_, {.create = false});
+    live.execute("VACUUM INTO '" + backup + "'");
+  }
+  const auto later =
+      client().Post("/api/v1/pincodes", admin(), R"({"pincode": "999031"})", "application/json");
+  ASSERT_TRUE(later && later->status == 201);
+  std::filesystem::rename(backup, db_path_);
+  EXPECT_EQ(server_->stop(), 0);
+
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened) << opened.error().message;
+  db::Connection& restored = opened.value().connection;
+  EXPECT_TRUE(db::LookupPincode(restored, Pincode(999030)));
+  EXPECT_FALSE(db::LookupPincode(restored, Pincode(999031)));
+  EXPECT_NE(ReadFile(dir_.file("stderr.log")).find("were moved into the file this server opened"),
+            std::string::npos)
+      << ReadFile(dir_.file("stderr.log"));
+}
+
 TEST_F(ServeTest, ATokenThatCannotBeCheckedIsUnavailableNotInvalid) {
   // A new process has no database connection open until a request needs one; with the file
   // moved away that first one cannot open, and the token is not at fault: 503, not 401 (a client

@@ -101,7 +101,7 @@ inline constexpr double kMinRedOverGreenCr = 0.1;
 /// crimson nearly black (0.008) to explain a black patch on one element as a C0, and the tag's
 /// true C0, crimson, as orange: a confident misread (lead 3,276) found by a review. On the tuning
 /// world (pintag_bench --world tuning, seeds 5-7) the least share of any accepted model reading
-/// is 0.056 (docs/DETECTOR-RESEARCH.md, "A level the occluder took").
+/// is 0.053 (docs/DETECTOR-RESEARCH.md, "A level the occluder took").
 inline constexpr double kMinLevelAboveBlack = 0.025;
 
 /// True when a square with these (fitted) corners is narrower than kNarrowExtentPx.

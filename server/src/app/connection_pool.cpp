@@ -2,6 +2,8 @@
 
 #include <sys/stat.h>
 
+#include <filesystem>
+
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
@@ -26,7 +28,8 @@ ConnectionPool::ConnectionPool(std::string path, int busy_timeout_ms, bool read_
 }
 
 ConnectionPool::~ConnectionPool() {
-  if (moved_ && !log_emptied_) emptyLogOfMovedFile();
+  // Shutdown may come before any request or probe saw the file leave: look once more.
+  servesFileAtPath();
 }
 
 bool ConnectionPool::servesFileAtPath() {
@@ -41,7 +44,7 @@ bool ConnectionPool::servesFileAtPath() {
     left = !here && !moved_;
     back = here && moved_;
     moved_ = !here;
-    if (back) log_emptied_ = false;
+    if (left) told_log_kept_ = false;
   }
   if (left) {
     server::LogEvent(path_ +
@@ -49,52 +52,83 @@ bool ConnectionPool::servesFileAtPath() {
                          "replaced); requests that need the database are refused until it is "
                          "back or the server restarts",
                      /*warning=*/true);
-    emptyLogOfMovedFile();
   } else if (back) {
     server::LogEvent(path_ + " is the database this server opened again");
   }
+  // Tried on every look while the file is away, not once: a reader or a lease still out can keep
+  // the first try from emptying the log, and a write committed by a lease taken before the move
+  // refills it.
+  if (!here) emptyLogOfMovedFile();
   return here;
 }
 
 // The log's frames go into the file the connections have open (wherever it is now, or unlinked),
-// and the log at the path is truncated, so it is nobody's. Needs an idle connection and no reader
-// in the log; when there is none now, the destructor tries again at shutdown.
+// and the log at the path is truncated, so it is nobody's. Uses an idle connection without
+// waiting on readers (a refused request must not wait); a try that cannot finish now leaves the
+// connection idle for the next, and says so once.
 void ConnectionPool::emptyLogOfMovedFile() {
   std::unique_ptr<db::Connection> connection;
   {
     const std::lock_guard lock(mutex_);
-    if (log_emptied_ || idle_.empty()) return;
+    if (idle_.empty()) return;
     connection = std::move(idle_.back());
     idle_.pop_back();
   }
   bool emptied = false;
+  // What the log held: a truncating checkpoint reports its frames as 0 once it is done.
+  std::error_code no_size;
+  const std::uintmax_t log_bytes = std::filesystem::file_size(path_ + "-wal", no_size);
+  std::string why = "readers held it";
   try {
-    db::Statement checkpoint = connection->prepare("PRAGMA wal_checkpoint(TRUNCATE)");
-    // One row: busy (1 when readers kept it from finishing), log frames, frames checkpointed.
-    emptied = checkpoint.step() && checkpoint.getInt64(0) == 0;
+    connection->execute("PRAGMA busy_timeout = 0");
+    {
+      db::Statement checkpoint = connection->prepare("PRAGMA wal_checkpoint(TRUNCATE)");
+      // One row: busy (1 when readers kept it from finishing), log frames, frames checkpointed.
+      emptied = checkpoint.step() && checkpoint.getInt64(0) == 0;
+    }
+    connection->execute("PRAGMA busy_timeout = " + std::to_string(busy_timeout_ms_));
   } catch (const std::exception& e) {
-    server::LogEvent(std::string("checkpointing the moved database's log failed: ") + e.what(),
-                     /*warning=*/true);
+    emptied = false;
+    why = e.what();
   }
   if (!emptied) {
-    const std::lock_guard lock(mutex_);
-    idle_.push_back(std::move(connection));  // for the next try
+    bool tell = false;
+    {
+      const std::lock_guard lock(mutex_);
+      idle_.push_back(std::move(connection));  // for the next try
+      tell = !told_log_kept_;
+      told_log_kept_ = true;
+    }
+    if (tell) {
+      server::LogEvent("the log " + path_ +
+                           "-wal of the moved database could not be emptied yet (" + why +
+                           "); trying again at each request, probe and at shutdown",
+                       /*warning=*/true);
+    }
     return;
   }
   {
     const std::lock_guard lock(mutex_);
-    log_emptied_ = true;
-    ++generation_;  // leases out now are closed when they come back
+    ++generation_;  // leases out now come back to idle_ (moved) or are closed (back)
     idle_.clear();
   }
-  server::LogEvent("the writes in " + path_ +
-                   "-wal were moved into the file this server opened, and the log emptied");
+  if (!no_size && log_bytes > 0) {
+    server::LogEvent("the writes in " + path_ +
+                     "-wal were moved into the file this server opened, and the log emptied");
+  }
 }
 
 ConnectionPool::Lease::~Lease() {
   if (!connection_ || pool_ == nullptr) return;
-  const std::lock_guard lock(pool_->mutex_);
-  if (generation_ == pool_->generation_) pool_->idle_.push_back(std::move(connection_));
+  bool moved = false;
+  {
+    const std::lock_guard lock(pool_->mutex_);
+    moved = pool_->moved_;
+    // While the served file is away, a connection that may just have written to its log is kept
+    // for emptying it: closing does not checkpoint a moved file.
+    if (generation_ == pool_->generation_ || moved) pool_->idle_.push_back(std::move(connection_));
+  }
+  if (moved) pool_->emptyLogOfMovedFile();
 }
 
 void ConnectionPool::renew(const std::string& path) {

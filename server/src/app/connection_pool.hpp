@@ -9,8 +9,9 @@
 // deleted or replaced while the server runs, SQLite's connections keep the old file but its
 // write-ahead log stays at the path, where a database put there later would take it as its own
 // (a restored backup undone, or corrupted). So while another file or none is at the path the
-// pool refuses every lease (503), and when the file leaves it moves what the log holds into the
-// file it belongs to (a checkpoint) and empties the log. Put back, the file is served again.
+// pool refuses every lease (503), and at every request, readiness probe and at shutdown it tries
+// to move what the log holds into the file it belongs to (a checkpoint) and to empty the log.
+// Put back, the file is served again.
 
 #include <cstdint>
 #include <memory>
@@ -26,8 +27,8 @@ class ConnectionPool {
  public:
   /// `path` must be an existing database (the serve command opened and migrated it first).
   explicit ConnectionPool(std::string path, int busy_timeout_ms = 5000, bool read_only = false);
-  /// Checkpoints the log of a served file that was moved away (closing does not: SQLite leaves
-  /// the log of a moved database as it is).
+  /// Looks at the path once more and, when the served file has left it, checkpoints its log
+  /// (closing does not: SQLite leaves the log of a moved database as it is).
   ~ConnectionPool();
   ConnectionPool(const ConnectionPool&) = delete;
   ConnectionPool& operator=(const ConnectionPool&) = delete;
@@ -58,8 +59,9 @@ class ConnectionPool {
   Lease acquire();
 
   /// For a writable pool: whether the file it serves is still the one at its path (always true
-  /// for a read-only pool, whose file is replaced by design). When the file has just left, its
-  /// log is checkpointed into it. One stat; the readiness check calls it, so a moved file is
+  /// for a read-only pool, whose file is replaced by design). While it is away, each call tries
+  /// to checkpoint the log into it and empty the log, without waiting on readers. One stat when
+  /// the file is there; the readiness check and a forced stop call it too, so a moved file is
   /// found within a probe interval even when no request comes.
   bool servesFileAtPath();
 
@@ -74,13 +76,12 @@ class ConnectionPool {
   std::mutex mutex_;
   std::uint64_t generation_ = 0;
   std::vector<std::unique_ptr<db::Connection>> idle_;
-  // The served file's device and inode (writable pools); `moved_` while it is not at the path,
-  // and `log_emptied_` once its log was checkpointed and truncated since it left.
+  // The served file's device and inode (writable pools); `moved_` while it is not at the path.
   bool identified_ = false;
   std::uint64_t device_ = 0;
   std::uint64_t inode_ = 0;
   bool moved_ = false;
-  bool log_emptied_ = false;
+  bool told_log_kept_ = false;  ///< a try to empty the log failed and was logged, this departure
 
   void emptyLogOfMovedFile();
 };

@@ -120,6 +120,13 @@ void Run(const ServeArgs& args) {
   app::AppConfig config;
   config.db_path = args.db;
   Replication replication(args.replication, config);
+  // A primary's pool is made here so that a forced stop can still empty the log of a database
+  // file moved away under the server (app/connection_pool.hpp).
+  std::shared_ptr<app::ConnectionPool> writable_pool;
+  if (!read_only) {
+    writable_pool = std::make_shared<app::ConnectionPool>(args.db, config.busy_timeout_ms);
+    config.pool = writable_pool;
+  }
   if (!args.web.empty()) config.web_dir = args.web;
   config.max_body_bytes = static_cast<std::size_t>(args.max_body_mb * 1024 * 1024);
   config.max_pixels = args.max_pixels;
@@ -174,7 +181,14 @@ void Run(const ServeArgs& args) {
 
   std::atomic<bool> finished{false};
   const std::chrono::seconds drain_timeout(args.drain_timeout_s);
-  std::thread waiter([&http, &finished, &replication, &signals, drain_timeout] {
+  // Cut short, requests in flight get no answer and destructors do not run: what a moved
+  // database's log holds is put where it belongs first.
+  const auto stop_now = [&finished, writable_pool](int status) {
+    if (finished) return;
+    if (writable_pool) writable_pool->servesFileAtPath();
+    std::_Exit(status);
+  };
+  std::thread waiter([&http, &finished, &replication, &signals, drain_timeout, &stop_now] {
     int signal = signals.wait();
     while (signal == SIGHUP && !finished) {
       replication.reload();
@@ -199,13 +213,15 @@ void Run(const ServeArgs& args) {
       if (next == SIGINT || next == SIGTERM) {
         server::LogEvent(name(next) + " again: stopping now, requests in flight are cut off",
                          /*warning=*/true);
-        std::_Exit(128 + next);
+        stop_now(128 + next);
+        return;
       }
       if (next == -1) {
         server::LogEvent("requests still in flight after " + std::to_string(drain_timeout.count()) +
                              " s (--drain-timeout): stopping now, they are cut off",
                          /*warning=*/true);
-        std::_Exit(1);
+        stop_now(1);
+        return;
       }
       // SIGHUP while stopping: nothing to reload.
     }
