@@ -75,7 +75,8 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.match(metrics, /^pintag_scans_total 1$/m);
   // On a phone the answer is below the form: the page scrolls to it.
   const summary = await page.locator('#summary').boundingBox();
-  assert.ok(summary.y >= 0 && summary.y + summary.height <= 844, JSON.stringify(summary));
+  // Within a pixel: scrolled to, the top lands on a fraction of a pixel by the fonts' metrics.
+  assert.ok(summary.y > -1 && summary.y + summary.height <= 845, JSON.stringify(summary));
   await screenshot(page, 'scanner-phone');
 
   // A next photo that cannot be read (no token now) leaves nothing of this scan on screen.
