@@ -115,12 +115,21 @@ TEST_F(ServeTest, PortInUseFailsWithoutCreatingAToken) {
   const int status = ::pclose(pipe);
   EXPECT_NE(WEXITSTATUS(status), 0);
   EXPECT_TRUE(Secrets(out).empty()) << out;
-  EXPECT_NE(ReadFile(dir_.file("busy.log")).find("cannot listen"), std::string::npos);
+  EXPECT_NE(ReadFile(dir_.file("busy.log")).find("Address already in use"), std::string::npos)
+      << ReadFile(dir_.file("busy.log"));
   auto opened = db::OpenDatabase(fresh, {.create = false});
   ASSERT_TRUE(opened);
   auto tokens = db::ListTokens(opened.value().connection);
   ASSERT_TRUE(tokens);
   EXPECT_TRUE(tokens->empty());
+
+  // Said before a missing database is created and seeded (seconds), and none is left behind.
+  const std::string missing = dir_.file("never.db");
+  const CommandResult refused =
+      RunPintag("serve --db " + missing + " --port " + std::to_string(server_->port()));
+  EXPECT_EQ(refused.status, 1) << refused.out;
+  EXPECT_NE(refused.out.find("Address already in use"), std::string::npos) << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(missing));
 }
 
 // Many clients at once: each request leases its own database connection.

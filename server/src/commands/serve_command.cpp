@@ -28,6 +28,7 @@
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/server/http_server.hpp"
+#include "pintag/server/listen_check.hpp"
 #include "pintag/server/log.hpp"
 
 namespace pintag::cli {
@@ -113,6 +114,14 @@ void Run(const ServeArgs& args) {
     throw UsageError("--max-pixels-in-flight " + std::to_string(max_pixels_in_flight) +
                      " is below --max-pixels " + std::to_string(args.max_pixels) +
                      ": it must hold at least one photo of the largest size allowed");
+  }
+  // A port taken (a second start by mistake) is said before a missing database is created and
+  // seeded, which takes seconds; bind() below still decides.
+  if (args.port != 0) {
+    if (const std::string why = server::WhyCannotListen(args.bind, args.port); !why.empty()) {
+      throw std::runtime_error("cannot listen on " + args.bind + ":" + std::to_string(args.port) +
+                               ": " + why);
+    }
   }
   const bool read_only = args.replication.read_only || !args.replication.follow.empty();
   if (!read_only) OpenDb(args.db);  // creates and seeds a missing file, migrates an old one

@@ -38,6 +38,7 @@
 #include "connection_stream.hpp"
 #include "header_text.hpp"
 #include "idle_connections.hpp"
+#include "pintag/server/listen_check.hpp"
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 
@@ -754,8 +755,9 @@ bool HttpServer::bind(std::string* error) {
   if (impl_->port <= 0) {
     impl_->port = 0;
     if (error) {
-      *error = "cannot listen on " + o.bind_address + ":" + std::to_string(o.port) +
-               " (address in use, not local, or not permitted)";
+      const std::string why = o.port == 0 ? std::string() : WhyCannotListen(o.bind_address, o.port);
+      *error = "cannot listen on " + o.bind_address + ":" + std::to_string(o.port) + ": " +
+               (why.empty() ? "the address is in use, not this host's, or not permitted" : why);
     }
     return false;
   }
