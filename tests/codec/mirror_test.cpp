@@ -45,7 +45,7 @@ TEST(Mirror, CellsAreWhatAFlippedTagShows) {
   }
 }
 
-TEST(Mirror, AboutOneKeyIn32HasAValidMirrorImageAndMirroringTwiceGivesItBack) {
+TEST(Mirror, OneKeyIn32HasAValidMirrorImageAndMirroringTwiceGivesItBack) {
   int valid = 0;
   for (int k = 0; k < kKeyCount; ++k) {
     const std::optional<TagKey> image = MirrorImageKey(TagKey(k));

@@ -103,15 +103,12 @@ void AddPublishGauges(server::Metrics& metrics,
 // as the storage problems of db_problems.cpp keep file names to the log.
 server::HealthCheck DatabaseHealthCheck(const std::string& path,
                                         std::shared_ptr<ConnectionPool> pool) {
-  struct stat at_start {};
-  const bool known = ::stat(path.c_str(), &at_start) == 0;
-  return [path, at_start, known, pool = std::move(pool)]() -> std::optional<std::string> {
-    // The pool stops serving a file that left its path (and empties its log) as soon as it
-    // learns of it; a probe is how it learns when no request comes.
-    if (pool) pool->servesFileAtPath();
-    struct stat now {};
-    if (::stat(path.c_str(), &now) != 0) return "database unreachable: its file is missing";
-    if (known && (now.st_dev != at_start.st_dev || now.st_ino != at_start.st_ino)) {
+  return [path, pool = std::move(pool)]() -> std::optional<std::string> {
+    // The pool knows the file it opened; asking it is also how it learns, when no request comes,
+    // that the file left (and empties its log).
+    if (!pool->servesFileAtPath()) {
+      struct stat now {};
+      if (::stat(path.c_str(), &now) != 0) return "database unreachable: its file is missing";
       return "database unreachable: its file was replaced since the server started (restart it "
              "to use the new file)";
     }

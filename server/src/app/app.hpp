@@ -41,11 +41,11 @@ struct AppConfig {
 /// Builds the Api. Throws std::runtime_error when the web dir does not exist.
 std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
 
-/// Readiness of the database at `path`, as /readyz reports it: a fresh connection to the file
-/// now at that path (never created), a real query on the registry, and the same file (device
-/// and inode) the server opened at start. Nothing when ready, else why not.
+/// Readiness of the database at `path`, as /readyz reports it: the same file (device and inode)
+/// `pool` opened at start, a fresh connection to it (never created) and a real query on the
+/// registry. Nothing when ready, else why not.
 server::HealthCheck DatabaseHealthCheck(const std::string& path,
-                                        std::shared_ptr<ConnectionPool> pool = nullptr);
+                                        std::shared_ptr<ConnectionPool> pool);
 
 /// Readiness of a read-only replica: the snapshot its pool opens now answers a query.
 server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool);
