@@ -24,6 +24,7 @@
 #include "pintag/db/snapshot.hpp"
 #include "pintag/test/loopback_socket.hpp"
 #include "pintag/test/test_office.hpp"
+#include "replica/snapshot_follower.hpp"
 #include "replica_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -302,6 +303,7 @@ TEST_F(ReplicaSetTest, SnapshotDownloadsLeaveThePrimarysWorkersFree) {
   std::vector<std::thread> downloads;
   std::vector<int> statuses(6, 0);
   std::vector<std::string> retry_after(6);
+  std::vector<std::string> problem_type(6);
   for (std::size_t i = 0; i < statuses.size(); ++i) {
     downloads.emplace_back([&, i] {
       httplib::Client client("127.0.0.1", primary_->port());
@@ -309,6 +311,7 @@ TEST_F(ReplicaSetTest, SnapshotDownloadsLeaveThePrimarysWorkersFree) {
       const auto r = client.Get("/api/v1/registry/snapshot", Auth(replica_token_));
       statuses[i] = StatusOf(r);
       if (r) retry_after[i] = r->get_header_value("Retry-After");
+      if (r && r->status == 503) problem_type[i] = json::parse(r->body).value("type", "");
     });
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -322,10 +325,49 @@ TEST_F(ReplicaSetTest, SnapshotDownloadsLeaveThePrimarysWorkersFree) {
     if (statuses[i] == 503) {
       ++busy;
       EXPECT_EQ(retry_after[i], "1");
+      // What a follower takes for "ask at the next poll" (any other 503 is a failure).
+      EXPECT_EQ(problem_type[i], "tag:pintag,2026:snapshot-readers-busy");
     }
   }
   EXPECT_GE(busy, 1);
   EXPECT_LE(busy, 4);
+}
+
+// Only the primary's own "too many snapshots at once" 503 is "ask at the next poll", neither an
+// answer nor a failure. A follower took every 503 with Retry-After for it, so a primary whose
+// database stayed busy (503 Database Busy, Retry-After: 1), or a proxy in front of it answering
+// "in maintenance, come back later", left its replicas reporting nothing wrong while they served
+// an ever older snapshot. The proxy here is cpp-httplib's server answering as such a proxy does.
+TEST_F(ReplicaSetTest, AFollowerCountsOtherUnavailableAnswersAsFailures) {
+  httplib::Server proxy;
+  proxy.Get("/api/v1/registry/snapshot", [](const httplib::Request&, httplib::Response& answer) {
+    answer.status = 503;
+    answer.set_header("Retry-After", "120");
+    answer.set_content("<html><body>Down for maintenance</body></html>", "text/html");
+  });
+  const int port = proxy.bind_to_any_port("127.0.0.1");
+  ASSERT_GT(port, 0);
+  std::thread serving([&] { proxy.listen_after_bind(); });  // bound: connections queue till then
+  replica::SnapshotFollower follower({.primary_url = "http://127.0.0.1:" + std::to_string(port),
+                                      .token = replica_token_,
+                                      .path = dir_.file("followed.db")},
+                                     [](const db::SnapshotInfo&) {});
+  const auto answered = follower.fetch(std::nullopt);
+  proxy.stop();
+  serving.join();
+  ASSERT_FALSE(answered) << "a primary that cannot send was taken for a current one";
+  EXPECT_FALSE(follower.deferred());
+  EXPECT_NE(answered.error().message.find("answered 503"), std::string::npos)
+      << answered.error().message;
+
+  // The primary itself: a snapshot, and nothing deferred.
+  replica::SnapshotFollower direct(
+      {.primary_url = primaryUrl(), .token = replica_token_, .path = dir_.file("direct.db")},
+      [](const db::SnapshotInfo&) {});
+  const auto fetched = direct.fetch(std::nullopt);
+  ASSERT_TRUE(fetched) << fetched.error().message;
+  EXPECT_TRUE(fetched->has_value());
+  EXPECT_FALSE(direct.deferred());
 }
 
 TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequestsInFlight) {

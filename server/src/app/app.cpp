@@ -157,6 +157,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->metrics = std::make_shared<server::Metrics>();
   context->max_pixels = config.max_pixels;
   context->pixel_budget = std::make_shared<PixelBudget>(config.max_pixels_in_flight);
+  context->write_gate = std::make_shared<WriteGate>(WriteGateCapacity(config.worker_threads));
   context->max_batch = config.max_batch;
   context->max_tag_px = config.max_tag_px;
   context->read_only = config.read_only;

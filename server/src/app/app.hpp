@@ -26,6 +26,7 @@ struct AppConfig {
   std::size_t max_batch = 100;                     ///< labels per POST /labels
   int max_tag_px = 4096;                           ///< largest tag PNG square side
   int busy_timeout_ms = 5000;                      ///< SQLite lock wait
+  int worker_threads = 4;  ///< the server's; writers may hold half of them (WriteGate)
   /// A read-only replica (issue 22): db_path is a snapshot, reloaded through `pool`; writes
   /// answer 403 naming primary_url (empty: not told which); scans go to scan_log_path.
   bool read_only = false;

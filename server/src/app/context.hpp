@@ -9,6 +9,7 @@
 
 #include "app/connection_pool.hpp"
 #include "app/pixel_budget.hpp"
+#include "app/write_gate.hpp"
 #include "pintag/server/metrics.hpp"
 #include "replica/follow_status.hpp"
 #include "replica/snapshot_publisher.hpp"
@@ -34,6 +35,8 @@ struct AppContext {
   /// Pixels of photos being decoded and detected and of PNGs being rendered, at once over every
   /// request (--max-pixels-in-flight).
   std::shared_ptr<PixelBudget> pixel_budget;
+  /// Requests that write the database at once (the route table's Writing<> rows).
+  std::shared_ptr<WriteGate> write_gate;
   /// Replication (docs/SCALING.md): which this server is, its primary when a replica, and the
   /// snapshot it hands replicas when a primary started with --snapshot (else none).
   bool read_only = false;

@@ -24,7 +24,9 @@ void ThrowDbError(const db::Error& error, std::string title) {
     case db::ErrorCode::kFull:
       throw HttpError(507, error.message, std::move(title));
     case db::ErrorCode::kBusy:
-      throw HttpError(503, "the database is busy; try again", "Service Unavailable");
+      // Another writer held the lock past the busy timeout: it passes, so say when to ask again.
+      throw HttpError(server::Problem{503, "Database Busy", "the database is busy; try again",
+                                      "about:blank", /*retry_after_seconds=*/1});
     case db::ErrorCode::kNoSpace:
       // The client learns what it can act on (try later, tell the operator); the log says where.
       server::LogEvent("database error: " + error.message, /*warning=*/true);

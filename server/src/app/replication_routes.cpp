@@ -94,14 +94,12 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   }
   const std::optional<replica::SnapshotPublisher::ReaderSlot> slot = context.publisher->tryReader();
   if (!slot) {
-    HttpResponse busy = server::ProblemResponse(
-        {503, "Service Unavailable",
+    return server::ProblemResponse(
+        {503, "Snapshots Busy",
          std::to_string(replica::SnapshotPublisher::kMaxSnapshotReaders) +
              " snapshots are being prepared; ask again in a second (the worker threads stay free "
              "for other requests)",
-         "about:blank"});
-    busy.headers.emplace_back("Retry-After", "1");
-    return busy;
+         std::string(replica::SnapshotPublisher::kBusyProblemType), /*retry_after_seconds=*/1});
   }
   db::Result<replica::PublishedSnapshot> published = context.publisher->read();
   if (!published) {

@@ -30,6 +30,14 @@ struct AppRoute {
   RouteDoc doc;
 };
 
+/// A handler that writes the database: it runs holding a write gate permit (WriteGate), or the
+/// request is answered 503 at once.
+template <RouteHandler kHandler>
+HttpResponse Writing(const AppContext& context, const HttpRequest& request) {
+  const WriteGate::Permit permit = context.write_gate->enter();
+  return kHandler(context, request);
+}
+
 }  // namespace
 
 server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
@@ -51,10 +59,10 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
        {"offset", "rows to skip (default 0)", "integer"}}}},
     {"GET",    "/api/v1/keys/{key}",                Access::kOpen,    GetKey,
      {"registry", "The pincode a tag key belongs to (retired ones included)"}},
-    {"POST",   "/api/v1/pincodes",                  Access::kAdmin,   PostPincode,
+    {"POST",   "/api/v1/pincodes",                  Access::kAdmin,   Writing<PostPincode>,
      {"registry", "Add a pincode (and its offices); answers 201 with the allocated key", {},
       {"application/json"}}},
-    {"POST",   "/api/v1/pincodes/{pin}/retire",     Access::kAdmin,   PostRetirePincode,
+    {"POST",   "/api/v1/pincodes/{pin}/retire",     Access::kAdmin,   Writing<PostRetirePincode>,
      {"registry", "Retire a pincode: it keeps its key, labels are no longer issued"}},
 
     {"GET",    "/api/v1/tags/{pin}.png",            Access::kCounter, GetTagPng,
@@ -98,7 +106,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
     {"GET",    "/api/v1/sortplans/{name}",          Access::kOpen,    GetSortPlan,
      {"routing", "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv), with its version as ETag",
       {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}}},
-    {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   PutSortPlan,
+    {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<PutSortPlan>,
      {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new",
       {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}}},
 
@@ -108,14 +116,14 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"replication", "The registry as an SQLite snapshot for read-only replicas (ETag: its registry version and the primary run)",
       {}, {}, {"application/vnd.sqlite3"}}},
 
-    {"POST",   "/api/v1/tokens",                    Access::kAdmin,   PostToken,
+    {"POST",   "/api/v1/tokens",                    Access::kAdmin,   Writing<PostToken>,
      {"tokens", R"(Create a token {"role", "label"}; the answer holds its secret, once)", {},
       {"application/json"}}},
     {"GET",    "/api/v1/tokens",                    Access::kAdmin,   GetTokens,
      {"tokens", "Every token (never a secret), revoked ones included"}},
-    {"DELETE", "/api/v1/tokens/{id}",               Access::kAdmin,   RevokeToken,
+    {"DELETE", "/api/v1/tokens/{id}",               Access::kAdmin,   Writing<RevokeToken>,
      {"tokens", "Revoke a token (permanent)"}},
-    {"POST",   "/api/v1/tokens/{id}/revoke",        Access::kAdmin,   RevokeToken,
+    {"POST",   "/api/v1/tokens/{id}/revoke",        Access::kAdmin,   Writing<RevokeToken>,
      {"tokens", "Revoke a token (same as DELETE)"}},
   };
   // clang-format on

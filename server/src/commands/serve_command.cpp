@@ -142,6 +142,7 @@ void Run(const ServeArgs& args) {
   config.max_pixels_in_flight = max_pixels_in_flight;
   config.max_batch = static_cast<std::size_t>(args.max_batch);
   config.max_tag_px = args.max_tag_px;
+  config.worker_threads = args.threads;
   server::ServerOptions options;
   options.bind_address = args.bind;
   options.port = args.port;

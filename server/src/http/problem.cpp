@@ -69,10 +69,14 @@ HttpResponse ProblemResponse(Problem problem) {
                                {"status", problem.status},
                                {"detail", problem.detail}};
   // Replace invalid UTF-8 (details may quote user input) instead of throwing.
-  return {problem.status,
-          std::string(kProblemContentType),
-          body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
-          {}};
+  HttpResponse response{problem.status,
+                        std::string(kProblemContentType),
+                        body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+                        {}};
+  if (problem.retry_after_seconds > 0) {
+    response.headers.emplace_back("Retry-After", std::to_string(problem.retry_after_seconds));
+  }
+  return response;
 }
 
 HttpResponse ProblemResponse(int status, std::string detail) {

@@ -7,6 +7,9 @@
 #include <charconv>
 #include <cstdint>
 #include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "replica/snapshot_publisher.hpp"
 
 namespace pintag::replica {
 
@@ -21,6 +24,13 @@ std::string RegistryETag(std::int64_t version, const std::string& epoch) {
 }
 
 namespace {
+
+/// Whether a 503's problem body is the primary's "snapshots busy" (kBusyProblemType).
+bool IsSnapshotsBusy(const std::string& body) {
+  const nlohmann::json problem = nlohmann::json::parse(body, nullptr, /*allow_exceptions=*/false);
+  return problem.is_object() && problem.contains("type") && problem["type"].is_string() &&
+         problem["type"].get<std::string>() == SnapshotPublisher::kBusyProblemType;
+}
 
 /// What went wrong with a request to the primary, in words an operator can act on; cpp-httplib's
 /// own names ("Connection", "Read") said little in a log line or the follow status.
@@ -60,6 +70,7 @@ SnapshotFollower::~SnapshotFollower() {
 
 db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     std::optional<std::int64_t> have) {
+  deferred_ = false;
   httplib::Client client(options_.primary_url);
   if (!client.is_valid()) {
     return db::Error{db::ErrorCode::kInvalid, "not a primary URL: " + options_.primary_url};
@@ -129,8 +140,10 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     return std::optional<db::SnapshotInfo>{};
   }
   // The primary is sending as many snapshots as it will at once: asked again at the next poll,
-  // not an error (it would log and mark the follower failing after every change).
-  if (answer->status == 503 && answer->has_header("Retry-After")) {
+  // neither an answer nor an error (it would log and mark the follower failing after every
+  // change). Only that 503 is: a primary whose database stays busy or gone is a failure.
+  if (answer->status == 503 && IsSnapshotsBusy(body)) {
+    deferred_ = true;
     return std::optional<db::SnapshotInfo>{};
   }
   if (answer->status != 200) {
@@ -173,7 +186,7 @@ void SnapshotFollower::start(Have have, std::chrono::milliseconds interval,
     } catch (const std::exception& e) {
       fetched = db::Error{db::ErrorCode::kStorage, std::string("following failed: ") + e.what()};
     }
-    if (stopping_) return;  // a download cancelled by the destructor is not an error
+    if (stopping_ || deferred_) return;  // a cancelled download, or a primary that said "later"
     if (status) fetched ? status->succeeded() : status->failed(fetched.error().message);
     if (!fetched) {
       if (fetched.error().message != last_error) {

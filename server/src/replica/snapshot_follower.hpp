@@ -49,8 +49,10 @@ class SnapshotFollower {
 
   /// Asks the primary once. The installed snapshot when there was a newer one; nothing when the
   /// replica is current; an error (with the primary's answer) when the primary could not be
-  /// reached, refused the token or sent something that is not a whole snapshot.
+  /// reached, refused the token or sent something that is not a whole snapshot. A primary
+  /// sending as many snapshots as it will at once gives nothing, and deferred() is then true.
   db::Result<std::optional<db::SnapshotInfo>> fetch(std::optional<std::int64_t> have);
+  bool deferred() const { return deferred_; }
 
   /// The registry version the replica serves now (nothing before its first snapshot).
   using Have = std::function<std::optional<std::int64_t>()>;
@@ -69,6 +71,9 @@ class SnapshotFollower {
   /// before the request is in flight does nothing in cpp-httplib 0.11, so the socket is shut
   /// there instead (never under client_mutex_, which stop() may hold while it waits).
   std::atomic<bool> stopping_{false};
+  /// The last fetch was told to come back later (SnapshotPublisher::kBusyProblemType): the
+  /// polling thread's own, so the follow status keeps its last real answer or failure.
+  bool deferred_ = false;
   httplib::Client* client_ = nullptr;  ///< the download in progress, to cancel
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
   std::string installed_etag_;

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "pintag/db/result.hpp"
@@ -57,6 +58,11 @@ class SnapshotPublisher {
     std::atomic<int>* count_;
   };
   static constexpr int kMaxSnapshotReaders = 2;
+  /// The problem type of the 503 a primary answers while kMaxSnapshotReaders snapshots are being
+  /// sent: a follower asks again at its next poll and counts it neither as an answer nor as a
+  /// failure. Any other 503 (a database busy or replaced, one that cannot be read) is a failure,
+  /// so a replica whose primary stays unable to send reports it.
+  static constexpr std::string_view kBusyProblemType = "tag:pintag,2026:snapshot-readers-busy";
   std::optional<ReaderSlot> tryReader();
   /// Random per publisher, so per primary run: a version counts changes within one database's
   /// history only, and a primary restored from a backup counts again from the backup's version,

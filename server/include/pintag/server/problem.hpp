@@ -17,6 +17,9 @@ struct Problem {
   std::string title;   ///< short, the same for every occurrence of this kind of problem
   std::string detail;  ///< this occurrence, fit to show a user
   std::string type = "about:blank";  ///< a URI naming the kind; about:blank means "see status"
+  /// When above 0, the answer carries Retry-After with it: the problem is expected to pass
+  /// (a busy database, a full write gate) and the client may ask again after that many seconds.
+  int retry_after_seconds = 0;
 };
 
 /// Thrown by handlers (or returned as a value through ProblemResponse) to answer a problem.

@@ -1,0 +1,139 @@
+// Writes while another process holds the database's write lock (an import on the served file):
+// the writers that wait for it may hold at most half of `pintag serve`'s worker threads, the rest
+// are told at once to come back (503, Retry-After), and lookups and the liveness probe keep being
+// answered meanwhile. Nothing is written twice or lost: each 201 is a row, each 503 is none.
+
+#include <sqlite3.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+/// Another process's connection holding the database's write lock until closed.
+class HeldWriteLock {
+ public:
+  explicit HeldWriteLock(const std::string& path) {
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK ||
+        sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK) {
+      ADD_FAILURE() << "cannot lock " << path << ": " << sqlite3_errmsg(db_);
+    }
+  }
+  ~HeldWriteLock() { release(); }
+  HeldWriteLock(const HeldWriteLock&) = delete;
+  HeldWriteLock& operator=(const HeldWriteLock&) = delete;
+  void release() {
+    if (db_ == nullptr) return;
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    sqlite3_close(db_);
+    db_ = nullptr;
+  }
+
+ private:
+  sqlite3* db_ = nullptr;
+};
+
+struct WriteAnswer {
+  int status = 0;
+  std::string title;
+  std::string retry_after;
+  int finished_as = 0;  ///< 1 for the first answer to arrive, 2 for the second, ...
+};
+
+TEST_F(ServeTest, WritersWaitingOnAnotherProcessesLockLeaveHalfTheWorkersToEveryoneElse) {
+  // The fixture's server runs 4 worker threads: 2 may write at once.
+  HeldWriteLock lock(db_path_);
+  constexpr int kWriters = 4;
+  std::vector<WriteAnswer> answers(kWriters);
+  std::atomic<int> finished{0};
+  std::vector<std::thread> writers;
+  for (int i = 0; i < kWriters; ++i) {
+    writers.emplace_back([&, i] {
+      httplib::Client writer("127.0.0.1", server_->port());
+      writer.set_read_timeout(60, 0);
+      const json body = {{"role", "scanner"}, {"label", "gate-" + std::to_string(i)}};
+      const auto r = writer.Post("/api/v1/tokens", admin(), body.dump(), "application/json");
+      WriteAnswer& answer = answers[static_cast<std::size_t>(i)];
+      if (r) {
+        answer.status = r->status;
+        answer.retry_after = r->get_header_value("Retry-After");
+        const json parsed = json::parse(r->body, nullptr, false);
+        if (parsed.is_object() && parsed.contains("title")) answer.title = parsed["title"];
+      }
+      answer.finished_as = ++finished;
+    });
+  }
+  // Two writers are refused at once; the other two wait for the lock (up to 5 s).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (finished < 2 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_GE(finished.load(), 2);
+  // Answered while both waiting writers still hold their threads.
+  httplib::Client other("127.0.0.1", server_->port());
+  other.set_read_timeout(60, 0);
+  const auto live = other.Get("/livez");
+  const auto lookup = other.Get("/api/v1/pincodes/110001");
+  const int finished_before_release = finished;
+  lock.release();
+  for (std::thread& t : writers) t.join();
+
+  ASSERT_TRUE(live);
+  EXPECT_EQ(live->status, 200);
+  ASSERT_TRUE(lookup);
+  EXPECT_EQ(lookup->status, 200);
+  EXPECT_EQ(finished_before_release, 2)
+      << "the probe and the lookup waited until a writer gave up its thread";
+  int refused = 0;
+  int written = 0;
+  for (const WriteAnswer& answer : answers) {
+    if (answer.finished_as <= 2) {
+      ++refused;
+      EXPECT_EQ(answer.status, 503);
+      EXPECT_EQ(answer.title, "Writers Busy");
+      EXPECT_EQ(answer.retry_after, "1");
+    } else {
+      // Waited for the lock: written once it was released.
+      EXPECT_EQ(answer.status, 201) << answer.title;
+      written += answer.status == 201 ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(refused, 2);
+
+  // Each 201 is one token, each 503 none; and with the lock gone, every writer is let in again.
+  const json tokens = ExpectJson(client().Get("/api/v1/tokens", admin()));
+  int gate_tokens = 0;
+  for (const json& token : tokens["tokens"]) {
+    if (token["label"].get<std::string>().starts_with("gate-")) ++gate_tokens;
+  }
+  EXPECT_EQ(gate_tokens, written);
+  for (int i = 0; i < kWriters; ++i) {
+    const json body = {{"role", "scanner"}, {"label", "after-" + std::to_string(i)}};
+    EXPECT_EQ(client().Post("/api/v1/tokens", admin(), body.dump(), "application/json")->status,
+              201);
+  }
+}
+
+// A write that waited the whole busy timeout for another process's lock is told when to ask again.
+TEST_F(ServeTest, AWriteThatOutwaitsTheLockIsToldToRetry) {
+  HeldWriteLock lock(db_path_);
+  const json body = {{"role", "scanner"}, {"label", "outwaited"}};
+  const auto answer = client().Post("/api/v1/tokens", admin(), body.dump(), "application/json");
+  const json problem = ExpectProblem(answer, 503);
+  EXPECT_EQ(problem["title"], "Database Busy");
+  ASSERT_TRUE(answer);
+  EXPECT_EQ(answer->get_header_value("Retry-After"), "1");
+  lock.release();
+  const json tokens = ExpectJson(client().Get("/api/v1/tokens", admin()));
+  for (const json& token : tokens["tokens"]) EXPECT_NE(token["label"], "outwaited");
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
