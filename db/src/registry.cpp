@@ -81,10 +81,12 @@ const char* ToString(PincodeStatus status) {
 }
 
 const PostOffice* MainOffice(const PincodeRecord& record) {
-  for (const char* type : {"HO", "SO"}) {
-    for (const PostOffice& office : record.offices) {
-      if (office.branch_type == type) return &office;
-    }
+  for (const PostOffice& office : record.offices) {
+    if (office.branch_type == "HO") return &office;
+  }
+  // India Post's newer layout types a sub office PO where the older typed it SO.
+  for (const PostOffice& office : record.offices) {
+    if (office.branch_type == "SO" || office.branch_type == "PO") return &office;
   }
   return record.offices.empty() ? nullptr : &record.offices.front();
 }

@@ -586,5 +586,31 @@ TEST_F(Importer, CommandLineImportOfAMissingFileCreatesNoDatabase) {
   EXPECT_FALSE(std::filesystem::exists(db));
 }
 
+// The newer layout types a sub office PO, not SO. Its pincode's main office (the one labels print
+// and the summary's district and state come from) is that sub office, not the branch office
+// listed before it; the head office still comes first.
+TEST_F(Importer, ANewerLayoutSubOfficeTypedPoIsTheMainOfficeOverABranch) {
+  const std::string csv = kNewerHeader +
+                          "Test Circle,Test,Test Division,Alpha B.O,999501,BO,Delivery,"
+                          "Branchpur,Branch State,NA,NA\n"
+                          "Test Circle,Test,Test Division,Beta SO,999501,PO,Delivery,Subpur,"
+                          "Sub State,NA,NA\n"
+                          "Test Circle,Test,Test Division,Gamma SO,999502,PO,Delivery,Subpur,"
+                          "Sub State,NA,NA\n"
+                          "Test Circle,Test,Test Division,Delta H.O,999502,HO,Delivery,Headpur,"
+                          "Head State,NA,NA\n";
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  const PincodeRecord with_branch = LookupPincode(db_, Pincode(999501)).value();
+  ASSERT_NE(MainOffice(with_branch), nullptr);
+  EXPECT_EQ(MainOffice(with_branch)->name, "Beta");
+  EXPECT_EQ(with_branch.district, "Subpur");
+  EXPECT_EQ(with_branch.state, "Sub State");
+  const PincodeRecord with_head = LookupPincode(db_, Pincode(999502)).value();
+  ASSERT_NE(MainOffice(with_head), nullptr);
+  EXPECT_EQ(MainOffice(with_head)->name, "Delta");
+  EXPECT_EQ(with_head.district, "Headpur");
+}
+
 }  // namespace
 }  // namespace pintag::db

@@ -49,7 +49,8 @@ struct PincodeRecord {
 };
 
 /// The office that stands for a pincode (its summary, the office a label prints by default): the
-/// head office, else a sub office, else the first (lowest id); nullptr when it has none.
+/// head office, else a sub office (SO, or PO as the newer layout types it), else the first
+/// (lowest id); nullptr when it has none.
 const PostOffice* MainOffice(const PincodeRecord& record);
 
 /// kNotFound when the pincode is not in the registry.
