@@ -376,6 +376,70 @@ TEST(LabelText, HostileNamesStillRender) {
   EXPECT_TRUE(RenderLabelPng(label, {kLabelA6, 96}));
 }
 
+/// The rows where two renders of one size differ: [first, last], or nothing when they do not.
+std::optional<std::pair<int, int>> RowsThatDiffer(const RgbImage& a, const RgbImage& b) {
+  std::optional<std::pair<int, int>> rows;
+  for (int y = 0; y < a.height; ++y) {
+    for (int i = y * a.width * 3; i < (y + 1) * a.width * 3; ++i) {
+      if (a.pixels[static_cast<std::size_t>(i)] == b.pixels[static_cast<std::size_t>(i)]) continue;
+      rows = rows ? std::make_pair(rows->first, y) : std::make_pair(y, y);
+      break;
+    }
+  }
+  return rows;
+}
+
+TEST(LabelText, StackedMarksStayOnTheirOwnRow) {
+  // A name of one letter and 99 combining accents (the API accepts it) drew its accents up
+  // through "PIN CODE" and the pincode digits and off the label; a Tibetan stack of subjoined
+  // letters ran down over the bin. Each line's ink is now held to its row.
+  constexpr int kDpi = 200;
+  const double px_per_mm = kDpi / 25.4;
+  std::string accents;
+  for (int i = 0; i < 99; ++i) accents += "\u0301";
+  std::string tibetan_stack = "\u0F40";
+  for (int i = 0; i < 40; ++i) tibetan_stack += "\u0F90";
+  struct Case {
+    const char* what;
+    std::string LabelContent::*field;
+    std::string plain;
+    std::string hostile;
+    double row_mm;  ///< the largest line size that field prints at on 100 x 150 mm
+  };
+  const Case cases[] = {{"office", &LabelContent::office, "A", "A" + accents, 7.0},
+                        {"district", &LabelContent::district, "Nagar ", "Nagar " + tibetan_stack,
+                         4.6}};
+  for (const Case& c : cases) {
+    LabelContent plain = test::SampleLabel();
+    plain.*c.field = c.plain;
+    LabelContent hostile = plain;
+    hostile.*c.field = c.hostile;
+    const RenderedLabel a = RenderLabelPng(plain, {kLabel100x150, kDpi});
+    const RenderedLabel b = RenderLabelPng(hostile, {kLabel100x150, kDpi});
+    ASSERT_TRUE(a && b) << a.error << b.error;
+    const auto pa = test::ReadPng(a.bytes);
+    const auto pb = test::ReadPng(b.bytes);
+    ASSERT_TRUE(pa && pb);
+    const auto rows = RowsThatDiffer(pa->image, pb->image);
+    ASSERT_TRUE(rows.has_value()) << c.what << ": the marks were not drawn at all";
+    const double span_mm = (rows->second - rows->first + 1) / px_per_mm;
+    // Within the line's band (1.3 sizes above the baseline, 0.6 below).
+    EXPECT_LE(span_mm, 1.9 * c.row_mm + 0.5) << c.what << ": rows " << rows->first << " to "
+                                             << rows->second;
+  }
+  // A bin of stacked accents keeps off the pincode, which prints above the bin's box.
+  LabelContent plain = test::SampleLabel();
+  plain.bin = "B";
+  LabelContent hostile = plain;
+  hostile.bin = "B" + accents.substr(0, 31 * 2);
+  const auto pa = test::ReadPng(RenderLabelPng(plain, {kLabel100x150, kDpi}).bytes);
+  const auto pb = test::ReadPng(RenderLabelPng(hostile, {kLabel100x150, kDpi}).bytes);
+  ASSERT_TRUE(pa && pb);
+  const auto rows = RowsThatDiffer(pa->image, pb->image);
+  ASSERT_TRUE(rows.has_value());
+  EXPECT_LE((rows->second - rows->first + 1) / px_per_mm, 1.9 * 14.0 + 0.5);
+}
+
 TEST(LabelLayout, TagIsLargeAndItsQuietZoneStaysOnTheLabel) {
   for (const LabelSize& size :
        {kLabel100x150, kLabelA6, kLabel4x6In, LabelSize{150, 100}, LabelSize{75, 75},

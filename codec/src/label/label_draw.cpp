@@ -113,7 +113,11 @@ void DrawAddress(LabelFont& font, const LabelContent& label, const Box& box) {
   double top = box.y + gap;
   for (const TextLine& line : lines) {
     DrawLine(font, line.text, box.x + kPadMm, width, top + line.size * 0.76,
-             {.bold = line.bold, .size = line.size, .min_size = kMinNameMm, .align = Align::kLeft});
+             {.bold = line.bold,
+              .size = line.size,
+              .min_size = kMinNameMm,
+              .align = Align::kLeft,
+              .within = &box});
     top += line.size + gap;
   }
 }
@@ -153,12 +157,13 @@ std::vector<LineBreak> BinBreaks(LabelFont& font, const std::string& bin) {
 // start, so it is not cut off while a break can show it. When even that does not fit at the
 // 2.2 mm floor, the second line keeps the longest end that fits and the first is ellipsized:
 // two bins that differ in their number never print alike.
-void DrawBinValue(LabelFont& font, const std::string& bin, double x, double width, double baseline,
-                  double size, double height) {
+void DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, double x, double width,
+                  double baseline, double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
   const std::vector<LineBreak> breaks = BinBreaks(font, bin);
   if (font.advancePerSize(bin, true) * kOneLineMinMm <= width || breaks.empty()) {
-    DrawLine(font, bin, x, width, baseline, {.bold = true, .size = size, .min_size = kMinNameMm});
+    DrawLine(font, bin, x, width, baseline,
+             {.bold = true, .size = size, .min_size = kMinNameMm, .within = &box});
     return;
   }
   LineBreak cut = breaks.front();
@@ -186,7 +191,8 @@ void DrawBinValue(LabelFont& font, const std::string& bin, double x, double widt
     longer = width / kMinNameMm;
   }
   const double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
-  const LineStyle style{.bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm};
+  const LineStyle style{
+      .bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm, .within = &box};
   DrawLine(font, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style);
   DrawLine(font, bin.substr(cut.second_begin), x, width, baseline, style);
 }
@@ -205,7 +211,7 @@ void DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
     DrawLine(font, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
              {.bold = false, .size = std::min(value_size, 5.0), .min_size = 2.0});
   } else {
-    DrawBinValue(font, bin, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
+    DrawBinValue(font, bin, box, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
                  value_size, value_h);
   }
 
@@ -215,7 +221,11 @@ void DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
     const std::string plan = SanitizeUtf8(*label.plan);
     if (!plan.empty()) {
       DrawLine(font, "plan " + plan, right_x, right_w, box.y + kPadMm + kCaptionMm * 0.75,
-               {.bold = false, .size = kCaptionMm, .min_size = 1.8, .align = Align::kRight});
+               {.bold = false,
+                .size = kCaptionMm,
+                .min_size = 1.8,
+                .align = Align::kRight,
+                .within = &box});
     }
   }
   DrawLine(font, "key " + std::to_string(label.key.value()), right_x, right_w,

@@ -10,6 +10,12 @@ namespace {
 
 constexpr char32_t kReplacement = 0xFFFD;
 
+// A line's ink band, in font sizes from its baseline and beyond the ends of its width. Noto's
+// Indian faces reach about 1.1 above and 0.5 below; stacked marks beyond that are cut.
+constexpr double kBandAbove = 1.3;
+constexpr double kBandBelow = 0.6;
+constexpr double kBandSide = 0.3;
+
 bool IsContinuation(char byte) {
   return (static_cast<unsigned char>(byte) & 0xC0) == 0x80;
 }
@@ -95,7 +101,23 @@ double DrawLine(LabelFont& font, std::string_view text, double x, double width, 
   double left = x;
   if (style.align == Align::kCentre) left = x + (width - advance) / 2;
   if (style.align == Align::kRight) left = x + width - advance;
+  double clip_left = x - kBandSide * size;
+  double clip_right = x + width + kBandSide * size;
+  double clip_top = baseline - kBandAbove * size;
+  double clip_bottom = baseline + kBandBelow * size;
+  if (style.within != nullptr) {
+    clip_left = std::max(clip_left, style.within->x);
+    clip_right = std::min(clip_right, style.within->right());
+    clip_top = std::max(clip_top, style.within->y);
+    clip_bottom = std::min(clip_bottom, style.within->bottom());
+  }
+  cairo_t* cr = font.context();
+  cairo_save(cr);
+  cairo_rectangle(cr, clip_left, clip_top, std::max(0.0, clip_right - clip_left),
+                  std::max(0.0, clip_bottom - clip_top));
+  cairo_clip(cr);
   font.show(line, style.bold, size, left, baseline);
+  cairo_restore(cr);
   return size;
 }
 

@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "label/label_font.hpp"
+#include "label/label_layout.hpp"
 #include "label/label_utf8.hpp"
 
 namespace pintag::label {
@@ -15,11 +16,17 @@ struct LineStyle {
   double size = 3;      ///< preferred font size, user units (mm on labels)
   double min_size = 2;  ///< shrink no further than this, then ellipsize
   Align align = Align::kLeft;
+  /// The box the line belongs to (its ink is clipped to it as well); none: only the line's band.
+  const Box* within = nullptr;
 };
 
 /// Draws one line of sanitized text with its baseline at `baseline`, inside [x, x + width]:
 /// shrinks the font down to style.min_size to fit, then cuts whole characters (as a reader
-/// counts them) from the end and appends "…". Returns the font size used.
+/// counts them) from the end and appends "…". Returns the font size used. Ink is clipped to the
+/// line's band (1.3 sizes above the baseline, 0.6 below, a little either side of the width) and
+/// to style.within: a name of stacked combining marks, which the API accepts, drew over the
+/// pincode digits and the bin instead of staying on its row. Real text of every script the
+/// label prints stays inside the band.
 double DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
                 const LineStyle& style);
 
