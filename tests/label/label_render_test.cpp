@@ -406,9 +406,9 @@ TEST(LabelText, StackedMarksStayOnTheirOwnRow) {
     std::string hostile;
     double row_mm;  ///< the largest line size that field prints at on 100 x 150 mm
   };
-  const Case cases[] = {{"office", &LabelContent::office, "A", "A" + accents, 7.0},
-                        {"district", &LabelContent::district, "Nagar ", "Nagar " + tibetan_stack,
-                         4.6}};
+  const Case cases[] = {
+      {"office", &LabelContent::office, "A", "A" + accents, 7.0},
+      {"district", &LabelContent::district, "Nagar ", "Nagar " + tibetan_stack, 4.6}};
   for (const Case& c : cases) {
     LabelContent plain = test::SampleLabel();
     plain.*c.field = c.plain;
@@ -424,8 +424,8 @@ TEST(LabelText, StackedMarksStayOnTheirOwnRow) {
     ASSERT_TRUE(rows.has_value()) << c.what << ": the marks were not drawn at all";
     const double span_mm = (rows->second - rows->first + 1) / px_per_mm;
     // Within the line's band (1.3 sizes above the baseline, 0.6 below).
-    EXPECT_LE(span_mm, 1.9 * c.row_mm + 0.5) << c.what << ": rows " << rows->first << " to "
-                                             << rows->second;
+    EXPECT_LE(span_mm, 1.9 * c.row_mm + 0.5)
+        << c.what << ": rows " << rows->first << " to " << rows->second;
   }
   // A bin of stacked accents keeps off the pincode, which prints above the bin's box.
   LabelContent plain = test::SampleLabel();
