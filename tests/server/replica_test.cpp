@@ -570,6 +570,44 @@ TEST_F(ReplicaSetTest, AReadOnlyReplicaRefusesAFileThatGivesAServedKeyToAnotherP
   EXPECT_EQ(WaitForStatus(client, "/api/v1/pincodes/999303", 200), 200) << stderrOf("replica-0");
 }
 
+// A primary whose first snapshot could not be written (a full disk under --snapshot) exited,
+// the only writer down over its replicas' disk, although later failures are retried. It now
+// starts, says so, answers replicas 503 and publishes once it can. A --snapshot directory that
+// does not exist is still refused at start: that is a mistake in the command.
+TEST_F(ReplicaSetTest, APrimaryStartsWhenItsFirstSnapshotCannotBeWrittenAndPublishesLater) {
+  primary_.reset();
+  const std::string blocked = dir_.file("blocked.db");
+  std::filesystem::create_directory(blocked);  // a rename onto it fails, as a full disk's write
+  primary_ = std::make_unique<ServerProcess>(
+      std::vector<std::string>{"--db", primary_db_, "--threads", "4", "--snapshot", blocked},
+      dir_.file("primary-blocked.err"));
+  ASSERT_TRUE(primary_->ok()) << ReadFile(dir_.file("primary-blocked.err"));
+  const std::string log = ReadFile(dir_.file("primary-blocked.err"));
+  EXPECT_NE(log.find("cannot publish a snapshot to " + blocked), std::string::npos) << log;
+  EXPECT_NE(log.find("starting without a published snapshot"), std::string::npos) << log;
+  httplib::Client primary = LoopbackClient(primary_->port());
+  const auto refused = primary.Get("/api/v1/registry/snapshot", Auth(replica_token_));
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 503) << refused->body;
+  const json status = Body(primary.Get("/api/v1/registry"));
+  EXPECT_TRUE(status["snapshot"]["failing_since"].is_string()) << status.dump();
+  // Writes go on meanwhile, and once the path is free the snapshot holds them.
+  addPincode(primary, "999321");
+  std::filesystem::remove(blocked);
+  EXPECT_TRUE(WaitUntil([&] {
+    const auto r = primary.Get("/api/v1/registry/snapshot", Auth(replica_token_));
+    return r && r->status == 200;
+  }));
+  const json published = Body(primary.Get("/api/v1/registry"));
+  EXPECT_EQ(published["snapshot"]["published_version"], published["registry_version"])
+      << published.dump();
+
+  const CommandResult missing = RunPintag("serve --port 0 --db " + primary_db_ + " --snapshot " +
+                                          dir_.file("no-such-dir/snap.db"));
+  EXPECT_EQ(missing.status, 2) << missing.out;
+  EXPECT_NE(missing.out.find("does not exist"), std::string::npos) << missing.out;
+}
+
 // The primary trusted the version it remembered: a published file removed or overwritten by
 // another process was served as it was (5 bytes of junk with the live ETag) or answered 503 until
 // the next write. And a publication that failed was tried again, whole, every half second.

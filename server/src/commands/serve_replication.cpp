@@ -145,9 +145,21 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
   }
   if (!args_.read_only) {
     if (args_.snapshot.empty()) return;
+    // A directory that is not there is a mistake in the command; a failed write (a full disk, a
+    // file another process holds) is not a reason to keep the only writer down: it is logged,
+    // tried again with backoff, and shown by GET /api/v1/registry and the metrics until it works.
+    const std::filesystem::path snapshot_dir =
+        std::filesystem::absolute(args_.snapshot).parent_path();
+    std::error_code error;
+    if (!std::filesystem::is_directory(snapshot_dir, error)) {
+      throw UsageError("--snapshot " + args_.snapshot + ": its directory " + snapshot_dir.string() +
+                       " does not exist");
+    }
     publisher_ = std::make_shared<replica::SnapshotPublisher>(db_path_, args_.snapshot);
-    const auto published = publisher_->publish();
-    if (!published) throw std::runtime_error(published.error().message);
+    if (!publisher_->publish()) {
+      std::cerr << "pintag serve: starting without a published snapshot; replicas are answered "
+                   "503 until one is written\n";
+    }
     config.publisher = publisher_;
     return;
   }

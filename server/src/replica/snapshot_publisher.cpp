@@ -92,7 +92,8 @@ db::Error SnapshotPublisher::failed(db::Error error) {
   error.message += " (" + std::to_string(failures_in_a_row_) + " in a row; next try in " +
                    std::to_string(delay.count()) + " s)";
   failure_ = error;
-  std::cerr << "pintag serve: cannot publish a snapshot: " << error.message << "\n";
+  std::cerr << "pintag serve: cannot publish a snapshot to " << out_path_ << ": " << error.message
+            << "\n";
   updateStatus();
   return error;
 }
