@@ -306,13 +306,16 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
     TemporaryBeside temporary(path);
     {
       const int fd = ::open(temporary.path().c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-      if (fd < 0) throw std::runtime_error(SystemError("cannot open " + temporary.path()));
+      // Errors name `path`, not the temporary file's random name: a follower logs an error that
+      // repeats once (a full disk failed every poll under another name, each logged).
+      const std::string received = "the snapshot received for " + path + " (a file beside it)";
+      if (fd < 0) throw std::runtime_error(SystemError("cannot open " + received));
       std::size_t written = 0;
       while (written < bytes.size()) {
         const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) {
-          const std::string error = SystemError("cannot write " + temporary.path());
+          const std::string error = SystemError("cannot write " + received);
           ::close(fd);
           throw std::runtime_error(error);
         }
@@ -320,10 +323,8 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
       }
       const bool synced = ::fsync(fd) == 0;
       ::close(fd);
-      if (!synced) throw std::runtime_error(SystemError("fsync " + temporary.path()));
+      if (!synced) throw std::runtime_error(SystemError("cannot fsync " + received));
     }
-    // Errors name `path`, not the temporary file's random name: a follower logs a repeated error
-    // once.
     const auto named_by_target = [&](std::string message) {
       const std::string named = path + " (as received)";
       for (std::size_t at = 0; (at = message.find(temporary.path(), at)) != std::string::npos;

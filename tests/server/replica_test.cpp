@@ -570,6 +570,78 @@ TEST_F(ReplicaSetTest, AReadOnlyReplicaRefusesAFileThatGivesAServedKeyToAnotherP
   EXPECT_EQ(WaitForStatus(client, "/api/v1/pincodes/999303", 200), 200) << stderrOf("replica-0");
 }
 
+/// How many whole snapshots the primary has sent so far (its access log's 200s on the route).
+std::size_t SnapshotsSent(const std::string& log) {
+  std::size_t sent = 0;
+  for (std::size_t at = log.find("path=/api/v1/registry/snapshot status=200");
+       at != std::string::npos;
+       at = log.find("path=/api/v1/registry/snapshot status=200", at + 1)) {
+    ++sent;
+  }
+  return sent;
+}
+
+// A follower starting without a snapshot downloaded it twice: once to start on, and again at
+// its first poll, since the follower that polls did not know the ETag of the one that fetched.
+TEST_F(ReplicaSetTest, AFollowerStartingWithoutASnapshotDownloadsItOnce) {
+  const std::size_t before = SnapshotsSent(stderrOf("primary"));
+  ServerProcess& replica = startFollower(0);
+  ASSERT_TRUE(replica.ok());
+  // Polls every 200 ms: a few of them, each a 304.
+  ASSERT_TRUE(WaitUntil([&] {
+    const std::string log = stderrOf("primary");
+    std::size_t not_modified = 0;
+    for (std::size_t at = log.find("path=/api/v1/registry/snapshot status=304");
+         at != std::string::npos;
+         at = log.find("path=/api/v1/registry/snapshot status=304", at + 1)) {
+      ++not_modified;
+    }
+    return not_modified >= 3;
+  }));
+  EXPECT_EQ(SnapshotsSent(stderrOf("primary")) - before, 1U) << stderrOf("primary");
+}
+
+// A snapshot downloaded whole and then not installed (a full disk, say; here the replica's path
+// is a directory, which the rename cannot replace) was downloaded again at every poll, 35 MB
+// every 200 ms, each holding one of the primary's two snapshot slots. It now waits 1 s, 2 s, …
+TEST_F(ReplicaSetTest, AFollowerThatCannotInstallBacksOffItsDownloads) {
+  const std::string blocked = dir_.file("blocked-replica.db");
+  std::filesystem::create_directory(blocked);
+  replica::SnapshotFollower follower(
+      {.primary_url = primaryUrl(), .token = replica_token_, .path = blocked},
+      [](const db::SnapshotInfo&) {});
+  const std::size_t before = SnapshotsSent(stderrOf("primary"));
+  const auto first = follower.fetch(std::nullopt);
+  ASSERT_FALSE(first);
+  EXPECT_NE(first.error().message.find("1 in a row; next download in 1 s"), std::string::npos)
+      << first.error().message;
+  EXPECT_EQ(first.error().message.find(".tmp-"), std::string::npos) << first.error().message;
+  const auto sent = [&](std::size_t count) {  // the access log is written as the answer ends
+    return WaitUntil([&] { return SnapshotsSent(stderrOf("primary")) - before >= count; },
+                     std::chrono::seconds(10));
+  };
+  ASSERT_TRUE(sent(1));
+  // Asked again at once: the same error, and nothing downloaded.
+  const auto again = follower.fetch(std::nullopt);
+  ASSERT_FALSE(again);
+  EXPECT_EQ(again.error().message, first.error().message);
+  EXPECT_EQ(SnapshotsSent(stderrOf("primary")) - before, 1U);
+  // After the delay it downloads once more, and waits longer.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  const auto later = follower.fetch(std::nullopt);
+  ASSERT_FALSE(later);
+  EXPECT_NE(later.error().message.find("2 in a row; next download in 2 s"), std::string::npos)
+      << later.error().message;
+  ASSERT_TRUE(sent(2));
+  EXPECT_EQ(SnapshotsSent(stderrOf("primary")) - before, 2U);
+  // Room again: the next download after the delay is installed.
+  std::filesystem::remove(blocked);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2100));
+  const auto installed = follower.fetch(std::nullopt);
+  ASSERT_TRUE(installed) << installed.error().message;
+  EXPECT_TRUE(installed->has_value());
+}
+
 // A primary whose first snapshot could not be written (a full disk under --snapshot) exited,
 // the only writer down over its replicas' disk, although later failures are retried. It now
 // starts, says so, answers replicas 503 and publishes once it can. A --snapshot directory that

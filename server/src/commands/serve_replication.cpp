@@ -174,12 +174,16 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     token_ = ReadToken(args_);
     follow_status_ = std::make_shared<replica::FollowStatus>();
     config.follow_status = follow_status_;
+    // One follower from the first fetch on: it keeps the ETag of what it installed, so its first
+    // poll is a 304, not the whole snapshot again.
+    follower_ = std::make_unique<replica::SnapshotFollower>(
+        replica::FollowOptions{args_.follow, token_, db_path_},
+        [this](const db::SnapshotInfo&) { watcher_->check(); });
     // A replica with no usable snapshot yet waits for its primary.
     if (!db::VerifySnapshot(db_path_)) {
-      replica::SnapshotFollower first({args_.follow, token_, db_path_}, nullptr);
       std::string last_error;
       while (true) {
-        const auto fetched = first.fetch(std::nullopt);
+        const auto fetched = follower_->fetch(std::nullopt);
         if (fetched && *fetched) break;
         const std::string error = fetched ? "no snapshot" : fetched.error().message;
         if (error != last_error) {
@@ -224,10 +228,7 @@ void Replication::start() {
   if (publisher_) publisher_->start(std::chrono::milliseconds(500));
   if (!args_.read_only) return;
   watcher_->start(std::chrono::milliseconds(250));
-  if (args_.follow.empty()) return;
-  follower_ = std::make_unique<replica::SnapshotFollower>(
-      replica::FollowOptions{args_.follow, token_, db_path_},
-      [watcher = watcher_.get()](const db::SnapshotInfo&) { watcher->check(); });
+  if (!follower_) return;
   follower_->start([watcher = watcher_.get()] { return watcher->loaded().registry_version; },
                    std::chrono::milliseconds(args_.follow_interval_ms), follow_status_);
 }

@@ -71,6 +71,9 @@ SnapshotFollower::~SnapshotFollower() {
 db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     std::optional<std::int64_t> have) {
   deferred_ = false;
+  if (download_failures_ > 0 && std::chrono::steady_clock::now() < next_download_) {
+    return download_error_;
+  }
   httplib::Client client(options_.primary_url);
   if (!client.is_valid()) {
     return db::Error{db::ErrorCode::kInvalid, "not a primary URL: " + options_.primary_url};
@@ -125,9 +128,9 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
         return !too_large;
       });
   if (too_large) {
-    return db::Error{db::ErrorCode::kStorage,
-                     "primary " + options_.primary_url + " sent a snapshot of more than " +
-                         std::to_string(options_.max_bytes >> 20) + " MiB; refused"};
+    return downloadWasted({db::ErrorCode::kStorage,
+                           "primary " + options_.primary_url + " sent a snapshot of more than " +
+                               std::to_string(options_.max_bytes >> 20) + " MiB; refused"});
   }
   if (!answer) {
     return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url +
@@ -161,13 +164,27 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     if (installed.error().code == db::ErrorCode::kConflict && !etag.empty()) {
       refused_etag_ = etag;
       refused_error_ = installed.error();
+      return installed.error();
     }
-    return installed.error();
+    return downloadWasted(installed.error());
   }
+  download_failures_ = 0;
   refused_etag_.clear();
   installed_etag_ = etag;
   installed_version_ = installed->registry_version;
   return std::optional<db::SnapshotInfo>{*installed};
+}
+
+db::Error SnapshotFollower::downloadWasted(db::Error error) {
+  // 1, 2, 4, … s, at most kMaxDownloadDelay.
+  const std::chrono::seconds delay =
+      std::min(kMaxDownloadDelay, std::chrono::seconds(1LL << std::min(download_failures_, 6)));
+  ++download_failures_;
+  next_download_ = std::chrono::steady_clock::now() + delay;
+  error.message += " (" + std::to_string(download_failures_) + " in a row; next download in " +
+                   std::to_string(delay.count()) + " s)";
+  download_error_ = error;
+  return error;
 }
 
 void SnapshotFollower::setToken(std::string token) {

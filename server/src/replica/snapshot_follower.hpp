@@ -82,6 +82,15 @@ class SnapshotFollower {
   /// fetched again while the primary still serves it, and the refusal stands meanwhile.
   std::string refused_etag_;
   db::Error refused_error_{db::ErrorCode::kConflict, ""};
+  /// A snapshot downloaded whole and then not installed (a full disk, a directory it cannot
+  /// write, a body over max_bytes) is not downloaded again before a delay that doubles with each
+  /// such failure in a row: a replica re-fetched 35 MB every poll, holding one of the primary's
+  /// two snapshot slots each time. Polls meanwhile give the last error without asking.
+  static constexpr std::chrono::seconds kMaxDownloadDelay{60};
+  int download_failures_ = 0;
+  std::chrono::steady_clock::time_point next_download_;
+  db::Error download_error_{db::ErrorCode::kStorage, ""};
+  db::Error downloadWasted(db::Error error);
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
