@@ -181,8 +181,8 @@ db::Error SnapshotFollower::downloadWasted(db::Error error) {
       std::min(kMaxDownloadDelay, std::chrono::seconds(1LL << std::min(download_failures_, 6)));
   ++download_failures_;
   next_download_ = std::chrono::steady_clock::now() + delay;
-  error.message += " (" + std::to_string(download_failures_) + " in a row; next download in " +
-                   std::to_string(delay.count()) + " s)";
+  // The same words each time, so that a failure that repeats is logged once.
+  error.message += " (downloaded again after 1 s, 2 s, 4 s … at most a minute)";
   download_error_ = error;
   return error;
 }

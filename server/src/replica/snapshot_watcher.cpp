@@ -182,8 +182,28 @@ bool SnapshotWatcher::check() {
   // A --follow replica's install refuses a registry that gives a served key to another pincode
   // (a primary restored from an older backup); a file renamed into place is held to the same.
   std::optional<db::Error> refusal;
+  const std::optional<FileIdentity> served_file = IdentifyFile(loaded_->path);
+  const bool written_in_place = linked && served_file && linked->device == served_file->device &&
+                                linked->inode == served_file->inode;
+  if (!verified && written_in_place) {
+    // Nothing to refuse or put back: the served registry is this file, changed under it.
+    if (!link.empty()) ::unlink(link.c_str());
+    std::cerr << "pintag serve: " << path_ << " was written over in place, and the registry "
+              << "served (the same file) changed with it: " << verified.error().message
+              << ". Not ready until a snapshot is renamed into place at " << path_ << "\n";
+    return false;
+  }
   if (!verified) {
     refusal = verified.error();
+  } else if (const auto served = db::VerifySnapshot(loaded_->path); !served) {
+    // The served file shares FILE's inode, so a copy written over FILE in place (cp, scp, a
+    // truncation) changed it: there are no keys left to compare, and refusing every later file
+    // for that ("cannot compare the keys") left the replica unready for good. db::InstallSnapshot
+    // replaces a file that is not a snapshot likewise.
+    std::cerr << "pintag serve: the registry served, " << loaded_->path
+              << ", no longer reads as a snapshot (" << served.error().message << "; was " << path_
+              << " written over in place?); taking the new file without "
+              << "comparing keys\n";
   } else {
     refusal = db::KeysNotKeptBy(verified->path, loaded_->path);
   }
