@@ -1,5 +1,7 @@
 #include "pintag/db/csv.hpp"
 
+#include <string>
+
 namespace pintag::db {
 
 CsvReader::CsvReader(std::string_view text) : text_(text) {
@@ -39,7 +41,13 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
       continue;
     }
     if (c == ',') {
-      record.fields.push_back(std::move(field));
+      // Fields past the limit are read over, not kept: a line of 25 million commas held a
+      // string for each (1.1 GB) before its field count was checked.
+      if (record.fields.size() < kMaxCsvFields) {
+        record.fields.push_back(std::move(field));
+      } else {
+        fail("more than " + std::to_string(kMaxCsvFields) + " fields");
+      }
       field.clear();
       was_quoted = false;
     } else if (c == '\n' || c == '\r') {
@@ -48,14 +56,17 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
       record.fields.push_back(std::move(field));
       return record;
     } else if (c == '"') {
-      if (field.empty() && !was_quoted) {
+      // Spaces before the opening quote are dropped, as a hand-written `11, "delhi, north"` means.
+      if (!was_quoted && field.find_first_not_of(' ') == std::string::npos) {
+        field.clear();
         quoted = was_quoted = true;
       } else {
         fail("stray double quote");
         field += c;
       }
+    } else if (was_quoted) {
+      if (c != ' ') fail("text after a closing quote");  // spaces after it are dropped
     } else {
-      if (was_quoted) fail("text after a closing quote");
       field += c;
     }
   }

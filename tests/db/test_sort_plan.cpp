@@ -222,6 +222,21 @@ TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
   ASSERT_TRUE(spaced.ok()) << spaced.error().message;
   EXPECT_EQ(spaced->fallback_bin, "floor");
   EXPECT_EQ(spaced->rules, (std::vector<SortRule>{{"11", "delhi"}, {"56", "south zone"}}));
+  // Spaces around a quoted field too (both were "stray double quote" / "text after a closing
+  // quote"); a space inside the quotes is the bin's, and refused as one at its end.
+  const auto spaced_quotes =
+      ParsePlanCsv("s", "prefix,bin\n*, \"floor, east\"\n\"11\" ,delhi\n56,  \"a \"\"b\"\"\"  \n");
+  ASSERT_TRUE(spaced_quotes.ok()) << spaced_quotes.error().message;
+  EXPECT_EQ(spaced_quotes->fallback_bin, "floor, east");
+  EXPECT_EQ(spaced_quotes->rules, (std::vector<SortRule>{{"11", "delhi"}, {"56", "a \"b\""}}));
+  const auto after_quote = ParsePlanCsv("x", "prefix,bin\n*,\"a\"b\n");
+  ASSERT_FALSE(after_quote.ok());
+  EXPECT_NE(after_quote.error().message.find("text after a closing quote"), std::string::npos);
+  // A line of a million commas is refused by its field count without keeping a field for each.
+  const auto commas = ParsePlanCsv("x", "prefix,bin\n*,a\n" + std::string(1'000'000, ','));
+  ASSERT_FALSE(commas.ok());
+  EXPECT_NE(commas.error().message.find("more than 256 fields"), std::string::npos)
+      << commas.error().message;
 
   const auto no_fallback = ParsePlanCsv("x", "prefix,bin\n1,a\n");
   ASSERT_FALSE(no_fallback.ok());

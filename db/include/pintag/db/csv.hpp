@@ -17,6 +17,10 @@ struct CsvRecord {
   std::vector<std::string> fields;
 };
 
+/// Fields kept of one record; a record with more is read to its end and has an error (the
+/// layouts read here have at most a few dozen columns).
+inline constexpr std::size_t kMaxCsvFields = 256;
+
 /// The error of a record whose quoted field is never closed: it has read to the end of the text.
 inline constexpr std::string_view kUnterminatedQuote = "unterminated quoted field";
 
