@@ -110,12 +110,13 @@ std::optional<Error> CheckRule(const SortRule& rule) {
 std::optional<Error> CheckPlan(const SortPlan& plan) {
   if (auto error = CheckShownName("plan name", plan.name, kMaxBinBytes)) return error;
   // A name is a path segment (/api/v1/sortplans/{name}, ?plan=): "." and ".." would be read as
-  // steps of the path by every client, and these characters must be percent-encoded in a URL.
+  // steps of the path by every client, and these characters must be percent-encoded in a URL
+  // (in a query, `+` reads as a space and `&` and `=` split it: ?plan=a+b asked for "a b").
   if (plan.name == "." || plan.name == ".." ||
-      plan.name.find_first_of("/?#%\\") != std::string::npos) {
+      plan.name.find_first_of("/?#%\\+&=") != std::string::npos) {
     return Error{ErrorCode::kInvalid, "plan name '" + plan.name.substr(0, 64) +
-                                          "' is '.' or '..' or holds one of / ? # % \\, which a "
-                                          "URL would have to encode"};
+                                          "' is '.' or '..' or holds one of / ? # % \\ + & =, "
+                                          "which a URL would have to encode"};
   }
   if (auto error = CheckShownName("fallback bin", plan.fallback_bin, kMaxBinBytes)) return error;
   if (auto error = CheckText("description", plan.description, kMaxLabelBytes, true)) return error;

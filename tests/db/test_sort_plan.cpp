@@ -185,7 +185,8 @@ TEST_F(SortPlans, NamesAndBinsMustReadAsWhatTheyAre) {
   }
   for (const std::string& name :
        {std::string("."), std::string(".."), std::string("a/b"), std::string("hub?x=1"),
-        std::string("h#x"), std::string("p%"), std::string("a\\b")}) {
+        std::string("h#x"), std::string("p%"), std::string("a\\b"), std::string("a+b"),
+        std::string("a&b"), std::string("a=b")}) {
     EXPECT_NE(refusal(name, "south").find("which a URL would have to encode"), std::string::npos)
         << name;
   }

@@ -78,6 +78,12 @@ TEST_F(ServeTest, SortPlansReadAndWrite) {
   plan = ExpectJson(client().Put("/api/v1/sortplans/hub?description=one%20bin", admin(),
                                  hub_csv->body, "text/csv"));
   EXPECT_EQ(plan["description"], "one bin");
+  // A JSON body holds its own description: ?description= beside it was dropped without a word.
+  const json refused = ExpectProblem(client().Put("/api/v1/sortplans/hub?description=q", admin(),
+                                                  replacement.dump(), "application/json"),
+                                     400);
+  EXPECT_NE(refused["detail"].get<std::string>().find("for CSV bodies"), std::string::npos);
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/sortplans/hub"))["description"], "one bin");
 
   // Malformed plans: no fallback row, a bad prefix, a duplicate, bad JSON.
   ExpectProblem(client().Put("/api/v1/sortplans/bad", admin(), "prefix,bin\n11,a\n", "text/csv"),

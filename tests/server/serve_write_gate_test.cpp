@@ -1,7 +1,9 @@
 // Writes while another process holds the database's write lock (an import on the served file):
 // the writers that wait for it may hold at most half of `pintag serve`'s worker threads, the rest
-// are told at once to come back (503, Retry-After), and lookups and the liveness probe keep being
-// answered meanwhile. Nothing is written twice or lost: each 201 is a row, each 503 is none.
+// are told within a second to come back (503, Retry-After), and lookups and the liveness probe
+// keep being answered meanwhile. Nothing is written twice or lost: each 201 is a row, each 503 is
+// none. (Writers that contend only with each other all get in: serve_routing_test's six
+// concurrent plan writers.)
 
 #include <sqlite3.h>
 
@@ -70,7 +72,8 @@ TEST_F(ServeTest, WritersWaitingOnAnotherProcessesLockLeaveHalfTheWorkersToEvery
       answer.finished_as = ++finished;
     });
   }
-  // Two writers are refused at once; the other two wait for the lock (up to 5 s).
+  // Two writers wait for the lock (up to 5 s); the other two are refused once those have held
+  // the gate for a second.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (finished < 2 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));

@@ -194,6 +194,13 @@ HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) 
     plan = std::move(parsed).value();
     if (const auto description = request.queryParam("description")) plan.description = *description;
   } else {
+    // Dropped without a word before: a JSON plan's description is the body's own.
+    if (request.queryParam("description")) {
+      throw HttpError(400,
+                      "?description= is for CSV bodies; a JSON plan gives \"description\" in "
+                      "its body",
+                      "Bad Sort Plan");
+    }
     plan = PlanFromJson(name, JsonBody(request));
   }
   if (const auto problem = db::CheckPlan(plan)) ThrowPlanError(*problem);

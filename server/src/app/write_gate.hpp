@@ -1,25 +1,34 @@
 #pragma once
-// At most a set number of requests may write the database at once; the others are answered 503
-// with Retry-After at once. A writer waits for SQLite's write lock (up to the busy timeout,
-// 5 s) on its worker thread. While another process holds that lock (`pintag import` on the
-// served file), writers queued behind it took every worker thread, and lookups, labels, scans
-// and the liveness probe waited with them (GET /livez stalled 4.6 s). So the gate lets writers
-// have half the threads, and the rest of the server keeps answering.
+// At most half the worker threads may be in requests that write the database. A writer waits for
+// SQLite's write lock (up to the busy timeout, 5 s) on its worker thread. While another process
+// holds that lock (`pintag import` on the served file), writers queued behind it took every worker
+// thread, and lookups, labels, scans and the liveness probe waited with them (GET /livez stalled
+// 4.6 s). A writer that finds the gate full waits for a permit, since writes take milliseconds
+// when nothing else holds the lock (six admins saving a plan at once all get in); but once the
+// writers inside have held their permits for kStuck, the lock is someone else's and a writer is
+// answered 503 with Retry-After instead of waiting with them.
 
+#include <chrono>
+#include <condition_variable>
 #include <mutex>
+#include <vector>
 
 namespace pintag::app {
 
 class WriteGate {
  public:
+  using Clock = std::chrono::steady_clock;
+
   /// `capacity` writers at once (at least 1).
   explicit WriteGate(int capacity);
 
   /// Held by one writing request until it ends.
   class Permit {
    public:
-    explicit Permit(WriteGate* gate) : gate_(gate) {}
-    Permit(Permit&& other) noexcept : gate_(other.gate_) { other.gate_ = nullptr; }
+    Permit(WriteGate* gate, Clock::time_point entered) : gate_(gate), entered_(entered) {}
+    Permit(Permit&& other) noexcept : gate_(other.gate_), entered_(other.entered_) {
+      other.gate_ = nullptr;
+    }
     Permit& operator=(Permit&&) = delete;
     Permit(const Permit&) = delete;
     Permit& operator=(const Permit&) = delete;
@@ -27,9 +36,14 @@ class WriteGate {
 
    private:
     WriteGate* gate_;
+    Clock::time_point entered_;
   };
 
-  /// A permit, or server::HttpError 503 (Retry-After: 1) when `capacity` writers are in.
+  /// How long writers may all stay in before those waiting for a permit are refused.
+  static constexpr std::chrono::milliseconds kStuck{1000};
+
+  /// A permit, or server::HttpError 503 (Retry-After: 1) when `capacity` writers are in and the
+  /// one that entered first has been in for kStuck.
   Permit enter();
 
   int capacity() const { return capacity_; }
@@ -37,7 +51,8 @@ class WriteGate {
  private:
   const int capacity_;
   std::mutex mutex_;
-  int writers_ = 0;
+  std::condition_variable left_;
+  std::vector<Clock::time_point> entered_;  ///< of the writers in
 };
 
 /// Half the worker threads, at least one: the writers a server of `threads` admits at once.
