@@ -52,11 +52,23 @@ function revealDetail() {
   $('detail-card').scrollIntoView({ block: 'nearest' });
 }
 
+// Only the latest request for the details card draws in it: a slow answer for one pincode came
+// after a click on another and replaced it. Each request takes a number; an answer whose number
+// is no longer the latest is dropped.
+let detailRequest = 0;
+function claimDetail() {
+  detailRequest += 1;
+  const request = detailRequest;
+  return () => request === detailRequest;
+}
+
 async function showPincode(pin) {
+  const latest = claimDetail();
   try {
-    showRecord(await api(`/api/v1/pincodes/${pin}`));
+    const record = await api(`/api/v1/pincodes/${pin}`);
+    if (latest()) showRecord(record);
   } catch (error) {
-    show($('detail'), problemBox(error));
+    if (latest()) show($('detail'), problemBox(error));
   }
 }
 
@@ -113,12 +125,14 @@ $('search-form').addEventListener('submit', (event) => {
       revealDetail();
       return;
     }
-    search = { q: $('s-q').value.trim(), district: $('s-district').value.trim(), state: $('s-state').value.trim(),
+    const asked = { q: $('s-q').value.trim(), district: $('s-district').value.trim(), state: $('s-state').value.trim(),
       limit: Number($('s-limit').value), offset: 0 };
-    if (!search.q && !search.district && !search.state) {
+    // Not kept when empty: a later change of the page size would run it and show the server's 400.
+    if (!asked.q && !asked.district && !asked.state) {
       show($('search-msg'), messageBox('info', 'Fill in a pincode, an office name, a district or a state.'));
       return;
     }
+    search = asked;
     await runSearch();
   });
 });
@@ -149,9 +163,10 @@ $('key-form').addEventListener('submit', (event) => {
   }
   busy($('key-lookup'), async () => {
     show($('key-msg'));
+    const latest = claimDetail();
     try {
       const record = await api(`/api/v1/keys/${encodeURIComponent(key)}`);
-      showRecord(record);
+      if (latest()) showRecord(record);
       const where = record.office || record.district;
       show($('key-msg'), messageBox('ok', `Key ${key} belongs to ${record.pincode}${where ? ` (${where})` : ''}.`));
     } catch (error) {
@@ -179,11 +194,12 @@ $('add-form').addEventListener('submit', (event) => {
       if (value('a-branch')) office.branch_type = value('a-branch');
       body.offices = [office];
     }
+    const latest = claimDetail();
     try {
       const record = await api('/api/v1/pincodes', { method: 'POST', token: token(), json: body });
       show($('add-msg'), messageBox('ok', 'Added ', el('strong', {}, record.pincode), ' with key ',
         el('strong', { id: 'added-key' }, String(record.key)), '.'));
-      showRecord(record, `Pincode ${record.pincode} added.`);
+      if (latest()) showRecord(record, `Pincode ${record.pincode} added.`);
       refreshSearch();
     } catch (error) {
       show($('add-msg'), problemBox(error));
@@ -219,11 +235,12 @@ $('retire-form').addEventListener('submit', (event) => {
       onclick: () => { show($('retire-confirm')); $('r-pin').focus(); },
     }, 'Cancel');
     confirm.addEventListener('click', () => busy(confirm, async () => {
+      const latest = claimDetail();
       try {
         const retired = await api(`/api/v1/pincodes/${pin}/retire`, { method: 'POST', token: token() });
         show($('retire-confirm'));
         show($('retire-msg'), messageBox('ok', `${pin} is retired. It keeps key ${retired.key}.`));
-        showRecord(retired);
+        if (latest()) showRecord(retired);
         refreshSearch();
         $('r-pin').focus();
       } catch (error) {
