@@ -504,6 +504,29 @@ TEST_F(Importer, NewPincodesProbePastRetiredKeys) {
 }
 
 // `pintag import` into a database file that does not exist yet: created, seeded, then imported.
+// An import into a database another process is writing waits 5 s for the lock, then gives up.
+// It said "pintag: FILE.csv: execute: database is locked", as if the file imported were at fault.
+TEST_F(Importer, CommandLineImportIntoALockedDatabaseSaysWhoHoldsItAndImportsNothing) {
+  if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
+  const std::string db = dir_.file("locked.db");
+  const std::string first = test::WriteFile(dir_.file("older.csv"), kOlderCsv);
+  ASSERT_EQ(
+      test::RunCommand(test::PintagExe() + " import " + first + " --db " + db + " 2>&1").exit_code,
+      0);
+  const std::string csv = test::WriteFile(dir_.file("newer.csv"), kNewerCsv);
+  Connection other = test::OpenExisting(db);
+  other.execute("BEGIN IMMEDIATE");
+  const auto locked =
+      test::RunCommand(test::PintagExe() + " import " + csv + " --db " + db + " 2>&1");
+  other.execute("ROLLBACK");
+  EXPECT_EQ(locked.exit_code, 1) << locked.out;
+  EXPECT_NE(locked.out.find(db + " is being written by another process"), std::string::npos)
+      << locked.out;
+  EXPECT_NE(locked.out.find("nothing of " + csv + " was imported"), std::string::npos)
+      << locked.out;
+  EXPECT_EQ(LookupPincode(other, Pincode(999011)).error().code, ErrorCode::kNotFound);
+}
+
 TEST_F(Importer, CommandLineImportCreatesTheDatabaseAndLooksUp) {
   if (test::PintagExe().empty()) GTEST_SKIP() << "no pintag executable in this build";
   const std::string csv = test::WriteFile(dir_.file("newer.csv"), kNewerCsv);

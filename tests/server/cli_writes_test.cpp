@@ -101,6 +101,26 @@ void ExpectOneAdminTokenRevoked(const TempDir& dir, const std::string& db) {
   EXPECT_EQ(tokens, 1);
 }
 
+// A token's label is free text an admin typed; the list is opened in spreadsheets, which run a
+// cell starting with = + - or @ as a formula (=HYPERLINK(...) sent its reader to a web page).
+TEST(CliWrites, TokenListLabelsReadAsTextInASpreadsheet) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  for (const char* label : {"=HYPERLINK(\"http://x\",\"y\")", "+1", "-2", "@SUM(1)", "plain"}) {
+    const CommandResult made = RunPintag("token create --role scanner --db " + db + " --label '" +
+                                         std::string(label) + "'");
+    ASSERT_EQ(made.status, 0) << made.out;
+  }
+  const CommandResult list = RunPintagWithStdoutTo("token list --db " + db, dir.file("list.csv"));
+  ASSERT_EQ(list.status, 0) << list.out;
+  const std::string csv = ReadFile(dir.file("list.csv"));
+  EXPECT_NE(csv.find(R"csv(,"'=HYPERLINK(""http://x"",""y"")",)csv"), std::string::npos) << csv;
+  for (const char* cell : {",'+1,", ",'-2,", ",'@SUM(1),", ",plain,"}) {
+    EXPECT_NE(csv.find(cell), std::string::npos) << cell << " in\n" << csv;
+  }
+}
+
 TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
   ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
   const TempDir dir;

@@ -56,7 +56,7 @@ void List(const TokenArgs& args) {
   if (!tokens) throw std::runtime_error(tokens.error().message);
   std::cout << "id,role,label,created_at,revoked_at\n";
   for (const db::TokenInfo& t : *tokens) {
-    std::cout << t.id << "," << db::ToString(t.role) << "," << db::CsvField(t.label) << ","
+    std::cout << t.id << "," << db::ToString(t.role) << "," << db::CsvTextField(t.label) << ","
               << t.created_at << "," << t.revoked_at.value_or("") << "\n";
   }
 }
@@ -82,7 +82,10 @@ void AddTokenCommand(CLI::App& app) {
   add_db(create, "database file (created and seeded when missing)");
   create->callback([args] { Create(*args); });
 
-  CLI::App* list = token->add_subcommand("list", "List tokens (never their secrets) as CSV");
+  CLI::App* list =
+      token->add_subcommand("list",
+                            "List tokens (never their secrets) as CSV; a label starting with = + - "
+                            "or @ is printed after a ' so that a spreadsheet shows it as text");
   add_db(list, "database file (must exist)");
   list->callback([args] { List(*args); });
 

@@ -43,4 +43,9 @@ class CsvReader {
 /// Quotes a field when it holds a comma, quote, CR or LF.
 std::string CsvField(std::string_view text);
 
+/// CsvField for free text in a file that is only read, never imported again (the token list): a
+/// field starting with = + - @ or a tab gets a leading ' so that a spreadsheet shows it as text
+/// instead of running it as a formula. Not for the sort plan CSV, which is put back as it reads.
+std::string CsvTextField(std::string_view text);
+
 }  // namespace pintag::db
