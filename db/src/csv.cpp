@@ -24,6 +24,15 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
   const auto fail = [&](const std::string& why) {
     if (error->empty()) *error = why;
   };
+  // Fields past the limit are read over, not kept: a line of 25 million commas held a string for
+  // each (1.1 GB) before its field count was checked.
+  const auto keep = [&](std::string&& done) {
+    if (record.fields.size() < kMaxCsvFields) {
+      record.fields.push_back(std::move(done));
+    } else {
+      fail("more than " + std::to_string(kMaxCsvFields) + " fields");
+    }
+  };
   while (position_ < text_.size()) {
     const char c = text_[position_++];
     if (quoted) {
@@ -41,19 +50,13 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
       continue;
     }
     if (c == ',') {
-      // Fields past the limit are read over, not kept: a line of 25 million commas held a
-      // string for each (1.1 GB) before its field count was checked.
-      if (record.fields.size() < kMaxCsvFields) {
-        record.fields.push_back(std::move(field));
-      } else {
-        fail("more than " + std::to_string(kMaxCsvFields) + " fields");
-      }
+      keep(std::move(field));
       field.clear();
       was_quoted = false;
     } else if (c == '\n' || c == '\r') {
       if (c == '\r' && position_ < text_.size() && text_[position_] == '\n') ++position_;
       ++line_;
-      record.fields.push_back(std::move(field));
+      keep(std::move(field));
       return record;
     } else if (c == '"') {
       // Spaces before the opening quote are dropped, as a hand-written `11, "delhi, north"` means.
@@ -72,7 +75,7 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
   }
   // Overrides an earlier fault of the record: the rest of the file has gone into this field.
   if (quoted) *error = kUnterminatedQuote;
-  record.fields.push_back(std::move(field));
+  keep(std::move(field));
   return record;
 }
 

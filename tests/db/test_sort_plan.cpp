@@ -238,6 +238,11 @@ TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
   ASSERT_FALSE(commas.ok());
   EXPECT_NE(commas.error().message.find("more than 256 fields"), std::string::npos)
       << commas.error().message;
+  // The limit is exact: 256 fields are counted, 257 refused.
+  EXPECT_EQ(ParsePlanCsv("x", "prefix,bin\n*,a\n" + std::string(255, ',')).error().message,
+            "line 3: expected 2 fields, got 256");
+  EXPECT_EQ(ParsePlanCsv("x", "prefix,bin\n*,a\n" + std::string(256, ',')).error().message,
+            "line 3: more than 256 fields");
 
   const auto no_fallback = ParsePlanCsv("x", "prefix,bin\n1,a\n");
   ASSERT_FALSE(no_fallback.ok());

@@ -431,7 +431,7 @@ TEST(LabelText, StackedMarksStayOnTheirOwnRow) {
   LabelContent plain = test::SampleLabel();
   plain.bin = "B";
   LabelContent hostile = plain;
-  hostile.bin = "B" + accents.substr(0, 31 * 2);
+  hostile.bin = "B" + accents.substr(0, std::size_t{31} * 2);  // 31 accents of 2 bytes
   const auto pa = test::ReadPng(RenderLabelPng(plain, {kLabel100x150, kDpi}).bytes);
   const auto pb = test::ReadPng(RenderLabelPng(hostile, {kLabel100x150, kDpi}).bytes);
   ASSERT_TRUE(pa && pb);

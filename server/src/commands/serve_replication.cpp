@@ -153,7 +153,9 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     std::error_code error;
     if (!std::filesystem::is_directory(snapshot_dir, error)) {
       throw UsageError("--snapshot " + args_.snapshot + ": its directory " + snapshot_dir.string() +
-                       " does not exist");
+                       (error && error != std::errc::no_such_file_or_directory
+                            ? " cannot be looked at: " + error.message()
+                            : " does not exist"));
     }
     publisher_ = std::make_shared<replica::SnapshotPublisher>(db_path_, args_.snapshot);
     if (!publisher_->publish()) {
@@ -229,7 +231,7 @@ void Replication::start() {
   if (!args_.read_only) return;
   watcher_->start(std::chrono::milliseconds(250));
   if (!follower_) return;
-  follower_->start([watcher = watcher_.get()] { return watcher->loaded().registry_version; },
+  follower_->start([watcher = watcher_.get()] { return watcher->servedVersion(); },
                    std::chrono::milliseconds(args_.follow_interval_ms), follow_status_);
 }
 

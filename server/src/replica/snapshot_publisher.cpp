@@ -89,11 +89,11 @@ db::Error SnapshotPublisher::failed(db::Error error) {
   ++failures_in_a_row_;
   retry_at_ = Clock::now() + delay;
   if (!failing_since_) failing_since_ = std::chrono::system_clock::now();
-  error.message += " (" + std::to_string(failures_in_a_row_) + " in a row; next try in " +
-                   std::to_string(delay.count()) + " s)";
+  // The count goes to the log only: a replica quotes the error it is answered, and one that
+  // changed at every try was logged by every replica at every try.
   failure_ = error;
   std::cerr << "pintag serve: cannot publish a snapshot to " << out_path_ << ": " << error.message
-            << "\n";
+            << " (" << failures_in_a_row_ << " in a row; next try in " << delay.count() << " s)\n";
   updateStatus();
   return error;
 }

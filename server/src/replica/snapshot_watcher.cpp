@@ -188,6 +188,7 @@ bool SnapshotWatcher::check() {
   if (!verified && written_in_place) {
     // Nothing to refuse or put back: the served registry is this file, changed under it.
     if (!link.empty()) ::unlink(link.c_str());
+    served_damaged_ = true;
     std::cerr << "pintag serve: " << path_ << " was written over in place, and the registry "
               << "served (the same file) changed with it: " << verified.error().message
               << ". Not ready until a snapshot is renamed into place at " << path_ << "\n";
@@ -195,15 +196,13 @@ bool SnapshotWatcher::check() {
   }
   if (!verified) {
     refusal = verified.error();
-  } else if (const auto served = db::VerifySnapshot(loaded_->path); !served) {
+  } else if (served_damaged_) {
     // The served file shares FILE's inode, so a copy written over FILE in place (cp, scp, a
     // truncation) changed it: there are no keys left to compare, and refusing every later file
     // for that ("cannot compare the keys") left the replica unready for good. db::InstallSnapshot
     // replaces a file that is not a snapshot likewise.
-    std::cerr << "pintag serve: the registry served, " << loaded_->path
-              << ", no longer reads as a snapshot (" << served.error().message << "; was " << path_
-              << " written over in place?); taking the new file without "
-              << "comparing keys\n";
+    std::cerr << "pintag serve: the registry served was written over in place; taking the new "
+              << "file at " << path_ << " without comparing keys\n";
   } else {
     refusal = db::KeysNotKeptBy(verified->path, loaded_->path);
   }
@@ -215,6 +214,7 @@ bool SnapshotWatcher::check() {
   }
   const std::string previous = loaded_->path;
   loaded_ = *verified;
+  served_damaged_ = false;
   on_loaded_(*loaded_);
   ::unlink(previous.c_str());  // connections still reading it keep it until they close
   std::cerr << "pintag serve: loaded snapshot " << path_ << " (registry version "
@@ -255,6 +255,12 @@ void SnapshotWatcher::start(std::chrono::milliseconds interval) {
 db::SnapshotInfo SnapshotWatcher::loaded() const {
   const std::lock_guard lock(mutex_);
   return *loaded_;
+}
+
+std::optional<std::int64_t> SnapshotWatcher::servedVersion() const {
+  const std::lock_guard lock(mutex_);
+  if (served_damaged_) return std::nullopt;
+  return loaded_->registry_version;
 }
 
 }  // namespace pintag::replica

@@ -47,6 +47,10 @@ class SnapshotWatcher {
 
   /// The snapshot being served (its path is the serving link).
   db::SnapshotInfo loaded() const;
+  /// The registry version served, for a follower's If-None-Match; nothing while the file served
+  /// was written over in place and no longer reads as a snapshot, so that the follower asks for
+  /// the whole snapshot again instead of being told it is current.
+  std::optional<std::int64_t> servedVersion() const;
 
  private:
   /// `<path>.serving-<tag><suffix>`: every name of a tag's files (links "-N", ".lock").
@@ -77,7 +81,10 @@ class SnapshotWatcher {
   std::uint64_t links_made_ = 0;
   std::optional<db::SnapshotInfo> loaded_;
   std::optional<FileIdentity> seen_;  // the file last looked at, loaded or refused
-  PeriodicThread thread_;             // last: stopped before the members it uses go
+  /// The file served was written over in place and did not read as a snapshot: the next one is
+  /// taken without comparing keys (there are none left to compare with).
+  bool served_damaged_ = false;
+  PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
 }  // namespace pintag::replica
