@@ -91,7 +91,10 @@ std::string CsvField(std::string_view text) {
 
 std::string CsvTextField(std::string_view text) {
   if (!text.empty() && std::string_view("=+-@\t\r").find(text.front()) != std::string_view::npos) {
-    return CsvField("'" + std::string(text));
+    // Appended, not `"'" + ...`: GCC 12 warns (-Wrestrict) about that concatenation wrongly.
+    std::string guarded = "'";
+    guarded += text;
+    return CsvField(guarded);
   }
   return CsvField(text);
 }
