@@ -237,6 +237,8 @@ async function refreshPreview() {
     if (previewUrl) URL.revokeObjectURL(previewUrl);
     previewUrl = null;
     show($('preview'), problemBox(error));
+    // Retired since it was looked up: its rows are marked so, as a refused batch marks them.
+    if (error.status === 410) markRetired(selected);
   } finally {
     if (request === previewRequest) $('preview').removeAttribute('aria-busy');
   }
@@ -305,6 +307,7 @@ $('download-pdf').addEventListener('click', (event) => printing(event.currentTar
     show($('print-msg'), messageBox('ok', `Label for ${pincode} downloaded (label-${pincode}.pdf).`));
   } catch (error) {
     show($('print-msg'), problemBox(error));
+    if (error.status === 410) markRetired(pincode);
   }
 }));
 
@@ -333,6 +336,7 @@ $('print-pdf').addEventListener('click', (event) => {
     } catch (error) {
       if (win) win.close();
       show($('print-msg'), problemBox(error));
+      if (error.status === 410) markRetired(pincode);
     }
   });
 });

@@ -315,6 +315,31 @@ test('pincodes pasted with no-break or zero-width spaces are read as typed', asy
   assert.deepEqual(page.problems, []);
 });
 
+test('a single label refused as retired marks its row retired, as a refused batch does', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('500001\n110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  assert.equal(await page.locator('tr.is-selected').getAttribute('data-pincode'), '500001');
+  // Retired by an admin elsewhere after the clerk looked it up; the clerk downloads its label.
+  const retired = await fetch(`${server.url}/api/v1/pincodes/500001/retire`,
+    { method: 'POST', headers: { Authorization: `Bearer ${server.adminToken}` } });
+  assert.equal(retired.status, 200);
+  await page.getByRole('button', { name: 'Download PDF' }).click();
+  const alert = page.locator('#print-msg [role="alert"]');
+  await alert.waitFor();
+  assert.match(await alert.textContent(), /HTTP 410/);
+  const row = page.locator('tr[data-pincode="500001"]');
+  await row.filter({ hasText: /retired/i }).waitFor();
+  assert.equal(await row.getByRole('checkbox').isChecked(), false);
+  assert.equal(await row.getByRole('checkbox').isDisabled(), true);
+  assert.match(await page.locator('#preview').textContent(), /500001 is retired/);
+  assert.ok(await page.getByRole('button', { name: /Batch PDF \(1 label\)/ }).isVisible());
+  assert.deepEqual(page.problems, []);
+});
+
 test('a batch refused for one pincode names that pincode\'s row and marks it retired', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);
