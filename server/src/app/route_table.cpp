@@ -31,7 +31,7 @@ struct AppRoute {
 };
 
 /// A handler that writes the database: it runs holding a write gate permit (WriteGate), or the
-/// request is answered 503 at once.
+/// request is answered 503 Writers Busy when the writers inside have been stuck for a second.
 template <RouteHandler kHandler>
 HttpResponse Writing(const AppContext& context, const HttpRequest& request) {
   const WriteGate::Permit permit = context.write_gate->enter();

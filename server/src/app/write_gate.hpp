@@ -46,8 +46,6 @@ class WriteGate {
   /// one that entered first has been in for kStuck.
   Permit enter();
 
-  int capacity() const { return capacity_; }
-
  private:
   const int capacity_;
   std::mutex mutex_;

@@ -191,7 +191,8 @@ bool SnapshotWatcher::check() {
     served_damaged_ = true;
     std::cerr << "pintag serve: " << path_ << " was written over in place, and the registry "
               << "served (the same file) changed with it: " << verified.error().message
-              << ". Not ready until a snapshot is renamed into place at " << path_ << "\n";
+              << ". Not ready until a good snapshot is at " << path_
+              << " (a --follow replica fetches one; else rename one into place)\n";
     return false;
   }
   if (!verified) {
