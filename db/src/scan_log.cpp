@@ -1,9 +1,70 @@
 #include "pintag/db/scan_log.hpp"
 
+#include <cstdio>
+#include <ctime>
+#include <string_view>
+
 #include "guard.hpp"
 #include "pintag/db/text.hpp"
 
 namespace pintag::db {
+namespace {
+
+// ScanTime's form, digit for digit: "2026-12-06T16:20:01.123Z".
+bool IsScanTime(std::string_view text) {
+  constexpr std::string_view kForm = "dddd-dd-ddTdd:dd:dd.dddZ";
+  if (text.size() != kForm.size()) return false;
+  for (std::size_t i = 0; i < kForm.size(); ++i) {
+    const bool ok = kForm[i] == 'd' ? (text[i] >= '0' && text[i] <= '9') : text[i] == kForm[i];
+    if (!ok) return false;
+  }
+  return true;
+}
+
+std::optional<Error> CheckScan(const ScanRecord& scan) {
+  if (scan.result_json.size() > kMaxJsonBytes) {
+    return Error{ErrorCode::kInvalid, "scan result JSON is over 1 MiB"};
+  }
+  if (scan.result_json.find('\0') != std::string::npos) {
+    return Error{ErrorCode::kInvalid, "scan result JSON contains a NUL byte"};
+  }
+  if (scan.image_bytes < 0) return Error{ErrorCode::kInvalid, "image size is negative"};
+  if (!scan.scanned_at.empty() && !IsScanTime(scan.scanned_at)) {
+    return Error{ErrorCode::kInvalid, "scan time is not YYYY-MM-DDTHH:MM:SS.mmmZ"};
+  }
+  return std::nullopt;
+}
+
+// Throws SqliteError; the statement alone fails on a constraint (bad JSON, unknown token).
+std::int64_t InsertScan(Connection& connection, const ScanRecord& scan) {
+  connection
+      .prepare(std::string("INSERT INTO scan_log (scanned_at, token_id, image_bytes, image_width, "
+                           "image_height, result_json) VALUES (coalesce(?6, ") +
+               detail::kNowSql + "), ?1, ?2, ?3, ?4, ?5)")
+      .bind(1, scan.token_id)
+      .bind(2, scan.image_bytes)
+      .bind(3, scan.image_width)
+      .bind(4, scan.image_height)
+      .bind(5, scan.result_json)
+      .bind(6, scan.scanned_at.empty() ? std::nullopt : std::optional<std::string>(scan.scanned_at))
+      .run();
+  return connection.lastInsertRowid();
+}
+
+}  // namespace
+
+std::string ScanTime(std::chrono::system_clock::time_point when) {
+  const auto since_epoch =
+      std::chrono::duration_cast<std::chrono::milliseconds>(when.time_since_epoch()).count();
+  const std::time_t seconds = static_cast<std::time_t>(since_epoch / 1000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[64];  // room for any int the compiler can imagine in each field
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900,
+                utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec,
+                static_cast<int>(since_epoch % 1000));
+  return text;
+}
 
 Result<Connection> OpenScanLogFile(const std::string& path) {
   return detail::Guard([&]() -> Result<Connection> {
@@ -27,25 +88,29 @@ CREATE INDEX IF NOT EXISTS scan_log_token ON scan_log (token_id, id);
 }
 
 Result<std::int64_t> AppendScan(Connection& connection, const ScanRecord& scan) {
-  if (scan.result_json.size() > kMaxJsonBytes) {
-    return Error{ErrorCode::kInvalid, "scan result JSON is over 1 MiB"};
-  }
-  if (scan.result_json.find('\0') != std::string::npos) {
-    return Error{ErrorCode::kInvalid, "scan result JSON contains a NUL byte"};
-  }
-  if (scan.image_bytes < 0) return Error{ErrorCode::kInvalid, "image size is negative"};
-  return detail::Guard([&]() -> Result<std::int64_t> {
-    connection
-        .prepare(std::string("INSERT INTO scan_log (scanned_at, token_id, image_bytes, "
-                             "image_width, image_height, result_json) VALUES (") +
-                 detail::kNowSql + ", ?1, ?2, ?3, ?4, ?5)")
-        .bind(1, scan.token_id)
-        .bind(2, scan.image_bytes)
-        .bind(3, scan.image_width)
-        .bind(4, scan.image_height)
-        .bind(5, scan.result_json)
-        .run();
-    return connection.lastInsertRowid();
+  if (auto refused = CheckScan(scan)) return *refused;
+  return detail::Guard([&]() -> Result<std::int64_t> { return InsertScan(connection, scan); });
+}
+
+Result<AppendedScans> AppendScans(Connection& connection, std::span<const ScanRecord> scans) {
+  return detail::Guard([&]() -> Result<AppendedScans> {
+    AppendedScans appended;
+    Transaction transaction(connection);
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      if (auto refused = CheckScan(scans[i])) {
+        appended.refused.push_back({i, std::move(*refused)});
+        continue;
+      }
+      try {
+        InsertScan(connection, scans[i]);
+        ++appended.written;
+      } catch (const SqliteError& e) {
+        if (!e.isConstraint()) throw;  // the whole batch: nothing is committed
+        appended.refused.push_back({i, detail::ToError(e)});
+      }
+    }
+    transaction.commit();
+    return appended;
   });
 }
 

@@ -1,9 +1,8 @@
-// API tokens and the scan log.
+// API tokens.
 
 #include <gtest/gtest.h>
 
 #include "db_test_util.hpp"
-#include "pintag/db/scan_log.hpp"
 #include "pintag/db/tokens.hpp"
 
 namespace pintag::db {
@@ -87,37 +86,6 @@ TEST_F(Tokens, OnlyASaltedHashIsStored) {
   EXPECT_EQ(ParseRole("counter"), Role::kCounter);
   EXPECT_FALSE(ParseRole("root").has_value());
   EXPECT_FALSE(ParseRole("Admin").has_value());
-}
-
-TEST_F(Tokens, ScanLogAppendsAndListsNewestFirst) {
-  const auto token = CreateToken(db_, Role::kScanner).value();
-  ScanRecord scan{.token_id = token.info.id,
-                  .image_bytes = 123456,
-                  .image_width = 1920,
-                  .image_height = 1080,
-                  .result_json = R"({"tags":[{"pincode":"110001","key":11684}]})"};
-  const auto first = AppendScan(db_, scan);
-  ASSERT_TRUE(first.ok()) << first.error().message;
-  scan.result_json = R"({"tags":[]})";
-  scan.image_width.reset();
-  ASSERT_TRUE(AppendScan(db_, scan).ok());
-  ASSERT_TRUE(AppendScan(db_, {.image_bytes = 1, .result_json = "[]"}).ok());
-
-  const auto recent = RecentScans(db_, 10).value();
-  ASSERT_EQ(recent.size(), 3u);
-  EXPECT_EQ(recent[0].result_json, "[]");
-  EXPECT_FALSE(recent[0].token_id.has_value());
-  EXPECT_EQ(recent[2].id, *first);
-  EXPECT_EQ(recent[2].image_width, 1920);
-  EXPECT_EQ(recent[2].result_json, R"({"tags":[{"pincode":"110001","key":11684}]})");
-  EXPECT_FALSE(recent[2].scanned_at.empty());
-  EXPECT_EQ(RecentScans(db_, 10, token.info.id).value().size(), 2u);
-  EXPECT_EQ(RecentScans(db_, 1).value().size(), 1u);
-
-  EXPECT_EQ(AppendScan(db_, {.result_json = "{not json"}).error().code, ErrorCode::kInvalid);
-  EXPECT_EQ(AppendScan(db_, {.token_id = 999, .result_json = "{}"}).error().code,
-            ErrorCode::kInvalid);
-  EXPECT_EQ(RecentScans(db_, 0).error().code, ErrorCode::kInvalid);
 }
 
 TEST_F(Tokens, CommandLineCreateListRevoke) {

@@ -5,42 +5,18 @@
 // none. (Writers that contend only with each other all get in: serve_routing_test's six
 // concurrent plan writers.)
 
-#include <sqlite3.h>
-
 #include <atomic>
 #include <chrono>
 #include <thread>
 #include <vector>
 
+#include "held_write_lock.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
 namespace {
 
 using nlohmann::json;
-
-/// Another process's connection holding the database's write lock until closed.
-class HeldWriteLock {
- public:
-  explicit HeldWriteLock(const std::string& path) {
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK ||
-        sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK) {
-      ADD_FAILURE() << "cannot lock " << path << ": " << sqlite3_errmsg(db_);
-    }
-  }
-  ~HeldWriteLock() { release(); }
-  HeldWriteLock(const HeldWriteLock&) = delete;
-  HeldWriteLock& operator=(const HeldWriteLock&) = delete;
-  void release() {
-    if (db_ == nullptr) return;
-    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-    sqlite3_close(db_);
-    db_ = nullptr;
-  }
-
- private:
-  sqlite3* db_ = nullptr;
-};
 
 struct WriteAnswer {
   int status = 0;

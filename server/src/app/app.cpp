@@ -97,6 +97,20 @@ void AddPublishGauges(server::Metrics& metrics,
   });
 }
 
+/// The scans waiting for the scan log (app/scan_log_writer.hpp): above zero while the log's lock is
+/// held elsewhere. Weak: the writer holds the metrics, and must end with the context.
+void AddScanLogGauge(server::Metrics& metrics, std::weak_ptr<const ScanLogWriter> writer) {
+  metrics.addGaugeSource([writer = std::move(writer)] {
+    std::vector<server::Metrics::Gauge> gauges;
+    if (const auto alive = writer.lock()) {
+      gauges.push_back({"pintag_scan_log_backlog",
+                        "Scans answered and waiting to be written to the scan log.",
+                        static_cast<double>(alive->backlog())});
+    }
+    return gauges;
+  });
+}
+
 }  // namespace
 
 // /readyz is open: its answers say what is wrong without the --db path (the operator knows it),
@@ -150,11 +164,12 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->pool = config.pool ? config.pool
                               : std::make_shared<ConnectionPool>(
                                     config.db_path, config.busy_timeout_ms, config.read_only);
-  context->scan_log =
+  context->metrics = std::make_shared<server::Metrics>();
+  context->scan_log = std::make_shared<ScanLogWriter>(
       config.scan_log_path.empty()
           ? context->pool
-          : std::make_shared<ConnectionPool>(config.scan_log_path, config.busy_timeout_ms);
-  context->metrics = std::make_shared<server::Metrics>();
+          : std::make_shared<ConnectionPool>(config.scan_log_path, config.busy_timeout_ms),
+      context->metrics, std::string(kScanLogFailuresCounter));
   context->max_pixels = config.max_pixels;
   context->pixel_budget = std::make_shared<PixelBudget>(config.max_pixels_in_flight);
   context->write_gate = std::make_shared<WriteGate>(WriteGateCapacity(config.worker_threads));
@@ -165,6 +180,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->publisher = config.publisher;
   context->follow_status = config.follow_status;
   DefineCounters(*context->metrics);
+  AddScanLogGauge(*context->metrics, context->scan_log);
   if (config.follow_status) AddFollowGauges(*context->metrics, config.follow_status);
   if (config.publisher) AddPublishGauges(*context->metrics, config.publisher);
   server::Router router = AppRouter(context);

@@ -9,6 +9,7 @@
 
 #include "app/connection_pool.hpp"
 #include "app/pixel_budget.hpp"
+#include "app/scan_log_writer.hpp"
 #include "app/write_gate.hpp"
 #include "pintag/server/metrics.hpp"
 #include "replica/follow_status.hpp"
@@ -26,8 +27,9 @@ inline constexpr std::string_view kPixelBudgetWaitsCounter = "pintag_pixel_budge
 
 struct AppContext {
   std::shared_ptr<ConnectionPool> pool;
-  /// Where scans are logged: the pool's file, or a replica's own (docs/SCALING.md).
-  std::shared_ptr<ConnectionPool> scan_log;
+  /// Writes scans to the pool's file, or a replica's own (docs/SCALING.md), off the worker
+  /// threads.
+  std::shared_ptr<ScanLogWriter> scan_log;
   std::shared_ptr<server::Metrics> metrics;  ///< the counters above are defined in it
   std::int64_t max_pixels = 40'000'000;      ///< decoded pixels per uploaded photo
   std::size_t max_batch = 100;               ///< labels per POST /api/v1/labels; more is 413

@@ -19,6 +19,7 @@
 #include "pintag/codec/mirror.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/sort_plan.hpp"
+#include "pintag/db/text.hpp"
 #include "pintag/detector/detector.hpp"
 #include "pintag/detector/json.hpp"
 #include "pintag/detector/tag_outline.hpp"
@@ -121,18 +122,40 @@ void Log(const AppContext& context, const HttpRequest& request, std::size_t byte
   scan.image_width = outcome.width;
   scan.image_height = outcome.height;
   scan.result_json = outcome.result_json;
-  // The answer stands when the log cannot be written: the count shows a log that loses scans.
-  try {
-    auto connection = context.scan_log->acquire();
-    auto appended = db::AppendScan(*connection, scan);
-    if (!appended) {
-      context.metrics->increment(kScanLogFailuresCounter);
-      server::LogRequestError(request.request_id, "scan log: " + appended.error().message);
+  // The answer stands when the log cannot be written: the writer counts the scans it loses.
+  context.scan_log->append(std::move(scan), request.request_id);
+}
+
+/// The answer `out` as the scan log keeps it. A row holds at most db::kMaxJsonBytes, which an
+/// answer of about 330 tags passes (each tag's pose and corners take about 3 KB): past that each
+/// tag keeps what was read and where (key, pincode, status, bin, centre), and past that again the
+/// tags that fit, the rest counted in "tags_omitted". A row that says so beats a lost one.
+std::string ScanLogJson(const json& out) {
+  std::string whole = out.dump();
+  if (whole.size() <= db::kMaxJsonBytes) return whole;
+  json abridged = out;
+  abridged["scan_log_abridged"] = true;
+  abridged["tags"] = json::array();
+  json tags = json::array();
+  const std::string head = abridged.dump();
+  std::size_t room = db::kMaxJsonBytes - std::min(db::kMaxJsonBytes, head.size() + 64);
+  std::size_t omitted = 0;
+  for (const json& tag : out["tags"]) {
+    json kept;
+    for (const char* field : {"key", "pincode", "status", "bin", "centre_px"}) {
+      if (tag.contains(field)) kept[field] = tag[field];
     }
-  } catch (const std::exception& e) {
-    context.metrics->increment(kScanLogFailuresCounter);
-    server::LogRequestError(request.request_id, std::string("scan log: ") + e.what());
+    const std::size_t size = kept.dump().size() + 1;
+    if (omitted == 0 && size <= room) {
+      room -= size;
+      tags.push_back(std::move(kept));
+    } else {
+      ++omitted;
+    }
   }
+  abridged["tags"] = std::move(tags);
+  if (omitted > 0) abridged["tags_omitted"] = omitted;
+  return abridged.dump();
 }
 
 HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::string_view bytes,
@@ -254,7 +277,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   out["tags"] = std::move(tags);
   out["warnings"] = ToJson(result.warnings);
   out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
-  outcome->result_json = out.dump();
+  outcome->result_json = ScanLogJson(out);
 
   switch (overlay) {
     case Overlay::kNone:

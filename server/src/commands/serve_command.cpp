@@ -154,7 +154,10 @@ void Run(const ServeArgs& args) {
   // that every worker thread inherits the mask and only the waiter below is interrupted.
   signals.takeStopSignals();
 
-  server::HttpServer http(app::BuildApi(config), options);
+  // Held by pointer so that the application ends before "stopped" is logged: its scan log writer
+  // writes the scans it holds back as it ends (app/scan_log_writer.hpp).
+  auto http_server = std::make_unique<server::HttpServer>(app::BuildApi(config), options);
+  server::HttpServer& http = *http_server;
   std::string error;
   if (!http.bind(&error)) throw std::runtime_error(error);
   const std::string first_admin = read_only ? "" : FirstAdminToken(args.db);
@@ -242,6 +245,7 @@ void Run(const ServeArgs& args) {
   signals.wake();
   waiter.join();
   http.stop();
+  http_server.reset();
   server::LogEvent("stopped");
   if (!served) throw std::runtime_error("the server stopped unexpectedly");
 }

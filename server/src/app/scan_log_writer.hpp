@@ -1,0 +1,84 @@
+#pragma once
+// Writes the scan log from a thread of its own, so that a scan never waits on the log's lock on a
+// worker thread. Another process writing the database (`pintag import`) holds that lock for as
+// long as it writes; appended on the worker, each scan waited out SQLite's busy timeout (5 s),
+// and a few scans took every worker, stalling lookups, labels and probes with them.
+//
+// A scan is timed when it is handed over, then written in order with the scans queued beside it,
+// in one transaction. While the log keeps up, append() returns once its scan is written, so an
+// answered scan is in the log as before. When a write has not finished within kWaitForWrite (the
+// lock is held elsewhere), append() returns at once until the backlog is written: the scans are
+// held in memory, up to kMaxBacklogScans and kMaxBacklogBytes of JSON; past that a scan is
+// dropped and counted. The backlog is written before the writer is destroyed, for at most
+// kFinishTimeout; what is left then, or at a forced stop, is lost and counted.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <thread>
+
+#include "app/connection_pool.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/server/metrics.hpp"
+
+namespace pintag::app {
+
+class ScanLogWriter {
+ public:
+  static constexpr std::chrono::milliseconds kWaitForWrite{1000};
+  static constexpr std::size_t kMaxBacklogScans = 100'000;
+  static constexpr std::size_t kMaxBacklogBytes = 64 << 20;
+  static constexpr std::size_t kMaxBatch = 500;  ///< scans written in one transaction
+  static constexpr std::chrono::seconds kFinishTimeout{10};
+
+  /// Writes to `log`'s file. Scans it loses are added to `failures_counter` in `metrics`.
+  ScanLogWriter(std::shared_ptr<ConnectionPool> log, std::shared_ptr<server::Metrics> metrics,
+                std::string failures_counter);
+  /// Writes the backlog (for at most kFinishTimeout), then ends the thread.
+  ~ScanLogWriter();
+  ScanLogWriter(const ScanLogWriter&) = delete;
+  ScanLogWriter& operator=(const ScanLogWriter&) = delete;
+
+  /// Times `scan` now (when it has no time) and queues it; returns once it is written, or at
+  /// once while the log is behind. `request_id` names the request in the server log.
+  void append(db::ScanRecord scan, const std::string& request_id);
+
+  /// Scans queued and not yet written.
+  std::size_t backlog() const;
+
+ private:
+  struct Queued {
+    std::uint64_t sequence = 0;
+    db::ScanRecord scan;
+    std::string request_id;
+  };
+  void run();
+  /// Writes the queue's first scans once; false when the log could not be written.
+  bool writeBatch(std::unique_lock<std::mutex>& lock);
+  void lose(std::size_t count, const std::string& why);
+
+  std::shared_ptr<ConnectionPool> log_;
+  std::shared_ptr<server::Metrics> metrics_;
+  std::string failures_counter_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable queued_;   ///< a scan was queued, or the writer is stopping
+  std::condition_variable written_;  ///< done_through_ moved on
+  std::deque<Queued> queue_;
+  std::size_t queued_bytes_ = 0;
+  std::uint64_t next_sequence_ = 1;
+  std::uint64_t done_through_ = 0;  ///< every scan up to this one is written or lost
+  bool behind_ = false;             ///< a scan waited kWaitForWrite; cleared when caught up
+  bool dropping_ = false;           ///< the backlog is full; logged once until it has room
+  bool stopping_ = false;
+  std::string last_error_;  ///< why the last write failed; empty once the backlog is written
+  std::thread thread_;      ///< last: started once everything above is made
+};
+
+}  // namespace pintag::app

@@ -1,0 +1,162 @@
+// The scan log while another process holds the database's write lock (`pintag import` on the
+// served file): scans are answered without waiting for it, held back, and written once it is
+// released, with the time they were scanned; a server stopped meanwhile writes them before it
+// exits.
+
+#include <chrono>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <thread>
+#include <vector>
+
+#include "held_write_lock.hpp"
+#include "pintag/codec/tag_raster.hpp"
+#include "pintag/db/database.hpp"
+#include "pintag/db/scan_log.hpp"
+#include "pintag/db/text.hpp"
+#include "serve_fixture.hpp"
+
+namespace pintag::serve_test {
+namespace {
+
+using nlohmann::json;
+
+/// A small photo without a tag: decoded, read (nothing found) and logged like any other.
+std::string TaglessPng() {
+  cv::Mat photo(48, 64, CV_8UC3);
+  cv::randu(photo, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", photo, png);
+  return {png.begin(), png.end()};
+}
+
+/// The scans in the log at `path`, oldest first; waits up to `timeout` for `expected` of them.
+std::vector<db::ScanRecord> ScansOnceThereAre(const std::string& path, std::size_t expected,
+                                              std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  std::vector<db::ScanRecord> scans;
+  while (true) {
+    auto opened = db::OpenDatabase(path, {.create = false});
+    if (opened) {
+      auto recent = db::RecentScans(opened.value().connection, 1000);
+      if (recent) scans.assign(recent->rbegin(), recent->rend());
+    }
+    if (scans.size() >= expected || std::chrono::steady_clock::now() > deadline) return scans;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
+double ScrapedMetric(httplib::Client& client, const std::string& series) {
+  const auto page = client.Get("/metrics");
+  if (!page || page->status != 200) {
+    ADD_FAILURE() << "GET /metrics failed";
+    return -1;
+  }
+  return Metric(page->body, series);
+}
+
+TEST_F(ServeTest, ScansWhileAnotherProcessHoldsTheLockAreAnsweredAndLoggedOnceItIsReleased) {
+  const std::string photo = TaglessPng();
+  // Twice the fixture's 4 worker threads: were a scan to wait for the lock on its thread, the
+  // last four would wait behind the first four.
+  constexpr int kScans = 8;
+  HeldWriteLock lock(db_path_);
+  const std::string before = db::ScanTime(std::chrono::system_clock::now());
+  std::vector<int> statuses(kScans, 0);
+  std::vector<std::thread> scanners;
+  scanners.reserve(kScans);
+  for (int i = 0; i < kScans; ++i) {
+    scanners.emplace_back([&, i] {
+      httplib::Client scanner_client("127.0.0.1", server_->port());
+      scanner_client.set_read_timeout(60, 0);
+      const auto r = scanner_client.Post("/api/v1/detect", scanner(), photo, "image/png");
+      statuses[static_cast<std::size_t>(i)] = r ? r->status : -1;
+    });
+  }
+  for (std::thread& t : scanners) t.join();
+  // Every scan was answered with the lock still held, and each one waits in memory.
+  for (const int status : statuses) EXPECT_EQ(status, 200);
+  EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_backlog"), kScans);
+  const std::string answered = db::ScanTime(std::chrono::system_clock::now());
+  EXPECT_TRUE(ScansOnceThereAre(db_path_, 1, std::chrono::seconds(0)).empty());
+
+  lock.release();
+  const std::vector<db::ScanRecord> scans =
+      ScansOnceThereAre(db_path_, kScans, std::chrono::seconds(30));
+  ASSERT_EQ(scans.size(), static_cast<std::size_t>(kScans));
+  for (const db::ScanRecord& scan : scans) {
+    // Timed when scanned, not when written.
+    EXPECT_GE(scan.scanned_at, before);
+    EXPECT_LE(scan.scanned_at, answered);
+    EXPECT_EQ(scan.image_bytes, static_cast<std::int64_t>(photo.size()));
+    EXPECT_EQ(scan.image_width, 64);
+    EXPECT_TRUE(json::parse(scan.result_json)["tags"].empty());
+  }
+  EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_backlog"), 0);
+  EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_failures_total"), 0);
+  EXPECT_EQ(ScrapedMetric(client(), "pintag_scans_total"), kScans);
+}
+
+TEST_F(ServeTest, AServerStoppedWhileTheLockIsHeldWritesTheScansItHeldBackBeforeItExits) {
+  const std::string photo = TaglessPng();
+  constexpr int kScans = 3;
+  HeldWriteLock lock(db_path_);
+  for (int i = 0; i < kScans; ++i) {
+    EXPECT_EQ(client().Post("/api/v1/detect", scanner(), photo, "image/png")->status, 200);
+  }
+  // The lock is released a second into the stop, while the server waits to write its backlog.
+  std::thread releaser([&lock] {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    lock.release();
+  });
+  server_->signal(SIGTERM);
+  const int status = server_->wait(30);
+  releaser.join();
+  EXPECT_EQ(status, 0);
+  EXPECT_EQ(ScansOnceThereAre(db_path_, kScans, std::chrono::seconds(0)).size(),
+            static_cast<std::size_t>(kScans));
+  EXPECT_EQ(ReadFile(dir_.file("stderr.log")).find("lost"), std::string::npos);
+}
+
+// An answer over the log's 1 MiB a row (about 330 tags with their poses) was answered and then
+// lost from the log. Now the row keeps what each tag read.
+TEST_F(ServeTest, AnAnswerTooLargeForTheScanLogIsLoggedAbridgedNotLost) {
+  constexpr int kSide = 20;  // 400 tags of 110001's key
+  const TagRaster tag = RenderTagRaster(TagKey(11684), {.square_px = 96});
+  const int cell = tag.image.width;
+  cv::Mat sheet(cell * kSide, cell * kSide, CV_8UC3, cv::Scalar::all(255));
+  std::vector<std::uint8_t> rgb = tag.image.pixels;
+  const cv::Mat tile(tag.image.height, tag.image.width, CV_8UC3, rgb.data());
+  cv::Mat bgr;
+  cv::cvtColor(tile, bgr, cv::COLOR_RGB2BGR);
+  for (int row = 0; row < kSide; ++row) {
+    for (int col = 0; col < kSide; ++col) bgr.copyTo(sheet(cv::Rect(col * cell, row * cell, cell, cell)));
+  }
+  std::vector<std::uint8_t> png;
+  ASSERT_TRUE(cv::imencode(".png", sheet, png));
+  auto answer = client().Post("/api/v1/detect", scanner(),
+                              std::string(png.begin(), png.end()), "image/png");
+  const json read = ExpectJson(answer);
+  ASSERT_EQ(read["tag_count"], kSide * kSide);
+  ASSERT_GT(answer->body.size(), db::kMaxJsonBytes) << "the answer must outgrow a log row";
+
+  const std::vector<db::ScanRecord> scans = ScansOnceThereAre(db_path_, 1, std::chrono::seconds(30));
+  ASSERT_EQ(scans.size(), 1U);
+  EXPECT_LE(scans[0].result_json.size(), db::kMaxJsonBytes);
+  const json logged = json::parse(scans[0].result_json);
+  EXPECT_EQ(logged["scan_log_abridged"], true);
+  EXPECT_EQ(logged["tag_count"], kSide * kSide);
+  ASSERT_EQ(logged["tags"].size(), static_cast<std::size_t>(kSide * kSide));
+  for (std::size_t i = 0; i < logged["tags"].size(); ++i) {
+    const json& tag_logged = logged["tags"][i];
+    EXPECT_EQ(tag_logged["key"], 11684);
+    EXPECT_EQ(tag_logged["pincode"], "110001");
+    EXPECT_EQ(tag_logged["bin"], read["tags"][i]["bin"]);
+    EXPECT_EQ(tag_logged["centre_px"], read["tags"][i]["centre_px"]);
+  }
+  EXPECT_FALSE(logged.contains("tags_omitted"));
+  EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_failures_total"), 0);
+}
+
+}  // namespace
+}  // namespace pintag::serve_test
