@@ -128,8 +128,19 @@ TEST_F(LoopbackTest, ProblemsFor401And403) {
   ExpectProblem(client_->Get("/api/v1/files/report.bin",
                              {{"Authorization", std::string("Bearer ") + test::kScannerToken}}),
                 403);
-  r = client_->Get("/api/v1/files/report.bin",
-                   {{"Authorization", std::string("Bearer ") + test::kCounterToken}});
+  // Two credentials are refused whichever comes first: a proxy may act on the other one.
+  const std::string counter = std::string("Bearer ") + test::kCounterToken;
+  const std::string scanner = std::string("Bearer ") + test::kScannerToken;
+  for (const auto& [first, second] : {std::pair{counter, scanner}, std::pair{scanner, counter},
+                                      std::pair{counter, counter}}) {
+    const auto twice = client_->Get("/api/v1/files/report.bin",
+                                    {{"Authorization", first}, {"Authorization", second}});
+    ExpectProblem(twice, 400);
+    ASSERT_TRUE(twice);
+    EXPECT_EQ(nlohmann::json::parse(twice->body)["detail"],
+              "the request carries 2 Authorization headers; send one, 'Bearer <token>'");
+  }
+  r = client_->Get("/api/v1/files/report.bin", {{"Authorization", counter}});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
   EXPECT_EQ(r->get_header_value("Content-Type"), "application/octet-stream");
@@ -258,6 +269,12 @@ TEST_F(LoopbackTest, HeadsAProxyCouldReadOtherwiseAreRefused) {
       {"POST /livez HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: %63hunked\r\n\r\n0\r\n\r\n" +
            smuggled,
        400, R"(the header \"Transfer-Encoding\" may not hold 0x25)"},
+      // ... and so read "Bearer%20<token>" as "Bearer <token>".
+      {"GET /livez HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer%20" +
+           std::string(test::kCounterToken) + "\r\n\r\n",
+       400, R"(the header \"Authorization\" may not hold 0x25)"},
+      {"GET /livez HTTP/1.1\r\nHost: x\r\nauthorization: %42earer x\r\n\r\n", 400,
+       R"(the header \"Authorization\" may not hold 0x25)"},
       {"GET /livez HTTP/1.1\r\nHost: x\r\nX-A: a\x01"
        "b\r\n\r\n",
        400, R"(the header \"X-A\" holds the control byte 0x01)"},

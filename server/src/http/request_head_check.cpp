@@ -41,11 +41,12 @@ std::string Hex(char c) {
   return text;
 }
 
-/// Which of the headers that frame a body `name` is, told without case.
+/// Which of the headers held to their grammar `name` is, told without case.
 RequestHeadCheck::Value ValueKind(const std::string& name) {
   const std::string lower = Lower(name);
   if (lower == "content-length") return RequestHeadCheck::Value::kLength;
   if (lower == "transfer-encoding") return RequestHeadCheck::Value::kCoding;
+  if (lower == "authorization") return RequestHeadCheck::Value::kAuthorization;
   return RequestHeadCheck::Value::kOther;
 }
 
@@ -155,6 +156,14 @@ bool RequestHeadCheck::takeValueByte(char c) {
       if (c == '%' || (!IsTokenChar(c) && c != ' ' && c != '\t' && c != ',' && c != ';' &&
                        c != '=' && c != '"')) {
         return refuse(400, "the header \"Transfer-Encoding\" may not hold " + Hex(c));
+      }
+      break;
+    case Value::kAuthorization:
+      // A bearer token (RFC 6750's b64token) and Basic's base64 hold no `%`.
+      if (c == '%') {
+        return refuse(400,
+                      "the header \"Authorization\" may not hold 0x25 ('%'): send the token as "
+                      "it was given, 'Bearer <token>', not percent-encoded");
       }
       break;
     case Value::kOther:

@@ -11,7 +11,9 @@
 //     character a name may not hold; a header line without a colon;
 //   - a NUL anywhere in the head, a control byte (other than tab) in a header's value;
 //   - a Content-Length that is not digits (or is empty), a Transfer-Encoding holding `%` or what
-//     its grammar does not allow: cpp-httplib percent-decodes header values.
+//     its grammar does not allow: cpp-httplib percent-decodes header values;
+//   - an Authorization holding `%`: decoded, "Bearer%20<token>" or a token spelt in escapes would
+//     be let in, where a proxy or log filter that looks at the header sees something else.
 // A header line longer than kMaxHeaderLineBytes is refused with 431 naming the limit (cpp-httplib
 // would answer 400 without a reason). The request line is left to cpp-httplib (414 past 8 KiB).
 
@@ -27,8 +29,9 @@ class RequestHeadCheck {
   /// cpp-httplib's own bound on a header line (CPPHTTPLIB_HEADER_MAX_LENGTH), its CRLF counted.
   static constexpr std::size_t kMaxHeaderLineBytes = std::size_t{8} * 1024;
 
-  /// The headers that frame a request's body, whose values are held to their grammar.
-  enum class Value { kOther, kLength, kCoding };
+  /// The headers whose values are held to their grammar: the two that frame a request's body,
+  /// and the credentials.
+  enum class Value { kOther, kLength, kCoding, kAuthorization };
 
   struct Refusal {
     int status = 400;
