@@ -480,6 +480,31 @@ TEST_F(ServeTest, DetectRefusesBadUploadsWithProblems) {
   EXPECT_TRUE(bomb_logged);
 }
 
+// A query is split as a browser splits it: a value runs from its name's first '=' to the next
+// '&'. cpp-httplib kept the part after a value's last '=' (fx=1000=2000 read as 2000, a plan
+// named "nope=default" as the default plan) and let two identical pieces through as one.
+TEST_F(ServeTest, AQueryValueHoldingAnEqualsSignOrAParameterGivenTwiceIsRefused) {
+  const std::string jpeg = SmallJpeg();
+  const auto post = [&](const std::string& query) {
+    return client().Post("/api/v1/detect?" + query, scanner(), jpeg, "image/jpeg");
+  };
+  json problem = ExpectProblem(post("fx=1000=2000&fy=1000"), 400);
+  EXPECT_NE(problem["detail"].get<std::string>().find("fx"), std::string::npos) << problem;
+  problem = ExpectProblem(post("plan=nope=default"), 404);
+  EXPECT_NE(problem["detail"].get<std::string>().find("nope=default"), std::string::npos)
+      << problem;
+  problem = ExpectProblem(post("overlay=1=0"), 400);
+  EXPECT_NE(problem["detail"].get<std::string>().find("overlay"), std::string::npos) << problem;
+  problem = ExpectProblem(post("fx=1000&fx=1000&fy=1000"), 400);
+  EXPECT_EQ(problem["detail"], "the query parameter 'fx' is given 2 times; give it once");
+  // Escaped, '=' and '&' are a value's own; empty pieces are nothing.
+  problem = ExpectProblem(post("plan=a%3Db%26c"), 404);
+  EXPECT_NE(problem["detail"].get<std::string>().find("a=b&c"), std::string::npos) << problem;
+  const json read = ExpectJson(post("&fx=1000&&fy=1000&"));
+  EXPECT_EQ(read["intrinsics"]["fx"], 1000.0);
+  EXPECT_EQ(read["intrinsics"]["source"], "given");
+}
+
 /// Sends raw bytes; returns what the server answers before it closes or goes quiet for 2 s.
 std::string Raw(int port, const std::string& request) {
   return test::SendRaw(port, request, 2, [](const std::string& out) {

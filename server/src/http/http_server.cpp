@@ -87,12 +87,36 @@ std::optional<std::string> OriginFormPath(std::string_view target) {
   return std::nullopt;
 }
 
+/// The query of the request target `target`, split as a browser's URLSearchParams splits it:
+/// pieces at '&', each a name and a value at its first '=', then decoded ('+' a space).
+/// cpp-httplib 0.11.4 splits a piece at every '=' and keeps the last part ("fx=1000=2000" gave
+/// fx 2000), and keeps one of two identical pieces, so a parameter given twice passed as once.
+std::multimap<std::string, std::string> ParseQuery(const std::string& target) {
+  std::multimap<std::string, std::string> query;
+  const std::size_t question = target.find('?');
+  if (question == std::string::npos) return query;
+  std::string_view rest = std::string_view(target).substr(question + 1);
+  while (!rest.empty()) {
+    const std::size_t amp = rest.find('&');
+    const std::string_view piece = rest.substr(0, amp);
+    rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
+    if (piece.empty()) continue;
+    const std::size_t equals = piece.find('=');
+    const std::string_view name = piece.substr(0, equals);
+    const std::string_view value =
+        equals == std::string_view::npos ? std::string_view() : piece.substr(equals + 1);
+    query.emplace(httplib::detail::decode_url(std::string(name), true),
+                  httplib::detail::decode_url(std::string(value), true));
+  }
+  return query;
+}
+
 HttpRequest ToRequest(const httplib::Request& req) {
   HttpRequest request;
   request.request_id = t_state.request_id;
   request.method = req.method;
   request.path = req.path;
-  for (const auto& [name, value] : req.params) request.query.emplace(name, value);
+  request.query = ParseQuery(req.target);
   request.headers = Headers(req);
   return request;
 }
