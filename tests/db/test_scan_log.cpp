@@ -55,8 +55,8 @@ TEST_F(ScanLog, AppendsAndListsNewestFirst) {
 TEST_F(ScanLog, ScanTimeWritesUtcWithMilliseconds) {
   using std::chrono::milliseconds;
   // 2026-12-06 16:20:01.007 UTC, counted from the epoch by hand: 20,793 days and 58,801 s.
-  const std::chrono::system_clock::time_point when{milliseconds(20'793LL * 86'400'000 +
-                                                                58'801'000 + 7)};
+  const std::chrono::system_clock::time_point when{
+      milliseconds(20'793LL * 86'400'000 + 58'801'000 + 7)};
   EXPECT_EQ(ScanTime(when), "2026-12-06T16:20:01.007Z");
 }
 
@@ -105,10 +105,9 @@ TEST_F(ScanLog, ABadScanInABatchIsLeftOutAndTheRestWritten) {
   ASSERT_EQ(recent.size(), 2u);
   EXPECT_EQ(recent[0].result_json, "[5]");
   EXPECT_EQ(recent[1].result_json, "[1]");
-  EXPECT_EQ(AppendScan(db_, {.scanned_at = "2026-12-06 10:00:00", .result_json = "[]"})
-                .error()
-                .code,
-            ErrorCode::kInvalid);
+  EXPECT_EQ(
+      AppendScan(db_, {.scanned_at = "2026-12-06 10:00:00", .result_json = "[]"}).error().code,
+      ErrorCode::kInvalid);
 }
 
 TEST_F(ScanLog, ABatchThatCannotTakeTheLockWritesNothingAndSaysBusy) {

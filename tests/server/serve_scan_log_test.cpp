@@ -130,17 +130,19 @@ TEST_F(ServeTest, AnAnswerTooLargeForTheScanLogIsLoggedAbridgedNotLost) {
   cv::Mat bgr;
   cv::cvtColor(tile, bgr, cv::COLOR_RGB2BGR);
   for (int row = 0; row < kSide; ++row) {
-    for (int col = 0; col < kSide; ++col) bgr.copyTo(sheet(cv::Rect(col * cell, row * cell, cell, cell)));
+    for (int col = 0; col < kSide; ++col)
+      bgr.copyTo(sheet(cv::Rect(col * cell, row * cell, cell, cell)));
   }
   std::vector<std::uint8_t> png;
   ASSERT_TRUE(cv::imencode(".png", sheet, png));
-  auto answer = client().Post("/api/v1/detect", scanner(),
-                              std::string(png.begin(), png.end()), "image/png");
+  auto answer =
+      client().Post("/api/v1/detect", scanner(), std::string(png.begin(), png.end()), "image/png");
   const json read = ExpectJson(answer);
   ASSERT_EQ(read["tag_count"], kSide * kSide);
   ASSERT_GT(answer->body.size(), db::kMaxJsonBytes) << "the answer must outgrow a log row";
 
-  const std::vector<db::ScanRecord> scans = ScansOnceThereAre(db_path_, 1, std::chrono::seconds(30));
+  const std::vector<db::ScanRecord> scans =
+      ScansOnceThereAre(db_path_, 1, std::chrono::seconds(30));
   ASSERT_EQ(scans.size(), 1U);
   EXPECT_LE(scans[0].result_json.size(), db::kMaxJsonBytes);
   const json logged = json::parse(scans[0].result_json);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pintag/server/log.hpp"
+#include "pintag/server/problem.hpp"
 
 namespace pintag::app {
 
@@ -66,7 +67,8 @@ void ScanLogWriter::run() {
     if (queue_.empty()) return;
     if (stopping_ && !finish_by) finish_by = Clock::now() + kFinishTimeout;
     if (finish_by && Clock::now() >= *finish_by) {
-      lose(queue_.size(), "not written before the server stopped");
+      lose(queue_.size(), "not written before the server stopped" +
+                              (last_error_.empty() ? "" : " (" + last_error_ + ")"));
       return;
     }
     // A failed write is tried again after a pause; one that was busy has waited already.
@@ -84,6 +86,10 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
   lock.unlock();
   std::optional<db::AppendedScans> appended;
   std::string error;
+  // Worth waiting for: a lock held elsewhere, a disk that fills up, a database file moved away
+  // (the pool refuses it until it is back). Anything else (a file that is not a database, an I/O
+  // error) would fail the same way again: that batch is lost at once, as before the writer.
+  bool passing = false;
   try {
     auto connection = log_->acquire();
     auto result = db::AppendScans(*connection, batch);
@@ -91,12 +97,26 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
       appended = std::move(*result);
     } else {
       error = result.error().message;
+      passing = result.error().code == db::ErrorCode::kBusy ||
+                result.error().code == db::ErrorCode::kNoSpace;
     }
+  } catch (const server::HttpError& e) {
+    // The pool refuses a file that is not at its path any more until it is put back; one it
+    // cannot open (not a database) stays so.
+    error = e.problem().detail;
+    passing = !log_->servesFileAtPath();
   } catch (const std::exception& e) {
     error = e.what();
   }
   lock.lock();
 
+  if (!appended && !passing) {
+    for (std::size_t i = 0; i < count; ++i) {
+      server::LogRequestError(queue_[i].request_id, "scan log: " + error);
+    }
+    lose(count, error);
+    return true;
+  }
   if (!appended) {
     if (error != last_error_) {
       server::LogEvent("scan log: " + std::to_string(queue_.size()) +
@@ -109,8 +129,7 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
   }
   for (const auto& refusal : appended->refused) {
     metrics_->increment(failures_counter_);
-    server::LogRequestError(queue_[refusal.index].request_id,
-                            "scan log: " + refusal.error.message);
+    server::LogRequestError(queue_[refusal.index].request_id, "scan log: " + refusal.error.message);
   }
   for (std::size_t i = 0; i < count; ++i) {
     queued_bytes_ -= queue_.front().scan.result_json.size();
@@ -124,8 +143,7 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
     last_error_.clear();
     behind_ = false;
   }
-  if (dropping_ && queue_.size() < kMaxBacklogScans / 2 &&
-      queued_bytes_ < kMaxBacklogBytes / 2) {
+  if (dropping_ && queue_.size() < kMaxBacklogScans / 2 && queued_bytes_ < kMaxBacklogBytes / 2) {
     dropping_ = false;
     server::LogEvent("scan log: the backlog has room again");
   }
@@ -135,14 +153,14 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
 
 void ScanLogWriter::lose(std::size_t count, const std::string& why) {
   metrics_->increment(failures_counter_, static_cast<double>(count));
-  server::LogEvent("scan log: " + std::to_string(count) + " answered scans are lost, " + why +
-                       (last_error_.empty() ? "" : " (" + last_error_ + ")"),
+  server::LogEvent("scan log: " + std::to_string(count) + " answered scans are lost: " + why,
                    /*warning=*/true);
-  while (!queue_.empty()) {
+  for (std::size_t i = 0; i < count && !queue_.empty(); ++i) {
+    queued_bytes_ -= queue_.front().scan.result_json.size();
     done_through_ = queue_.front().sequence;
     queue_.pop_front();
   }
-  queued_bytes_ = 0;
+  if (queue_.empty()) behind_ = false;
   written_.notify_all();
 }
 

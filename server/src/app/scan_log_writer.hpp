@@ -9,8 +9,10 @@
 // answered scan is in the log as before. When a write has not finished within kWaitForWrite (the
 // lock is held elsewhere), append() returns at once until the backlog is written: the scans are
 // held in memory, up to kMaxBacklogScans and kMaxBacklogBytes of JSON; past that a scan is
-// dropped and counted. The backlog is written before the writer is destroyed, for at most
-// kFinishTimeout; what is left then, or at a forced stop, is lost and counted.
+// dropped and counted. Only what may pass is waited for (a lock, a full disk, a database file
+// moved away); a log that cannot be written otherwise (not a database) loses its scans at once.
+// The backlog is written before the writer is destroyed, for at most kFinishTimeout; what is left
+// then, or at a forced stop, is lost and counted.
 
 #include <chrono>
 #include <condition_variable>
@@ -59,8 +61,10 @@ class ScanLogWriter {
     std::string request_id;
   };
   void run();
-  /// Writes the queue's first scans once; false when the log could not be written.
+  /// Writes the queue's first scans once; false when the log could not be written for a reason
+  /// that may pass (they are tried again). Scans that cannot be written at all are lost.
   bool writeBatch(std::unique_lock<std::mutex>& lock);
+  /// Counts, logs and drops the queue's first `count` scans.
   void lose(std::size_t count, const std::string& why);
 
   std::shared_ptr<ConnectionPool> log_;

@@ -15,7 +15,7 @@
 namespace pintag::db {
 
 struct ScanRecord {
-  std::int64_t id = 0;                   ///< assigned on append; ignored on input
+  std::int64_t id = 0;  ///< assigned on append; ignored on input
   /// ISO 8601 UTC with milliseconds, as ScanTime writes it; when empty, the time of the append.
   std::string scanned_at;
   std::optional<std::int64_t> token_id;  ///< the token that uploaded it, if any
