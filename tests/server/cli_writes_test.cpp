@@ -132,6 +132,27 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
   ExpectOneAdminTokenRevoked(dir, db);
 }
 
+// The first start of `pintag serve` prints the first admin token. Printed nowhere, it stayed
+// working, and later starts print none (the table is no longer empty): the only admin secret was
+// lost while the server served on, exit 0 at its stop.
+TEST(CliWrites, AServerWhoseFirstAdminTokenCannotBePrintedRevokesItAndDoesNotStart) {
+  ASSERT_TRUE(std::filesystem::exists(kFull)) << "the full disk these tests write to";
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  // Bounded: a server that starts regardless would serve until stopped.
+  const CommandResult run = RunShell("timeout 60 " + PintagExe() +
+                                     " serve --port 0 --bind 127.0.0.1 --db " + db + " 2>&1 >" +
+                                     kFull);
+  EXPECT_EQ(run.status, 1) << run.out;
+  EXPECT_NE(run.out.find("the token is revoked; make an admin token with `pintag token create "
+                         "--role admin --db " +
+                         db + "`"),
+            std::string::npos)
+      << run.out;
+  ExpectOneAdminTokenRevoked(dir, db);
+}
+
 // The same through a pipe whose reader has gone (`pintag token create | head -c0`): SIGPIPE
 // killed the command before it could revoke the token it had made.
 TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {

@@ -25,6 +25,7 @@
 #include "commands/option_checks.hpp"
 #include "commands/serve_replication.hpp"
 #include "commands/serve_signals.hpp"
+#include "commands/unseen_token.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/server/http_server.hpp"
@@ -52,19 +53,19 @@ struct ServeArgs {
   ReplicationArgs replication;
 };
 
-/// On an empty token table, creates the first admin token and returns its secret; "" when tokens
+/// On an empty token table, creates the first admin token and returns it; nothing when tokens
 /// already exist. Called once the port is bound, so a start that cannot listen does not create a
 /// token nobody sees.
-std::string FirstAdminToken(const std::string& path) {
+std::optional<db::NewToken> FirstAdminToken(const std::string& path) {
   auto opened = db::OpenDatabase(path, {.create = false});
   if (!opened) throw std::runtime_error(opened.error().message);
   db::Connection& connection = opened.value().connection;
   auto tokens = db::ListTokens(connection);
   if (!tokens) throw std::runtime_error(tokens.error().message);
-  if (!tokens->empty()) return {};
+  if (!tokens->empty()) return std::nullopt;
   auto token = db::CreateToken(connection, db::Role::kAdmin, "first start of pintag serve");
   if (!token) throw std::runtime_error(token.error().message);
-  return token->secret;
+  return std::move(*token);
 }
 
 /// glibc gives each busy thread its own malloc arena, up to 8 per core; the detector's
@@ -160,7 +161,8 @@ void Run(const ServeArgs& args) {
   server::HttpServer& http = *http_server;
   std::string error;
   if (!http.bind(&error)) throw std::runtime_error(error);
-  const std::string first_admin = read_only ? "" : FirstAdminToken(args.db);
+  const std::optional<db::NewToken> first_admin =
+      read_only ? std::nullopt : FirstAdminToken(args.db);
   replication.start();
 
   const bool any = args.bind == "0.0.0.0" || args.bind == "::";
@@ -180,17 +182,30 @@ void Run(const ServeArgs& args) {
     std::cout << "  " << role << "\n";
   std::cout << "  API: " << url << "/api/v1/   OpenAPI: " << url
             << "/openapi.json   health: " << url << "/readyz\n";
-  if (!first_admin.empty()) {
+  if (first_admin) {
     std::cout << "First start: an admin token was created. Its secret is shown only now (the "
                  "database keeps a hash):\n"
-              << "  " << first_admin << "\n"
-              << "  e.g. curl -H 'Authorization: Bearer " << first_admin << "' " << url
+              << "  " << first_admin->secret << "\n"
+              << "  e.g. curl -H 'Authorization: Bearer " << first_admin->secret << "' " << url
               << "/api/v1/tokens\n";
   } else if (!read_only) {
     std::cout << "Tokens: pintag token create --role admin|counter|scanner|replica --db " << args.db
               << "\n";
   }
   std::cout << "Stop with Ctrl-C.\n" << std::flush;
+  if (first_admin) {
+    // A secret nobody saw must not stay working, and a server nobody can administer must not
+    // start as if all were well: revoked, and the start fails (stderr says how to make one).
+    db::Connection connection(args.db, {.create = false});
+    try {
+      RevokeIfStdoutFailed(connection, first_admin->info.id);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string(e.what()) +
+                               "; make an admin token with `pintag token create --role admin "
+                               "--db " +
+                               args.db + "`");
+    }
+  }
 
   std::atomic<bool> finished{false};
   const std::chrono::seconds drain_timeout(args.drain_timeout_s);

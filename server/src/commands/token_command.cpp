@@ -6,6 +6,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "commands/unseen_token.hpp"
 #include "pintag/db/csv.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/text.hpp"
@@ -35,19 +36,7 @@ void Create(const TokenArgs& args) {
   std::cerr << "token " << token->info.id << " (" << db::ToString(*role)
             << "); the secret below is shown only now:\n";
   std::cout << token->secret << "\n" << std::flush;
-  if (!std::cout) {
-    // The secret is lost or only partly written (stdout full or closed): revoke the token rather
-    // than leave a working one that nobody knowingly holds.
-    const std::string id = std::to_string(token->info.id);
-    auto revoked = db::RevokeToken(connection, token->info.id);
-    if (!revoked) {
-      throw std::runtime_error("cannot write the secret of token " + id +
-                               " to standard output, and revoking it failed (" +
-                               revoked.error().message + "): run `pintag token revoke " + id + "`");
-    }
-    throw std::runtime_error("cannot write the secret of token " + id +
-                             " to standard output; the token is revoked");
-  }
+  RevokeIfStdoutFailed(connection, token->info.id);
 }
 
 void List(const TokenArgs& args) {
