@@ -138,14 +138,32 @@ Result<std::vector<TokenInfo>> ListTokens(Connection& connection) {
   });
 }
 
-Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id) {
+Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id, LastAdmin last_admin) {
   return Guard([&]() -> Result<TokenInfo> {
+    Transaction transaction(connection);
+    if (last_admin == LastAdmin::kKeep) {
+      Statement others = connection.prepare(
+          "SELECT (SELECT role = 'admin' AND revoked_at IS NULL FROM api_tokens WHERE id = ?1), "
+          "(SELECT count(*) FROM api_tokens WHERE role = 'admin' AND revoked_at IS NULL AND "
+          "id <> ?1)");
+      others.bind(1, id);
+      others.step();
+      if (!others.isNull(0) && others.getInt64(0) == 1 && others.getInt64(1) == 0) {
+        return Error{ErrorCode::kConflict,
+                     "token " + std::to_string(id) +
+                         " is the last active admin token; create another admin token before "
+                         "revoking it (without one nobody could administer the server through "
+                         "the API; `pintag token revoke` on the server's host still can)"};
+      }
+    }
     connection
         .prepare(std::string("UPDATE api_tokens SET revoked_at = ") + detail::kNowSql +
                  " WHERE id = ?1 AND revoked_at IS NULL")
         .bind(1, id)
         .run();
-    return LoadInfo(connection, id);
+    auto info = LoadInfo(connection, id);
+    if (info) transaction.commit();
+    return info;
   });
 }
 

@@ -291,6 +291,33 @@ TEST_F(ServeTest, TokensCreateListRevoke) {
   EXPECT_NE(misspelt["detail"].get<std::string>().find("unknown field 'lable'"), std::string::npos)
       << misspelt.dump();
   EXPECT_EQ(ExpectJson(client().Get("/api/v1/tokens", admin()))["tokens"].size(), tokens);
+
+  // The last active admin token is not revoked through the API: nobody could administer the
+  // server through it again (a review revoked it and locked the API for everyone).
+  int admin_id = 0;
+  const json listed = ExpectJson(client().Get("/api/v1/tokens", admin()));
+  for (const json& token : listed["tokens"]) {
+    if (token["role"] == "admin" && token["revoked_at"].is_null()) admin_id = token["id"];
+  }
+  ASSERT_GT(admin_id, 0);
+  const std::string admin_path = "/api/v1/tokens/" + std::to_string(admin_id);
+  const json last = ExpectProblem(client().Delete(admin_path, admin()), 409);
+  EXPECT_EQ(last["title"], "Last Admin Token");
+  EXPECT_NE(last["detail"].get<std::string>().find("create another admin token before revoking"),
+            std::string::npos)
+      << last;
+  ExpectJson(client().Get("/api/v1/tokens", admin()));  // still works
+  // With a second admin it may go; then the second is the last.
+  const json second = ExpectJson(
+      client().Post("/api/v1/tokens", admin(), R"({"role": "admin"})", "application/json"), 201);
+  const std::string second_secret = second["secret"];
+  ExpectJson(client().Delete(admin_path, Auth(second_secret)));
+  ExpectProblem(client().Get("/api/v1/tokens", admin()), 401);
+  const std::string second_path = "/api/v1/tokens/" + std::to_string(second["id"].get<int>());
+  EXPECT_EQ(ExpectProblem(client().Delete(second_path, Auth(second_secret)), 409)["title"],
+            "Last Admin Token");
+  // Revoking a revoked admin token stays a no-op, not a conflict.
+  ExpectJson(client().Delete(admin_path, Auth(second_secret)));
 }
 
 }  // namespace

@@ -55,8 +55,11 @@ HttpResponse GetTokens(const AppContext& context, const HttpRequest&) {
 HttpResponse RevokeToken(const AppContext& context, const HttpRequest& request) {
   const std::int64_t id = TokenIdParam(request);
   auto connection = context.pool->acquire();
-  return HttpResponse::Json(
-      TokenJson(Unwrap(db::RevokeToken(*connection, id), "Unknown Token")).dump());
+  auto revoked = db::RevokeToken(*connection, id, db::LastAdmin::kKeep);
+  if (!revoked && revoked.error().code == db::ErrorCode::kConflict) {
+    throw HttpError(409, revoked.error().message, "Last Admin Token");
+  }
+  return HttpResponse::Json(TokenJson(Unwrap(std::move(revoked), "Unknown Token")).dump());
 }
 
 }  // namespace pintag::app

@@ -35,8 +35,16 @@ struct NewToken {
 
 Result<NewToken> CreateToken(Connection& connection, Role role, std::string_view label = "");
 Result<std::vector<TokenInfo>> ListTokens(Connection& connection);  ///< by id, revoked included
-/// kNotFound for an unknown id; revoking a revoked token is a no-op.
-Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id);
+/// Whether RevokeToken may revoke the last active admin token.
+enum class LastAdmin {
+  kMayRevoke,  ///< the command line: whoever runs it can make another
+  kKeep,       ///< the API: revoked, nobody could administer the server through it again
+};
+/// kNotFound for an unknown id; revoking a revoked token is a no-op. With LastAdmin::kKeep, the
+/// last active admin token is kConflict (checked and revoked in one transaction, so two admins
+/// revoking each other at once cannot both go).
+Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id,
+                              LastAdmin last_admin = LastAdmin::kMayRevoke);
 /// The token the secret belongs to; kUnauthorized (one message for every cause) when it is
 /// malformed, unknown, wrong or revoked.
 Result<TokenInfo> VerifyToken(Connection& connection, std::string_view secret);
