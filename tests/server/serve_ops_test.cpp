@@ -377,8 +377,25 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
       EXPECT_NE(r->status, 501) << upper << " " << concrete;
       EXPECT_EQ(r->body.find("no route for"), std::string::npos) << upper << " " << concrete;
       EXPECT_LT(r->status, 500) << upper << " " << concrete << " " << r->body;
+      if (r->status < 300) {
+        EXPECT_TRUE(operation["responses"].contains(std::to_string(r->status)))
+            << upper << " " << concrete << " answered " << r->status << ", not documented";
+      }
     }
   }
+  // The routes that create answer 201 Created, and say so (every success was documented as 200).
+  const auto created =
+      client().Post("/api/v1/tokens", admin(), R"({"role": "scanner"})", "application/json");
+  ASSERT_TRUE(created);
+  EXPECT_EQ(created->status, 201);
+  for (const char* path : {"/api/v1/tokens", "/api/v1/pincodes"}) {
+    const json& responses = doc["paths"][path]["post"]["responses"];
+    EXPECT_TRUE(responses.contains("201")) << path;
+    EXPECT_FALSE(responses.contains("200")) << path;
+  }
+  const json& put_plan = doc["paths"]["/api/v1/sortplans/{name}"]["put"]["responses"];
+  EXPECT_TRUE(put_plan.contains("200") && put_plan.contains("201")) << put_plan;
+  EXPECT_NE(doc["info"]["description"].get<std::string>().find("replica ("), std::string::npos);
   for (const char* route : {"GET /api/v1/pincodes/{pin}",
                             "GET /api/v1/pincodes",
                             "GET /api/v1/keys/{key}",

@@ -191,8 +191,8 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   options.web_dir = config.web_dir;
   options.info.description =
       "PinTag labels, detection, registry and routing. Errors are application/problem+json "
-      "(RFC 9457). Roles: admin (everything), counter (labels), scanner (detect); lookups are "
-      "open.";
+      "(RFC 9457). Roles: admin (everything), counter (labels), scanner (detect), replica (the "
+      "registry snapshot, for read-only replicas); lookups are open.";
   // A replica's file is replaced by design; its readiness is the snapshot it serves now.
   server::HealthCheck health = config.read_only
                                    ? SnapshotHealthCheck(context->pool)

@@ -19,6 +19,7 @@ struct RouteDoc {
   std::vector<QueryParamDoc> query = {};   ///< documented query parameters
   std::vector<std::string> consumes = {};  ///< request body media types; none: no body
   std::vector<std::string> produces = {};  ///< success media types; none: application/json
+  std::vector<int> success = {200};        ///< the statuses a success answers with
 };
 
 /// One row of the table.
@@ -61,7 +62,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"registry", "The pincode a tag key belongs to (retired ones included)"}},
     {"POST",   "/api/v1/pincodes",                  Access::kAdmin,   Writing<PostPincode>,
      {"registry", "Add a pincode (and its offices); answers 201 with the allocated key", {},
-      {"application/json"}}},
+      {"application/json"}, {}, {201}}},
     {"POST",   "/api/v1/pincodes/{pin}/retire",     Access::kAdmin,   Writing<PostRetirePincode>,
      {"registry", "Retire a pincode: it keeps its key, labels are no longer issued"}},
 
@@ -108,7 +109,8 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
       {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}}},
     {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<PutSortPlan>,
      {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new",
-      {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}}},
+      {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}, {},
+      {200, 201}}},
 
     {"GET",    "/api/v1/registry",                  Access::kOpen,    GetRegistryStatus,
      {"replication", "Which registry version this server serves, and whether it is the primary or a replica"}},
@@ -118,7 +120,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
 
     {"POST",   "/api/v1/tokens",                    Access::kAdmin,   Writing<PostToken>,
      {"tokens", R"(Create a token {"role", "label"}; the answer holds its secret, once)", {},
-      {"application/json"}}},
+      {"application/json"}, {}, {201}}},
     {"GET",    "/api/v1/tokens",                    Access::kAdmin,   GetTokens,
      {"tokens", "Every token (never a secret), revoked ones included"}},
     {"DELETE", "/api/v1/tokens/{id}",               Access::kAdmin,   Writing<RevokeToken>,
@@ -139,6 +141,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
     route.query = row.doc.query;
     route.consumes = row.doc.consumes;
     route.produces = row.doc.produces;
+    route.success = row.doc.success;
     router.add(std::move(route));
   }
   return router;

@@ -92,7 +92,11 @@ std::string OpenApiJson(const Router& router, const ApiInfo& info) {
                           ? json{{"schema", {{"type", "string"}, {"contentMediaType", type}}}}
                           : json{{"schema", json::object()}};
     }
-    json responses = {{"200", {{"description", "OK"}, {"content", content}}}};
+    json responses = json::object();
+    for (const int status : route.success) {
+      responses[std::to_string(status)] = {{"description", std::string(StatusTitle(status))},
+                                           {"content", content}};
+    }
     responses["4XX"] = ProblemRef("client error (problem details, RFC 9457)");
     responses["5XX"] = ProblemRef("server error (problem details, RFC 9457)");
     if (route.access != Access::kOpen) {

@@ -28,6 +28,7 @@ struct Route {
   Handler handler;
   std::string summary;                ///< one line for OpenAPI
   std::vector<std::string> produces;  ///< success media types; empty = application/json
+  std::vector<int> success = {200};   ///< the statuses a success answers with (201 Created, …)
   std::vector<QueryParamDoc> query;   ///< documented query parameters
   std::vector<std::string> consumes;  ///< request body media types; empty = no body
   std::string tag = "api";            ///< OpenAPI tag grouping the route
