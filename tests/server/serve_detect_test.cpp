@@ -560,6 +560,29 @@ TEST_F(ServeTest, PhotosBeyondThePixelBudgetWaitTheirTurnAndAllAreRead) {
   EXPECT_GE(Metric(client().Get("/metrics")->body, "pintag_pixel_budget_waits_total"), 1.0);
 }
 
+// An overlay copies the photo, encodes it as PNG and, inline, as base64 inside the JSON: a review
+// measured 465 MB more resident memory for a 40 MP photo with ?overlay=inline against 190 MB
+// without, where the budget counted the same pixels. An overlay now holds twice the photo's.
+TEST_F(ServeTest, AnOverlayHoldsTwiceThePhotosPixelsUnderTheBudget) {
+  const std::string jpeg = SmallJpeg();
+  const json plain = ExpectJson(client().Post("/api/v1/detect", scanner(), jpeg, "image/jpeg"));
+  const double pixels =
+      plain["image"]["width"].get<double>() * plain["image"]["height"].get<double>();
+  const auto peak = [&] {
+    return Metric(client().Get("/metrics")->body, "pintag_pixel_budget_peak_pixels");
+  };
+  EXPECT_EQ(peak(), pixels);
+  EXPECT_EQ(Metric(client().Get("/metrics")->body, "pintag_pixel_budget_held_pixels"), 0);
+  for (const char* overlay : {"inline", "1"}) {
+    startServer();  // a fresh peak
+    const auto r = client().Post(std::string("/api/v1/detect?overlay=") + overlay, scanner(), jpeg,
+                                 "image/jpeg");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << overlay;
+    EXPECT_EQ(peak(), 2 * pixels) << overlay;
+  }
+}
+
 TEST_F(ServeTest, APixelBudgetBelowOnePhotoIsRefusedBeforeAnythingIsCreated) {
   const std::string db = dir_.file("never-made.db");
   const CommandResult refused = RunPintag("serve --port 0 --bind 127.0.0.1 --db " + db +

@@ -111,6 +111,21 @@ void AddScanLogGauge(server::Metrics& metrics, std::weak_ptr<const ScanLogWriter
   });
 }
 
+/// The pixel budget (--max-pixels-in-flight) as gauges: what it holds now and the most it has held,
+/// to size the budget against the memory a server has (about 7 bytes a pixel).
+void AddPixelBudgetGauges(server::Metrics& metrics, std::shared_ptr<const PixelBudget> budget) {
+  metrics.addGaugeSource([budget = std::move(budget)] {
+    return std::vector<server::Metrics::Gauge>{
+        {"pintag_pixel_budget_held_pixels",
+         "Pixels of photos and PNGs held under --max-pixels-in-flight now (an overlay counts "
+         "twice).",
+         static_cast<double>(budget->held())},
+        {"pintag_pixel_budget_peak_pixels",
+         "The most pixels held under --max-pixels-in-flight at once since the server started.",
+         static_cast<double>(budget->peak())}};
+  });
+}
+
 }  // namespace
 
 // /readyz is open: its answers say what is wrong without the --db path (the operator knows it),
@@ -181,6 +196,7 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   context->follow_status = config.follow_status;
   DefineCounters(*context->metrics);
   AddScanLogGauge(*context->metrics, context->scan_log);
+  AddPixelBudgetGauges(*context->metrics, context->pixel_budget);
   if (config.follow_status) AddFollowGauges(*context->metrics, config.follow_status);
   if (config.publisher) AddPublishGauges(*context->metrics, config.publisher);
   server::Router router = AppRouter(context);
