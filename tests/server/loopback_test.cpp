@@ -131,8 +131,8 @@ TEST_F(LoopbackTest, ProblemsFor401And403) {
   // Two credentials are refused whichever comes first: a proxy may act on the other one.
   const std::string counter = std::string("Bearer ") + test::kCounterToken;
   const std::string scanner = std::string("Bearer ") + test::kScannerToken;
-  for (const auto& [first, second] : {std::pair{counter, scanner}, std::pair{scanner, counter},
-                                      std::pair{counter, counter}}) {
+  for (const auto& [first, second] :
+       {std::pair{counter, scanner}, std::pair{scanner, counter}, std::pair{counter, counter}}) {
     const auto twice = client_->Get("/api/v1/files/report.bin",
                                     {{"Authorization", first}, {"Authorization", second}});
     ExpectProblem(twice, 400);

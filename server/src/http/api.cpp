@@ -154,9 +154,9 @@ Admission Api::admit(std::string_view method, std::string_view path,
     // One credential: a proxy that acts on another copy than this server would let a request
     // through as someone else.
     if (const std::size_t copies = headers.count("Authorization"); copies > 1) {
-      admission.rejection = ProblemResponse(
-          400, "the request carries " + std::to_string(copies) +
-                   " Authorization headers; send one, 'Bearer <token>'");
+      admission.rejection =
+          ProblemResponse(400, "the request carries " + std::to_string(copies) +
+                                   " Authorization headers; send one, 'Bearer <token>'");
       return admission;
     }
     const std::optional<std::string> authorization = FirstHeader(headers, "Authorization");
