@@ -435,14 +435,22 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
 }
 
 /// Whether a WebP holds a lossy (VP8, 4:2:0) image: its first image chunk is "VP8 ", not "VP8L".
-/// Animations (ANMF frames) are not looked into.
+/// In an animation that is the first frame's (the one decoded): the image chunk inside the first
+/// ANMF chunk, after its 16 bytes of frame header.
 bool WebpIsLossy(std::span<const std::uint8_t> b) {
+  constexpr std::size_t kFrameHeaderBytes = 16;
   std::size_t pos = 12;
-  while (pos + 8 <= b.size()) {
+  std::size_t end = b.size();
+  while (pos + 8 <= end) {
     if (std::memcmp(&b[pos], "VP8 ", 4) == 0) return true;
     if (std::memcmp(&b[pos], "VP8L", 4) == 0) return false;
     const std::size_t size = Le32(&b[pos + 4]);
-    if (size > b.size() - pos - 8) return false;  // a chunk past the end: nothing more to find
+    if (size > end - pos - 8) return false;  // a chunk past the end: nothing more to find
+    if (std::memcmp(&b[pos], "ANMF", 4) == 0 && size >= kFrameHeaderBytes) {
+      end = pos + 8 + size;  // the first frame's own chunks, and no further
+      pos += 8 + kFrameHeaderBytes;
+      continue;
+    }
     pos += 8 + size + (size & 1);
   }
   return false;

@@ -731,6 +731,45 @@ TEST(ImageIo, JpegPlanesAsStored) {
 
 // The loader says how the decoder filled in subsampled colour, in the upright image's axes: the
 // reader undoes exactly that, and nothing where the colour was stored whole.
+
+/// A one-frame animated WebP around a still one's image chunk (RIFF: VP8X with the animation flag,
+/// ANIM, then ANMF holding the frame header and the still's "VP8 " or "VP8L" chunk).
+std::vector<std::uint8_t> AnimatedWebp(const std::vector<std::uint8_t>& still, int width,
+                                       int height) {
+  const auto le = [](std::vector<std::uint8_t>& out, std::uint32_t value, int bytes) {
+    for (int i = 0; i < bytes; ++i) out.push_back(static_cast<std::uint8_t>(value >> (8 * i)));
+  };
+  const auto chunk = [&](std::vector<std::uint8_t>& out, const char* tag,
+                         const std::vector<std::uint8_t>& payload) {
+    out.insert(out.end(), tag, tag + 4);
+    le(out, static_cast<std::uint32_t>(payload.size()), 4);
+    out.insert(out.end(), payload.begin(), payload.end());
+    if (payload.size() % 2 == 1) out.push_back(0);
+  };
+  // The still is RIFF, size, WEBP, then its one image chunk.
+  const std::vector<std::uint8_t> image(still.begin() + 12, still.end());
+  std::vector<std::uint8_t> vp8x = {0x02, 0, 0, 0};  // the animation flag
+  le(vp8x, static_cast<std::uint32_t>(width - 1), 3);
+  le(vp8x, static_cast<std::uint32_t>(height - 1), 3);
+  const std::vector<std::uint8_t> anim = {0, 0, 0, 0, 0, 0};  // background, loop for ever
+  std::vector<std::uint8_t> frame;
+  le(frame, 0, 3);  // x / 2
+  le(frame, 0, 3);  // y / 2
+  le(frame, static_cast<std::uint32_t>(width - 1), 3);
+  le(frame, static_cast<std::uint32_t>(height - 1), 3);
+  le(frame, 100, 3);  // duration, ms
+  frame.push_back(0);
+  frame.insert(frame.end(), image.begin(), image.end());
+  std::vector<std::uint8_t> body = {'W', 'E', 'B', 'P'};
+  chunk(body, "VP8X", vp8x);
+  chunk(body, "ANIM", anim);
+  chunk(body, "ANMF", frame);
+  std::vector<std::uint8_t> file = {'R', 'I', 'F', 'F'};
+  le(file, static_cast<std::uint32_t>(body.size()), 4);
+  file.insert(file.end(), body.begin(), body.end());
+  return file;
+}
+
 TEST(ImageIo, ReportsTheDecodersChromaUpsampling) {
   // OpenImageIO writes 4:4:4, 4:2:2 and 4:2:0 (4:4:0 is test_tag_samples.cpp's, through
   // TurboJPEG). A mirrored stored axis of odd length puts the chroma blocks on odd pixels: not
@@ -779,6 +818,14 @@ TEST(ImageIo, ReportsTheDecodersChromaUpsampling) {
     ASSERT_TRUE(r.image) << o.what << ": " << r.error;
     EXPECT_EQ(r.image->chroma_upsampling, o.expected) << o.what;
   }
+  // An animated WebP (a phone's "live" photo saved so) decodes its first frame, lossy here: its
+  // image chunk sits inside an ANMF chunk, which was not looked into ("none").
+  const LoadResult animated = LoadImageBytes(AnimatedWebp(kOthers[2].bytes, 64, 48));
+  ASSERT_TRUE(animated.image) << animated.error;
+  EXPECT_EQ(animated.image->bgr.cols, 64);
+  EXPECT_EQ(animated.image->chroma_upsampling, ChromaUpsampling::kBoth);
+  EXPECT_EQ(LoadImageBytes(AnimatedWebp(kOthers[3].bytes, 64, 48)).image->chroma_upsampling,
+            ChromaUpsampling::kNone);
   LoadOptions halved;
   halved.scale_denominator = 2;
   const LoadResult scaled = LoadImageBytes(Encode(".jpg", frame), halved);
