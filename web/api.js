@@ -57,7 +57,14 @@ async function problemFrom(response) {
  */
 export async function api(path, { method = 'GET', token = '', json, body, headers = {}, as = 'json', signal } = {}) {
   const sent = new Headers(headers);
-  if (token) sent.set('Authorization', `Bearer ${token}`);
+  if (token) {
+    // A header holds Latin-1 only: the browser would throw its own message, naming no field.
+    if (!kTokenText.test(token)) {
+      throw new ApiError(0, 'Token not valid',
+        'The token holds a character a PinTag token cannot have (a token is pt_ followed by letters, digits, - and _). Paste it again.');
+    }
+    sent.set('Authorization', `Bearer ${token}`);
+  }
   if (json !== undefined) {
     sent.set('Content-Type', 'application/json');
     body = JSON.stringify(json);
@@ -211,6 +218,17 @@ export function parsePincodes(text) {
 
 const kStorePrefix = 'pintag.token.';
 
+// What a token may hold as sent: printable ASCII without spaces. The server judges the rest.
+const kTokenText = /^[\x21-\x7e]+$/;
+
+/**
+ * A pasted token as it is meant: spaces, line breaks and invisible characters (a zero-width space
+ * or byte order mark that came along from a chat or a PDF) dropped, since a token holds none.
+ */
+export function cleanToken(text) {
+  return text.replace(/[\s\u00ad\u180e\u200b-\u200d\u2060\ufeff]/gu, '');
+}
+
 function store() {
   try {
     return window.sessionStorage;
@@ -227,19 +245,20 @@ export function savedToken(name) {
 
 /**
  * Wires a token field: filled from sessionStorage, saved on every change (this tab only), a
- * Show/Hide toggle and a Forget button. Returns a function giving the current token.
+ * Show/Hide toggle and a Forget button (`onForget` then runs too: a page clears what it fetched
+ * with the token). Returns a function giving the current token, cleaned (cleanToken).
  */
-export function bindToken({ name, input, status, forget, toggle }) {
+export function bindToken({ name, input, status, forget, toggle, onForget }) {
   const s = store();
   input.value = savedToken(name);
   const describe = () => {
     if (!status) return;
-    status.textContent = input.value.trim()
+    status.textContent = cleanToken(input.value)
       ? 'Token kept for this browser tab only; it is forgotten when the tab closes.'
       : 'No token yet. Paste one to continue.';
   };
   input.addEventListener('input', () => {
-    const value = input.value.trim();
+    const value = cleanToken(input.value);
     if (s) {
       if (value) s.setItem(kStorePrefix + name, value);
       else s.removeItem(kStorePrefix + name);
@@ -251,6 +270,7 @@ export function bindToken({ name, input, status, forget, toggle }) {
       input.value = '';
       if (s) s.removeItem(kStorePrefix + name);
       describe();
+      if (onForget) onForget();
       input.focus();
     });
   }
@@ -263,7 +283,7 @@ export function bindToken({ name, input, status, forget, toggle }) {
     });
   }
   describe();
-  return () => input.value.trim();
+  return () => cleanToken(input.value);
 }
 
 /** Fills a <select> with the server's sort plans; keeps `preferred` selected when it exists. */

@@ -7,6 +7,8 @@ const $ = (id) => document.getElementById(id);
 
 const token = bindToken({
   name: 'counter', input: $('token'), status: $('token-status'), forget: $('token-forget'), toggle: $('token-toggle'),
+  // The preview was fetched with the token: it goes with it.
+  onForget: () => clearPreview('Paste a counter token above to preview and print labels.'),
 });
 
 const kPreviewDpi = 120;

@@ -9,6 +9,14 @@ const token = bindToken({
 
 let search = null;  // {q, district, state, limit, offset}
 
+// Adding and retiring need an admin token: asked for before anything is sent or confirmed.
+function needToken(message) {
+  if (token()) return false;
+  show(message, messageBox('info', 'Paste an admin token above first: adding and retiring pincodes need one.'));
+  $('token').focus();
+  return true;
+}
+
 // The pincode fields have no maxlength: a browser cuts a pasted value to it before the page sees
 // it, so a pasted 5600012 became 560001, another real pincode, and " 560001" lost its last digit.
 // What was typed or pasted is checked whole instead.
@@ -180,6 +188,7 @@ $('add-form').addEventListener('submit', (event) => {
   busy($('add'), async () => {
     show($('add-msg'));
     const value = (id) => $(id).value.trim();
+    if (needToken($('add-msg'))) return;
     if (!isPincode(value('a-pin'))) {
       show($('add-msg'), problemBox(notAPincode(value('a-pin'))));
       return;
@@ -212,6 +221,7 @@ $('retire-form').addEventListener('submit', (event) => {
   const pin = $('r-pin').value.trim();
   show($('retire-msg'));
   show($('retire-confirm'));
+  if (needToken($('retire-msg'))) return;
   if (!isPincode(pin)) {
     show($('retire-msg'), problemBox(notAPincode(pin)));
     return;

@@ -315,6 +315,22 @@ test('pincodes pasted with no-break or zero-width spaces are read as typed', asy
   assert.deepEqual(page.problems, []);
 });
 
+test('a token pasted with invisible characters is used as it is meant, and Forget takes its preview', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  // A zero-width space and a byte order mark, as a token copied from a chat or a PDF can carry;
+  // the browser refused to send such a header with its own message, naming no field.
+  await page.locator('#token').fill(`\u200b ${counterToken}\ufeff\n`);
+  await page.locator('#pins').fill('110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  assert.equal(await page.evaluate(() => sessionStorage.getItem('pintag.token.counter')), counterToken);
+  await page.locator('#token-forget').click();
+  await page.locator('#preview').filter({ hasText: 'Paste a counter token above' }).waitFor();
+  assert.equal(await page.locator('#label-preview').count(), 0);
+  assert.deepEqual(page.problems, []);
+});
+
 test('a single label refused as retired marks its row retired, as a refused batch does', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);

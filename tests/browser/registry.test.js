@@ -225,14 +225,24 @@ test('an office filled in part is refused with every missing field named, and no
   assert.deepEqual(page.problems, []);
 });
 
-test('adding without an admin token shows the 401 problem', async () => {
+test('adding or retiring without an admin token asks for one before anything is sent', async () => {
   const page = await newPage(browser);
+  const sent = [];
+  page.on('request', (request) => {
+    if (request.url().includes('/api/v1/pincodes')) sent.push(`${request.method()} ${request.url()}`);
+  });
   await page.goto(`${server.url}/registry.html`);
   await page.locator('#a-pin').fill('999002');
   await page.getByRole('button', { name: 'Add pincode' }).click();
-  const alert = page.locator('#add-msg [role="alert"]');
-  await alert.waitFor();
-  assert.match(await alert.textContent(), /HTTP 401/);
+  await page.locator('#add-msg').filter({ hasText: 'Paste an admin token above first' }).waitFor();
+  assert.equal(await page.evaluate(() => document.activeElement.id), 'token');
+  await page.locator('#r-pin').fill('110001');
+  await page.locator('#retire').click();
+  await page.locator('#retire-msg').filter({ hasText: 'Paste an admin token above first' }).waitFor();
+  assert.equal(await page.locator('#retire-confirm').textContent(), '', 'no confirmation is asked for');
+  assert.deepEqual(sent, []);
+  assert.equal(await page.locator('[role="alert"]').count(), 0, 'no 401 problem: nothing was refused');
+  assert.deepEqual(page.problems, []);
 });
 
 test('on a read-only replica a change is refused with the way to make it, not a token hint', async () => {
