@@ -55,34 +55,87 @@ function uprightToStored(o, W, H, [x, y]) {
   }
 }
 
-// The answer's corners are in the photo's pixels after its EXIF orientation; the SVG's view box
-// is the pixel grid the browser shows, stretched over the picture. Browsers apply the
-// orientation of a JPEG but not always of other files (Chromium shows a WebP as stored): when the
-// picture's size is the answer's turned a quarter, the corners are taken back to the stored grid.
+// Mean luma of the picture just inside each tag's black square (its border, a twentieth of the
+// side in from each edge and corner), with the corners placed by `place` on a grid of
+// viewWidth × viewHeight stretched over the picture. Drawn at most 800 px on its longer side.
+function borderLuma(picture, tags, { viewWidth, viewHeight, place }) {
+  const scale = Math.min(1, 800 / Math.max(picture.naturalWidth, picture.naturalHeight));
+  const canvas = document.createElement('canvas');
+  canvas.width = Math.max(1, Math.round(picture.naturalWidth * scale));
+  canvas.height = Math.max(1, Math.round(picture.naturalHeight * scale));
+  const context = canvas.getContext('2d', { willReadFrequently: true });
+  context.drawImage(picture, 0, 0, canvas.width, canvas.height);
+  let sum = 0;
+  let count = 0;
+  for (const tag of tags) {
+    const corners = tag.corners_px.map(place);
+    const centre = corners.reduce(([sx, sy], [x, y]) => [sx + x / 4, sy + y / 4], [0, 0]);
+    const points = [];
+    corners.forEach((corner, i) => {
+      const next = corners[(i + 1) % 4];
+      points.push(corner, [(corner[0] + next[0]) / 2, (corner[1] + next[1]) / 2]);
+    });
+    for (const [x, y] of points) {
+      // A tenth of the way to the centre: a twentieth of the side in, on the black border.
+      const px = (x + (centre[0] - x) * 0.1) * canvas.width / viewWidth;
+      const py = (y + (centre[1] - y) * 0.1) * canvas.height / viewHeight;
+      if (px < 0 || py < 0 || px >= canvas.width || py >= canvas.height) continue;
+      const [r, g, b] = context.getImageData(Math.floor(px), Math.floor(py), 1, 1).data;
+      sum += 0.2126 * r + 0.7152 * g + 0.0722 * b;
+      ++count;
+    }
+  }
+  return count ? sum / count : 255;
+}
+
+// The answer's corners are in the photo's pixels after its EXIF orientation (the upright grid).
+// Browsers apply the orientation of a JPEG but not always of other files (Chromium shows a WebP
+// as stored), so the page finds which grid the picture shows: by its size when the orientation
+// turns a photo that is not square a quarter, else by the tags themselves, whose black borders
+// are dark only where the picture really has them.
+function shownGrid(answer, picture) {
+  const { width, height } = answer.image;
+  const o = answer.image.exif_orientation || 1;
+  const upright = { viewWidth: width, viewHeight: height, place: (point) => point };
+  if (o === 1) return upright;
+  const stored = {
+    viewWidth: o >= 5 ? height : width,
+    viewHeight: o >= 5 ? width : height,
+    place: (point) => uprightToStored(o, width, height, point),
+  };
+  const fits = ({ viewWidth, viewHeight }) =>
+    picture.naturalWidth === viewWidth && picture.naturalHeight === viewHeight;
+  if (fits(upright) !== fits(stored)) return fits(stored) ? stored : upright;
+  if (answer.tags.length === 0) return upright;
+  return borderLuma(picture, answer.tags, stored) < borderLuma(picture, answer.tags, upright) ? stored : upright;
+}
+
+// The SVG's view box is the grid the picture shows, stretched over it.
 async function drawOutlines(answer) {
   const outlines = $('outlines');
   outlines.replaceChildren();
-  const { width, height } = answer.image;
   const picture = $('scan-photo');
   await picture.decode().catch(() => {});  // its natural size is known once it is decoded
-  const o = answer.image.exif_orientation || 1;
-  const shownAsStored = o >= 5 && width !== height
-    && picture.naturalWidth === height && picture.naturalHeight === width;
-  const [viewWidth, viewHeight] = shownAsStored ? [height, width] : [width, height];
-  const place = shownAsStored ? (point) => uprightToStored(o, width, height, point) : (point) => point;
+  const { viewWidth, viewHeight, place } = shownGrid(answer, picture);
   outlines.setAttribute('viewBox', `0 0 ${viewWidth} ${viewHeight}`);
   outlines.setAttribute('preserveAspectRatio', 'none');
-  const fontSize = Math.max(width, height) / 28;
-  for (const tag of answer.tags) {
-    const corners = tag.corners_px.map(place);
+  const photoFont = Math.max(viewWidth, viewHeight) / 28;
+  const placed = answer.tags.map((tag) => tag.corners_px.map(place));
+  const centres = placed.map((corners) => corners.reduce(([sx, sy], [x, y]) => [sx + x / 4, sy + y / 4], [0, 0]));
+  answer.tags.forEach((tag, i) => {
+    const corners = placed[i];
     const group = svg('g', { class: tag.status, 'data-pincode': tag.pincode || '' });
     group.append(svg('polygon', { points: corners.map(([x, y]) => `${x},${y}`).join(' ') }));
-    const centreX = corners.reduce((sum, [x]) => sum + x, 0) / corners.length;
+    const centreX = centres[i][0];
     const top = Math.min(...corners.map(([, y]) => y));
+    // Sized by the photo, unless another tag is near: then six digits fit in the distance to it
+    // (a photo of many tags had its captions piled over each other and over the tags).
+    const nearest = Math.min(...centres.map(([x, y], j) => (j === i ? Infinity : Math.hypot(x - centreX, y - centres[i][1]))));
+    const fontSize = Math.min(photoFont, nearest / 4);
     group.append(svg('text', { x: centreX, y: Math.max(fontSize, top - fontSize / 3), 'font-size': fontSize, 'text-anchor': 'middle' },
       tag.status === 'unknown_key' ? `key ${tag.key}` : tag.pincode));
     outlines.append(group);
-  }
+  });
 }
 
 function tagCard(tag, approximate) {
