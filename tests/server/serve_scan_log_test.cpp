@@ -118,6 +118,30 @@ TEST_F(ServeTest, AServerStoppedWhileTheLockIsHeldWritesTheScansItHeldBackBefore
   EXPECT_EQ(ReadFile(dir_.file("stderr.log")).find("lost"), std::string::npos);
 }
 
+// The scans held back are written after serving ends; a second signal must still stop the server
+// at once then (it waited on the log's lock with stop signals unanswered), and say what it left.
+TEST_F(ServeTest, ASecondSignalStopsAServerWritingItsBacklogAndSaysWhatItLeft) {
+  const std::string photo = TaglessPng();
+  constexpr int kScans = 3;
+  HeldWriteLock lock(db_path_);  // held until the server is gone
+  for (int i = 0; i < kScans; ++i) {
+    EXPECT_EQ(client().Post("/api/v1/detect", scanner(), photo, "image/png")->status, 200);
+  }
+  server_->signal(SIGTERM);
+  // Serving ends at once (nothing in flight); the server then waits on the lock for its backlog.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_TRUE(server_->running());
+  server_->signal(SIGTERM);
+  EXPECT_EQ(server_->wait(30), 128 + SIGTERM);
+  const std::string log = ReadFile(dir_.file("stderr.log"));
+  EXPECT_NE(log.find("scan log: up to 3 answered scans held back for it are lost (the stop was "
+                     "forced)"),
+            std::string::npos)
+      << log;
+  lock.release();
+  EXPECT_TRUE(ScansOnceThereAre(db_path_, 1, std::chrono::seconds(0)).empty());
+}
+
 // An answer over the log's 1 MiB a row (about 330 tags with their poses) was answered and then
 // lost from the log. Now the row keeps what each tag read.
 TEST_F(ServeTest, AnAnswerTooLargeForTheScanLogIsLoggedAbridgedNotLost) {

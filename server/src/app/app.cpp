@@ -174,7 +174,7 @@ server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& p
   };
 }
 
-std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
+App BuildApp(const AppConfig& config) {
   auto context = std::make_shared<AppContext>();
   context->pool = config.pool ? config.pool
                               : std::make_shared<ConnectionPool>(
@@ -213,9 +213,14 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
   server::HealthCheck health = config.read_only
                                    ? SnapshotHealthCheck(context->pool)
                                    : DatabaseHealthCheck(config.db_path, context->pool);
-  return std::make_shared<const server::Api>(
-      std::move(router), RegistryTokenVerifier(context->pool), std::move(health), context->metrics,
-      std::move(options));
+  return {
+      std::make_shared<const server::Api>(std::move(router), RegistryTokenVerifier(context->pool),
+                                          std::move(health), context->metrics, std::move(options)),
+      context->scan_log};
+}
+
+std::shared_ptr<const server::Api> BuildApi(const AppConfig& config) {
+  return BuildApp(config).api;
 }
 
 }  // namespace pintag::app

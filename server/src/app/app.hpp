@@ -11,6 +11,7 @@
 #include <string>
 
 #include "app/connection_pool.hpp"
+#include "app/scan_log_writer.hpp"
 #include "pintag/server/api.hpp"
 #include "replica/follow_status.hpp"
 #include "replica/snapshot_publisher.hpp"
@@ -39,7 +40,17 @@ struct AppConfig {
   std::shared_ptr<const replica::FollowStatus> follow_status;
 };
 
-/// Builds the Api. Throws std::runtime_error when the web dir does not exist.
+/// The application, and what its server ends once serving is over.
+struct App {
+  std::shared_ptr<const server::Api> api;
+  /// Writes the scan log; finish() it when serving ends, while a stop signal can still cut it
+  /// short (ending the Api finishes it too).
+  std::shared_ptr<ScanLogWriter> scan_log;
+};
+
+/// Builds the application. Throws std::runtime_error when the web dir does not exist.
+App BuildApp(const AppConfig& config);
+/// BuildApp's Api alone.
 std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
 
 /// Readiness of the database at `path`, as /readyz reports it: the same file (device and inode)

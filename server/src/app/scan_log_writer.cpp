@@ -1,5 +1,6 @@
 #include "app/scan_log_writer.hpp"
 
+#include <algorithm>
 #include <exception>
 #include <optional>
 #include <utility>
@@ -9,8 +10,38 @@
 #include "pintag/server/problem.hpp"
 
 namespace pintag::app {
+namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// Sets `connection`'s busy timeout for one try and puts the one it had back afterwards: a try
+/// made while stopping waits no longer than the time left.
+class BusyTimeoutFor {
+ public:
+  BusyTimeoutFor(db::Connection& connection, std::optional<std::chrono::milliseconds> limit)
+      : connection_(connection) {
+    if (!limit) return;
+    before_ = connection.queryInt64("PRAGMA busy_timeout");
+    const auto ms = std::clamp<std::int64_t>(limit->count(), 0, *before_);
+    connection.execute("PRAGMA busy_timeout = " + std::to_string(ms));
+  }
+  ~BusyTimeoutFor() {
+    if (!before_) return;
+    try {
+      connection_.execute("PRAGMA busy_timeout = " + std::to_string(*before_));
+    } catch (const std::exception&) {
+      // The connection goes back to the pool as it is; its next lease waits less, no more.
+    }
+  }
+  BusyTimeoutFor(const BusyTimeoutFor&) = delete;
+  BusyTimeoutFor& operator=(const BusyTimeoutFor&) = delete;
+
+ private:
+  db::Connection& connection_;
+  std::optional<std::int64_t> before_;
+};
+
+}  // namespace
 
 ScanLogWriter::ScanLogWriter(std::shared_ptr<ConnectionPool> log,
                              std::shared_ptr<server::Metrics> metrics, std::string failures_counter)
@@ -20,20 +51,28 @@ ScanLogWriter::ScanLogWriter(std::shared_ptr<ConnectionPool> log,
       thread_([this] { run(); }) {}
 
 ScanLogWriter::~ScanLogWriter() {
+  finish();
+}
+
+void ScanLogWriter::finish() {
   {
     const std::lock_guard lock(mutex_);
-    stopping_ = true;
+    if (!stopping_) {
+      stopping_ = true;
+      finish_by_ = Clock::now() + kFinishTimeout;
+    }
   }
   queued_.notify_all();
-  thread_.join();
+  if (thread_.joinable()) thread_.join();
 }
 
 void ScanLogWriter::append(db::ScanRecord scan, const std::string& request_id) {
-  if (scan.scanned_at.empty()) scan.scanned_at = db::ScanTime(std::chrono::system_clock::now());
   const std::size_t bytes = scan.result_json.size();
   std::unique_lock lock(mutex_);
-  if (queue_.size() >= kMaxBacklogScans || queued_bytes_ + bytes > kMaxBacklogBytes) {
-    if (!dropping_) {
+  // Timed under the lock, so that the log's ids (its order) and times agree.
+  if (scan.scanned_at.empty()) scan.scanned_at = db::ScanTime(std::chrono::system_clock::now());
+  if (stopping_ || queue_.size() >= kMaxBacklogScans || queued_bytes_ + bytes > kMaxBacklogBytes) {
+    if (!dropping_ && !stopping_) {
       dropping_ = true;
       server::LogEvent("scan log: " + std::to_string(queue_.size()) +
                            " scans are waiting to be written, the most it holds; later scans are "
@@ -41,12 +80,14 @@ void ScanLogWriter::append(db::ScanRecord scan, const std::string& request_id) {
                        /*warning=*/true);
     }
     metrics_->increment(failures_counter_);
-    server::LogRequestError(request_id, "scan log: not logged, the backlog is full");
+    server::LogRequestError(request_id, stopping_ ? "scan log: not logged, the server is stopping"
+                                                  : "scan log: not logged, the backlog is full");
     return;
   }
   const std::uint64_t sequence = next_sequence_++;
   queue_.push_back({sequence, std::move(scan), request_id});
   queued_bytes_ += bytes;
+  held_.store(queue_.size(), std::memory_order_relaxed);
   queued_.notify_one();
   if (behind_) return;
   if (!written_.wait_for(lock, kWaitForWrite, [&] { return done_through_ >= sequence; })) {
@@ -61,18 +102,21 @@ std::size_t ScanLogWriter::backlog() const {
 
 void ScanLogWriter::run() {
   std::unique_lock lock(mutex_);
-  std::optional<Clock::time_point> finish_by;
   while (true) {
     queued_.wait(lock, [this] { return !queue_.empty() || stopping_; });
     if (queue_.empty()) return;
-    if (stopping_ && !finish_by) finish_by = Clock::now() + kFinishTimeout;
-    if (finish_by && Clock::now() >= *finish_by) {
+    if (stopping_ && Clock::now() >= finish_by_) {
       lose(queue_.size(), "not written before the server stopped" +
                               (last_error_.empty() ? "" : " (" + last_error_ + ")"));
       return;
     }
-    // A failed write is tried again after a pause; one that was busy has waited already.
-    if (!writeBatch(lock)) written_.wait_for(lock, std::chrono::seconds(1));
+    if (!writeBatch(lock)) {
+      // Tried again after a pause, which a stop cuts short (and ends at its deadline).
+      const bool was_stopping = stopping_;
+      const auto until =
+          stopping_ ? std::min(Clock::now() + kRetryPause, finish_by_) : Clock::now() + kRetryPause;
+      queued_.wait_until(lock, until, [&] { return stopping_ != was_stopping; });
+    }
   }
 }
 
@@ -82,6 +126,10 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
   batch.reserve(count);
   for (std::size_t i = 0; i < count; ++i) batch.push_back(queue_[i].scan);
   const bool was_failing = !last_error_.empty();
+  std::optional<std::chrono::milliseconds> time_left;
+  if (stopping_) {
+    time_left = std::chrono::duration_cast<std::chrono::milliseconds>(finish_by_ - Clock::now());
+  }
 
   lock.unlock();
   std::optional<db::AppendedScans> appended;
@@ -92,6 +140,7 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
   bool passing = false;
   try {
     auto connection = log_->acquire();
+    const BusyTimeoutFor limit(*connection, time_left);
     auto result = db::AppendScans(*connection, batch);
     if (result) {
       appended = std::move(*result);
@@ -102,7 +151,7 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
     }
   } catch (const server::HttpError& e) {
     // The pool refuses a file that is not at its path any more until it is put back; one it
-    // cannot open (not a database) stays so.
+    // cannot open stays so.
     error = e.problem().detail;
     passing = !log_->servesFileAtPath();
   } catch (const std::exception& e) {
@@ -131,14 +180,27 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
     metrics_->increment(failures_counter_);
     server::LogRequestError(queue_[refusal.index].request_id, "scan log: " + refusal.error.message);
   }
-  for (std::size_t i = 0; i < count; ++i) {
+  dequeue(count);
+  if (was_failing && queue_.empty()) {
+    server::LogEvent("scan log: caught up, the scans held back are written");
+  }
+  return true;
+}
+
+void ScanLogWriter::lose(std::size_t count, const std::string& why) {
+  metrics_->increment(failures_counter_, static_cast<double>(count));
+  server::LogEvent("scan log: " + std::to_string(count) + " answered scans are lost: " + why,
+                   /*warning=*/true);
+  dequeue(count);
+}
+
+void ScanLogWriter::dequeue(std::size_t count) {
+  for (std::size_t i = 0; i < count && !queue_.empty(); ++i) {
     queued_bytes_ -= queue_.front().scan.result_json.size();
     done_through_ = queue_.front().sequence;
     queue_.pop_front();
   }
-  if (was_failing && queue_.empty()) {
-    server::LogEvent("scan log: caught up, the scans held back are written");
-  }
+  held_.store(queue_.size(), std::memory_order_relaxed);
   if (queue_.empty()) {
     last_error_.clear();
     behind_ = false;
@@ -147,20 +209,6 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
     dropping_ = false;
     server::LogEvent("scan log: the backlog has room again");
   }
-  written_.notify_all();
-  return true;
-}
-
-void ScanLogWriter::lose(std::size_t count, const std::string& why) {
-  metrics_->increment(failures_counter_, static_cast<double>(count));
-  server::LogEvent("scan log: " + std::to_string(count) + " answered scans are lost: " + why,
-                   /*warning=*/true);
-  for (std::size_t i = 0; i < count && !queue_.empty(); ++i) {
-    queued_bytes_ -= queue_.front().scan.result_json.size();
-    done_through_ = queue_.front().sequence;
-    queue_.pop_front();
-  }
-  if (queue_.empty()) behind_ = false;
   written_.notify_all();
 }
 

@@ -6,14 +6,17 @@
 //
 // A scan is timed when it is handed over, then written in order with the scans queued beside it,
 // in one transaction. While the log keeps up, append() returns once its scan is written, so an
-// answered scan is in the log as before. When a write has not finished within kWaitForWrite (the
-// lock is held elsewhere), append() returns at once until the backlog is written: the scans are
-// held in memory, up to kMaxBacklogScans and kMaxBacklogBytes of JSON; past that a scan is
-// dropped and counted. Only what may pass is waited for (a lock, a full disk, a database file
-// moved away); a log that cannot be written otherwise (not a database) loses its scans at once.
-// The backlog is written before the writer is destroyed, for at most kFinishTimeout; what is left
-// then, or at a forced stop, is lost and counted.
+// answered scan is in the log as before. When a scan has waited kWaitForWrite for its row (the
+// lock is held elsewhere, or a write is that slow), append() returns at once until the backlog
+// is written: the scans are held in memory, up to kMaxBacklogScans and kMaxBacklogBytes of JSON;
+// past that a scan is dropped and counted. Only what may pass is waited for (a lock, a full disk,
+// a database file moved away); a log that cannot be written otherwise (not a database, a file
+// that cannot be opened) loses its scans at once, counted.
+// finish() writes the backlog for at most kFinishTimeout from when it is called, each try cut to
+// the time left; what is left then is lost and counted. A forced stop (the process ends without
+// finish()) loses what is held: abandoned() says how much, for the stop to log.
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
@@ -39,10 +42,12 @@ class ScanLogWriter {
   static constexpr std::size_t kMaxBatch = 500;  ///< scans written in one transaction
   static constexpr std::chrono::seconds kFinishTimeout{10};
 
+  static constexpr std::chrono::milliseconds kRetryPause{1000};
+
   /// Writes to `log`'s file. Scans it loses are added to `failures_counter` in `metrics`.
   ScanLogWriter(std::shared_ptr<ConnectionPool> log, std::shared_ptr<server::Metrics> metrics,
                 std::string failures_counter);
-  /// Writes the backlog (for at most kFinishTimeout), then ends the thread.
+  /// finish(), when it has not run.
   ~ScanLogWriter();
   ScanLogWriter(const ScanLogWriter&) = delete;
   ScanLogWriter& operator=(const ScanLogWriter&) = delete;
@@ -53,6 +58,14 @@ class ScanLogWriter {
 
   /// Scans queued and not yet written.
   std::size_t backlog() const;
+
+  /// Writes the backlog (for at most kFinishTimeout) and ends the thread; later appends are
+  /// counted as lost. Call once serving has ended.
+  void finish();
+
+  /// Scans held and not written, read without waiting: for a stop that cannot wait to log what
+  /// it abandons.
+  std::size_t abandoned() const { return held_.load(std::memory_order_relaxed); }
 
  private:
   struct Queued {
@@ -66,6 +79,9 @@ class ScanLogWriter {
   bool writeBatch(std::unique_lock<std::mutex>& lock);
   /// Counts, logs and drops the queue's first `count` scans.
   void lose(std::size_t count, const std::string& why);
+  /// Takes the queue's first `count` scans off it as done, and what follows from the queue
+  /// then: waiters woken, the behind and backlog-full states left when it has room.
+  void dequeue(std::size_t count);
 
   std::shared_ptr<ConnectionPool> log_;
   std::shared_ptr<server::Metrics> metrics_;
@@ -81,8 +97,10 @@ class ScanLogWriter {
   bool behind_ = false;             ///< a scan waited kWaitForWrite; cleared when caught up
   bool dropping_ = false;           ///< the backlog is full; logged once until it has room
   bool stopping_ = false;
+  std::chrono::steady_clock::time_point finish_by_;  ///< when stopping_: the deadline
   std::string last_error_;  ///< why the last write failed; empty once the backlog is written
-  std::thread thread_;      ///< last: started once everything above is made
+  std::atomic<std::size_t> held_{0};  ///< queue_.size(), for abandoned()
+  std::thread thread_;                ///< last: started once everything above is made
 };
 
 }  // namespace pintag::app

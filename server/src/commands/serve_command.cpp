@@ -155,10 +155,8 @@ void Run(const ServeArgs& args) {
   // that every worker thread inherits the mask and only the waiter below is interrupted.
   signals.takeStopSignals();
 
-  // Held by pointer so that the application ends before "stopped" is logged: its scan log writer
-  // writes the scans it holds back as it ends (app/scan_log_writer.hpp).
-  auto http_server = std::make_unique<server::HttpServer>(app::BuildApi(config), options);
-  server::HttpServer& http = *http_server;
+  const app::App application = app::BuildApp(config);
+  server::HttpServer http(application.api, options);
   std::string error;
   if (!http.bind(&error)) throw std::runtime_error(error);
   const std::optional<db::NewToken> first_admin =
@@ -211,9 +209,14 @@ void Run(const ServeArgs& args) {
   const std::chrono::seconds drain_timeout(args.drain_timeout_s);
   // Cut short, requests in flight get no answer and destructors do not run: what a moved
   // database's log holds is put where it belongs first.
-  const auto stop_now = [&finished, writable_pool](int status) {
+  const auto stop_now = [&finished, writable_pool, scan_log = application.scan_log](int status) {
     if (finished) return;
     if (writable_pool) writable_pool->servesFileAtPath();
+    if (const std::size_t held = scan_log->abandoned(); held > 0) {
+      server::LogEvent("scan log: up to " + std::to_string(held) +
+                           " answered scans held back for it are lost (the stop was forced)",
+                       /*warning=*/true);
+    }
     std::_Exit(status);
   };
   std::thread waiter([&http, &finished, &replication, &signals, drain_timeout, &stop_now] {
@@ -255,12 +258,14 @@ void Run(const ServeArgs& args) {
     }
   });
   const bool served = http.serve();
-  // serve() returned: stop() ran from the waiter, or serving failed; then wake the waiter.
+  // serve() returned: stop() ran from the waiter, or serving failed. The scans held back for the
+  // scan log are written while the waiter still answers a second signal and the drain's deadline.
+  application.scan_log->finish();
+  // Then wake the waiter.
   finished = true;
   signals.wake();
   waiter.join();
   http.stop();
-  http_server.reset();
   server::LogEvent("stopped");
   if (!served) throw std::runtime_error("the server stopped unexpectedly");
 }
