@@ -222,11 +222,12 @@ const kStorePrefix = 'pintag.token.';
 const kTokenText = /^[\x21-\x7e]+$/;
 
 /**
- * A pasted token as it is meant: spaces, line breaks and invisible characters (a zero-width space
- * or byte order mark that came along from a chat or a PDF) dropped, since a token holds none.
+ * A pasted token as it is meant: spaces, line breaks and invisible characters (a zero-width space,
+ * a byte order mark or a bidi mark that came along from a chat or a PDF) dropped, since a token
+ * holds none.
  */
 export function cleanToken(text) {
-  return text.replace(/[\s\u00ad\u180e\u200b-\u200d\u2060\ufeff]/gu, '');
+  return text.replace(/[\s\u00ad\u061c\u180e\u200b-\u200f\u202a-\u202e\u2060-\u2069\ufeff]/gu, '');
 }
 
 function store() {

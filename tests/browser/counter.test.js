@@ -318,9 +318,9 @@ test('pincodes pasted with no-break or zero-width spaces are read as typed', asy
 test('a token pasted with invisible characters is used as it is meant, and Forget takes its preview', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);
-  // A zero-width space and a byte order mark, as a token copied from a chat or a PDF can carry;
-  // the browser refused to send such a header with its own message, naming no field.
-  await page.locator('#token').fill(`\u200b ${counterToken}\ufeff\n`);
+  // A zero-width space, a byte order mark and a bidi mark, as a token copied from a chat or a PDF
+  // can carry; the browser refused to send such a header with its own message, naming no field.
+  await page.locator('#token').fill(`\u200b ${counterToken}\ufeff\u200e\n`);
   await page.locator('#pins').fill('110001');
   await page.getByRole('button', { name: 'Look up' }).click();
   await page.locator('#label-preview').waitFor();

@@ -140,6 +140,9 @@ TEST_F(LoopbackTest, ProblemsFor401And403) {
     EXPECT_EQ(nlohmann::json::parse(twice->body)["detail"],
               "the request carries 2 Authorization headers; send one, 'Bearer <token>'");
   }
+  // On open routes too: a proxy in front may still act on a credential there.
+  ExpectProblem(client_->Get("/livez", {{"Authorization", counter}, {"Authorization", scanner}}),
+                400);
   r = client_->Get("/api/v1/files/report.bin", {{"Authorization", counter}});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);

@@ -113,6 +113,15 @@ Admission Api::admit(std::string_view method, std::string_view path,
   }
   admission.match = router_.match(method, path);
   const Route* route = admission.match.route;
+  // One credential, on every path (open routes and static files too): a proxy that acts on
+  // another copy than this server would let a request through as someone else.
+  if (const std::size_t copies = headers.count("Authorization"); copies > 1) {
+    admission.rejection =
+        ProblemResponse(400, "the request carries " + std::to_string(copies) +
+                                 " Authorization headers; send one, 'Bearer <token>'");
+    admission.route_label = route != nullptr ? route->pattern : "unmatched";
+    return admission;
+  }
   if (route == nullptr) {
     if (!admission.match.allowed_methods.empty()) {
       std::vector<std::string> allowed = admission.match.allowed_methods;
@@ -151,14 +160,6 @@ Admission Api::admit(std::string_view method, std::string_view path,
 
   // Bearer auth, before a byte of the body is read.
   if (route->access != Access::kOpen) {
-    // One credential: a proxy that acts on another copy than this server would let a request
-    // through as someone else.
-    if (const std::size_t copies = headers.count("Authorization"); copies > 1) {
-      admission.rejection =
-          ProblemResponse(400, "the request carries " + std::to_string(copies) +
-                                   " Authorization headers; send one, 'Bearer <token>'");
-      return admission;
-    }
     const std::optional<std::string> authorization = FirstHeader(headers, "Authorization");
     if (!authorization) {
       admission.rejection =
