@@ -97,7 +97,8 @@ function shownGrid(answer, picture) {
   const { width, height } = answer.image;
   const o = answer.image.exif_orientation || 1;
   const upright = { viewWidth: width, viewHeight: height, place: (point) => point };
-  if (o === 1) return upright;
+  // Not drawn (a TIFF the browser cannot show): no picture for the outline to sit on.
+  if (o === 1 || picture.naturalWidth === 0) return upright;
   const stored = {
     viewWidth: o >= 5 ? height : width,
     viewHeight: o >= 5 ? width : height,

@@ -178,6 +178,14 @@ test('a TIFF the browser cannot draw is still read, and the page says why no pho
   assert.equal(await page.locator('#photo-figure').isHidden(), true);  // no broken picture
   await screenshot(page, 'scanner-tiff');
   assert.deepEqual(page.problems, []);
+  // Turned by its EXIF orientation, a square TIFF leaves no size to judge by: the page must not
+  // look for the tags on a picture it could not draw.
+  const turned = join(dir, 'label-square-exif6.tif');
+  await promisify(execFile)('oiiotool', [labelPng, '--crop', '0,0,899,899', '--fullpixels',
+    '--attrib', 'Orientation', '6', '-o', turned]);
+  const turnedPage = await scannerReading(turned);
+  await turnedPage.locator('#summary').filter({ hasText: /^1 tag read.*cannot show the photo itself/ }).waitFor();
+  assert.deepEqual(turnedPage.problems, []);
 });
 
 test('the outline sits on the tag of a WebP whose EXIF orientation the browser does not apply', async () => {
