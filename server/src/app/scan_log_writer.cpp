@@ -143,7 +143,7 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
     const BusyTimeoutFor limit(*connection, time_left);
     auto result = db::AppendScans(*connection, batch);
     if (result) {
-      appended = std::move(*result);
+      appended = std::move(result).value();
     } else {
       error = result.error().message;
       passing = result.error().code == db::ErrorCode::kBusy ||

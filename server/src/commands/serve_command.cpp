@@ -65,7 +65,7 @@ std::optional<db::NewToken> FirstAdminToken(const std::string& path) {
   if (!tokens->empty()) return std::nullopt;
   auto token = db::CreateToken(connection, db::Role::kAdmin, "first start of pintag serve");
   if (!token) throw std::runtime_error(token.error().message);
-  return std::move(*token);
+  return std::move(token).value();
 }
 
 /// glibc gives each busy thread its own malloc arena, up to 8 per core; the detector's
