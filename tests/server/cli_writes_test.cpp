@@ -141,9 +141,9 @@ TEST(CliWrites, AServerWhoseFirstAdminTokenCannotBePrintedRevokesItAndDoesNotSta
   const std::string db = dir.file("copy.db");
   std::filesystem::copy_file(SeededTemplate(), db);
   // Bounded: a server that starts regardless would serve until stopped.
-  const CommandResult run = RunShell("timeout 60 " + PintagExe() +
-                                     " serve --port 0 --bind 127.0.0.1 --db " + db + " 2>&1 >" +
-                                     kFull);
+  const CommandResult run =
+      RunShell("timeout 60 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + db +
+               " 2>&1 >" + kFull);
   EXPECT_EQ(run.status, 1) << run.out;
   EXPECT_NE(run.out.find("the token is revoked; make an admin token with `pintag token create "
                          "--role admin --db " +

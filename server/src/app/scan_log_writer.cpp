@@ -95,11 +95,6 @@ void ScanLogWriter::append(db::ScanRecord scan, const std::string& request_id) {
   }
 }
 
-std::size_t ScanLogWriter::backlog() const {
-  const std::lock_guard lock(mutex_);
-  return queue_.size();
-}
-
 void ScanLogWriter::run() {
   std::unique_lock lock(mutex_);
   while (true) {

@@ -14,7 +14,7 @@
 // that cannot be opened) loses its scans at once, counted.
 // finish() writes the backlog for at most kFinishTimeout from when it is called, each try cut to
 // the time left; what is left then is lost and counted. A forced stop (the process ends without
-// finish()) loses what is held: abandoned() says how much, for the stop to log.
+// finish()) loses what is held: backlog() says how much, for the stop to log.
 
 #include <atomic>
 #include <chrono>
@@ -56,16 +56,13 @@ class ScanLogWriter {
   /// once while the log is behind. `request_id` names the request in the server log.
   void append(db::ScanRecord scan, const std::string& request_id);
 
-  /// Scans queued and not yet written.
-  std::size_t backlog() const;
+  /// Scans queued and not yet written. Read without waiting on the writer, so a stop that
+  /// cannot wait may still log what it abandons.
+  std::size_t backlog() const { return held_.load(std::memory_order_relaxed); }
 
   /// Writes the backlog (for at most kFinishTimeout) and ends the thread; later appends are
   /// counted as lost. Call once serving has ended.
   void finish();
-
-  /// Scans held and not written, read without waiting: for a stop that cannot wait to log what
-  /// it abandons.
-  std::size_t abandoned() const { return held_.load(std::memory_order_relaxed); }
 
  private:
   struct Queued {
@@ -99,7 +96,7 @@ class ScanLogWriter {
   bool stopping_ = false;
   std::chrono::steady_clock::time_point finish_by_;  ///< when stopping_: the deadline
   std::string last_error_;  ///< why the last write failed; empty once the backlog is written
-  std::atomic<std::size_t> held_{0};  ///< queue_.size(), for abandoned()
+  std::atomic<std::size_t> held_{0};  ///< queue_.size(), for backlog()
   std::thread thread_;                ///< last: started once everything above is made
 };
 

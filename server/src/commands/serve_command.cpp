@@ -212,7 +212,7 @@ void Run(const ServeArgs& args) {
   const auto stop_now = [&finished, writable_pool, scan_log = application.scan_log](int status) {
     if (finished) return;
     if (writable_pool) writable_pool->servesFileAtPath();
-    if (const std::size_t held = scan_log->abandoned(); held > 0) {
+    if (const std::size_t held = scan_log->backlog(); held > 0) {
       server::LogEvent("scan log: up to " + std::to_string(held) +
                            " answered scans held back for it are lost (the stop was forced)",
                        /*warning=*/true);
