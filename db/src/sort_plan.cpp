@@ -25,6 +25,19 @@ Error TooManyRules(std::string_view at) {
           std::string(at) + "a sort plan has at most " + std::to_string(kMaxPlanRules) + " rules"};
 }
 
+/// A bin is shown on screens and in the plan's CSV, which is opened in spreadsheets: a bin
+/// starting with = + - or @ would be run there as a formula. Refused rather than escaped, since the
+/// CSV is put back as it reads (an escaping ' would become part of the bin).
+std::optional<Error> CheckBin(std::string_view field, std::string_view bin) {
+  if (auto error = CheckShownName(field, bin, kMaxBinBytes)) return error;
+  if (!bin.empty() && std::string_view("=+-@").find(bin.front()) != std::string_view::npos) {
+    return Error{ErrorCode::kInvalid,
+                 std::string(field) + " '" + std::string(bin.substr(0, 64)) + "' starts with '" +
+                     bin.front() + "', which a spreadsheet opening the plan's CSV runs as a formula"};
+  }
+  return std::nullopt;
+}
+
 /// `error` with `at` ("line 4: ") put before its message.
 Error At(std::string_view at, Error error) {
   error.message.insert(0, at);
@@ -104,7 +117,7 @@ std::optional<Error> CheckRule(const SortRule& rule) {
                                           "' starts with 0, as no pincode does: the rule could "
                                           "never match"};
   }
-  return CheckShownName("bin for prefix " + rule.prefix, rule.bin, kMaxBinBytes);
+  return CheckBin("bin for prefix " + rule.prefix, rule.bin);
 }
 
 std::optional<Error> CheckPlan(const SortPlan& plan) {
@@ -118,7 +131,7 @@ std::optional<Error> CheckPlan(const SortPlan& plan) {
                                           "' is '.' or '..' or holds one of / ? # % \\ + & =, "
                                           "which a URL would have to encode"};
   }
-  if (auto error = CheckShownName("fallback bin", plan.fallback_bin, kMaxBinBytes)) return error;
+  if (auto error = CheckBin("fallback bin", plan.fallback_bin)) return error;
   if (auto error = CheckText("description", plan.description, kMaxLabelBytes, true)) return error;
   if (plan.rules.size() > kMaxPlanRules) {
     return Error{ErrorCode::kTooLarge, "the plan has " + std::to_string(plan.rules.size()) +
@@ -175,7 +188,7 @@ Result<SortPlan> ParsePlanCsv(std::string_view name, std::string_view csv) {
       if (have_fallback) return Error{ErrorCode::kInvalid, at + "a second fallback row '*'"};
       have_fallback = true;
       plan.fallback_bin = field(record, 1);
-      if (auto problem = CheckShownName("fallback bin", plan.fallback_bin, kMaxBinBytes)) {
+      if (auto problem = CheckBin("fallback bin", plan.fallback_bin)) {
         return At(at, *problem);
       }
       continue;

@@ -201,6 +201,20 @@ TEST_F(SortPlans, NamesAndBinsMustReadAsWhatTheyAre) {
   // Kannur in Malayalam's older chillu form ends in a zero-width joiner.
   EXPECT_EQ(refusal("hub-d", "\u0d15\u0d23\u0d4d\u0d23\u0d42\u0d30\u0d4d\u200d"), "");
   EXPECT_FALSE(refusal("hub-e", "\u200dkannur").empty());
+  // The plan's CSV is opened in spreadsheets, which run a cell starting with = + - @.
+  for (const std::string& bin : {std::string("=HYPERLINK(\"x\")"), std::string("+91"),
+                                 std::string("-2"), std::string("@sum")}) {
+    EXPECT_NE(refusal("hub-f", bin).find("runs as a formula"), std::string::npos) << bin;
+  }
+  EXPECT_EQ(refusal("hub-f", "a=b+c-d@e"), "");
+  SortPlan formula_fallback = HubPlan();
+  formula_fallback.fallback_bin = "=1+1";
+  EXPECT_FALSE(SavePlan(db_, formula_fallback).ok());
+  const auto from_csv = ParsePlanCsv("x", "prefix,bin\n*,ok\n11,\"=cmd|' /c calc'!A0\"\n");
+  ASSERT_FALSE(from_csv.ok());
+  EXPECT_EQ(from_csv.error().message.rfind("line 3: bin for prefix 11 '=cmd", 0), 0U)
+      << from_csv.error().message;
+  EXPECT_FALSE(ParsePlanCsv("x", "prefix,bin\n*,@floor\n").ok());
 }
 
 TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {
