@@ -232,7 +232,7 @@ async function refreshPreview() {
     const plan = `plan ${planValue() || 'default'}`;
     show($('preview'),
       el('img', { id: 'label-preview', src: previewUrl, alt: `Label for ${selected}${office ? ` (${office})` : ''}` }),
-      el('figcaption', { class: 'small muted', style: 'margin-top:0.6rem' },
+      el('figcaption', { class: 'small muted space-above-md' },
         [selected, office, sizeText[sizeValue()] || sizeValue(), plan].filter(Boolean).join(' · ')));
   } catch (error) {
     if (request !== previewRequest) return;

@@ -41,7 +41,7 @@ function showRecord(record, note) {
   const offices = record.offices || [];
   show($('detail'),
     note ? messageBox('ok', note) : null,
-    el('div', { class: 'row', style: 'align-items:center;margin:0.6rem 0' },
+    el('div', { class: 'row record-head' },
       el('span', { class: 'big-pin', id: 'detail-pincode' }, record.pincode), badge(record.status)),
     el('dl', { class: 'kv' },
       [['Key', el('span', { id: 'detail-key', class: 'mono' }, String(record.key))], ['Office', record.office || '—'],
@@ -49,7 +49,7 @@ function showRecord(record, note) {
         ['Region', record.region || '—'], ['Circle', record.circle || '—'],
         record.retired_at ? ['Retired', record.retired_at] : null]
         .filter(Boolean).map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])),
-    offices.length > 1 ? el('details', { class: 'more', style: 'margin-top:0.6rem' },
+    offices.length > 1 ? el('details', { class: 'more space-above-md' },
       el('summary', {}, `All ${offices.length} offices`),
       el('ul', { class: 'small' }, offices.map((o) => el('li', {}, `${o.name} — ${o.district}`)))) : null);
 }

@@ -67,3 +67,29 @@ test('another site cannot frame the pages; the server\'s own pages still can', a
   assert.equal(await drawnInAFrameOf(server.url.replace('127.0.0.1', 'localhost')), false);
   assert.equal(await drawnInAFrameOf(server.url), true);
 });
+
+// Text that reaches a page (an office name from an imported file, a bin) must not run: the pages'
+// policy lets only the server's own script and style files run. A page that itself broke the
+// policy would log the violation as a console error, which every test's page.problems catches.
+test('a page runs no inline script or style attribute, and says so in its console', async () => {
+  for (const name of ['index', 'counter', 'scanner', 'registry']) {
+    const page = await newPage(browser);
+    await page.goto(`${server.url}/${name}.html`);
+    await page.waitForLoadState('networkidle');
+    assert.deepEqual(page.problems, [], `${name}.html loads within its own policy`);
+    const ran = await page.evaluate(async () => {
+      const script = document.createElement('script');
+      script.textContent = 'window.injectedRan = true;';
+      document.body.append(script);
+      const marked = document.createElement('p');
+      marked.setAttribute('style', 'color: rgb(1, 2, 3)');
+      marked.textContent = 'x';
+      document.body.append(marked);
+      await new Promise((resolve) => setTimeout(resolve, 100));
+      return { script: window.injectedRan === true, style: getComputedStyle(marked).color === 'rgb(1, 2, 3)' };
+    });
+    assert.deepEqual(ran, { script: false, style: false }, name);
+    assert.ok(page.problems.some((p) => /Content Security Policy/.test(p)), `${name}: ${page.problems}`);
+    await page.context().close();
+  }
+});

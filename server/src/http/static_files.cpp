@@ -15,6 +15,9 @@ namespace {
 
 constexpr std::size_t kMaxUrlPath = 1024;
 constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t{64} * 1024 * 1024;
+constexpr std::string_view kPagePolicy =
+    "default-src 'self'; img-src 'self' blob:; object-src 'none'; base-uri 'none'; "
+    "form-action 'self'; frame-ancestors 'self'";
 
 // realpath(3): the canonical absolute path with every symlink resolved; nothing if missing.
 std::optional<std::filesystem::path> RealPath(const std::filesystem::path& path) {
@@ -82,9 +85,12 @@ HttpResponse StaticFiles::serve(std::string_view url_path) const {
   HttpResponse response = HttpResponse::Bytes(std::string(MediaTypeFor(*real)), std::move(body));
   response.headers.emplace_back("X-Content-Type-Options", "nosniff");
   response.headers.emplace_back("Cache-Control", "no-cache");
-  // The pages act with the token typed into them (retiring a pincode cannot be undone): another
-  // site must not frame them and lead a click onto a button it hides.
-  response.headers.emplace_back("Content-Security-Policy", "frame-ancestors 'self'");
+  // The pages act with the token typed into them (retiring a pincode cannot be undone):
+  // - another site must not frame them and lead a click onto a button it hides;
+  // - text that got into a page (an office name from an imported file) must not run as script or
+  //   style: only the server's own files run, and pictures come from it or from the photo and label
+  //   the page holds (blob:).
+  response.headers.emplace_back("Content-Security-Policy", std::string(kPagePolicy));
   response.headers.emplace_back("X-Frame-Options", "SAMEORIGIN");
   return response;
 }
