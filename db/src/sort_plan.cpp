@@ -33,7 +33,8 @@ std::optional<Error> CheckBin(std::string_view field, std::string_view bin) {
   if (!bin.empty() && std::string_view("=+-@").find(bin.front()) != std::string_view::npos) {
     return Error{ErrorCode::kInvalid,
                  std::string(field) + " '" + std::string(bin.substr(0, 64)) + "' starts with '" +
-                     bin.front() + "', which a spreadsheet opening the plan's CSV runs as a formula"};
+                     bin.front() +
+                     "', which a spreadsheet opening the plan's CSV runs as a formula"};
   }
   return std::nullopt;
 }
