@@ -512,6 +512,10 @@ TEST_F(ServeTest, SigtermFinishesTheRequestInFlightThenExits) {
   ::close(fd);
   EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
   EXPECT_NE(answer.find("%PDF-"), std::string::npos);
+  // The answer says the connection ends, so that the client does not send another request on it.
+  const std::string answer_head = answer.substr(0, answer.find("\r\n\r\n"));
+  EXPECT_NE(answer_head.find("\r\nConnection: close"), std::string::npos) << answer_head;
+  EXPECT_EQ(answer_head.find("Keep-Alive"), std::string::npos) << answer_head;
   EXPECT_EQ(server_->wait(30), 0);  // a second SIGTERM would cut the drain short
   EXPECT_NE(ReadFile(dir_.file("stderr.log")).find("stopped"), std::string::npos);
   httplib::Client after("127.0.0.1", server_->port());

@@ -359,6 +359,8 @@ struct HttpServer::Impl {
     pool->enqueue([this, fd, requests_left] { server.serveConnection(fd, requests_left); });
   }
   std::atomic<int> listen_fd{-1};
+  /// Set by stop(): answers from then on close their connection.
+  std::atomic<bool> stopping{false};
   int port = 0;
   std::thread thread;
 
@@ -725,6 +727,15 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
   s.set_pre_routing_handler([impl](const httplib::Request& req, httplib::Response& res) {
     return impl->preRoute(req, res);
   });
+  // Runs as every answer is written. An answer sent while the server stops (a request in flight
+  // at SIGTERM) closes its connection: a client that took it as kept alive would send its next
+  // request into a socket about to close, and an upload is not retried by clients or proxies.
+  s.set_post_routing_handler([impl](const httplib::Request& /*req*/, httplib::Response& res) {
+    if (impl->stopping && res.get_header_value("Connection") != "close") {
+      res.headers.erase("Keep-Alive");
+      res.set_header("Connection", "close");
+    }
+  });
   s.set_error_handler(httplib::Server::HandlerWithResponse(
       [impl](const httplib::Request& req, httplib::Response& res) {
         return impl->onError(req, res);
@@ -808,6 +819,7 @@ bool HttpServer::start(std::string* error) {
 }
 
 void HttpServer::stop() {
+  impl_->stopping = true;
   impl_->server.stop();
   if (impl_->thread.joinable()) impl_->thread.join();
 }
