@@ -3,6 +3,7 @@
 // every serve flag also from a PINTAG_* variable, and the process_* metrics.
 
 #include <sqlite3.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -12,6 +13,7 @@
 
 #include "pintag/db/database.hpp"
 #include "pintag/db/scan_log.hpp"
+#include "pintag/test/loopback_socket.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -67,6 +69,39 @@ TEST_F(ServeLogTest, EveryRequestGetsOneAccessLineWithItsEchoedRequestId) {
   const auto missing_lines = LogLines(stderrFile(), "id=missing-1");
   ASSERT_EQ(missing_lines.size(), 1U);
   EXPECT_NE(missing_lines[0].find("status=404"), std::string::npos) << missing_lines[0];
+}
+
+// An answer the client went away from is logged with what the server answered and cut_off=true:
+// a 200 alone would say the client got it. The file is larger than loopback's socket buffers
+// can hold, so the server is still writing when the client resets the connection.
+TEST_F(ServeLogTest, AnAnswerTheClientLeftIsLoggedAsCutOff) {
+  const std::filesystem::path web = dir_.path() / "web";
+  std::filesystem::create_directories(web);
+  WriteFile(web / "big.bin", std::string(std::size_t{48} << 20, 'x'));
+  startServer({"--web", web.string()});
+
+  auto whole = client().Get("/big.bin", {{"X-Request-Id", "read-whole"}});
+  ASSERT_TRUE(whole);
+  EXPECT_EQ(whole->body.size(), std::size_t{48} << 20);
+  const auto whole_lines = LogLines(stderrFile(), "id=read-whole");
+  ASSERT_EQ(whole_lines.size(), 1U);
+  EXPECT_EQ(whole_lines[0].find("cut_off"), std::string::npos) << whole_lines[0];
+
+  const int fd = test::ConnectLoopback(server_->port());
+  ASSERT_GE(fd, 0);
+  ASSERT_TRUE(test::SendAll(fd, "GET /big.bin HTTP/1.1\r\nHost: x\r\nX-Request-Id: left\r\n\r\n"));
+  const std::string head = test::ReceiveUntil(
+      fd, 30, [](const std::string& in) { return in.find("\r\n\r\n") != std::string::npos; });
+  ASSERT_EQ(head.rfind("HTTP/1.1 200", 0), 0U) << head.substr(0, 200);
+  const linger reset_on_close{1, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &reset_on_close, sizeof reset_on_close);
+  ::close(fd);
+  const auto left_lines = LogLines(stderrFile(), "id=left");
+  ASSERT_EQ(left_lines.size(), 1U) << ReadFile(stderrFile());
+  EXPECT_NE(left_lines[0].find("status=200"), std::string::npos) << left_lines[0];
+  EXPECT_NE(left_lines[0].find("cut_off=true"), std::string::npos) << left_lines[0];
+  // The server goes on serving.
+  EXPECT_EQ(client().Get("/livez")->status, 200);
 }
 
 TEST_F(ServeLogTest, AnInsaneOrMissingRequestIdIsReplacedByARandomOne) {

@@ -153,11 +153,15 @@ std::size_t ConnectionStream::headBytesToTake(std::string_view peeked) {
 }
 
 ssize_t ConnectionStream::write(const char* ptr, size_t size) {
-  if (!is_writable()) return -1;
+  if (!is_writable()) {
+    write_failed_ = true;
+    return -1;
+  }
   ssize_t sent = 0;
   do {
     sent = ::send(fd_, ptr, size, MSG_NOSIGNAL);
   } while (sent < 0 && errno == EINTR);
+  if (sent < 0) write_failed_ = true;
   return sent;
 }
 

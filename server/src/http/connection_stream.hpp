@@ -78,6 +78,9 @@ class ConnectionStream final : public httplib::Stream {
   }
   bool wasAnswered() const { return answered_; }
   bool closeAfterAnswer() const { return close_; }
+  /// True once a write failed or timed out: the answer did not all reach the client (it closed
+  /// the connection, or stopped reading for the write timeout).
+  bool writeFailed() const { return write_failed_; }
 
  private:
   /// How many of `peeked`, the bytes waiting in the socket, a read of the head takes, checking
@@ -98,6 +101,7 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t unread_ = 0;
   bool answered_ = false;
   bool close_ = false;
+  bool write_failed_ = false;
   std::array<char, 4096> buffer_{};
   std::size_t buffered_begin_ = 0;
   std::size_t buffered_end_ = 0;

@@ -671,7 +671,8 @@ struct HttpServer::Impl {
                .status = res.status,
                .bytes = res.body.size(),
                .seconds = seconds,
-               .principal = principal});
+               .principal = principal,
+               .cut_off = t_connection != nullptr && t_connection->writeFailed()});
     t_state = RequestState{};
   }
 };

@@ -35,6 +35,7 @@ struct AccessRecord {
   std::size_t bytes = 0;       ///< response body bytes
   double seconds = 0;          ///< from the request's headers read to its answer built
   std::string_view principal;  ///< the token id, or empty for open routes
+  bool cut_off = false;        ///< the answer did not all reach the client (it went away)
 };
 void LogAccess(const AccessRecord& record);
 
