@@ -177,5 +177,68 @@ TEST_F(ReplicaSetTest, NginxWithThreeReplicasLosesNothingWhenOneIsKilledUnderLoa
   if (HasFailure()) std::cerr << "nginx:\n" << nginx.logs().substr(0, 20000);
 }
 
+/// Asserts `r` is a problem+json answer from nginx with this status; returns its body.
+json ExpectNginxProblem(const httplib::Result& r, int status) {
+  if (!r) {
+    ADD_FAILURE() << "no answer: " << httplib::to_string(r.error());
+    return {};
+  }
+  EXPECT_EQ(r->status, status) << r->body.substr(0, 300);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json");
+  EXPECT_EQ(r->get_header_value("Server"), "nginx");  // without its version
+  const json body = Body(r);
+  EXPECT_EQ(body["status"], status) << r->body.substr(0, 300);
+  EXPECT_TRUE(body["title"].is_string() && body["detail"].is_string()) << r->body.substr(0, 300);
+  EXPECT_FALSE(r->get_header_value("X-Request-Id").empty());
+  return body;
+}
+
+// Through nginx, an answer nginx makes itself (a body over the limit, no server up) reads as the
+// server's own problem+json; every request carries one id, in the answer, in nginx's log (which
+// holds the client's address) and in the server's log.
+TEST_F(ReplicaSetTest, NginxAnswersItsOwnRefusalsAsProblemsAndCarriesOneRequestId) {
+  ASSERT_TRUE(startFollower(0).ok());
+  NginxProcess nginx(dir_.path() / "nginx", primary_->port(), {replica(0).port()});
+  ASSERT_TRUE(nginx.ok()) << nginx.error();
+  httplib::Client front("127.0.0.1", nginx.port());
+
+  const auto looked_up = front.Get("/api/v1/pincodes/110001");
+  ASSERT_TRUE(looked_up);
+  ASSERT_EQ(looked_up->status, 200);
+  const std::string id = looked_up->get_header_value("X-Request-Id");
+  EXPECT_EQ(id.size(), 32U) << id;
+  const auto own = front.Get("/api/v1/pincodes/560001", {{"X-Request-Id", "scanner-7-0042"}});
+  ASSERT_TRUE(own);
+  EXPECT_EQ(own->get_header_value("X-Request-Id"), "scanner-7-0042");
+  // Both in each log: nginx writes its log at most 1 s late (flush=1s).
+  const auto logged_in_both = [&](const std::string& wanted) {
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      if (nginx.logs().find("id=" + wanted) != std::string::npos &&
+          stderrOf("replica-0").find("id=" + wanted) != std::string::npos) {
+        return true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  };
+  EXPECT_TRUE(logged_in_both(id)) << nginx.logs() << stderrOf("replica-0");
+  EXPECT_TRUE(logged_in_both("scanner-7-0042"));
+
+  // One byte over the documented 25 MiB: refused by nginx before any server sees it.
+  const std::string over(std::size_t{25} << 20 | 1, 'x');
+  const json too_large = ExpectNginxProblem(
+      front.Post("/api/v1/detect", Auth(scanner_token_), over, "image/jpeg"), 413);
+  EXPECT_NE(too_large.dump().find("26214400 bytes"), std::string::npos) << too_large.dump();
+
+  // No replica up: nginx has nobody to ask.
+  EXPECT_EQ(replica(0).stop(SIGKILL), 128 + SIGKILL);
+  httplib::Client again("127.0.0.1", nginx.port());
+  ExpectNginxProblem(again.Get("/api/v1/pincodes/110001"), 502);
+  // The servers' own refusals pass through as they were: a write still reaches the primary.
+  const json refused = Body(again.Post("/api/v1/pincodes", "{}", "application/json"));
+  EXPECT_EQ(refused["status"], 401) << refused.dump();
+  if (HasFailure()) std::cerr << "nginx:\n" << nginx.logs().substr(0, 20000);
+}
+
 }  // namespace
 }  // namespace pintag::serve_test
