@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "pintag/db/sqlite.hpp"
+#include "pintag/db/tokens.hpp"
 #include "serve_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -130,6 +132,69 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
   EXPECT_EQ(run.status, 1) << run.out;
   EXPECT_NE(run.out.find("the token is revoked"), std::string::npos) << run.out;
   ExpectOneAdminTokenRevoked(dir, db);
+}
+
+// `token create --out FILE` (a replica's --follow-token-file): the secret in a file only its owner
+// may read, replaced whole, nothing on stdout; a directory that is not there is a usage error
+// before any token is made, and a file that cannot be written revokes the token made for it.
+TEST(CliWrites, ATokenWrittenToAFileIsItsOwnersAloneAndReplacedWhole) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const std::filesystem::path secrets = dir.path() / "secrets";
+  std::filesystem::create_directory(secrets);
+  const std::string file = (secrets / "replica.token").string();
+  const auto create = [&](const std::string& out) {
+    return RunPintagWithStdoutTo(
+        "token create --role replica --label r --out " + out + " --db " + db,
+        dir.file("stdout.txt"));
+  };
+  const auto secret_in = [](const std::string& path) {
+    const std::string text = ReadFile(path);
+    EXPECT_EQ(text.rfind("pt_", 0), 0U) << text;
+    EXPECT_EQ(text.back(), '\n');
+    return text.substr(0, text.size() - 1);
+  };
+  const CommandResult first = create(file);
+  ASSERT_EQ(first.status, 0) << first.out;
+  EXPECT_EQ(ReadFile(dir.file("stdout.txt")), "");
+  EXPECT_NE(first.out.find("its secret is in " + file), std::string::npos) << first.out;
+  EXPECT_EQ(std::filesystem::status(file).permissions(),
+            std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  const std::string first_secret = secret_in(file);
+  db::Connection connection(db, {.create = false, .read_only = true});
+  const auto verified = db::VerifyToken(connection, first_secret);
+  ASSERT_TRUE(verified.ok()) << verified.error().message;
+  EXPECT_EQ(verified->role, db::Role::kReplica);
+
+  // A second one replaces the first whole, still 0600 (even over a file others could read), and
+  // leaves nothing beside it.
+  std::filesystem::permissions(file, std::filesystem::perms(0644));
+  ASSERT_EQ(create(file).status, 0);
+  EXPECT_NE(secret_in(file), first_secret);
+  EXPECT_TRUE(db::VerifyToken(connection, secret_in(file)).ok());
+  EXPECT_EQ(std::filesystem::status(file).permissions(),
+            std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(secrets),
+                          std::filesystem::directory_iterator()),
+            1);
+
+  const auto token_count = [&] { return connection.queryInt64("SELECT count(*) FROM api_tokens"); };
+  const std::int64_t before = token_count();
+  const CommandResult missing = create((dir.path() / "no-such-dir" / "t").string());
+  EXPECT_EQ(missing.status, 2) << missing.out;
+  EXPECT_NE(missing.out.find("is not a directory"), std::string::npos) << missing.out;
+  EXPECT_EQ(create(secrets.string()).status, 2);
+  EXPECT_EQ(token_count(), before);
+
+  // /proc takes no new files, not even from root: the token made is revoked.
+  const CommandResult unwritable = create("/proc/pintag-secret");
+  EXPECT_EQ(unwritable.status, 1) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("the token is revoked"), std::string::npos) << unwritable.out;
+  EXPECT_EQ(token_count(), before + 1);
+  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM api_tokens WHERE revoked_at IS NULL AND "
+                                  "id = (SELECT max(id) FROM api_tokens)"),
+            0);
 }
 
 // The first start of `pintag serve` prints the first admin token. Printed nowhere, it stayed

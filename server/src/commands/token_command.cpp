@@ -1,5 +1,6 @@
 // `pintag token create|list|revoke`: API tokens for the HTTP server.
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -19,6 +20,7 @@ struct TokenArgs {
   std::string db = "pintag.db";
   std::string role;
   std::string label;
+  std::string out;  ///< a file for the secret instead of stdout
   std::int64_t id = 0;
 };
 
@@ -30,9 +32,26 @@ void Create(const TokenArgs& args) {
   if (auto error = db::CheckText("label", args.label, db::kMaxLabelBytes, true)) {
     throw UsageError("--" + error->message);
   }
+  // A file in a directory that is not there is a mistyped path: no token is made for it.
+  const std::filesystem::path out(args.out);
+  if (!args.out.empty()) {
+    const std::filesystem::path directory = out.has_parent_path() ? out.parent_path() : ".";
+    if (!std::filesystem::is_directory(directory)) {
+      throw UsageError("--out " + args.out + ": " + directory.string() + " is not a directory");
+    }
+    if (std::filesystem::is_directory(out)) {
+      throw UsageError("--out " + args.out + " is a directory; name the file for the secret");
+    }
+  }
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token) throw std::runtime_error(token.error().message);
+  if (!args.out.empty()) {
+    RevokeIfUnwritten(connection, token->info.id, args.out, WriteSecretFile(out, token->secret));
+    std::cerr << "token " << token->info.id << " (" << db::ToString(*role) << "); its secret is in "
+              << args.out << " (mode 0600), and shown nowhere else\n";
+    return;
+  }
   std::cerr << "token " << token->info.id << " (" << db::ToString(*role)
             << "); the secret below is shown only now:\n";
   std::cout << token->secret << "\n" << std::flush;
@@ -68,6 +87,9 @@ void AddTokenCommand(CLI::App& app) {
   CLI::App* create = token->add_subcommand("create", "Create a token and print its secret once");
   create->add_option("--role", args->role, "admin, counter, scanner or replica")->required();
   create->add_option("--label", args->label, "a note on who or what uses it");
+  create->add_option("--out", args->out,
+                     "write the secret to this file (mode 0600, replaced whole) instead of "
+                     "stdout, e.g. a replica's --follow-token-file");
   add_db(create, "database file (created and seeded when missing)");
   create->callback([args] { Create(*args); });
 
