@@ -25,6 +25,20 @@ extern "C" void PassToWaiter(int signal) {
   errno = saved;
 }
 
+// SIGINT or SIGTERM while the server is still starting (seeding, waiting for a first snapshot):
+// end as the default action ends a process. A process that is PID 1 (a container run without an
+// init) ignores a signal left at its default action, so `docker stop` would wait out its grace
+// period; handled, it ends there too. signal, sigprocmask, raise and _exit are async-signal-safe.
+extern "C" void EndWhileStarting(int signal) {
+  ::signal(signal, SIG_DFL);
+  sigset_t only;
+  sigemptyset(&only);
+  sigaddset(&only, signal);
+  ::sigprocmask(SIG_UNBLOCK, &only, nullptr);
+  ::raise(signal);
+  ::_exit(128 + signal);  // the raise was ignored: PID 1
+}
+
 sigset_t Only(std::initializer_list<int> signals) {
   sigset_t set;
   sigemptyset(&set);
@@ -59,6 +73,12 @@ ServeSignals::ServeSignals() {
   const sigset_t hangup = Only({SIGHUP});
   pthread_sigmask(SIG_BLOCK, &hangup, nullptr);
   Handle(SIGHUP);
+  for (const int stop : {SIGINT, SIGTERM}) {
+    struct sigaction action {};
+    action.sa_handler = EndWhileStarting;
+    sigemptyset(&action.sa_mask);
+    sigaction(stop, &action, nullptr);
+  }
 }
 
 void ServeSignals::takeStopSignals() {

@@ -20,8 +20,9 @@ namespace pintag::cli {
 class ServeSignals {
  public:
   /// Handles SIGHUP from now on (a reload the waiter takes when it starts) and blocks it in the
-  /// calling thread. SIGINT and SIGTERM keep their default action (a server still starting, e.g.
-  /// a follower waiting for its first snapshot, just ends).
+  /// calling thread. SIGINT and SIGTERM end the process at once, as their default action would
+  /// (a server still starting, e.g. a follower waiting for its first snapshot, just ends), also
+  /// where it is PID 1 in a container and the default action would be ignored.
   ServeSignals();
   ServeSignals(const ServeSignals&) = delete;
   ServeSignals& operator=(const ServeSignals&) = delete;
