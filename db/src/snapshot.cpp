@@ -245,6 +245,20 @@ std::string LiveDatabaseAt(const std::string& path) {
   return {};
 }
 
+std::string DatabaseOwningFile(const std::string& path, const std::string& source) {
+  std::error_code error;
+  for (const std::string_view suffix : {"-wal", "-shm", "-journal"}) {
+    // The source's own files, however they are named (a link, a relative path).
+    if (std::filesystem::equivalent(path, source + std::string(suffix), error)) return source;
+    // Any other database's: SQLite names them after it.
+    if (path.size() > suffix.size() && path.ends_with(suffix)) {
+      const std::string base = path.substr(0, path.size() - suffix.size());
+      if (std::filesystem::is_regular_file(base, error)) return base;
+    }
+  }
+  return {};
+}
+
 Result<std::int64_t> RegistryVersion(Connection& connection) {
   return detail::Guard([&]() -> Result<std::int64_t> {
     Statement s = connection.prepare("SELECT version FROM registry_version WHERE id = 1");
@@ -263,6 +277,12 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
   if (const std::string live = LiveDatabaseAt(out_path); !live.empty()) {
     return Error{ErrorCode::kConflict,
                  live + ": a snapshot must not replace it; write it to another path"};
+  }
+  if (const std::string owner = DatabaseOwningFile(out_path, source.path()); !owner.empty()) {
+    return Error{ErrorCode::kConflict,
+                 "the snapshot " + out_path + " would replace a file of the database " + owner +
+                     " (its write-ahead log, shared memory or journal), corrupting it; write it "
+                     "to another path"};
   }
   try {
     TemporaryBeside temporary(out_path);
@@ -301,6 +321,11 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
   if (const std::string live = LiveDatabaseAt(path); !live.empty()) {
     return Error{ErrorCode::kConflict,
                  live + ": a replica must not replace it; give the replica a --db of its own"};
+  }
+  if (const std::string owner = DatabaseOwningFile(path); !owner.empty()) {
+    return Error{ErrorCode::kConflict, path + " is a file of the database " + owner +
+                                           " (its write-ahead log, shared memory or journal): "
+                                           "give the replica a --db of its own"};
   }
   try {
     TemporaryBeside temporary(path);

@@ -29,14 +29,19 @@ struct SnapshotInfo {
 /// its open connections, whose log then corrupts the new file at the next checkpoint.
 std::string LiveDatabaseAt(const std::string& path);
 
+/// The database whose write-ahead log, shared-memory file or rollback journal `path` is (SQLite
+/// names them DB-wal, DB-shm and DB-journal), or empty: `source`'s own under any name, or those
+/// of a file named like it. Replacing one corrupts the database it belongs to.
+std::string DatabaseOwningFile(const std::string& path, const std::string& source = {});
+
 /// Copies `source` to `out_path` with SQLite's online backup API (writers on other connections
 /// go on meanwhile). The copy is made in a temporary file beside `out_path`, left without the
 /// scan log (each server keeps its own), switched to a rollback journal (a single file that
 /// opens read-only anywhere), fsynced and renamed into place, and the directory fsynced: a
 /// reader of `out_path` sees the old file or the new one, never part of one. kStorage when the
 /// directory cannot be written; the temporary file is removed on every failure. kConflict, with
-/// nothing written, when `out_path` is the source database itself or any other live database (a
-/// write-ahead log beside it).
+/// nothing written, when `out_path` is the source database itself, any other live database (a
+/// write-ahead log beside it), or a database's -wal, -shm or -journal file (DatabaseOwningFile).
 /// Temporary files beside `out_path` that no process is writing (left by one killed with SIGKILL)
 /// are removed: a temporary file holds a flock while it is written. The same holds for
 /// InstallSnapshot.
