@@ -25,6 +25,32 @@ TEST(CliKeys, LookupByKeyFindsItsPincode) {
   EXPECT_NE(found.out.find("pincode  110001"), std::string::npos) << found.out;
 }
 
+// A replica's snapshot read by the commands that only read stays a snapshot, byte for byte:
+// opened to be written, it was switched to WAL mode, and the replica then refused it.
+TEST(CliKeys, CommandsThatReadLeaveASnapshotAsItIs) {
+  const TempDir dir;
+  const std::string db = SeededCopy(dir);
+  const std::string snapshot = dir.file("snapshot.db");
+  ASSERT_EQ(RunPintag("snapshot --db " + db + " --out " + snapshot).status, 0);
+  const std::string before = ReadFile(snapshot);
+  for (const std::string& command :
+       {"keys lookup 110001 --db " + snapshot, "keys lookup --key 11684 --db " + snapshot,
+        "keys export --db " + snapshot + " > /dev/null", "token list --db " + snapshot}) {
+    const CommandResult read = RunPintag(command);
+    EXPECT_EQ(read.status, 0) << command << ": " << read.out;
+  }
+  EXPECT_TRUE(ReadFile(snapshot) == before) << "the snapshot changed";
+  EXPECT_FALSE(std::filesystem::exists(snapshot + "-wal"));
+  const CommandResult verified = RunPintag("snapshot --verify " + snapshot);
+  EXPECT_EQ(verified.status, 0) << verified.out;
+  // A file that is no database is named in the error.
+  const std::string junk = dir.file("junk.db");
+  WriteFile(junk, std::string(4096, 'j'));
+  const CommandResult refused = RunPintag("keys lookup 110001 --db " + junk);
+  EXPECT_EQ(refused.status, 1) << refused.out;
+  EXPECT_NE(refused.out.find(junk + ": "), std::string::npos) << refused.out;
+}
+
 TEST(CliKeys, LookupSaysWhatIsMissingOrTooMuch) {
   const TempDir dir;
   const std::string db = SeededCopy(dir);

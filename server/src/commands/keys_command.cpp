@@ -21,7 +21,7 @@ struct KeysArgs {
 };
 
 void Export(const KeysArgs& args) {
-  db::Connection connection = OpenDb(args.db);
+  db::Connection connection = OpenForReading(args.db);
   auto rows = db::ListKeys(connection);
   if (!rows) throw std::runtime_error(rows.error().message);
   std::string out = "pincode,key,status\n";
@@ -43,7 +43,7 @@ void Lookup(const KeysArgs& args) {
     if (!parsed) throw UsageError("'" + args.pincode + "': " + parsed.error);
     pincode = *parsed.pincode;
   }
-  db::Connection connection = OpenDb(args.db);
+  db::Connection connection = OpenForReading(args.db);
   const db::Result<db::PincodeRecord> record =
       pincode ? db::LookupPincode(connection, *pincode)
               : db::LookupKey(connection, TagKey(static_cast<std::uint16_t>(*args.key)));

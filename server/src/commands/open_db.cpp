@@ -6,12 +6,13 @@
 #include <utility>
 
 #include "pintag/db/database.hpp"
+#include "pintag/db/snapshot.hpp"
 
 namespace pintag::cli {
 
 db::Connection OpenDb(const std::string& path) {
   auto opened = db::OpenDatabase(path);
-  if (!opened) throw std::runtime_error(opened.error().message);
+  if (!opened) throw std::runtime_error(path + ": " + opened.error().message);
   if (opened->created) {
     std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
   }
@@ -26,6 +27,20 @@ db::Connection OpenExistingDb(const std::string& path) {
         " (`pintag serve`, `pintag import` or `pintag token create` makes one)");
   }
   return OpenDb(path);
+}
+
+db::Connection OpenForReading(const std::string& path, bool must_exist) {
+  std::error_code error;
+  if (std::filesystem::is_regular_file(path, error) && db::LiveDatabaseAt(path).empty()) {
+    // A registry of this schema, read as it is. Anything else (an older registry to migrate,
+    // another application's database, no database) goes through OpenDb, which says what it is.
+    try {
+      db::Connection connection(path, {.create = false, .read_only = true});
+      if (db::SchemaVersion(connection) == db::kSchemaVersion) return connection;
+    } catch (const std::exception&) {
+    }
+  }
+  return must_exist ? OpenExistingDb(path) : OpenDb(path);
 }
 
 }  // namespace pintag::cli

@@ -16,4 +16,10 @@ db::Connection OpenDb(const std::string& path);
 /// and seed a new one. Throws std::runtime_error naming the path when it is missing.
 db::Connection OpenExistingDb(const std::string& path);
 
+/// For commands that only read (keys lookup and export, token list): as OpenDb, or OpenExistingDb
+/// when `must_exist`, except that a file that is not a live registry (a replica's snapshot, which
+/// keeps a rollback journal) is opened read-only and left as it is. Opened to be written, it was
+/// switched to WAL mode, and a replica then refused it as no snapshot.
+db::Connection OpenForReading(const std::string& path, bool must_exist = false);
+
 }  // namespace pintag::cli

@@ -59,7 +59,7 @@ void Create(const TokenArgs& args) {
 }
 
 void List(const TokenArgs& args) {
-  db::Connection connection = OpenExistingDb(args.db);
+  db::Connection connection = OpenForReading(args.db, /*must_exist=*/true);
   auto tokens = db::ListTokens(connection);
   if (!tokens) throw std::runtime_error(tokens.error().message);
   std::cout << "id,role,label,created_at,revoked_at\n";
