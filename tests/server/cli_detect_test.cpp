@@ -159,6 +159,30 @@ TEST(CliDetect, AWrongCommandLineIsExitTwoEvenWhenThePhotoIsMissing) {
   EXPECT_EQ(RunPintag("detect " + missing + " --fx 1000 --fy 1000 --distortion 0 0 0 0").status, 1);
 }
 
+// The API's ranges: beyond them the pose was NaN ("distance nan m") with exit 0. A number is read
+// as the API reads it: no hexadecimal, no spaces.
+TEST(CliDetect, IntrinsicsOutsideTheApisRangesAreRefused) {
+  const test::TempDir dir;
+  const std::string missing = dir.file("missing.jpg");
+  for (const std::string& options :
+       {std::string(" --fx 1e308 --fy 1e308"), std::string(" --fx 0 --fy 500"),
+        std::string(" --fx 500 --fy 2e7"), std::string(" --fx 500 --fy 500 --cx 2e6"),
+        std::string(" --fx 500 --fy 500 --distortion 1e300 1e300 0 0"),
+        std::string(" --fx 0x1F4 --fy 500"), std::string(" --fx ' 500' --fy 500"),
+        std::string(" --max-pixels 99999999999"), std::string(" --max-pixels 0")}) {
+    const CommandResult refused = RunPintag("detect " + missing + options);
+    EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
+    // Said in a sentence, not with DBL_MAX's 309 digits.
+    EXPECT_LT(refused.out.size(), 400U) << options << ": " << refused.out;
+  }
+  const CommandResult range = RunPintag("detect " + missing + " --fx 1e308 --fy 1e308");
+  EXPECT_NE(range.out.find("must be a number from 0.001 to 1e+07, got '1e308'"), std::string::npos)
+      << range.out;
+  const CommandResult size = RunPintag("render --key 12 --size-mm 0x10 -o " + dir.file("t.png"));
+  EXPECT_EQ(size.status, 2) << size.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("t.png")));
+}
+
 TEST(CliDetect, ADashReadsThePhotoFromStandardInput) {
   const test::TempDir dir;
   const RenderedPhoto photo = RenderPhoto(dir);
@@ -217,8 +241,23 @@ TEST(CliDetect, AnOverlayPathThatIsThePhotoIsRefusedAndThePhotoKept) {
     const CommandResult refused = RunPintag("detect " + photo.path + " --overlay " + overlay);
     EXPECT_EQ(refused.status, 2) << overlay << ": " << refused.out;
     EXPECT_NE(refused.out.find("is the photo itself"), std::string::npos) << refused.out;
+    // The photo given on standard input (`detect - < photo.png`) is the same file.
+    const CommandResult piped =
+        RunShell(PintagExe() + " detect - --overlay " + overlay + " < " + photo.path + " 2>&1");
+    EXPECT_EQ(piped.status, 2) << overlay << ": " << piped.out;
+    EXPECT_NE(piped.out.find("the photo itself"), std::string::npos) << piped.out;
   }
   EXPECT_EQ(ReadFile(photo.path), before);
+  // Where an overlay cannot go is a usage error before the photo is searched, output or not.
+  std::filesystem::create_directory(dir.path() / "adir.png");
+  for (const std::string& overlay :
+       {dir.file("no-such-dir/seen.png"), dir.file("adir.png"), dir.file("adir.png") + "/"}) {
+    const CommandResult refused =
+        RunPintag("detect --json " + photo.path + " --overlay " + overlay);
+    EXPECT_EQ(refused.status, 2) << overlay << ": " << refused.out;
+    EXPECT_EQ(refused.out.find("\"detections\""), std::string::npos) << refused.out;
+    EXPECT_NE(refused.out.find("directory"), std::string::npos) << refused.out;
+  }
 
   const std::string seen = dir.file("seen.png");
   const CommandResult drawn = RunPintag("detect " + photo.path + " --overlay " + seen);

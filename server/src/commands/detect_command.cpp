@@ -1,6 +1,7 @@
 // `pintag detect`: find every tag in a photo; print keys and poses (JSON with --json) and draw an
 // overlay with outlines, keys and pose axes.
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
@@ -130,13 +131,34 @@ void CheckOptions(const DetectArgs& args) {
                      std::to_string(coefficients));
   }
   if (coefficients != 0 && given != 2) throw UsageError("--distortion needs --fx and --fy");
-  if (!args.overlay.empty() && !cv::haveImageWriter(args.overlay)) {
-    throw UsageError("--overlay " + args.overlay +
-                     ": no image format for its extension; name a .png or .jpg file");
-  }
   std::error_code ec;
   if (!args.overlay.empty() && std::filesystem::equivalent(args.photo, args.overlay, ec)) {
     throw UsageError("--overlay " + args.overlay + " is the photo itself; give another file");
+  }
+  // `detect - --overlay photo.png < photo.png`: the photo is standard input's file.
+  struct stat input {};
+  struct stat overlay {};
+  if (!args.overlay.empty() && args.photo == "-" && ::fstat(STDIN_FILENO, &input) == 0 &&
+      ::stat(args.overlay.c_str(), &overlay) == 0 && input.st_dev == overlay.st_dev &&
+      input.st_ino == overlay.st_ino) {
+    throw UsageError("--overlay " + args.overlay +
+                     " is the file on standard input, the photo itself; give another file");
+  }
+  // Where the overlay cannot go is known now, not after the photo is read and searched.
+  if (!args.overlay.empty()) {
+    const std::filesystem::path path(args.overlay);
+    const std::filesystem::path directory = path.has_parent_path() ? path.parent_path() : ".";
+    if (std::filesystem::is_directory(path, ec) || args.overlay.back() == '/') {
+      throw UsageError("--overlay " + args.overlay + " is a directory; name the image file");
+    }
+    if (!std::filesystem::is_directory(directory, ec)) {
+      throw UsageError("--overlay " + args.overlay + ": " + directory.string() +
+                       " is not a directory");
+    }
+  }
+  if (!args.overlay.empty() && !cv::haveImageWriter(args.overlay)) {
+    throw UsageError("--overlay " + args.overlay +
+                     ": no image format for its extension; name a .png or .jpg file");
   }
   if (!args.debug_dir.empty() && std::filesystem::exists(args.debug_dir, ec) &&
       !std::filesystem::is_directory(args.debug_dir, ec)) {
@@ -223,24 +245,23 @@ void AddDetectCommand(CLI::App& app) {
       ->check(FiniteNumber())
       ->check(CLI::Range(1.0, 10000.0))
       ->capture_default_str();
+  // The detect route's ranges (server/src/app/detect_route.cpp): beyond them a pose is NaN.
   cmd->add_option("--fx", args->fx, "focal length x, pixels (with --fy: intrinsics given)")
-      ->check(FiniteNumber())
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--fy", args->fy, "focal length y, pixels")
-      ->check(FiniteNumber())
-      ->check(CLI::PositiveNumber);
+      ->check(NumberFromTo(1e-3, 1e7));
+  cmd->add_option("--fy", args->fy, "focal length y, pixels")->check(NumberFromTo(1e-3, 1e7));
   cmd->add_option("--cx", args->cx,
                   "principal point x, pixels (default: image centre; needs --fx and --fy)")
-      ->check(FiniteNumber());
+      ->check(NumberFromTo(-1e6, 1e6));
   cmd->add_option("--cy", args->cy,
                   "principal point y, pixels (default: image centre; needs --fx and --fy)")
-      ->check(FiniteNumber());
+      ->check(NumberFromTo(-1e6, 1e6));
   cmd->add_option("--distortion", args->distortion,
                   "lens distortion in OpenCV's order: 4, 5 or 8 numbers (needs --fx and --fy)")
       // CLI11 would show "FLOAT x 4" (the least it takes): say which counts it reads instead.
       ->option_text("K1 K2 P1 P2 [K3 [K4 K5 K6]]")
       ->expected(4, 8)
-      ->check(FiniteNumber());
+      // Real lenses, fisheyes included, stay within units; 1e300 made every pose NaN.
+      ->check(NumberFromTo(-1000, 1000));
   cmd->add_flag("--json", args->json, "print JSON");
   cmd->add_option("--overlay", args->overlay, "write the photo with outlines, keys and axes");
   cmd->add_option("--debug-dir", args->debug_dir, "write each pipeline stage's image here");
@@ -248,8 +269,10 @@ void AddDetectCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "worker threads")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
-  cmd->add_option("--max-pixels", args->max_pixels, "refuse larger images")
-      ->check(CLI::PositiveNumber)
+  // As `serve --max-pixels`: past 1e9 a header's claim alone would make the loader ask for more
+  // memory than the machine has.
+  cmd->add_option("--max-pixels", args->max_pixels, "refuse larger images (at most 1e9)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000}))
       ->capture_default_str();
   cmd->callback([args] { Run(*args); });
 }

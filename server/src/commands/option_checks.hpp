@@ -6,22 +6,53 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
+#include <sstream>
 #include <string>
+#include <system_error>
 
 #include "pintag/codec/tag_key.hpp"
 
 namespace pintag::cli {
 
+/// The whole text as a decimal number, as the HTTP routes read one (std::from_chars): no sign
+/// before it but a minus, no spaces, no hexadecimal. strtod took " 10" and "0x10" (a 16 mm tag).
+inline std::optional<double> DecimalNumber(const std::string& text) {
+  double value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
 /// A number that is finite: CLI11's ranges compare with < and >, which NaN passes ("nan" would
 /// reach a render as a size of nan mm, or turn the server's body limit off). Put it before them.
 inline CLI::Validator FiniteNumber() {
   return {[](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double value = std::strtod(text.c_str(), &end);
-            if (end == text.c_str() || *end != '\0' || !std::isfinite(value)) {
+            const std::optional<double> value = DecimalNumber(text);
+            if (!value || !std::isfinite(*value)) {
               return "must be a finite number, got '" + text + "'";
+            }
+            return {};
+          },
+          "NUMBER"};
+}
+
+/// A finite number from `min` to `max`, refused in the routes' words ("must be a number from
+/// 0.001 to 1e+07"): CLI::Range printed an unbounded side as DBL_MAX's 309 digits.
+inline CLI::Validator NumberFromTo(double min, double max) {
+  const auto shown = [](double v) {
+    std::ostringstream out;
+    out << v;
+    return out.str();
+  };
+  const std::string range = shown(min) + " to " + shown(max);
+  return {[min, max, range](std::string& text) -> std::string {
+            const std::optional<double> value = DecimalNumber(text);
+            if (!value || !std::isfinite(*value) || *value < min || *value > max) {
+              return "must be a number from " + range + ", got '" + text + "'";
             }
             return {};
           },
