@@ -434,12 +434,21 @@ Result<std::string> ReadImportFile(const std::string& path) {
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{ErrorCode::kNotFound, "cannot read " + path + ": " + std::strerror(errno)};
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::string text;
+  std::array<char, 1 << 16> chunk{};
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    if (text.size() + static_cast<std::size_t>(in.gcount()) > kMaxImportFileBytes) {
+      return Error{ErrorCode::kTooLarge,
+                   path + " is larger than " + std::to_string(kMaxImportFileBytes >> 20) +
+                       " MiB, more than any pincode directory (India Post's whole directory is "
+                       "about 20 MB)"};
+    }
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+  }
   if (in.bad()) {
     return Error{ErrorCode::kStorage, "error reading " + path + ": " + std::strerror(errno)};
   }
-  return std::move(text).str();
+  return text;
 }
 
 Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,

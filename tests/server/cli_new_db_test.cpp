@@ -102,6 +102,13 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
     EXPECT_EQ(run.out.find("created"), std::string::npos) << c.name << ": " << run.out;
     EXPECT_FALSE(std::filesystem::exists(db)) << c.name;
   }
+  // A file with no end is refused at the size limit, not read until memory runs out.
+  const std::string db = dir.file("zero.db");
+  const CommandResult endless =
+      RunShell("ulimit -v 2000000; " + PintagExe() + " import /dev/zero --db " + db + " 2>&1");
+  EXPECT_EQ(endless.status, 1) << endless.out;
+  EXPECT_NE(endless.out.find("/dev/zero is larger than 256 MiB"), std::string::npos) << endless.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
 }
 
 // An SQLite file of another application's (user_version 0, tables of its own) is not seeded in

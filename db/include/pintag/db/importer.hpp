@@ -89,8 +89,13 @@ Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport pars
 /// the row is the same as the first, which is kept.
 Result<ImportReport> ImportDirectoryCsv(Connection& connection, std::string_view csv,
                                         const ImportOptions& options = {});
+/// The largest file ReadImportFile reads: India Post's whole directory is about 20 MB.
+inline constexpr std::size_t kMaxImportFileBytes = std::size_t{256} << 20;
+
 /// The whole file, read before any database is opened; kNotFound when it cannot be read,
-/// kInvalid for a directory, kStorage for a read error (the message gives the system's reason).
+/// kInvalid for a directory, kTooLarge past kMaxImportFileBytes (found as it is read, so a
+/// device that never ends, such as /dev/zero, is refused too), kStorage for a read error (the
+/// message gives the system's reason).
 Result<std::string> ReadImportFile(const std::string& path);
 /// Reads the file (ReadImportFile) and imports it.
 Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
