@@ -81,20 +81,28 @@ front="http://127.0.0.1:$PINTAG_NGINX_PORT"
 replica_ports=("$PINTAG_REPLICA1_PORT" "$PINTAG_REPLICA2_PORT" "$PINTAG_REPLICA3_PORT")
 say "ports: nginx $PINTAG_NGINX_PORT, primary $PINTAG_PRIMARY_PORT, replicas ${replica_ports[*]}"
 
-say "starting the primary (seeds its database)"
-export PINTAG_REPLICA_TOKEN=""
-"${compose[@]}" up -d primary >/dev/null 2>&1
+say "starting everything as docker/compose.yaml says: up -d, then the replica token"
+"${compose[@]}" up -d >/dev/null 2>&1
 wait_ready "$PINTAG_PRIMARY_PORT" 120 || { "${compose[@]}" logs primary; exit 1; }
 token() { "${compose[@]}" exec -T primary pintag token create --role "$1" --label test-docker \
-  --db /var/lib/pintag/pintag.db 2>/dev/null | tr -d '\r\n'; }
+  --db /var/lib/pintag/pintag.db "${@:2}" 2>/dev/null | tr -d '\r\n'; }
 admin="$(token admin)" counter="$(token counter)" scanner="$(token scanner)"
-export PINTAG_REPLICA_TOKEN="$(token replica)"
-say "starting three replicas and nginx"
-"${compose[@]}" up -d >/dev/null 2>&1
+token replica --out /var/lib/pintag-follow/replica.token
+# The replicas, started before the token was there, start again until they find it.
 for port in "${replica_ports[@]}"; do
   wait_ready "$port" 120 || { "${compose[@]}" logs; exit 1; }
 done
 wait_ready "$PINTAG_NGINX_PORT" 60 || { "${compose[@]}" logs nginx; exit 1; }
+ids_before="$("${compose[@]}" ps -q | sort)"
+# Another operator's shell, with none of this script's variables but the ports: nothing is
+# recreated, and the replicas keep serving.
+env -u PINTAG_REPLICA_TOKEN "${compose[@]}" up -d >/dev/null 2>&1
+check "a second up -d from another shell recreates nothing" \
+  test "$("${compose[@]}" ps -q | sort)" = "$ids_before"
+check "the replicas still serve after it" bash -c \
+  "for p in ${replica_ports[*]}; do [[ \$(curl -s -o /dev/null -w '%{http_code}' http://127.0.0.1:\$p/readyz) == 200 ]] || exit 1; done"
+check "the replica token is in no container's environment" bash -c \
+  "! ${DOCKER[*]} inspect $("${compose[@]}" ps -q | tr '\n' ' ') | grep -q 'pt_[0-9]'"
 healthy() {  # healthy SERVICE: Docker's HEALTHCHECK says so within 60 s
   local i
   for ((i = 0; i < 60; ++i)); do
@@ -132,6 +140,31 @@ check "0 wrong answers" test "$(field wrong)" = 0
 check "0 socket errors" test "$(field socket_errors)" = 0
 check "0 timeouts" test "$(field timeouts)" = 0
 check "replica-2 is ready again" wait_ready "$PINTAG_REPLICA2_PORT" 60
+
+# A server that dies (its init killed from the host, as a crash would end it) is started again by
+# the restart policy; one stopped by hand stops at once (an init passes SIGTERM on).
+"${DOCKER[@]}" inspect -f '{{.State.Pid}}' "$("${compose[@]}" ps -q replica-3)" | xargs kill -9
+sleep 1
+check "replica-3 starts again by itself after its process was killed" bash -c \
+  "for i in \$(seq 60); do [[ \$(${DOCKER[*]} inspect -f '{{.RestartCount}}' $("${compose[@]}" ps -q replica-3)) -ge 1 ]] && break; sleep 1; done;
+   [[ \$(${DOCKER[*]} inspect -f '{{.RestartCount}}' $("${compose[@]}" ps -q replica-3)) -ge 1 ]]"
+check "replica-3 is ready again" wait_ready "$PINTAG_REPLICA3_PORT" 60
+stop_start=$(date +%s%3N)
+"${DOCKER[@]}" stop "$("${compose[@]}" ps -q replica-1)" >/dev/null
+stop_ms=$(($(date +%s%3N) - stop_start))
+summary+=("docker stop of a replica took ${stop_ms} ms")
+check "docker stop of a replica takes under 5 s (SIGTERM reached pintag)" test "$stop_ms" -lt 5000
+check "the stopped replica exited 0" test \
+  "$("${DOCKER[@]}" inspect -f '{{.State.ExitCode}}' "$("${compose[@]}" ps -q replica-1)")" = 0
+"${compose[@]}" up -d replica-1 >/dev/null 2>&1
+check "replica-1 is ready again" wait_ready "$PINTAG_REPLICA1_PORT" 60
+check "nginx's HEALTHCHECK reports it healthy" healthy nginx
+check "nginx answers its own 413 as problem+json" bash -c \
+  "head -c 26214401 /dev/zero | curl -s -D - -o /dev/null -H 'Content-Type: image/jpeg' \
+     --data-binary @- $front/api/v1/detect | grep -qi '^content-type: application/problem+json'"
+check "nginx's access log is in docker logs, with the request id" bash -c \
+  "curl -s -o /dev/null -H 'X-Request-Id: test-docker-log-1' $front/livez; sleep 2;
+   ${compose[*]} logs nginx 2>&1 | grep -q 'id=test-docker-log-1'"
 
 say "adding pincode 999555 on the primary through nginx"
 added="$(curl -s -o /dev/null -w '%{http_code}' -X POST "$front/api/v1/pincodes" \

@@ -10,4 +10,6 @@ here=/opt/pintag-nginx
 # shellcheck disable=SC2046  # the list is split on purpose
 "$here/render-conf.sh" "$here/pintag.conf.template" "$PINTAG_NGINX_PREFIX" "$PINTAG_LISTEN" \
   "$PINTAG_PRIMARY" $(echo "$PINTAG_REPLICAS" | tr ',' ' ')
+# The access log to the container's stdout (docker logs), beside the error log on stderr.
+ln -sf /dev/stdout "$PINTAG_NGINX_PREFIX/logs/access.log"
 exec nginx -p "$PINTAG_NGINX_PREFIX" -e stderr -c "$PINTAG_NGINX_PREFIX/nginx.conf" -g 'daemon off;'
