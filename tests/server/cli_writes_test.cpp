@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "held_write_lock.hpp"
 #include "pintag/db/sqlite.hpp"
 #include "pintag/db/tokens.hpp"
 #include "serve_fixture.hpp"
@@ -195,6 +196,28 @@ TEST(CliWrites, ATokenWrittenToAFileIsItsOwnersAloneAndReplacedWhole) {
   EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM api_tokens WHERE revoked_at IS NULL AND "
                                   "id = (SELECT max(id) FROM api_tokens)"),
             0);
+}
+
+// Another process holding the write lock (an import) for longer than the busy timeout: the token
+// commands say so and what they left undone, where they printed SQLite's "database is locked".
+TEST(CliWrites, TokenCommandsSayTheDatabaseIsBusyAndWhatTheyLeftUndone) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const CommandResult made = RunPintag("token create --role counter --db " + db);
+  ASSERT_EQ(made.status, 0) << made.out;
+  const std::string id = made.out.substr(6, made.out.find(' ', 6) - 6);  // "token N (counter)…"
+  HeldWriteLock lock(db);
+  const CommandResult create = RunPintag("token create --role admin --db " + db);
+  EXPECT_EQ(create.status, 1) << create.out;
+  EXPECT_NE(create.out.find(db + " is being written by another process"), std::string::npos)
+      << create.out;
+  EXPECT_NE(create.out.find("no token was made"), std::string::npos) << create.out;
+  const CommandResult revoke = RunPintag("token revoke " + id + " --db " + db);
+  EXPECT_EQ(revoke.status, 1) << revoke.out;
+  EXPECT_NE(revoke.out.find("the token was not revoked"), std::string::npos) << revoke.out;
+  lock.release();
+  EXPECT_EQ(RunPintag("token revoke " + id + " --db " + db).status, 0) << id;
 }
 
 // The first start of `pintag serve` prints the first admin token. Printed nowhere, it stayed

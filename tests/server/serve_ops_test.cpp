@@ -88,6 +88,28 @@ TEST(ServeStartRefusals, AnEmptyBindAddressIsAUsageErrorNotEveryInterface) {
   EXPECT_NE(refused.out.find("--bind needs an address"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
+// A replica's options on a primary did nothing, without a word (no --scan-log file was made), and
+// a --snapshot naming the database itself was retried for ever: usage errors, before the database
+// is created and seeded.
+TEST(ServeStartRefusals, OptionsThatContradictTheRoleAreUsageErrors) {
+  const TempDir dir;
+  const std::string db = dir.file("new.db");
+  const std::string token = WriteFile(dir.path() / "t", "pt_1_x\n");
+  for (const std::string& options :
+       {"--scan-log " + dir.file("scans.db"), std::string("--primary http://127.0.0.1:1"),
+        "--follow-token-file " + token, "--snapshot " + db, "--snapshot " + db + "-wal",
+        "--snapshot " + (dir.path() / "." / "new.db").string(),
+        "--read-only --follow-token-file " + token}) {
+    // Bounded: a server that starts regardless would serve until stopped.
+    const CommandResult refused =
+        RunShell("timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + db + " " +
+                 options + " 2>&1");
+    EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
+    EXPECT_FALSE(std::filesystem::exists(db)) << options;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("scans.db"))) << options;
+  }
+}
+
 TEST(ServeStartRefusals, AReadOnlyReplicaWithoutItsSnapshotSaysHowToMakeOne) {
   const TempDir dir;
   const CommandResult refused =

@@ -98,10 +98,7 @@ void Run(const ImportArgs& args) {
   options.progress = nullptr;
   if (!result && result.error().code == db::ErrorCode::kBusy) {
     // SQLite's "database is locked" named the file being imported, as if it were at fault.
-    throw std::runtime_error(args.db +
-                             " is being written by another process (another import, "
-                             "or `pintag serve` writing) and stayed locked for 5 s; nothing of " +
-                             args.file + " was imported. Try again when it is done");
+    throw std::runtime_error(LockedMessage(args.db, "nothing of " + args.file + " was imported"));
   }
   if (!result) throw std::runtime_error(args.file + ": " + result.error().message);
   const db::ImportReport& report = *result;

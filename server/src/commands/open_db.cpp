@@ -10,8 +10,18 @@
 
 namespace pintag::cli {
 
+std::string LockedMessage(const std::string& path, const std::string& not_done) {
+  return path +
+         " is being written by another process (an import, or `pintag serve` writing) and "
+         "stayed locked for 5 s; " +
+         not_done + ". Try again when it is done";
+}
+
 db::Connection OpenDb(const std::string& path) {
   auto opened = db::OpenDatabase(path);
+  if (!opened && opened.error().code == db::ErrorCode::kBusy) {
+    throw std::runtime_error(LockedMessage(path, "it could not be opened"));
+  }
   if (!opened) throw std::runtime_error(path + ": " + opened.error().message);
   if (opened->created) {
     std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";

@@ -7,6 +7,11 @@
 
 namespace pintag::cli {
 
+/// What to say when the database at `path` stayed locked by another writer for SQLite's busy
+/// timeout (an import, a serving primary's write): SQLite's own "database is locked" reads as if
+/// the file were at fault. `not_done` says what was left undone ("no token was made").
+std::string LockedMessage(const std::string& path, const std::string& not_done);
+
 /// Opens and migrates the database at `path`; a missing file is created and seeded from the
 /// bundled registry, which is said on stderr. Throws std::runtime_error when it cannot open.
 db::Connection OpenDb(const std::string& path);

@@ -124,6 +124,7 @@ void Run(const ServeArgs& args) {
                                ": " + why);
     }
   }
+  CheckReplicationArgs(args.replication, args.db);
   const bool read_only = args.replication.read_only || !args.replication.follow.empty();
   if (!read_only) OpenDb(args.db);  // creates and seeds a missing file, migrates an old one
 

@@ -96,6 +96,41 @@ std::string PrimaryBaseUrl(std::string url) {
 
 }  // namespace
 
+void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_path) {
+  const bool replica = args.read_only || !args.follow.empty();
+  if (!replica) {
+    // Each was taken without a word and did nothing: a primary keeps its scan log in --db and
+    // follows no one.
+    for (const auto& [given, name] :
+         {std::pair{!args.scan_log.empty(), "--scan-log"},
+          std::pair{!args.primary.empty(), "--primary"},
+          std::pair{!args.follow_token_file.empty(), "--follow-token-file"}}) {
+      if (given) {
+        throw UsageError(
+            std::string(name) +
+            " is for a replica (--read-only or --follow); a primary has no use for it");
+      }
+    }
+  } else if (!args.follow_token_file.empty() && args.follow.empty()) {
+    throw UsageError("--follow-token-file is the token for --follow; this replica follows no one");
+  }
+  if (!args.snapshot.empty()) {
+    std::error_code error;
+    const std::filesystem::path snapshot = std::filesystem::weakly_canonical(args.snapshot, error);
+    const std::filesystem::path db = std::filesystem::weakly_canonical(db_path, error);
+    const bool same = snapshot == db || std::filesystem::equivalent(args.snapshot, db_path, error);
+    // By name too: on a first start neither file is there yet.
+    bool its_file = !db::DatabaseOwningFile(snapshot.string(), db.string()).empty();
+    for (const char* suffix : {"-wal", "-shm", "-journal"}) {
+      its_file = its_file || snapshot.string() == db.string() + suffix;
+    }
+    if (same || its_file) {
+      throw UsageError("--snapshot " + args.snapshot + " would replace the database " + db_path +
+                       (same ? "" : " or one of its files") + "; publish it to another path");
+    }
+  }
+}
+
 void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
   serve
       ->add_flag("--read-only", args.read_only,

@@ -27,6 +27,11 @@ struct ReplicationArgs {
 
 void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args);
 
+/// The replication options that contradict each other or the role, checked before the database
+/// is opened or seeded: a replica's options (--scan-log, --primary, --follow-token-file) on a
+/// primary, and a --snapshot that names the database or one of its files. UsageError.
+void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_path);
+
 class Replication {
  public:
   /// Prepares before the server is built: a following replica without a usable snapshot fetches

@@ -45,6 +45,9 @@ void Create(const TokenArgs& args) {
   }
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
+  if (!token && token.error().code == db::ErrorCode::kBusy) {
+    throw std::runtime_error(LockedMessage(args.db, "no token was made"));
+  }
   if (!token) throw std::runtime_error(token.error().message);
   if (!args.out.empty()) {
     RevokeIfUnwritten(connection, token->info.id, args.out, WriteSecretFile(out, token->secret));
@@ -72,6 +75,9 @@ void List(const TokenArgs& args) {
 void Revoke(const TokenArgs& args) {
   db::Connection connection = OpenExistingDb(args.db);
   auto token = db::RevokeToken(connection, args.id);
+  if (!token && token.error().code == db::ErrorCode::kBusy) {
+    throw std::runtime_error(LockedMessage(args.db, "the token was not revoked"));
+  }
   if (!token) throw std::runtime_error(token.error().message);
   std::cout << "token " << token->id << " revoked at " << token->revoked_at.value_or("?") << "\n";
 }
