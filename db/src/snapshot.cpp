@@ -252,7 +252,7 @@ std::string DatabaseOwningFile(const std::string& path, const std::string& sourc
     if (std::filesystem::equivalent(path, source + std::string(suffix), error)) return source;
     // Any other database's: SQLite names them after it.
     if (path.size() > suffix.size() && path.ends_with(suffix)) {
-      const std::string base = path.substr(0, path.size() - suffix.size());
+      std::string base = path.substr(0, path.size() - suffix.size());
       if (std::filesystem::is_regular_file(base, error)) return base;
     }
   }

@@ -3,9 +3,12 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <iostream>
+#include <string>
 
 #include "commands/commands.hpp"
+#include "pintag/db/database.hpp"
 
 namespace {
 
@@ -29,7 +32,24 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
   std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"PinTag: colour fiducial markers that carry Indian pincodes", "pintag"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("pintag ") + PINTAG_VERSION + " (registry schema " +
+                                        std::to_string(pintag::db::kSchemaVersion) + ")");
   pintag::cli::AddRegisteredCommands(app);
+  // CLI11 answered a mistyped subcommand ("pintag serv") with "A subcommand is required".
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::function<bool(CLI::App*)> every = [](CLI::App*) { return true; };
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands(every)) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->check_name(argv[1]);
+    }
+    if (!known) {
+      std::cerr << "pintag: '" << argv[1] << "' is not a subcommand; the subcommands are " << names
+                << " (pintag --help)\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

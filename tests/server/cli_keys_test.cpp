@@ -150,5 +150,19 @@ TEST(CliKeys, ExitStatusTellsAWrongCommandLineFromAFailedJob) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));
 }
 
+TEST(CliKeys, AMistypedSubcommandIsNamedAndTheVersionIsShown) {
+  // CLI11 said "A subcommand is required" to a subcommand mistyped.
+  const CommandResult mistyped = RunPintag("serv --db x.db");
+  EXPECT_EQ(mistyped.status, 2) << mistyped.out;
+  EXPECT_NE(mistyped.out.find("'serv' is not a subcommand; the subcommands are detect, import, "
+                              "keys, render, serve, snapshot, token"),
+            std::string::npos)
+      << mistyped.out;
+  const CommandResult version = RunPintag("--version");
+  EXPECT_EQ(version.status, 0) << version.out;
+  EXPECT_EQ(version.out.rfind("pintag ", 0), 0U) << version.out;
+  EXPECT_NE(version.out.find("(registry schema "), std::string::npos) << version.out;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test
