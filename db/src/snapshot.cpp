@@ -16,9 +16,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <random>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "guard.hpp"
@@ -250,10 +252,17 @@ std::string DatabaseOwningFile(const std::string& path, const std::string& sourc
   for (const std::string_view suffix : {"-wal", "-shm", "-journal"}) {
     // The source's own files, however they are named (a link, a relative path).
     if (std::filesystem::equivalent(path, source + std::string(suffix), error)) return source;
-    // Any other database's: SQLite names them after it.
+    // Any other database's: SQLite names them after it. Only a file that is an SQLite database
+    // counts (its header), so `notes-wal` beside a text file `notes` is a path like any other.
     if (path.size() > suffix.size() && path.ends_with(suffix)) {
       std::string base = path.substr(0, path.size() - suffix.size());
-      if (std::filesystem::is_regular_file(base, error)) return base;
+      std::array<char, 16> header{};
+      std::ifstream file(base, std::ios::binary);
+      if (file.read(header.data(), header.size()) &&
+          std::string_view(header.data(), header.size()) ==
+              std::string_view("SQLite format 3\0", 16)) {
+        return base;
+      }
     }
   }
   return {};

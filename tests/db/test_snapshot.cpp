@@ -233,6 +233,8 @@ TEST(Snapshot, NeverReplacesALiveDatabase) {
   // Nor the files SQLite keeps beside a database: a snapshot renamed over the source's write-ahead
   // log corrupted it (its committed pages were read from the snapshot), and so for the others'.
   AddPincode(live, Pincode(999003), {TestOffice("In The Log")}).value();
+  ASSERT_TRUE(WriteSnapshot(live, dir.file("whole.db")).ok());
+  const std::string whole = test::ReadFile(dir.file("whole.db"));
   for (const std::string& out :
        {live_path + "-wal", live_path + "-shm", live_path + "-journal", other_path + "-wal",
         (dir.path() / "." / (std::filesystem::path(live_path).filename().string() + "-wal"))
@@ -243,8 +245,22 @@ TEST(Snapshot, NeverReplacesALiveDatabase) {
     EXPECT_NE(refused.error().message.find("would replace a file of the database"),
               std::string::npos)
         << refused.error().message;
-    EXPECT_FALSE(InstallSnapshot("not read", out).ok()) << out;
+    // A whole snapshot received for that path is refused for the same reason, nothing written.
+    const bool existed = std::filesystem::exists(out);
+    const std::string before = existed ? test::ReadFile(out) : std::string();
+    const auto install = InstallSnapshot(whole, out);
+    ASSERT_FALSE(install.ok()) << out;
+    EXPECT_EQ(install.error().code, ErrorCode::kConflict) << out;
+    EXPECT_NE(install.error().message.find("is a file of the database"), std::string::npos)
+        << install.error().message;
+    EXPECT_EQ(std::filesystem::exists(out), existed) << out;
+    if (out.ends_with("-wal")) {
+      EXPECT_EQ(test::ReadFile(out), before) << out;
+    }
   }
+  // Beside a file that is no database, such names are paths like any other.
+  test::WriteFile(dir.path() / "notes", "not a database");
+  EXPECT_TRUE(WriteSnapshot(live, dir.file("notes-wal")).ok());
   EXPECT_TRUE(LookupPincode(live, Pincode(999003)).ok());
   EXPECT_TRUE(WriteSnapshot(live, dir.file("snapshot-wal-free.db")).ok());
 

@@ -31,7 +31,7 @@ std::string LiveDatabaseAt(const std::string& path);
 
 /// The database whose write-ahead log, shared-memory file or rollback journal `path` is (SQLite
 /// names them DB-wal, DB-shm and DB-journal), or empty: `source`'s own under any name, or those
-/// of a file named like it. Replacing one corrupts the database it belongs to.
+/// of an SQLite database named like it. Replacing one corrupts the database it belongs to.
 std::string DatabaseOwningFile(const std::string& path, const std::string& source = {});
 
 /// Copies `source` to `out_path` with SQLite's online backup API (writers on other connections
