@@ -223,6 +223,15 @@ TEST_F(ReplicaSetTest, NginxAnswersItsOwnRefusalsAsProblemsAndCarriesOneRequestI
   };
   EXPECT_TRUE(logged_in_both(id)) << nginx.logs() << stderrOf("replica-0");
   EXPECT_TRUE(logged_in_both("scanner-7-0042"));
+  // An id the server would not keep is replaced by nginx's own, which both logs then share: with
+  // spaces it would also have written fields of the client's into nginx's log line.
+  const auto forged = front.Get("/api/v1/pincodes/560001",
+                                {{"X-Request-Id", "x upstream=10.9.9.9:1 upstream_status=200"}});
+  ASSERT_TRUE(forged);
+  const std::string replaced = forged->get_header_value("X-Request-Id");
+  EXPECT_EQ(replaced.size(), 32U) << replaced;
+  EXPECT_TRUE(logged_in_both(replaced));
+  EXPECT_EQ(nginx.logs().find("10.9.9.9"), std::string::npos) << nginx.logs();
 
   // One byte over the documented 25 MiB: refused by nginx before any server sees it.
   const std::string over(std::size_t{25} << 20 | 1, 'x');
