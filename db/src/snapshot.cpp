@@ -250,8 +250,13 @@ std::string LiveDatabaseAt(const std::string& path) {
 std::string DatabaseOwningFile(const std::string& path, const std::string& source) {
   std::error_code error;
   for (const std::string_view suffix : {"-wal", "-shm", "-journal"}) {
-    // The source's own files, however they are named (a link, a relative path).
-    if (std::filesystem::equivalent(path, source + std::string(suffix), error)) return source;
+    // The source's own files, however they are named (a link, a relative path), and by name
+    // alone while they are not there yet (a server's first start).
+    if (!source.empty() &&
+        (path == source + std::string(suffix) ||
+         std::filesystem::equivalent(path, source + std::string(suffix), error))) {
+      return source;
+    }
     // Any other database's: SQLite names them after it. Only a file that is an SQLite database
     // counts (its header), so `notes-wal` beside a text file `notes` is a path like any other.
     if (path.size() > suffix.size() && path.ends_with(suffix)) {

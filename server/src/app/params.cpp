@@ -39,6 +39,14 @@ std::optional<T> ParseWhole(std::string_view text) {
 
 }  // namespace
 
+std::optional<double> ParseDecimal(std::string_view text) {
+  return ParseWhole<double>(text);
+}
+
+std::string ShownNumber(double value) {
+  return Number(value);
+}
+
 Pincode PincodeParam(const HttpRequest& request) {
   const ParsedPincode parsed = ParsePincode(request.pathParam("pin"));
   if (!parsed) throw HttpError(400, parsed.error, "Malformed Pincode");

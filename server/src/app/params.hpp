@@ -49,6 +49,12 @@ server::QueryParamDoc LabelSizeQueryDoc();
 double DpiQuery(const server::HttpRequest& request);
 server::QueryParamDoc DpiQueryDoc();
 
+/// The whole text as a decimal number, as every route reads one (std::from_chars: no leading
+/// '+', no spaces, no hexadecimal), or nothing. `pintag`'s options read numbers with it too.
+std::optional<double> ParseDecimal(std::string_view text);
+/// A number as the routes' messages show it (printf's %g: 0.001, 1e+07).
+std::string ShownNumber(double value);
+
 /// A number within [min, max], if given.
 std::optional<double> NumberQuery(const server::HttpRequest& request, std::string_view name,
                                   double min, double max);

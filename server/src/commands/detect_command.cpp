@@ -144,21 +144,13 @@ void CheckOptions(const DetectArgs& args) {
     throw UsageError("--overlay " + args.overlay +
                      " is the file on standard input, the photo itself; give another file");
   }
-  // Where the overlay cannot go is known now, not after the photo is read and searched.
   if (!args.overlay.empty()) {
-    const std::filesystem::path path(args.overlay);
-    const std::filesystem::path directory = path.has_parent_path() ? path.parent_path() : ".";
-    if (std::filesystem::is_directory(path, ec) || args.overlay.back() == '/') {
-      throw UsageError("--overlay " + args.overlay + " is a directory; name the image file");
+    // Where the overlay cannot go is known now, not after the photo is read and searched.
+    CheckFileToWrite("--overlay", args.overlay);
+    if (!cv::haveImageWriter(args.overlay)) {
+      throw UsageError("--overlay " + args.overlay +
+                       ": no image format for its extension; name a .png or .jpg file");
     }
-    if (!std::filesystem::is_directory(directory, ec)) {
-      throw UsageError("--overlay " + args.overlay + ": " + directory.string() +
-                       " is not a directory");
-    }
-  }
-  if (!args.overlay.empty() && !cv::haveImageWriter(args.overlay)) {
-    throw UsageError("--overlay " + args.overlay +
-                     ": no image format for its extension; name a .png or .jpg file");
   }
   if (!args.debug_dir.empty() && std::filesystem::exists(args.debug_dir, ec) &&
       !std::filesystem::is_directory(args.debug_dir, ec)) {

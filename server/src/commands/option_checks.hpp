@@ -6,32 +6,23 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <optional>
-#include <sstream>
 #include <string>
-#include <system_error>
 
+#include "app/params.hpp"
+#include "commands/commands.hpp"
 #include "pintag/codec/tag_key.hpp"
 
 namespace pintag::cli {
-
-/// The whole text as a decimal number, as the HTTP routes read one (std::from_chars): no sign
-/// before it but a minus, no spaces, no hexadecimal. strtod took " 10" and "0x10" (a 16 mm tag).
-inline std::optional<double> DecimalNumber(const std::string& text) {
-  double value = 0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc() || end != text.data() + text.size()) return std::nullopt;
-  return value;
-}
 
 /// A number that is finite: CLI11's ranges compare with < and >, which NaN passes ("nan" would
 /// reach a render as a size of nan mm, or turn the server's body limit off). Put it before them.
 inline CLI::Validator FiniteNumber() {
   return {[](std::string& text) -> std::string {
-            const std::optional<double> value = DecimalNumber(text);
+            const std::optional<double> value = app::ParseDecimal(text);
             if (!value || !std::isfinite(*value)) {
               return "must be a finite number, got '" + text + "'";
             }
@@ -43,14 +34,9 @@ inline CLI::Validator FiniteNumber() {
 /// A finite number from `min` to `max`, refused in the routes' words ("must be a number from
 /// 0.001 to 1e+07"): CLI::Range printed an unbounded side as DBL_MAX's 309 digits.
 inline CLI::Validator NumberFromTo(double min, double max) {
-  const auto shown = [](double v) {
-    std::ostringstream out;
-    out << v;
-    return out.str();
-  };
-  const std::string range = shown(min) + " to " + shown(max);
+  const std::string range = app::ShownNumber(min) + " to " + app::ShownNumber(max);
   return {[min, max, range](std::string& text) -> std::string {
-            const std::optional<double> value = DecimalNumber(text);
+            const std::optional<double> value = app::ParseDecimal(text);
             if (!value || !std::isfinite(*value) || *value < min || *value > max) {
               return "must be a number from " + range + ", got '" + text + "'";
             }
@@ -97,6 +83,20 @@ inline CLI::Validator TagKeyText() {
       "KEY(0-32767)");
   validator.name(kReadsItsText);
   return validator;
+}
+
+/// A file `option` will write, checked before any work is done: a path naming a directory, or in a
+/// directory that is not there, is a mistyped path (UsageError), not a failure found at the end.
+inline void CheckFileToWrite(const std::string& option, const std::string& path) {
+  const std::filesystem::path file(path);
+  const std::filesystem::path directory = file.has_parent_path() ? file.parent_path() : ".";
+  std::error_code error;
+  if (std::filesystem::is_directory(file, error) || (!path.empty() && path.back() == '/')) {
+    throw UsageError(option + " " + path + " is a directory; name the file");
+  }
+  if (!std::filesystem::is_directory(directory, error)) {
+    throw UsageError(option + " " + path + ": " + directory.string() + " is not a directory");
+  }
 }
 
 }  // namespace pintag::cli

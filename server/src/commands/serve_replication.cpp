@@ -119,11 +119,7 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
     const std::filesystem::path snapshot = std::filesystem::weakly_canonical(args.snapshot, error);
     const std::filesystem::path db = std::filesystem::weakly_canonical(db_path, error);
     const bool same = snapshot == db || std::filesystem::equivalent(args.snapshot, db_path, error);
-    // By name too: on a first start neither file is there yet.
-    bool its_file = !db::DatabaseOwningFile(snapshot.string(), db.string()).empty();
-    for (const char* suffix : {"-wal", "-shm", "-journal"}) {
-      its_file = its_file || snapshot.string() == db.string() + suffix;
-    }
+    const bool its_file = !db::DatabaseOwningFile(snapshot.string(), db.string()).empty();
     if (same || its_file) {
       throw UsageError("--snapshot " + args.snapshot + " would replace the database " + db_path +
                        (same ? "" : " or one of its files") + "; publish it to another path");

@@ -7,6 +7,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "commands/option_checks.hpp"
 #include "commands/unseen_token.hpp"
 #include "pintag/db/csv.hpp"
 #include "pintag/db/database.hpp"
@@ -32,17 +33,8 @@ void Create(const TokenArgs& args) {
   if (auto error = db::CheckText("label", args.label, db::kMaxLabelBytes, true)) {
     throw UsageError("--" + error->message);
   }
-  // A file in a directory that is not there is a mistyped path: no token is made for it.
-  const std::filesystem::path out(args.out);
-  if (!args.out.empty()) {
-    const std::filesystem::path directory = out.has_parent_path() ? out.parent_path() : ".";
-    if (!std::filesystem::is_directory(directory)) {
-      throw UsageError("--out " + args.out + ": " + directory.string() + " is not a directory");
-    }
-    if (std::filesystem::is_directory(out)) {
-      throw UsageError("--out " + args.out + " is a directory; name the file for the secret");
-    }
-  }
+  // A mistyped path: no token is made for it.
+  if (!args.out.empty()) CheckFileToWrite("--out", args.out);
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token && token.error().code == db::ErrorCode::kBusy) {
@@ -50,7 +42,8 @@ void Create(const TokenArgs& args) {
   }
   if (!token) throw std::runtime_error(token.error().message);
   if (!args.out.empty()) {
-    RevokeIfUnwritten(connection, token->info.id, args.out, WriteSecretFile(out, token->secret));
+    RevokeIfUnwritten(connection, token->info.id, args.out,
+                      WriteSecretFile(args.out, token->secret));
     std::cerr << "token " << token->info.id << " (" << db::ToString(*role) << "); its secret is in "
               << args.out << " (mode 0600), and shown nowhere else\n";
     return;
