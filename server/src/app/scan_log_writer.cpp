@@ -129,9 +129,10 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
   lock.unlock();
   std::optional<db::AppendedScans> appended;
   std::string error;
-  // Worth waiting for: a lock held elsewhere, a disk that fills up, a database file moved away
-  // (the pool refuses it until it is back). Anything else (a file that is not a database, an I/O
-  // error) would fail the same way again: that batch is lost at once, as before the writer.
+  // Worth waiting for: a lock held elsewhere, a disk that fills up, a connection that cannot be
+  // opened now (the process is out of file descriptors, or the file was moved away and the pool
+  // refuses it until it is back). A write that fails on an open connection otherwise (the file is
+  // not a database, an I/O error) would fail the same way again: that batch is lost at once.
   bool passing = false;
   try {
     auto connection = log_->acquire();
@@ -145,10 +146,10 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
                 result.error().code == db::ErrorCode::kNoSpace;
     }
   } catch (const server::HttpError& e) {
-    // The pool refuses a file that is not at its path any more until it is put back; one it
-    // cannot open stays so.
+    // The pool could not lend a connection. What stops it may pass (descriptors free again, the
+    // file put back), and held scans cost only the backlog's bounded memory until the stop.
     error = e.problem().detail;
-    passing = !log_->servesFileAtPath();
+    passing = true;
   } catch (const std::exception& e) {
     error = e.what();
   }
