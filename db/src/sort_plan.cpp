@@ -106,6 +106,30 @@ void AppendField(std::string& out, std::string_view field) {
   out += field;
 }
 
+/// Why the plan stored under `name` (none when empty) fails `condition`, or nothing when it
+/// meets it. `doing` ends the message for a plan that must exist ("to replace").
+std::optional<Error> UnmetCondition(std::string_view name, const std::optional<SortPlan>& stored,
+                                    const PlanCondition& condition, std::string_view doing) {
+  const std::string quoted = "'" + std::string(name) + "'";
+  const std::string version = stored ? PlanVersion(*stored) : std::string();
+  if (condition.match && !stored) {
+    return Error{ErrorCode::kPrecondition,
+                 "there is no sort plan named " + quoted + " " + std::string(doing)};
+  }
+  if (condition.match && !condition.match->contains(version)) {
+    return Error{ErrorCode::kPrecondition, "sort plan " + quoted +
+                                               " is not at the version given (it is now \"" +
+                                               version + "\"): read it again and redo the change"};
+  }
+  if (condition.none_match && stored && condition.none_match->contains(version)) {
+    return Error{ErrorCode::kPrecondition,
+                 condition.none_match->any
+                     ? "a sort plan named " + quoted + " already exists"
+                     : "sort plan " + quoted + " is at a version the write excludes"};
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<Error> CheckRule(const SortRule& rule) {
@@ -263,22 +287,9 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
     Transaction transaction(connection);
     if (condition.match || condition.none_match) {
       // Read under the write lock: no other writer can change the plan between here and commit.
-      const std::optional<SortPlan> stored = ReadPlan(connection, plan.name);
-      const std::string version = stored ? PlanVersion(*stored) : std::string();
-      if (condition.match && !stored) {
-        return Error{ErrorCode::kPrecondition,
-                     "there is no sort plan named '" + plan.name + "' to replace"};
-      }
-      if (condition.match && !condition.match->contains(version)) {
-        return Error{ErrorCode::kPrecondition,
-                     "sort plan '" + plan.name + "' is not at the version given (it is now \"" +
-                         version + "\"): read it again and redo the change"};
-      }
-      if (condition.none_match && stored && condition.none_match->contains(version)) {
-        return Error{ErrorCode::kPrecondition,
-                     condition.none_match->any
-                         ? "a sort plan named '" + plan.name + "' already exists"
-                         : "sort plan '" + plan.name + "' is at a version the write excludes"};
+      if (auto unmet =
+              UnmetCondition(plan.name, ReadPlan(connection, plan.name), condition, "to replace")) {
+        return *unmet;
       }
     }
     SavedPlan saved;
@@ -312,12 +323,22 @@ Result<std::vector<std::string>> ListPlans(Connection& connection) {
   });
 }
 
-Result<void> DeletePlan(Connection& connection, std::string_view name) {
-  return Guard([&]() -> Result<void> {
-    if (connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, name).run() == 0) {
-      return UnknownPlan(name);
-    }
-    return {};
+Result<SortPlan> DeletePlan(Connection& connection, std::string_view name,
+                            const PlanCondition& condition) {
+  if (name == kDefaultPlanName) {
+    return Error{ErrorCode::kConflict,
+                 "the default sort plan cannot be deleted: labels and scans that name no plan "
+                 "use it; replace its rules instead"};
+  }
+  return Guard([&]() -> Result<SortPlan> {
+    Transaction transaction(connection);
+    // Read under the write lock, as a save reads it: what is returned is what was deleted.
+    std::optional<SortPlan> stored = ReadPlan(connection, name);
+    if (auto unmet = UnmetCondition(name, stored, condition, "to delete")) return *unmet;
+    if (!stored) return UnknownPlan(name);
+    connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, name).run();
+    transaction.commit();
+    return std::move(*stored);
   });
 }
 

@@ -82,6 +82,34 @@ TEST_F(SortPlans, SavingReplacesAndDeletingRemoves) {
   EXPECT_EQ(db_.queryInt64("SELECT count(*) FROM sort_rules WHERE bin = 'two'"), 0);
 }
 
+TEST_F(SortPlans, DeletingAnswersThePlanAsItWasAndHonoursTheVersionRead) {
+  const SortPlan hub = HubPlan();
+  ASSERT_TRUE(SavePlan(db_, hub).ok());
+  const std::string version = PlanVersion(GetPlan(db_, hub.name).value());
+
+  const PlanCondition other{PlanVersions{false, {"0123"}}, std::nullopt};
+  EXPECT_EQ(DeletePlan(db_, hub.name, other).error().code, ErrorCode::kPrecondition);
+  EXPECT_TRUE(HasPlan(db_, hub.name).value());
+
+  const PlanCondition read{PlanVersions{false, {version}}, std::nullopt};
+  const Result<SortPlan> deleted = DeletePlan(db_, hub.name, read);
+  ASSERT_TRUE(deleted.ok()) << deleted.error().message;
+  EXPECT_EQ(PlanVersion(deleted.value()), version);
+  EXPECT_EQ(deleted->rules.size(), hub.rules.size());
+  EXPECT_FALSE(HasPlan(db_, hub.name).value());
+  EXPECT_EQ(DeletePlan(db_, hub.name, read).error().code, ErrorCode::kPrecondition);
+  EXPECT_EQ(DeletePlan(db_, hub.name).error().code, ErrorCode::kNotFound);
+}
+
+TEST_F(SortPlans, TheDefaultPlanIsNeverDeleted) {
+  const std::size_t rules = GetPlan(db_, kDefaultPlanName).value().rules.size();
+  ASSERT_GT(rules, 0U);
+  const Result<SortPlan> refused = DeletePlan(db_, kDefaultPlanName);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+  EXPECT_EQ(GetPlan(db_, kDefaultPlanName).value().rules.size(), rules);
+}
+
 TEST_F(SortPlans, KeepingTheStoredDescriptionKeepsItOnlyWhenThereIsOne) {
   ASSERT_TRUE(SavePlan(db_, HubPlan()).ok());  // "test plan"
   SortPlan from_csv{"hub-a", "other", "", {{"2", "two"}}};

@@ -199,6 +199,74 @@ TEST_F(ServeTest, SortPlanWritesAreConditionalOnTheVersionRead) {
   EXPECT_EQ(bins(), "last");
 }
 
+// A plan a hub no longer uses is deleted by an admin, answered as it was (so that a mistaken
+// delete can be put back), and conditionally on the version read as a PUT is; the default plan,
+// which labels and scans naming no plan use, is never deleted.
+TEST_F(ServeTest, SortPlansAreDeletedByAnAdminAndAnsweredAsTheyWere) {
+  const std::string plan_path = "/api/v1/sortplans/hub";
+  const std::string csv = "prefix,bin\n*,manual\n11,delhi\n56,bengaluru\n";
+  const auto del = [&](const std::string& path, const httplib::Headers& extra = {}) {
+    httplib::Headers headers = admin();
+    headers.insert(extra.begin(), extra.end());
+    return client().Delete(path, headers);
+  };
+  auto created = client().Put(plan_path + "?description=north%20hub", admin(), csv, "text/csv");
+  ASSERT_TRUE(created);
+  ASSERT_EQ(created->status, 201) << created->body;
+  const std::string etag = created->get_header_value("ETag");
+
+  // Only an admin deletes.
+  ExpectProblem(client().Delete(plan_path), 401);
+  ExpectProblem(client().Delete(plan_path, counter()), 403);
+  ExpectProblem(client().Delete(plan_path, scanner()), 403);
+
+  // A tag that is not the plan's: 412, and the plan still routes.
+  const json stale = ExpectProblem(del(plan_path, {{"If-Match", "\"nope\""}}), 412);
+  EXPECT_NE(stale["detail"].get<std::string>().find(etag.substr(1, 32)), std::string::npos)
+      << stale.dump();
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/560001?plan=hub"))["bin"], "bengaluru");
+
+  // The tag read: deleted, answered as it was with that tag.
+  auto deleted = del(plan_path, {{"If-Match", etag}});
+  ASSERT_TRUE(deleted);
+  ASSERT_EQ(deleted->status, 200) << deleted->body;
+  EXPECT_EQ(deleted->get_header_value("ETag"), etag);
+  const json was = json::parse(deleted->body);
+  EXPECT_EQ(was["name"], "hub");
+  EXPECT_EQ(was["fallback_bin"], "manual");
+  EXPECT_EQ(was["description"], "north hub");
+  EXPECT_EQ(was["rules"].size(), 2U);
+
+  // Gone: not listed, not read, not routed by, not on a label; a second delete is 404.
+  ExpectProblem(client().Get(plan_path), 404);
+  ExpectProblem(client().Get("/api/v1/route/560001?plan=hub"), 404);
+  ExpectProblem(client().Get("/api/v1/labels/560001.png?plan=hub", counter()), 404);
+  for (const json& plan : ExpectJson(client().Get("/api/v1/sortplans"))["plans"]) {
+    EXPECT_NE(plan["name"], "hub");
+  }
+  ExpectProblem(del(plan_path), 404);
+  ExpectProblem(del(plan_path, {{"If-Match", "*"}}), 412);
+
+  // What the delete answered puts the plan back as it was.
+  auto restored = client().Put(plan_path, admin(), deleted->body, "application/json");
+  ASSERT_TRUE(restored);
+  EXPECT_EQ(restored->status, 201) << restored->body;
+  EXPECT_EQ(restored->get_header_value("ETag"), etag);
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/560001?plan=hub"))["bin"], "bengaluru");
+
+  // Without If-Match a delete takes the plan whatever it is now.
+  ExpectJson(del(plan_path));
+  ExpectProblem(client().Get(plan_path), 404);
+
+  // The default plan stays, with or without its tag.
+  const std::string default_etag =
+      client().Get("/api/v1/sortplans/default")->get_header_value("ETag");
+  const json kept = ExpectProblem(del("/api/v1/sortplans/default"), 409);
+  EXPECT_NE(kept["detail"].get<std::string>().find("default"), std::string::npos) << kept.dump();
+  ExpectProblem(del("/api/v1/sortplans/default", {{"If-Match", default_etag}}), 409);
+  EXPECT_EQ(client().Get("/api/v1/sortplans/default")->get_header_value("ETag"), default_etag);
+}
+
 // A rule no pincode can match, or a prefix given twice, is refused naming the line (or rule) so a
 // long CSV can be put right; nothing is saved.
 TEST_F(ServeTest, SortPlanFaultsAreNamedByLine) {

@@ -111,6 +111,8 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new",
       {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}, {},
       {200, 201}}},
+    {"DELETE", "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<DeleteSortPlan>,
+     {"routing", "Delete a sort plan (not the default one, 409) and answer it as it was; with If-Match: its ETag, only if unchanged since read (else 412)"}},
 
     {"GET",    "/api/v1/registry",                  Access::kOpen,    GetRegistryStatus,
      {"replication", "Which registry version this server serves, and whether it is the primary or a replica"}},

@@ -41,6 +41,7 @@ HttpResponse GetRoute(const AppContext& context, const HttpRequest& request);
 HttpResponse GetSortPlans(const AppContext& context, const HttpRequest& request);
 HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request);
 HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request);
+HttpResponse DeleteSortPlan(const AppContext& context, const HttpRequest& request);
 
 // replication_routes.cpp: the registry version served, and the primary's snapshot.
 HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& request);

@@ -217,4 +217,18 @@ HttpResponse PutSortPlan(const AppContext& context, const HttpRequest& request) 
                       saved->replaced ? 200 : 201);
 }
 
+HttpResponse DeleteSortPlan(const AppContext& context, const HttpRequest& request) {
+  const std::string name = PlanNameParam(request);
+  auto connection = context.pool->acquire();
+  // Without If-Match the plan is deleted whatever it was, as a PUT without it overwrites.
+  auto deleted = db::DeletePlan(*connection, name, PlanConditionOf(request));
+  if (!deleted && deleted.error().code == db::ErrorCode::kConflict) {
+    throw HttpError(409, deleted.error().message, "Default Sort Plan");
+  }
+  if (!deleted) ThrowPlanError(deleted.error());
+  // The plan as it was, so that a mistaken delete can be put back with PUT.
+  return PlanResponse(PlanJson(*deleted).dump(), "application/json", db::PlanVersion(*deleted),
+                      false);
+}
+
 }  // namespace pintag::app

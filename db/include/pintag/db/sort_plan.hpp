@@ -110,7 +110,12 @@ Result<SortPlan> GetPlan(Connection& connection, std::string_view name);
 /// Whether a plan called `name` is stored (its rules are not read).
 Result<bool> HasPlan(Connection& connection, std::string_view name);
 Result<std::vector<std::string>> ListPlans(Connection& connection);  ///< names, ascending
-Result<void> DeletePlan(Connection& connection, std::string_view name);
+/// Deletes the plan and its rules when the stored plan meets `condition` (checked in the same
+/// transaction, as SavePlanIf checks it), and returns it as it was. kNotFound for an unknown plan;
+/// kConflict for the default plan, which labels and scans naming no plan use (replace it
+/// instead); kPrecondition, and nothing deleted, when the condition does not hold.
+Result<SortPlan> DeletePlan(Connection& connection, std::string_view name,
+                            const PlanCondition& condition = {});
 
 /// The bin for `pincode` under the named plan, and the rule that matched; kNotFound for an
 /// unknown plan. The pincode need not be in the registry (routing is by prefix only).
