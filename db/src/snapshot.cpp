@@ -437,6 +437,12 @@ Result<SnapshotInfo> VerifySnapshot(const std::string& path) {
   try {
     Connection connection(path, {.create = false, .read_only = true});
     const int version = SchemaVersion(connection);
+    if (version == 0) {
+      return Error{ErrorCode::kConflict,
+                   "snapshot " + path +
+                       " holds no PinTag registry (it is empty, or another application's "
+                       "SQLite database)"};
+    }
     if (version != kSchemaVersion) {
       return Error{ErrorCode::kConflict, "snapshot " + path + " has schema version " +
                                              std::to_string(version) + "; this pintag reads " +

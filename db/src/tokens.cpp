@@ -95,8 +95,17 @@ std::optional<Role> ParseRole(std::string_view text) {
   return std::nullopt;
 }
 
+std::optional<Error> CheckTokenLabel(std::string_view label) {
+  if (auto error = CheckText("label", label, kMaxLabelBytes, true)) return error;
+  if (!label.empty() && IsBlank(label)) {
+    return Error{ErrorCode::kInvalid,
+                 "label is blank (only spaces or invisible characters); leave it out instead"};
+  }
+  return std::nullopt;
+}
+
 Result<NewToken> CreateToken(Connection& connection, Role role, std::string_view label) {
-  if (auto error = CheckText("label", label, kMaxLabelBytes, true)) return *error;
+  if (auto error = CheckTokenLabel(label)) return *error;
   return Guard([&]() -> Result<NewToken> {
     try {
       Transaction transaction(connection);

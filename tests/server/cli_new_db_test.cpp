@@ -33,6 +33,11 @@ TEST(CliNewDb, ABadTokenLabelIsAUsageErrorBeforeTheDatabaseIsCreated) {
   const CommandResult long_label =
       RunPintag("token create --role admin --label " + std::string(201, 'x') + " --db " + db);
   EXPECT_EQ(long_label.status, 2) << long_label.out;
+  // A label of spaces (a no-break one among them) labels nothing in a list.
+  const CommandResult blank =
+      RunPintag("token create --role admin --label \"$(printf '  \\302\\240 ')\" --db " + db);
+  EXPECT_EQ(blank.status, 2) << blank.out;
+  EXPECT_NE(blank.out.find("--label is blank"), std::string::npos) << blank.out;
   EXPECT_FALSE(std::filesystem::exists(db));
 
   // A good label still makes a token (and, the file being missing, the database).
@@ -58,6 +63,35 @@ TEST(CliNewDb, TokenListAndRevokeNeedAnExistingDatabase) {
     EXPECT_NE(run.out.find("no database at " + db), std::string::npos) << run.out;
   }
   EXPECT_FALSE(std::filesystem::exists(db));
+}
+
+// An empty file at --db (`touch`, a mount's placeholder) is seeded as a new database and said
+// so, not said to be created; a snapshot check of one says it holds no registry.
+TEST(CliNewDb, AnEmptyFileIsSeededAndSaidToBeAndIsNoSnapshot) {
+  const TempDir dir;
+  const std::string empty = WriteFile(dir.file("empty.db"), "");
+  const CommandResult verified = RunPintag("snapshot --verify " + empty);
+  EXPECT_EQ(verified.status, 1) << verified.out;
+  EXPECT_NE(verified.out.find("holds no PinTag registry (it is empty"), std::string::npos)
+      << verified.out;
+  EXPECT_EQ(verified.out.find("schema version 0"), std::string::npos) << verified.out;
+
+  const CommandResult made = RunPintag("token create --role admin --db " + empty);
+  EXPECT_EQ(made.status, 0) << made.out;
+  EXPECT_NE(made.out.find("seeded the empty file " + empty + " from "), std::string::npos)
+      << made.out;
+  EXPECT_EQ(made.out.find("created " + empty), std::string::npos) << made.out;
+
+  // Revoking it twice: the second says it was already revoked, at the first one's time.
+  const CommandResult first = RunPintag("token revoke 1 --db " + empty);
+  EXPECT_EQ(first.status, 0) << first.out;
+  const std::size_t at = first.out.find("revoked at ");
+  ASSERT_NE(at, std::string::npos) << first.out;
+  const std::string when = first.out.substr(at + 11, first.out.find('\n', at) - at - 11);
+  const CommandResult second = RunPintag("token revoke 1 --db " + empty);
+  EXPECT_EQ(second.status, 0) << second.out;
+  EXPECT_NE(second.out.find("token 1 was already revoked at " + when), std::string::npos)
+      << second.out;
 }
 
 TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {

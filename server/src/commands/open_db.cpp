@@ -17,14 +17,24 @@ std::string LockedMessage(const std::string& path, const std::string& not_done) 
          not_done + ". Try again when it is done";
 }
 
-db::Connection OpenDb(const std::string& path) {
+db::Connection OpenDb(const std::string& path, const SayFunction& say) {
+  std::error_code error;
+  const bool existed = std::filesystem::exists(path, error);
   auto opened = db::OpenDatabase(path);
   if (!opened && opened.error().code == db::ErrorCode::kBusy) {
     throw std::runtime_error(LockedMessage(path, "it could not be opened"));
   }
   if (!opened) throw std::runtime_error(path + ": " + opened.error().message);
   if (opened->created) {
-    std::cerr << "created " << path << " and seeded it from " << db::SeedSource() << "\n";
+    // An empty file (`touch`, or a mount's placeholder) is a new database to SQLite.
+    const std::string what = existed
+                                 ? "seeded the empty file " + path + " from " + db::SeedSource()
+                                 : "created " + path + " and seeded it from " + db::SeedSource();
+    if (say) {
+      say(what);
+    } else {
+      std::cerr << what << "\n";
+    }
   }
   return std::move(opened).value().connection;
 }

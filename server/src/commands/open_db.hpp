@@ -1,6 +1,7 @@
 #pragma once
 // The database a subcommand works on (`--db`, default pintag.db).
 
+#include <functional>
 #include <string>
 
 #include "pintag/db/sqlite.hpp"
@@ -12,9 +13,14 @@ namespace pintag::cli {
 /// the file were at fault. `not_done` says what was left undone ("no token was made").
 std::string LockedMessage(const std::string& path, const std::string& not_done);
 
-/// Opens and migrates the database at `path`; a missing file is created and seeded from the
-/// bundled registry, which is said on stderr. Throws std::runtime_error when it cannot open.
-db::Connection OpenDb(const std::string& path);
+/// Where OpenDb says that it seeded a database: stderr for the commands, the server log for
+/// `serve` (whose stderr is one log line per line, JSON with --log-format json).
+using SayFunction = std::function<void(const std::string&)>;
+
+/// Opens and migrates the database at `path`; a missing (or empty) file is created and seeded
+/// from the bundled registry, which is said through `say` (stderr when empty). Throws
+/// std::runtime_error when it cannot open.
+db::Connection OpenDb(const std::string& path, const SayFunction& say = {});
 
 /// Opens and migrates the database at `path`, which must exist: for commands that only make sense
 /// on a registry in use (listing or revoking its tokens), where a mistyped path must not create

@@ -30,7 +30,7 @@ void Create(const TokenArgs& args) {
   if (!role) throw UsageError("--role must be admin, counter, scanner or replica");
   // Checked as CreateToken checks it, before the database is opened: a bad label must not create
   // and seed one.
-  if (auto error = db::CheckText("label", args.label, db::kMaxLabelBytes, true)) {
+  if (auto error = db::CheckTokenLabel(args.label)) {
     throw UsageError("--" + error->message);
   }
   // A mistyped path: no token is made for it.
@@ -67,6 +67,16 @@ void List(const TokenArgs& args) {
 
 void Revoke(const TokenArgs& args) {
   db::Connection connection = OpenExistingDb(args.db);
+  // Said apart from a revocation made now: a script revoking a leaked token must not read an
+  // old revocation as its own.
+  if (auto tokens = db::ListTokens(connection)) {
+    for (const db::TokenInfo& t : *tokens) {
+      if (t.id == args.id && t.revoked_at) {
+        std::cout << "token " << t.id << " was already revoked at " << *t.revoked_at << "\n";
+        return;
+      }
+    }
+  }
   auto token = db::RevokeToken(connection, args.id);
   if (!token && token.error().code == db::ErrorCode::kBusy) {
     throw std::runtime_error(LockedMessage(args.db, "the token was not revoked"));

@@ -33,6 +33,10 @@ struct NewToken {
   std::string secret;  ///< the only copy: give it to the user now
 };
 
+/// Nothing when `label` may label a token: empty, or text CheckText takes (at most
+/// kMaxLabelBytes) that is not blank; a label of only spaces names nothing in a list.
+std::optional<Error> CheckTokenLabel(std::string_view label);
+
 Result<NewToken> CreateToken(Connection& connection, Role role, std::string_view label = "");
 Result<std::vector<TokenInfo>> ListTokens(Connection& connection);  ///< by id, revoked included
 /// Whether RevokeToken may revoke the last active admin token.
