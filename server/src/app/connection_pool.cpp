@@ -171,7 +171,14 @@ ConnectionPool::Lease ConnectionPool::acquire() {
         if (generation_ != generation) continue;
       }
       server::LogEvent("cannot open database " + path + ": " + e.what(), /*warning=*/true);
-      throw server::HttpError(503, "the database is not reachable", "Service Unavailable");
+      // A file that could not be opened at all (no file descriptor left, its permissions) may
+      // open on a later try, so the client is told when to ask again; one that opened and is no
+      // database will not.
+      const auto* sqlite = dynamic_cast<const db::SqliteError*>(&e);
+      const bool may_pass = sqlite != nullptr && sqlite->isCantOpen();
+      throw server::HttpError(server::Problem{503, "Service Unavailable",
+                                              "the database is not reachable", "about:blank",
+                                              may_pass ? 1 : 0});
     }
   }
 }

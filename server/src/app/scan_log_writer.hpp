@@ -10,9 +10,9 @@
 // lock is held elsewhere, or a write is that slow), append() returns at once until the backlog
 // is written: the scans are held in memory, up to kMaxBacklogScans and kMaxBacklogBytes of JSON;
 // past that a scan is dropped and counted. Only what may pass is waited for (a lock, a full disk,
-// a connection that cannot be opened now: no file descriptor left, the file moved away); a log
-// that an open connection cannot write otherwise (not a database, an I/O error) loses its scans
-// at once, counted.
+// a file that cannot be opened now, as with no file descriptor left, a file moved away); a log
+// that cannot be written otherwise (not a database, an I/O error) loses its scans at once,
+// counted.
 // finish() writes the backlog for at most kFinishTimeout from when it is called, each try cut to
 // the time left; what is left then is lost and counted. A forced stop (the process ends without
 // finish()) loses what is held: backlog() says how much, for the stop to log.

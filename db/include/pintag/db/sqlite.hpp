@@ -35,6 +35,7 @@ class SqliteError : public std::runtime_error {
   bool isConstraint() const { return code_ == 19; }         ///< SQLITE_CONSTRAINT
   bool isFull() const { return code_ == 13; }               ///< SQLITE_FULL: no room to write
   bool isReadOnly() const { return code_ == 8; }            ///< SQLITE_READONLY
+  bool isCantOpen() const { return code_ == 14; }           ///< SQLITE_CANTOPEN: the file itself
 
  private:
   int code_;
