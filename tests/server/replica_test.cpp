@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <fstream>
 #include <functional>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "label_photo.hpp"
@@ -241,6 +243,48 @@ TEST_F(ReplicaSetTest, AFollowerWaitingForItsFirstSnapshotOutlivesSigHup) {
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   EXPECT_TRUE(follower.running());
   EXPECT_EQ(follower.stop(SIGTERM, 30), 128 + SIGTERM);
+}
+
+// With --log-format json, every line a server writes on stderr is one JSON object, so a log
+// pipeline parses them all. A primary's publishing and a follower's following were plain text
+// among them, the line saying the primary stopped answering included.
+TEST_F(ReplicaSetTest, WithJsonLogsEveryLineOfAPrimaryAndItsFollowerIsAnObject) {
+  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+  primary_ = std::make_unique<ServerProcess>(
+      std::vector<std::string>{"--db", primary_db_, "--log-format", "json", "--snapshot",
+                               dir_.file("published.db")},
+      dir_.file("primary-json.err"));
+  ASSERT_TRUE(primary_->ok()) << stderrOf("primary-json");
+  ServerProcess follower({"--db", replicaDb(0), "--follow", primaryUrl(), "--follow-token-file",
+                          dir_.file("replica.token"), "--follow-interval-ms", "100", "--log-format",
+                          "json", "--scan-log", replicaScanLog(0)},
+                         dir_.file("replica-0.err"));
+  ASSERT_TRUE(follower.ok()) << stderrOf("replica-0");
+  ASSERT_EQ(primary_->stop(SIGTERM, 30), 0);
+  ASSERT_TRUE(
+      WaitUntil([&] { return stderrOf("replica-0").find("following") != std::string::npos; }));
+  ASSERT_EQ(follower.stop(SIGTERM, 30), 0);
+
+  const auto messages = [&](const std::string& name) {
+    std::vector<std::string> events;
+    std::istringstream lines(stderrOf(name));
+    for (std::string line; std::getline(lines, line);) {
+      const nlohmann::json object = nlohmann::json::parse(line, nullptr, false);
+      EXPECT_TRUE(object.is_object()) << name << ": " << line;
+      if (object.is_object() && object.value("event", "") == "event") {
+        events.push_back(object.value("message", ""));
+      }
+    }
+    return events;
+  };
+  const auto holds = [](const std::vector<std::string>& events, const std::string& start) {
+    return std::any_of(events.begin(), events.end(),
+                       [&](const std::string& m) { return m.rfind(start, 0) == 0; });
+  };
+  const std::vector<std::string> primary = messages("primary-json");
+  EXPECT_TRUE(holds(primary, "published snapshot " + dir_.file("published.db")));
+  const std::vector<std::string> replica = messages("replica-0");
+  EXPECT_TRUE(holds(replica, "following " + primaryUrl() + ": ")) << stderrOf("replica-0");
 }
 
 TEST_F(ReplicaSetTest, TheSnapshotRouteAnswersReplicaTokensWithETagsAndOnlyThem) {

@@ -69,6 +69,14 @@ TEST_F(ServeLogTest, EveryRequestGetsOneAccessLineWithItsEchoedRequestId) {
   const auto missing_lines = LogLines(stderrFile(), "id=missing-1");
   ASSERT_EQ(missing_lines.size(), 1U);
   EXPECT_NE(missing_lines[0].find("status=404"), std::string::npos) << missing_lines[0];
+
+  // A HEAD answer sends no body, so it logs none (it logged the body GET would have sent).
+  auto head = client().Head("/api/v1/pincodes/110001", {{"X-Request-Id", "head-1"}});
+  ASSERT_TRUE(head);
+  EXPECT_EQ(head->status, 200);
+  const auto head_lines = LogLines(stderrFile(), "id=head-1");
+  ASSERT_EQ(head_lines.size(), 1U);
+  EXPECT_NE(head_lines[0].find(" bytes=0 "), std::string::npos) << head_lines[0];
 }
 
 // An answer the client went away from is logged with what the server answered and cut_off=true:
@@ -200,6 +208,82 @@ TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLo
   ASSERT_EQ(scans->size(), 1U);
   const json result = json::parse(scans->front().result_json);
   EXPECT_EQ(result["error"]["status"], 500) << scans->front().result_json;
+}
+
+// Answers cpp-httplib makes before routing (a method it does not parse, a Range it cannot
+// parse, a head that never ends) name the client, keep the X-Request-Id the client sent when the
+// headers were read, and are timed: they were logged with client="" and 0 ms, and a 416 with a
+// new id, which split a proxy's log from this one.
+TEST_F(ServeLogTest, AnswersMadeBeforeRoutingNameTheClientKeepTheIdAndAreTimed) {
+  startServer({"--read-timeout", "1"});
+  const auto exchange = [&](const std::string& request) {
+    const int fd = test::ConnectLoopback(server_->port());
+    EXPECT_GE(fd, 0);
+    EXPECT_TRUE(test::SendAll(fd, request));
+    const std::string answer = test::ReceiveUntil(fd, 5);
+    ::close(fd);
+    return answer;
+  };
+
+  const std::string made_up = exchange("FOO /livez HTTP/1.1\r\nHost: x\r\n\r\n");
+  EXPECT_EQ(made_up.rfind("HTTP/1.1 501", 0), 0U) << made_up;
+  const auto made_up_lines = LogLines(stderrFile(), "status=501");
+  ASSERT_EQ(made_up_lines.size(), 1U) << ReadFile(stderrFile());
+  EXPECT_NE(made_up_lines[0].find("client=127.0.0.1"), std::string::npos) << made_up_lines[0];
+
+  const std::string bad_range = exchange(
+      "GET /livez HTTP/1.1\r\nHost: x\r\nRange: bytes=zz\r\nX-Request-Id: kept-416\r\n\r\n");
+  EXPECT_EQ(bad_range.rfind("HTTP/1.1 416", 0), 0U) << bad_range;
+  EXPECT_NE(bad_range.find("X-Request-Id: kept-416\r\n"), std::string::npos) << bad_range;
+  const auto range_lines = LogLines(stderrFile(), "id=kept-416");
+  ASSERT_EQ(range_lines.size(), 1U) << ReadFile(stderrFile());
+  EXPECT_NE(range_lines[0].find("status=416"), std::string::npos) << range_lines[0];
+  EXPECT_NE(range_lines[0].find("client=127.0.0.1"), std::string::npos) << range_lines[0];
+
+  // A head that stops coming: answered 408 a read timeout (1 s) after its first bytes, and
+  // logged and measured as taking that long, not as the fastest request of all.
+  const std::string stalled = exchange("GET /livez HTTP/1.1\r\nHost: x\r\n");
+  EXPECT_EQ(stalled.rfind("HTTP/1.1 408", 0), 0U) << stalled;
+  const auto stalled_lines = LogLines(stderrFile(), "status=408");
+  ASSERT_EQ(stalled_lines.size(), 1U) << ReadFile(stderrFile());
+  std::smatch ms;
+  ASSERT_TRUE(std::regex_search(stalled_lines[0], ms, std::regex(R"( ms=([0-9.]+))")))
+      << stalled_lines[0];
+  EXPECT_GE(std::stod(ms[1].str()), 1000.0) << stalled_lines[0];
+  const std::string metrics = client().Get("/metrics")->body;
+  EXPECT_GE(
+      Metric(
+          metrics,
+          R"(pintag_http_request_duration_seconds_sum{route="unmatched",method="other",status="408"})"),
+      1.0)
+      << metrics;
+}
+
+// A token that cannot be checked because the database fails is a 5xx like a handler's: logged
+// under the request's id with what the client was not told. It was answered without an error
+// line, so the failure could not be joined to the request.
+TEST_F(ServeLogTest, ATokenCheckTheDatabaseFailsIsLoggedWithTheRequestId) {
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db_path_.c_str(), &raw), SQLITE_OK);
+    sqlite3_busy_timeout(raw, 5000);
+    char* message = nullptr;
+    const int rc = sqlite3_exec(raw, "DROP TABLE api_tokens;", nullptr, nullptr, &message);
+    sqlite3_free(message);
+    sqlite3_close(raw);
+    ASSERT_EQ(rc, SQLITE_OK);
+  }
+  httplib::Headers headers = admin();
+  headers.emplace("X-Request-Id", "token-check-1");
+  const json problem = ExpectProblem(client().Get("/api/v1/tokens", headers), 500);
+  EXPECT_EQ(problem["detail"].get<std::string>().find("api_tokens"), std::string::npos)
+      << "the SQL error reached the client: " << problem.dump();
+  const auto lines = LogLines(stderrFile(), "token-check-1", 2);
+  ASSERT_EQ(lines.size(), 2U) << ReadFile(stderrFile());
+  EXPECT_NE(lines[0].find(" error error id=token-check-1"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("GET /api/v1/tokens: 500"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("checking the bearer token"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("status=500"), std::string::npos) << lines[1];
 }
 
 TEST_F(ServeLogTest, ProcessMetricsDescribeTheServerProcess) {

@@ -48,7 +48,9 @@ server::TokenVerifier RegistryTokenVerifier(const std::shared_ptr<ConnectionPool
 void DefineCounters(server::Metrics& metrics) {
   metrics.defineCounter(kLabelsRenderedCounter, "Labels rendered (PDF pages, PNGs, SVGs).");
   metrics.defineCounter(kTagsRenderedCounter, "Tag images rendered.");
-  metrics.defineCounter(kScansCounter, "POST /api/v1/detect calls that sent a photo.");
+  metrics.defineCounter(kScansCounter,
+                        "POST /api/v1/detect uploads the scan log records: photos read, and "
+                        "uploads refused as not an image or too large.");
   metrics.defineCounter(kScanLogFailuresCounter,
                         "Scans answered but not written to the scan log (the error is logged).");
   metrics.defineCounter(kDetectionsCounter, "Tags decoded in uploaded photos.");

@@ -4,7 +4,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <thread>
 
 #include "commands/commands.hpp"
@@ -190,8 +189,9 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     }
     publisher_ = std::make_shared<replica::SnapshotPublisher>(db_path_, args_.snapshot);
     if (!publisher_->publish()) {
-      std::cerr << "pintag serve: starting without a published snapshot; replicas are answered "
-                   "503 until one is written\n";
+      server::LogEvent(
+          "starting without a published snapshot; replicas are answered 503 until one is written",
+          /*warning=*/true);
     }
     config.publisher = publisher_;
     return;
@@ -220,8 +220,8 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
         if (fetched && *fetched) break;
         const std::string error = fetched ? "no snapshot" : fetched.error().message;
         if (error != last_error) {
-          std::cerr << "pintag serve: waiting for a snapshot from " << args_.follow << ": " << error
-                    << "\n";
+          server::LogEvent("waiting for a snapshot from " + args_.follow + ": " + error,
+                           /*warning=*/true);
         }
         last_error = error;
         std::this_thread::sleep_for(std::chrono::milliseconds(args_.follow_interval_ms));
@@ -277,7 +277,8 @@ void Replication::reload() {
   try {
     follower_->setToken(ReadToken(args_));
   } catch (const std::exception& e) {
-    std::cerr << "pintag serve: SIGHUP: keeping the replica token: " << e.what() << "\n";
+    server::LogEvent(std::string("SIGHUP: keeping the replica token: ") + e.what(),
+                     /*warning=*/true);
   }
 }
 

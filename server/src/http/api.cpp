@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "header_text.hpp"
+#include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 #include "process_metrics.hpp"
 
@@ -99,8 +100,8 @@ Api::Api(Router router, TokenVerifier verifier, HealthCheck health,
   *document = OpenApiJson(router_, options_.info);
 }
 
-Admission Api::admit(std::string_view method, std::string_view path,
-                     const HeaderMap& headers) const {
+Admission Api::admit(std::string_view method, std::string_view path, const HeaderMap& headers,
+                     std::string_view request_id) const {
   Admission admission;
   std::size_t header_bytes = 0;
   for (const auto& [name, value] : headers) header_bytes += name.size() + value.size() + 4;
@@ -179,6 +180,11 @@ Admission Api::admit(std::string_view method, std::string_view path,
       if (!token.empty() && token.size() <= kMaxTokenLength && verifier_)
         principal = verifier_(token);
     } catch (const HttpError& e) {
+      if (e.problem().status >= 500) {
+        LogRequestError(request_id, std::string(method) + " " + std::string(path) + ": " +
+                                        std::to_string(e.problem().status) + " " +
+                                        e.problem().detail + " (checking the bearer token)");
+      }
       admission.rejection = ProblemResponse(e.problem());
       return admission;
     }
@@ -246,7 +252,8 @@ HttpResponse Api::invoke(const Admission& admission, HttpRequest request) const 
 HttpResponse Api::handle(HttpRequest request) const {
   const auto start = std::chrono::steady_clock::now();
   const std::string method = request.method;
-  const Admission admission = admit(request.method, request.path, request.headers);
+  const Admission admission =
+      admit(request.method, request.path, request.headers, request.request_id);
   HttpResponse response;
   if (!admission.rejection && request.body.size() > options_.max_body_bytes) {
     response = ProblemResponse(413, "the request body may be at most " +

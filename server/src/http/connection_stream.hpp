@@ -81,6 +81,9 @@ class ConnectionStream final : public httplib::Stream {
   /// True once a write failed or timed out: the answer did not all reach the client (it closed
   /// the connection, or stopped reading for the write timeout).
   bool writeFailed() const { return write_failed_; }
+  /// When the stream was made: the moment the request's head was there to be read (or had run
+  /// past the budget). A request's time is counted from here.
+  std::chrono::steady_clock::time_point created() const { return created_; }
 
  private:
   /// How many of `peeked`, the bytes waiting in the socket, a read of the head takes, checking
@@ -105,6 +108,7 @@ class ConnectionStream final : public httplib::Stream {
   std::array<char, 4096> buffer_{};
   std::size_t buffered_begin_ = 0;
   std::size_t buffered_end_ = 0;
+  std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
 };
 
 }  // namespace pintag::server

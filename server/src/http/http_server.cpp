@@ -385,7 +385,13 @@ struct HttpServer::Impl {
       return httplib::Server::HandlerResponse::Unhandled;
     }
     if (t_connection != nullptr) t_connection->headRead();
-    t_state = RequestState{true, std::chrono::steady_clock::now(), {}, {}, false};
+    // Timed from when its head was there to read, as an answer made before routing is.
+    t_state = RequestState{
+        true,
+        t_connection != nullptr ? t_connection->created() : std::chrono::steady_clock::now(),
+        {},
+        {},
+        false};
     t_state.request_id = RequestIdFrom(req.has_header("X-Request-Id")
                                            ? std::optional(req.get_header_value("X-Request-Id"))
                                            : std::nullopt);
@@ -403,7 +409,7 @@ struct HttpServer::Impl {
         const_cast<std::string&>(type->second) = std::move(*multipart);
       }
     }
-    t_state.admission = api->admit(req.method, req.path, Headers(req));
+    t_state.admission = api->admit(req.method, req.path, Headers(req), t_state.request_id);
     if (!t_state.admission.rejection && AmbiguousLength(req)) {
       // Two lengths (or a length and chunked coding) let a proxy and this server split the
       // stream into different requests: refuse, and close, whichever was meant.
@@ -564,8 +570,12 @@ struct HttpServer::Impl {
   // Fills the body of error answers cpp-httplib makes itself (400 malformed, 413, …).
   httplib::Server::HandlerResponse onError(const httplib::Request& req, httplib::Response& res) {
     // A request cpp-httplib refused before routing (malformed, too long) still gets an id.
+    // One refused after its headers were read (a Range it cannot parse) keeps the id it was sent,
+    // so that a proxy's log and this one name it alike.
     if (!t_state.active) {
-      t_state.request_id = RequestIdFrom(std::nullopt);
+      t_state.request_id = RequestIdFrom(req.has_header("X-Request-Id")
+                                             ? std::optional(req.get_header_value("X-Request-Id"))
+                                             : std::nullopt);
       res.set_header("X-Request-Id", t_state.request_id);
     }
     if (t_connection != nullptr && (t_connection->overBudget() || t_connection->headRefusal())) {
@@ -603,7 +613,8 @@ struct HttpServer::Impl {
   /// being read. Written whole here, logged and counted as the logger would.
   void answerUnendedHead(ConnectionStream& stream) {
     const HttpResponse problem = HeadRefusal(stream);
-    answerWithoutRequest(stream, StatusTitle(problem.status), problem, true);
+    answerWithoutRequest(stream, StatusTitle(problem.status), problem, true,
+                         std::chrono::steady_clock::now() - stream.created());
   }
 
   /// A head still coming Limits::head_timeout after its first bytes (IdleConnections): 408,
@@ -615,14 +626,15 @@ struct HttpServer::Impl {
         ProblemResponse(408, "the request line and headers did not all arrive within " +
                                  std::to_string(options.read_timeout.count()) +
                                  " s of their first byte"),
-        false);
+        false, options.read_timeout);
   }
 
   /// Writes `problem` on a connection whose request was never read whole, asking to close it, and
-  /// counts and logs it as cpp-httplib's answers are. Without `wait`, only what the socket takes
-  /// at once is written.
+  /// counts and logs it as cpp-httplib's answers are, as taking `taken` (from the head's first
+  /// bytes or its arrival). Without `wait`, only what the socket takes at once is written.
   void answerWithoutRequest(ConnectionStream& stream, std::string_view reason,
-                            const HttpResponse& problem, bool wait) {
+                            const HttpResponse& problem, bool wait,
+                            std::chrono::steady_clock::duration taken) {
     const std::string id = RequestIdFrom(std::nullopt);
     const std::string answer = "HTTP/1.1 " + std::to_string(problem.status) + " " +
                                std::string(reason) + "\r\nContent-Type: " + problem.content_type +
@@ -639,14 +651,15 @@ struct HttpServer::Impl {
     std::string client;
     int client_port = 0;
     stream.get_remote_ip_and_port(client, client_port);
-    api->metrics().observeRequest("unmatched", "other", problem.status, 0);
+    const double seconds = std::chrono::duration<double>(taken).count();
+    api->metrics().observeRequest("unmatched", "other", problem.status, seconds);
     LogAccess({.request_id = id,
                .client = client,
                .method = "",
                .path = "",
                .status = problem.status,
                .bytes = problem.body.size(),
-               .seconds = 0,
+               .seconds = seconds,
                .principal = ""});
   }
 
@@ -654,22 +667,34 @@ struct HttpServer::Impl {
     if (t_connection != nullptr) {
       t_connection->answered(res.get_header_value("Connection") == "close");
     }
-    double seconds = 0;
+    // cpp-httplib answers some requests before routing (400, 414, 416, 501): timed from their
+    // stream, and their client named from it, since cpp-httplib fills in remote_addr only after
+    // the head parsed.
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
     std::string label = "unmatched";
     if (t_state.active) {
-      seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_state.start).count();
+      start = t_state.start;
       label = t_state.admission.route_label;
+    } else if (t_connection != nullptr) {
+      start = t_connection->created();
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::string client = req.remote_addr;
+    if (client.empty() && t_connection != nullptr) {
+      int client_port = 0;
+      t_connection->get_remote_ip_and_port(client, client_port);
     }
     api->metrics().observeRequest(label, req.method, res.status, seconds);
     const std::string principal =
         t_state.admission.principal ? t_state.admission.principal->id : "";
     LogAccess({.request_id = t_state.request_id,
-               .client = req.remote_addr,
+               .client = client,
                .method = req.method,
                .path = req.path,
                .status = res.status,
-               .bytes = res.body.size(),
+               // A HEAD answer's body is counted by its headers but never sent.
+               .bytes = req.method == "HEAD" ? 0 : res.body.size(),
                .seconds = seconds,
                .principal = principal,
                .cut_off = t_connection != nullptr && t_connection->writeFailed()});

@@ -107,7 +107,9 @@ std::string Metrics::renderPrometheus() const {
     out += "pintag_http_requests_total{route=\"" + Escape(route) + "\",method=\"" + Escape(method) +
            "\",status=\"" + std::to_string(status) + "\"} " + std::to_string(h.count) + "\n";
   }
-  out += "# HELP pintag_http_request_duration_seconds Time from request line to response.\n";
+  out +=
+      "# HELP pintag_http_request_duration_seconds Time from a request's head arriving to its "
+      "answer written.\n";
   out += "# TYPE pintag_http_request_duration_seconds histogram\n";
   for (const auto& [key, h] : requests_) {
     const auto& [route, method, status] = key;

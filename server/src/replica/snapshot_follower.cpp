@@ -6,9 +6,9 @@
 
 #include <charconv>
 #include <cstdint>
-#include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "pintag/server/log.hpp"
 #include "replica/snapshot_publisher.hpp"
 
 namespace pintag::replica {
@@ -207,8 +207,8 @@ void SnapshotFollower::start(Have have, std::chrono::milliseconds interval,
     if (status) fetched ? status->succeeded() : status->failed(fetched.error().message);
     if (!fetched) {
       if (fetched.error().message != last_error) {
-        std::cerr << "pintag serve: following " << options_.primary_url << ": "
-                  << fetched.error().message << "\n";
+        server::LogEvent("following " + options_.primary_url + ": " + fetched.error().message,
+                         /*warning=*/true);
       }
       last_error = fetched.error().message;
       return;

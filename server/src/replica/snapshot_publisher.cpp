@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <fstream>
 #include <iomanip>
-#include <iostream>
 #include <random>
 #include <sstream>
 
 #include "pintag/db/database.hpp"
+#include "pintag/server/log.hpp"
 
 namespace pintag::replica {
 
@@ -69,16 +69,18 @@ db::Result<db::SnapshotInfo> SnapshotPublisher::writeIfChanged() {
   const bool ours = publishedFileIsOurs();
   if (published_ && published_->registry_version == *version && ours) return *published_;
   if (published_ && !ours && !failure_) {
-    std::cerr << "pintag serve: the published snapshot " << out_path_
-              << " was removed or changed by another process; publishing it again\n";
+    server::LogEvent("the published snapshot " + out_path_ +
+                         " was removed or changed by another process; publishing it again",
+                     /*warning=*/true);
   }
   db::Result<db::SnapshotInfo> written = db::WriteSnapshot(*live_, out_path_);
   if (!written) return written.error();
   published_ = *written;
   published_file_ = IdentifyFile(out_path_);
   updateStatus();
-  std::cerr << "pintag serve: published snapshot " << out_path_ << " (registry version "
-            << written->registry_version << ", " << written->bytes << " bytes)\n";
+  server::LogEvent("published snapshot " + out_path_ + " (registry version " +
+                   std::to_string(written->registry_version) + ", " +
+                   std::to_string(written->bytes) + " bytes)");
   return *written;
 }
 
@@ -92,8 +94,10 @@ db::Error SnapshotPublisher::failed(db::Error error) {
   // The count goes to the log only: a replica quotes the error it is answered, and one that
   // changed at every try was logged by every replica at every try.
   failure_ = error;
-  std::cerr << "pintag serve: cannot publish a snapshot to " << out_path_ << ": " << error.message
-            << " (" << failures_in_a_row_ << " in a row; next try in " << delay.count() << " s)\n";
+  server::LogEvent("cannot publish a snapshot to " + out_path_ + ": " + error.message + " (" +
+                       std::to_string(failures_in_a_row_) + " in a row; next try in " +
+                       std::to_string(delay.count()) + " s)",
+                   /*warning=*/true);
   updateStatus();
   return error;
 }

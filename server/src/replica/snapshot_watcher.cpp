@@ -9,13 +9,14 @@
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
-#include <iostream>
 #include <map>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
+
+#include "pintag/server/log.hpp"
 
 namespace pintag::replica {
 
@@ -189,10 +190,12 @@ bool SnapshotWatcher::check() {
     // Nothing to refuse or put back: the served registry is this file, changed under it.
     if (!link.empty()) ::unlink(link.c_str());
     served_damaged_ = true;
-    std::cerr << "pintag serve: " << path_ << " was written over in place, and the registry "
-              << "served (the same file) changed with it: " << verified.error().message
-              << ". Not ready until a good snapshot is at " << path_
-              << " (a --follow replica fetches one; else rename one into place)\n";
+    server::LogEvent(path_ +
+                         " was written over in place, and the registry served (the same file) "
+                         "changed with it: " +
+                         verified.error().message + ". Not ready until a good snapshot is at " +
+                         path_ + " (a --follow replica fetches one; else rename one into place)",
+                     /*warning=*/true);
     return false;
   }
   if (!verified) {
@@ -202,15 +205,18 @@ bool SnapshotWatcher::check() {
     // truncation) changed it: there are no keys left to compare, and refusing every later file
     // for that ("cannot compare the keys") left the replica unready for good. db::InstallSnapshot
     // replaces a file that is not a snapshot likewise.
-    std::cerr << "pintag serve: the registry served was written over in place; taking the new "
-              << "file at " << path_ << " without comparing keys\n";
+    server::LogEvent("the registry served was written over in place; taking the new file at " +
+                         path_ + " without comparing keys",
+                     /*warning=*/true);
   } else {
     refusal = db::KeysNotKeptBy(verified->path, loaded_->path);
   }
   if (refusal) {
     const std::string kept = putBackServed(link);
-    std::cerr << "pintag serve: ignoring the new file at " << path_ << ": " << refusal->message
-              << "; still serving registry version " << loaded_->registry_version << kept << "\n";
+    server::LogEvent("ignoring the new file at " + path_ + ": " + refusal->message +
+                         "; still serving registry version " +
+                         std::to_string(loaded_->registry_version) + kept,
+                     /*warning=*/true);
     return false;
   }
   const std::string previous = loaded_->path;
@@ -218,8 +224,8 @@ bool SnapshotWatcher::check() {
   served_damaged_ = false;
   on_loaded_(*loaded_);
   ::unlink(previous.c_str());  // connections still reading it keep it until they close
-  std::cerr << "pintag serve: loaded snapshot " << path_ << " (registry version "
-            << loaded_->registry_version << ")\n";
+  server::LogEvent("loaded snapshot " + path_ + " (registry version " +
+                   std::to_string(loaded_->registry_version) + ")");
   return true;
 }
 

@@ -49,8 +49,10 @@ class Api {
   Api(Router router, TokenVerifier verifier, HealthCheck health, std::shared_ptr<Metrics> metrics,
       ApiOptions options = {});
 
-  /// Stage one: route, method, bearer auth, declared body length and content type.
-  Admission admit(std::string_view method, std::string_view path, const HeaderMap& headers) const;
+  /// Stage one: route, method, bearer auth, declared body length and content type. A 5xx refusal
+  /// (the token store failing) is logged under `request_id`, as a handler's is.
+  Admission admit(std::string_view method, std::string_view path, const HeaderMap& headers,
+                  std::string_view request_id = {}) const;
 
   /// Stage two: runs the admitted route's handler (or serves the static file) through the
   /// problem+json wrapper. `request` carries the body; its path_params and principal are filled
