@@ -77,6 +77,17 @@ std::string RenderTagSvg(TagKey key, const TagSvgOptions& options) {
   for (int e = 0; e < kElements; ++e) {
     const geometry::Point c = geometry::kElementCentres[e];
     svg += "  <g class=\"element\" id=\"C" + std::to_string(e) + "\">\n";
+    // An underlay in the bit-0 colours under the cells, exactly their outlines (as the label's
+    // DrawTagVector has): a viewer that anti-aliases blends each seam between two cells with a
+    // palette colour instead of the black square, which showed through as dark hairlines.
+    const std::string r_green = Num(geometry::kGreenOuterRadius * frame.side);
+    const std::string r_red = Num(geometry::kRedRadius * frame.side);
+    const std::string cx = Num(frame.x(c.x));
+    const std::string cy = Num(frame.y(c.y));
+    svg += "    <circle class=\"underlay green\" cx=\"" + cx + "\" cy=\"" + cy + "\" r=\"" +
+           r_green + "\" fill=\"" + Hex(PaletteColour::kGreenZero) + "\"/>\n";
+    svg += "    <circle class=\"underlay red\" cx=\"" + cx + "\" cy=\"" + cy + "\" r=\"" + r_red +
+           "\" fill=\"" + Hex(PaletteColour::kRedZero) + "\"/>\n";
     for (int s = 0; s < kGreenSectors; ++s) {
       const PaletteColour colour =
           cells.green[e][s] ? PaletteColour::kGreenOne : PaletteColour::kGreenZero;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "pintag/codec/geometry.hpp"
 #include "pintag/codec/palette.hpp"
 
 namespace pintag {
@@ -70,9 +71,35 @@ TEST(TagSvg, SectorColoursFollowTheBits) {
     std::snprintf(text, sizeof text, "#%02x%02x%02x", SrgbFor(c).r, SrgbFor(c).g, SrgbFor(c).b);
     return std::string(text);
   };
-  EXPECT_EQ(Count(svg, "fill=\"" + hex(PaletteColour::kGreenZero) + "\""), 32);
+  // Each cell once, plus each element's underlay (a disk of each bit-0 colour under its cells).
+  EXPECT_EQ(Count(svg, "fill=\"" + hex(PaletteColour::kGreenZero) + "\""), 32 + 4);
   EXPECT_EQ(Count(svg, "fill=\"" + hex(PaletteColour::kRedOne) + "\""), 9);
-  EXPECT_EQ(Count(svg, "fill=\"" + hex(PaletteColour::kRedZero) + "\""), 7);
+  EXPECT_EQ(Count(svg, "fill=\"" + hex(PaletteColour::kRedZero) + "\""), 7 + 4);
+}
+
+TEST(TagSvg, EachElementLiesOnAnUnderlayOfItsBitZeroColoursSoNoSeamShowsTheSquare) {
+  // Before its cells, each element draws a green-0 disk of the green ring's outer radius and a
+  // red-0 disk of the red radius, centred on the element: an anti-aliased seam between two cells
+  // then blends palette colours, not the black square (dark hairlines in a browser).
+  const std::string svg = RenderTagSvg(TagKey(777), {100, "mm"});
+  const std::regex underlay(
+      R"re(<circle class="underlay (green|red)" cx="([0-9.]+)" cy="([0-9.]+)" r="([0-9.]+)")re");
+  int green = 0;
+  int red = 0;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), underlay);
+       it != std::sregex_iterator(); ++it) {
+    const bool is_green = (*it)[1] == "green";
+    (is_green ? green : red)++;
+    // 100 mm square, 15 mm quiet zone: the radius is the geometry's times 100.
+    EXPECT_NEAR(std::stod((*it)[4]),
+                100 * (is_green ? geometry::kGreenOuterRadius : geometry::kRedRadius), 1e-3);
+    const std::size_t at = static_cast<std::size_t>(it->position());
+    const std::size_t first_cell = svg.find("class=\"sector", at);
+    const std::size_t group_end = svg.find("</g>", at);
+    EXPECT_LT(first_cell, group_end) << "the underlay lies under its own element's cells";
+  }
+  EXPECT_EQ(green, 4);
+  EXPECT_EQ(red, 4);
 }
 
 }  // namespace
