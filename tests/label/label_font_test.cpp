@@ -81,5 +81,26 @@ TEST_F(LabelFontTest, AdvancesScaleWithTheSizeAndShapingJoinsConjuncts) {
   EXPECT_LT(conjunct, 0.9 * apart);
 }
 
+// Urdu in one face. DejaVu Sans has most Arabic letters but not ہ or ے, so "ڈاک خانہ" came out
+// in DejaVu with those two in Noto Naskh Arabic, thin letters among heavy ones inside a word.
+TEST_F(LabelFontTest, UrduIsSetInNaskhWholeAndLatinBesideItInDejaVu) {
+  for (const bool bold : {false, true}) {
+    const std::vector<std::string> urdu = font_.familiesOf("ڈاک خانہ بہت بڑا ہے", bold);
+    ASSERT_FALSE(urdu.empty());
+    for (const std::string& family : urdu) EXPECT_EQ(family, "Noto Naskh Arabic") << bold;
+    // A mixed line: the Latin and the digits stay in DejaVu, the Urdu (with the space between
+    // its words) in Naskh.
+    const std::vector<std::string> mixed = font_.familiesOf("Lahori Gate 110006 لاہوری گیٹ", bold);
+    EXPECT_EQ(mixed.front(), "DejaVu Sans") << bold;
+    EXPECT_EQ(mixed.back(), "Noto Naskh Arabic") << bold;
+    for (const std::string& family : mixed) {
+      EXPECT_TRUE(family == "DejaVu Sans" || family == "Noto Naskh Arabic") << family;
+    }
+  }
+  // Other scripts keep their faces.
+  EXPECT_EQ(font_.familiesOf("Connaught Place", true), std::vector<std::string>{"DejaVu Sans"});
+  EXPECT_EQ(font_.familiesOf("नई दिल्ली", true), std::vector<std::string>{"Noto Sans Devanagari"});
+}
+
 }  // namespace
 }  // namespace pintag::label

@@ -147,6 +147,11 @@ TEST(LabelPng, RefusesOutOfRangeDpiAndPixelBombs) {
   const RenderedLabel huge = RenderLabelPng(test::SampleLabel(), {LabelSize{300, 300}, 1200});
   EXPECT_FALSE(huge);
   EXPECT_NE(huge.error.find("megapixels"), std::string::npos) << huge.error;
+  // The dpi as asked, not cut to a whole number.
+  const RenderedLabel fractional =
+      RenderLabelPng(test::SampleLabel(), {LabelSize{300, 150}, 1100.5});
+  EXPECT_FALSE(fractional);
+  EXPECT_NE(fractional.error.find("at 1100.5 dpi"), std::string::npos) << fractional.error;
   // The vector formats ignore dpi.
   EXPECT_TRUE(RenderLabelPdf(test::SampleLabel(), {kLabel100x150, 0}));
 }
@@ -276,7 +281,8 @@ TEST(LabelLayout, TextStaysApartLegibleAndOffTheTagAtEverySize) {
   label.office = "Kanchipuram Collectorate Buildings Extension S.O";
   label.district = "Thiruvananthapuram";
   label.state = "Andaman and Nicobar Islands";
-  label.bin = "BLR-OUTBOUND-CONVEYOR-CHUTE-12";
+  // Two lines on the small sizes; a longer bin is refused there (ABinIsPrintedWholeOrTheLabel…).
+  label.bin = "BLR-CHUTE-12";
   label.plan = "north-hub-night";
   constexpr double kMinSizePt = 1.4 * kPointsPerMm;  // the small print's floor
   for (const LabelSize& size :
@@ -315,32 +321,59 @@ TEST(LabelLayout, TextStaysApartLegibleAndOffTheTagAtEverySize) {
   }
 }
 
-TEST(LabelText, BinsThatDifferOnlyInTheirEndPrintDifferently) {
+TEST(LabelText, ABinIsPrintedWholeOrTheLabelIsRefused) {
   if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
   // A bin without spaces was cut to one line at 3 mm and ellipsized: "…-CHUTE-12" and
-  // "…-CHUTE-13" both printed "BLR-OUTBOUND-CONVEYOR-…".
-  const std::vector<std::string> stems = {
-      "BLR-OUTBOUND-CONVEYOR-CHUTE-", std::string(54, 'W') + "CHUTE",    // no break at all
-      "Mumbai West Sorting Chute Level Three North Wing Chute ",         // 64 bytes with spaces
-      "Bengaluru_Outbound/Conveyor.Line:Chute_Level_3_North_Wing_Chute"  // 64 bytes, punctuation
-  };
+  // "…-CHUTE-13" both printed "BLR-OUTBOUND-CONVEYOR-…". Then the end was kept and the start cut,
+  // and "Kolkata Inbound Bay 12" and "Kolkata Outbound Bay 12" both printed "Kolkata… / nd Bay
+  // 12" on a 70 x 50 mm label. A bin is the part a sorter acts on: it prints whole, or the label
+  // is refused saying why.
+  const std::vector<std::string> bins = {
+      "BLR-OUTBOUND-CONVEYOR-CHUTE-12",
+      std::string(54, 'W') + "CHUTE12",                                   // no break at all
+      "Mumbai West Sorting Chute Level Three North Wing Chute 12",        // 64 bytes, spaces
+      "Bengaluru_Outbound/Conveyor.Line:Chute_Level_3_North_Wing_Chu12",  // 64 bytes, punctuation
+      "Kolkata Inbound Bay 12",
+      "Kolkata Outbound Bay 12",
+      "N-07"};
+  std::size_t printed = 0;
+  std::size_t refused = 0;
   for (const LabelSize& size : {kLabel100x150, LabelSize{50, 75}, LabelSize{75, 75},
-                                LabelSize{100, 50}, LabelSize{75, 50}}) {
-    for (const std::string& stem : stems) {
-      std::vector<std::string> printed;
-      for (const char* number : {"12", "13"}) {
-        LabelContent label = test::SampleLabel();
-        label.bin = (stem.size() + 2 > 64 ? stem.substr(0, 62) : stem) + number;
-        const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
-        ASSERT_TRUE(pdf) << pdf.error;
-        const std::string text = JoinedText(WordsOf(pdf));
-        std::string end = label.bin->substr(label.bin->size() - 8);
-        std::erase(end, ' ');
-        EXPECT_NE(text.find(end), std::string::npos)
-            << ToString(size) << ": the end of '" << *label.bin << "' is not printed: " << text;
-        printed.push_back(text);
+                                LabelSize{100, 50}, LabelSize{75, 50}, LabelSize{70, 50}}) {
+    for (const std::string& bin : bins) {
+      LabelContent label = test::SampleLabel();
+      label.bin = bin;
+      const std::string where = ToString(size) + " '" + bin + "'";
+      const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+      const RenderedLabel png = RenderLabelPng(label, {size, 150});
+      const RenderedLabel svg = RenderLabelSvg(label, {size, 300});
+      EXPECT_EQ(static_cast<bool>(png), static_cast<bool>(pdf)) << where;
+      EXPECT_EQ(static_cast<bool>(svg), static_cast<bool>(pdf)) << where;
+      if (!pdf) {
+        ++refused;
+        EXPECT_NE(pdf.error.find("'" + bin + "'"), std::string::npos) << where << pdf.error;
+        EXPECT_NE(pdf.error.find("too long to print whole"), std::string::npos) << pdf.error;
+        EXPECT_TRUE(pdf.bytes.empty());
+        continue;
       }
-      EXPECT_NE(printed[0], printed[1]) << ToString(size) << " " << stem;
+      ++printed;
+      std::string whole = bin;
+      std::erase(whole, ' ');
+      // Whole and in order (the plan's name beside it may still be ellipsized).
+      const std::string text = JoinedText(WordsOf(pdf));
+      EXPECT_NE(text.find(whole), std::string::npos) << where << " printed as " << text;
+    }
+  }
+  // Both outcomes happen on these sizes: the check is not vacuous either way.
+  EXPECT_GT(printed, 15U);
+  EXPECT_GT(refused, 5U);
+  // The usual sizes print a 64-byte bin of words whole; 61 of the widest letter do not fit even
+  // there.
+  for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In}) {
+    for (const std::string& bin : {bins[0], bins[2], bins[3], bins[4], bins[5]}) {
+      LabelContent label = test::SampleLabel();
+      label.bin = bin;
+      EXPECT_TRUE(RenderLabelPdf(label, {size, 300})) << ToString(size) << " " << bin;
     }
   }
 }
@@ -363,11 +396,18 @@ TEST(LabelText, HostileNamesStillRender) {
   label.office = std::string(5000, 'W') + "\xff\xfe\x01\x02 \u202E evil";
   label.district = "\xe0\xa4";  // truncated Devanagari lead bytes
   label.state = "";
-  label.bin = std::string(300, '9');
+  label.bin = "\xff9\x01-\u202E9";
   label.plan = "\n\t";
   EXPECT_TRUE(RenderLabelPdf(label));
   EXPECT_TRUE(RenderLabelSvg(label));
   EXPECT_TRUE(RenderLabelPng(label, {kLabelA6, 96}));
+  // A bin no label can hold whole (the registry keeps bins to 64 bytes) is a refusal, not a cut.
+  label.bin = std::string(300, '9');
+  for (const RenderedLabel& refused :
+       {RenderLabelPdf(label), RenderLabelSvg(label), RenderLabelPng(label, {kLabelA6, 96})}) {
+    EXPECT_FALSE(refused);
+    EXPECT_NE(refused.error.find("too long to print whole"), std::string::npos) << refused.error;
+  }
   label.office.clear();
   label.district.clear();
   label.bin.reset();

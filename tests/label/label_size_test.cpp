@@ -75,6 +75,9 @@ TEST(LabelSize, RefusesMalformedText) {
   ExpectError("1..0x150mm", "plain positive number");
   ExpectError(".x150mm", "plain positive number");
   ExpectError("x150mm", "plain positive number");
+  // A side's number is at most 12 characters: said as such, not as "not a plain number".
+  ExpectError("49.9999999999x100mm", "a side of more than 12 characters");
+  ExpectError("100x150.00000000001mm", "a side of more than 12 characters");
   ExpectError("100x150mmmmmmmmmmmmmmmmmmmmmmmmmmmmmm", "too long");
 }
 

@@ -132,6 +132,37 @@ TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {
   EXPECT_EQ(MetricLine(metrics, "pintag_labels_rendered_total"), "pintag_labels_rendered_total 0");
 }
 
+// Two bins of a plan that differ in their middle printed alike on a small label, each cut to
+// "Kolkata… / nd Bay 12": a label whose bin cannot print whole is refused, naming it, and prints
+// on a size that holds it.
+TEST_F(ServeTest, ALabelWhoseBinCannotPrintWholeIsRefusedNamingIt) {
+  ExpectJson(client().Put("/api/v1/sortplans/pair", admin(),
+                          "prefix,bin\n*,floor\n110001,Kolkata Inbound Bay 12\n"
+                          "110002,Kolkata Outbound Bay 12\n",
+                          "text/csv"),
+             201);
+  for (const char* format : {"pdf", "png", "svg"}) {
+    const json refused = ExpectProblem(
+        client().Get(std::string("/api/v1/labels/110001.") + format + "?size=70x50mm&plan=pair",
+                     counter()),
+        400);
+    EXPECT_EQ(refused["title"], "Cannot Render Label") << refused;
+    EXPECT_NE(refused["detail"].get<std::string>().find("'Kolkata Inbound Bay 12'"),
+              std::string::npos)
+        << refused;
+  }
+  const json batch =
+      ExpectProblem(client().Post("/api/v1/labels?size=70x50mm&plan=pair", counter(),
+                                  R"({"pincodes": ["110001", "110002"]})", "application/json"),
+                    400);
+  EXPECT_NE(batch["detail"].get<std::string>().find("110001"), std::string::npos) << batch;
+  const auto whole = client().Get("/api/v1/labels/110002.pdf?plan=pair", counter());
+  ASSERT_TRUE(whole);
+  EXPECT_EQ(whole->status, 200) << whole->body;
+  const std::string metrics = client().Get("/metrics")->body;
+  EXPECT_EQ(MetricLine(metrics, "pintag_labels_rendered_total"), "pintag_labels_rendered_total 1");
+}
+
 TEST_F(ServeTest, BatchProblemsNameTheBadInput) {
   const auto expect = [&](const std::string& body, int status, const std::string& fragment) {
     const json problem =
@@ -142,6 +173,7 @@ TEST_F(ServeTest, BatchProblemsNameTheBadInput) {
   expect(R"({"pincodes": []})", 400, "empty");
   expect(R"({"pins": ["110001"]})", 400, "expected");
   expect(R"({"pincodes": [110001.5]})", 400, "pincodes[0]");
+  expect(R"({"pincodes": [true]})", 400, "pincodes[0] must be six digits, as a string");
   expect(R"({"pincodes": ["110001", "abc"]})", 400, "pincodes[1]");
   expect(R"({"pincodes": ["110001"], "size": 5})", 400, "'size' must be a string");
   expect(R"({"pincodes": ["110001"], "plan": "nope"})", 404, "Unknown Sort Plan");

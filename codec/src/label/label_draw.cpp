@@ -157,14 +157,16 @@ std::vector<LineBreak> BinBreaks(LabelFont& font, const std::string& bin) {
 // start, so it is not cut off while a break can show it. When even that does not fit at the
 // 2.2 mm floor, the second line keeps the longest end that fits and the first is ellipsized:
 // two bins that differ in their number never print alike.
-void DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, double x, double width,
+/// Draws `bin` on one line or two; false when even two lines at the smallest print could not hold
+/// it whole, and the first line lost its start (drawn all the same; the caller refuses the label).
+bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, double x, double width,
                   double baseline, double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
   const std::vector<LineBreak> breaks = BinBreaks(font, bin);
   if (font.advancePerSize(bin, true) * kOneLineMinMm <= width || breaks.empty()) {
     DrawLine(font, bin, x, width, baseline,
              {.bold = true, .size = size, .min_size = kMinNameMm, .within = &box});
-    return;
+    return font.advancePerSize(bin, true) * kMinNameMm <= width;
   }
   LineBreak cut = breaks.front();
   double longer = std::numeric_limits<double>::infinity();
@@ -178,7 +180,8 @@ void DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
       cut = at;
     }
   }
-  if (longer * kMinNameMm > width) {
+  const bool whole = longer * kMinNameMm <= width;
+  if (!whole) {
     // The longest end that fits on the second line, starting at a character (not a space, a
     // vowel sign or a combining mark).
     for (const std::size_t i : font.cutPoints(bin)) {
@@ -195,9 +198,11 @@ void DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
       .bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm, .within = &box};
   DrawLine(font, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style);
   DrawLine(font, bin.substr(cut.second_begin), x, width, baseline, style);
+  return whole;
 }
 
-void DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
+/// False when the bin could not be printed whole (DrawBinValue).
+bool DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
   font.show("SORT BIN", true, kCaptionMm, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
 
   // The bin value big on the left half; the plan and the key in small print on the right.
@@ -206,13 +211,14 @@ void DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
   const double value_size = std::min(value_h * 1.05, 14.0);
   const double left_w = box.w * 0.58 - kPadMm;
   const std::string bin = label.bin ? SanitizeUtf8(*label.bin) : std::string();
+  bool whole = true;
   if (bin.empty()) {
     // No plan chosen (or the plan has no bin for this pincode): say so quietly.
     DrawLine(font, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
              {.bold = false, .size = std::min(value_size, 5.0), .min_size = 2.0});
   } else {
-    DrawBinValue(font, bin, box, box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
-                 value_size, value_h);
+    whole = DrawBinValue(font, bin, box, box.x + kPadMm, left_w,
+                         box.bottom() - kPadMm - value_h * 0.08, value_size, value_h);
   }
 
   const double right_x = box.x + box.w * 0.58;
@@ -233,6 +239,7 @@ void DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
            {.bold = false, .size = kSmallPrintMm, .min_size = 1.6, .align = Align::kRight});
   DrawLine(font, "PinTag v1", right_x, right_w, box.bottom() - kPadMm,
            {.bold = false, .size = kSmallPrintMm * 0.85, .min_size = 1.4, .align = Align::kRight});
+  return whole;
 }
 
 }  // namespace
@@ -292,7 +299,8 @@ void DrawTagVector(cairo_t* cr, TagKey key, const LabelTagPlacement& placement) 
   cairo_restore(cr);
 }
 
-void DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout, bool with_tag) {
+std::string DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout,
+                      bool with_tag) {
   cairo_save(cr);
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_paint(cr);
@@ -314,10 +322,17 @@ void DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout
   LabelFont font(cr);
   DrawPin(font, label, layout.pin);
   DrawAddress(font, label, layout.address);
-  DrawBin(font, label, layout.bin);
+  const bool bin_whole = DrawBin(font, label, layout.bin);
   cairo_restore(cr);
 
   if (with_tag) DrawTagVector(cr, label.key, layout.placement);
+  if (bin_whole) return {};
+  // A bin cut short can read as another bin of the plan ("Kolkata…Bay 12" for Inbound and
+  // Outbound alike), and the bin is what a sorter acts on: no label rather than a wrong one.
+  return "the sort bin '" + SanitizeUtf8(*label.bin) + "' of pincode " + label.pincode.str() +
+         " is too long to print whole on this label size, even on two lines at the smallest "
+         "print, and a bin cut short could read as another; print a larger label, or give the "
+         "bin a shorter name in its plan";
 }
 
 }  // namespace pintag::label

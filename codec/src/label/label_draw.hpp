@@ -3,6 +3,8 @@
 
 #include <cairo.h>
 
+#include <string>
+
 #include "label/label_layout.hpp"
 #include "pintag/codec/label.hpp"
 
@@ -13,7 +15,9 @@ namespace pintag::label {
 void DrawTagVector(cairo_t* cr, TagKey key, const LabelTagPlacement& placement);
 
 /// Everything but the tag when `with_tag` is false (the raster renderer pastes the codec's own
-/// anti-aliased tag raster instead).
-void DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout, bool with_tag);
+/// anti-aliased tag raster instead). Empty, or why the label must not be printed: its sort bin
+/// did not fit whole (what was drawn is to be thrown away).
+std::string DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout,
+                      bool with_tag);
 
 }  // namespace pintag::label

@@ -2,7 +2,10 @@
 
 #include <pango/pangocairo.h>
 
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace pintag::label {
 namespace {
@@ -13,6 +16,36 @@ constexpr const char* kFamilies =
     "DejaVu Sans,Noto Sans Devanagari,Noto Sans Bengali,Noto Sans Gurmukhi,Noto Sans Gujarati,"
     "Noto Sans Oriya,Noto Sans Tamil,Noto Sans Telugu,Noto Sans Kannada,Noto Sans Malayalam,"
     "Noto Sans Ol Chiki,Noto Sans Meetei Mayek,Noto Naskh Arabic";
+
+// Urdu's face. DejaVu Sans covers most of the Arabic block but not ہ (U+06C1) or ے (U+06D2), so
+// an Urdu word came out in two faces, its heavy DejaVu letters beside thin Naskh ones.
+constexpr const char* kArabicFamily = "Noto Naskh Arabic";
+
+/// Byte ranges of `text` in the Arabic script, each with the spaces and punctuation between its
+/// words (whatever belongs to no script), so that a phrase is set in one face.
+std::vector<std::pair<std::size_t, std::size_t>> ArabicRuns(std::string_view text) {
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  std::optional<std::size_t> start;
+  std::size_t last_end = 0;  // the end of the run's last Arabic character
+  for (std::size_t at = 0; at < text.size();) {
+    const char* here = text.data() + at;
+    const gunichar c = g_utf8_get_char_validated(here, static_cast<gssize>(text.size() - at));
+    const std::size_t next =
+        c >= 0xFFFFFFFE ? at + 1 : static_cast<std::size_t>(g_utf8_next_char(here) - text.data());
+    const GUnicodeScript script =
+        c >= 0xFFFFFFFE ? G_UNICODE_SCRIPT_UNKNOWN : g_unichar_get_script(c);
+    if (script == G_UNICODE_SCRIPT_ARABIC) {
+      if (!start) start = at;
+      last_end = next;
+    } else if (script != G_UNICODE_SCRIPT_COMMON && script != G_UNICODE_SCRIPT_INHERITED && start) {
+      runs.emplace_back(*start, last_end);
+      start.reset();
+    }
+    at = next;
+  }
+  if (start) runs.emplace_back(*start, last_end);
+  return runs;
+}
 
 // Advances are measured at this size and scaled: Pango's units are 1/1024 of a user unit.
 constexpr double kMeasureSize = 16.0;
@@ -35,6 +68,16 @@ struct LabelFont::Pango {
     pango_font_description_set_absolute_size(description, size * PANGO_SCALE);
     pango_layout_set_font_description(layout, description);
     pango_layout_set_text(layout, text.data(), static_cast<int>(text.size()));
+    PangoAttrList* attributes = nullptr;
+    for (const auto& [begin, end] : ArabicRuns(text)) {
+      if (attributes == nullptr) attributes = pango_attr_list_new();
+      PangoAttribute* family = pango_attr_family_new(kArabicFamily);
+      family->start_index = static_cast<guint>(begin);
+      family->end_index = static_cast<guint>(end);
+      pango_attr_list_insert(attributes, family);  // the list owns it now
+    }
+    pango_layout_set_attributes(layout, attributes);
+    if (attributes != nullptr) pango_attr_list_unref(attributes);
   }
 };
 
@@ -79,6 +122,21 @@ void LabelFont::show(std::string_view text, bool bold, double size, double x, do
   const double above = pango_layout_get_baseline(pango_->layout) / static_cast<double>(PANGO_SCALE);
   cairo_move_to(cr_, x, baseline - above);
   pango_cairo_show_layout(cr_, pango_->layout);
+}
+
+std::vector<std::string> LabelFont::familiesOf(std::string_view text, bool bold) {
+  pango_->set(text, bold, kMeasureSize);
+  std::vector<std::string> families;
+  PangoLayoutIter* iter = pango_layout_get_iter(pango_->layout);
+  do {
+    const PangoLayoutRun* run = pango_layout_iter_get_run_readonly(iter);
+    if (run == nullptr) continue;  // the end of the line
+    PangoFontDescription* face = pango_font_describe(run->item->analysis.font);
+    families.emplace_back(pango_font_description_get_family(face));
+    pango_font_description_free(face);
+  } while (pango_layout_iter_next_run(iter));
+  pango_layout_iter_free(iter);
+  return families;
 }
 
 std::vector<std::size_t> LabelFont::cutPoints(std::string_view text) {

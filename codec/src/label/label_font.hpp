@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -40,6 +41,9 @@ class LabelFont {
   /// Byte offsets where a line may be cut without splitting a character as it is read (a letter
   /// and its vowel signs, a conjunct, a base and its combining marks): 0, …, text.size().
   std::vector<std::size_t> cutPoints(std::string_view text);
+  /// The family of the face each run of `text` is set in, in order (one entry per run): what a
+  /// line will print in, for checking that a script gets its own face.
+  std::vector<std::string> familiesOf(std::string_view text, bool bold);
 
   cairo_t* context() const { return cr_; }
 

@@ -49,7 +49,9 @@ std::string DrawPages(cairo_surface_t* surface, std::span<const LabelContent> la
   Context cr(cairo_create(surface));
   cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
   for (const LabelContent& content : labels) {
-    label::DrawLabel(cr.get(), content, layout, true);
+    if (std::string refused = label::DrawLabel(cr.get(), content, layout, true); !refused.empty()) {
+      return refused;
+    }
     cairo_show_page(cr.get());
   }
   if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
@@ -96,8 +98,9 @@ std::string ValidateLabelOptions(const LabelOptions& options, bool raster) {
   }
   const PixelSize px = LabelPixelSize(options);
   if (static_cast<long long>(px.width) * px.height > kMaxLabelPixels) {
-    return "a " + ToString(options.size) + " label at " +
-           std::to_string(static_cast<int>(options.dpi)) + " dpi would be " +
+    char dpi[32];
+    std::snprintf(dpi, sizeof dpi, "%g", options.dpi);  // 300.7 dpi is not 300
+    return "a " + ToString(options.size) + " label at " + dpi + " dpi would be " +
            std::to_string(px.width) + " x " + std::to_string(px.height) + " pixels; the limit is " +
            std::to_string(kMaxLabelPixels / 1'000'000) + " megapixels, lower the dpi";
   }
@@ -147,7 +150,11 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
     if (paste_tag) {
       layout.placement = {tag.square_x / scale, tag.square_y / scale, tag.square_side / scale};
     }
-    label::DrawLabel(cr.get(), label, layout, !paste_tag);
+    if (std::string refused = label::DrawLabel(cr.get(), label, layout, !paste_tag);
+        !refused.empty()) {
+      *error = std::move(refused);
+      return {};
+    }
     if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
       *error = CairoError("cannot draw label", cairo_status(cr.get()));
       return {};

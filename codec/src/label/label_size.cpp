@@ -32,9 +32,12 @@ std::string Format(double mm) {
   return text;
 }
 
+// The most characters one side's number may have ("49.999999999" and no more).
+constexpr std::size_t kMaxSideText = 12;
+
 // A plain decimal: digits with at most one point; no sign, exponent, "inf" or "nan".
 std::optional<double> ParseNumber(std::string_view text) {
-  if (text.empty() || text.size() > 12) return std::nullopt;
+  if (text.empty() || text.size() > kMaxSideText) return std::nullopt;
   int points = 0;
   int digits = 0;
   for (char c : text) {
@@ -109,6 +112,10 @@ ParsedLabelSize ParseLabelSize(std::string_view text) {
   if (x == std::string_view::npos || body.find('x', x + 1) != std::string_view::npos) {
     return Fail("label size '" + shown + "' must be WIDTHxHEIGHT with a unit; " +
                 std::string(kExpected));
+  }
+  if (x > kMaxSideText || body.size() - x - 1 > kMaxSideText) {
+    return Fail("label size '" + shown + "' has a side of more than " +
+                std::to_string(kMaxSideText) + " characters; " + std::string(kExpected));
   }
   const std::optional<double> width = ParseNumber(body.substr(0, x));
   const std::optional<double> height = ParseNumber(body.substr(x + 1));

@@ -239,8 +239,9 @@ Pincode PincodeValue(const nlohmann::json& value, std::string_view where) {
   } else if (value.is_number_unsigned()) {
     text = std::to_string(value.get<std::uint64_t>());
   } else {
-    throw HttpError(400, std::string(where) + " must be a string of six digits",
-                    "Malformed Pincode");
+    throw HttpError(
+        400, std::string(where) + " must be six digits, as a string (\"110001\") or a number",
+        "Malformed Pincode");
   }
   const ParsedPincode parsed = ParsePincode(text);
   if (!parsed) throw HttpError(400, std::string(where) + ": " + parsed.error, "Malformed Pincode");
