@@ -97,6 +97,10 @@ TEST_F(LabelFontTest, UrduIsSetInNaskhWholeAndLatinBesideItInDejaVu) {
       EXPECT_TRUE(family == "DejaVu Sans" || family == "Noto Naskh Arabic") << family;
     }
   }
+  // A mark on a run's last letter (a haraka, of no script of its own) stays in the run's face.
+  for (const std::string& family : font_.familiesOf("ملتان\u064B", true)) {
+    EXPECT_EQ(family, "Noto Naskh Arabic");
+  }
   // Other scripts keep their faces.
   EXPECT_EQ(font_.familiesOf("Connaught Place", true), std::vector<std::string>{"DejaVu Sans"});
   EXPECT_EQ(font_.familiesOf("नई दिल्ली", true), std::vector<std::string>{"Noto Sans Devanagari"});

@@ -367,6 +367,22 @@ TEST(LabelText, ABinIsPrintedWholeOrTheLabelIsRefused) {
   // Both outcomes happen on these sizes: the check is not vacuous either way.
   EXPECT_GT(printed, 15U);
   EXPECT_GT(refused, 5U);
+  // A bin whose only space or punctuation falls where the lines would not fit breaks between
+  // other characters instead: these were refused although two lines hold them (a review found).
+  for (const auto& [size, bin] :
+       {std::pair{kLabel100x150, "Hub 7 ConsolidationAndReturnsProcessingCentreNorth"},
+        std::pair{kLabel100x150, "X NNNNNNNNNNNNNNNNNNNNNNNNNNNNNN"},
+        std::pair{LabelSize{50, 75}, "A CHUTEONETWOTHREE"},
+        std::pair{LabelSize{50, 75}, "NNNNNNNNN N-NNNNNNNNNNNN"}}) {
+    LabelContent label = test::SampleLabel();
+    label.bin = bin;
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << ToString(size) << " " << bin << ": " << pdf.error;
+    std::string whole = bin;
+    std::erase(whole, ' ');
+    EXPECT_NE(JoinedText(WordsOf(pdf)).find(whole), std::string::npos)
+        << ToString(size) << " " << bin;
+  }
   // The usual sizes print a 64-byte bin of words whole; 61 of the widest letter do not fit even
   // there.
   for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In}) {

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "label/label_text.hpp"
@@ -152,21 +153,43 @@ std::vector<LineBreak> BinBreaks(LabelFont& font, const std::string& bin) {
   return breaks;
 }
 
+// The break whose longer line is shortest, between any two characters as a reader counts them
+// (a space there is dropped), and that line's advance at size 1.
+std::pair<LineBreak, double> ShortestBreak(LabelFont& font, const std::string& bin) {
+  LineBreak cut{bin.size(), bin.size(), 1.0};
+  double longer = std::numeric_limits<double>::infinity();
+  for (const std::size_t i : font.cutPoints(bin)) {
+    if (i == 0 || i >= bin.size()) continue;
+    std::size_t first_end = i;
+    std::size_t second_begin = i;
+    while (first_end > 0 && bin[first_end - 1] == ' ') --first_end;
+    while (second_begin < bin.size() && bin[second_begin] == ' ') ++second_begin;
+    if (first_end == 0 || second_begin == bin.size()) continue;
+    const double advance = std::max(font.advancePerSize(bin.substr(0, first_end), true),
+                                    font.advancePerSize(bin.substr(second_begin), true));
+    if (advance < longer) {
+      longer = advance;
+      cut = {first_end, second_begin, 1.0};
+    }
+  }
+  return {cut, longer};
+}
+
 // The bin on one line when it fits at 3 mm or more, else on two of one size, broken where the
 // longer line is shortest: the end of a bin name ("… chute 12") is as much the answer as its
-// start, so it is not cut off while a break can show it. When even that does not fit at the
-// 2.2 mm floor, the second line keeps the longest end that fits and the first is ellipsized:
-// two bins that differ in their number never print alike.
-/// Draws `bin` on one line or two; false when even two lines at the smallest print could not hold
-/// it whole, and the first line lost its start (drawn all the same; the caller refuses the label).
+// start, so it is not cut off while a break can show it. When the preferred breaks (a space,
+// punctuation) leave a line too long at the 2.2 mm floor, any break between two characters that
+// fits is taken. When none fits, the second line keeps the longest end that fits and the first
+// is ellipsized, and the caller refuses the label.
+/// Draws `bin` on one line or two; false when it was not drawn whole (a line was ellipsized).
 bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, double x, double width,
                   double baseline, double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
   const std::vector<LineBreak> breaks = BinBreaks(font, bin);
   if (font.advancePerSize(bin, true) * kOneLineMinMm <= width || breaks.empty()) {
-    DrawLine(font, bin, x, width, baseline,
-             {.bold = true, .size = size, .min_size = kMinNameMm, .within = &box});
-    return font.advancePerSize(bin, true) * kMinNameMm <= width;
+    return !DrawLine(font, bin, x, width, baseline,
+                     {.bold = true, .size = size, .min_size = kMinNameMm, .within = &box})
+                .cut;
   }
   LineBreak cut = breaks.front();
   double longer = std::numeric_limits<double>::infinity();
@@ -180,8 +203,14 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
       cut = at;
     }
   }
-  const bool whole = longer * kMinNameMm <= width;
-  if (!whole) {
+  if (longer * kMinNameMm > width) {
+    const auto [shortest, advance] = ShortestBreak(font, bin);
+    if (advance < longer) {
+      cut = shortest;
+      longer = advance;
+    }
+  }
+  if (longer * kMinNameMm > width) {
     // The longest end that fits on the second line, starting at a character (not a space, a
     // vowel sign or a combining mark).
     for (const std::size_t i : font.cutPoints(bin)) {
@@ -196,9 +225,13 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
   const double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
   const LineStyle style{
       .bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm, .within = &box};
-  DrawLine(font, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style);
-  DrawLine(font, bin.substr(cut.second_begin), x, width, baseline, style);
-  return whole;
+  // Whole when neither line was ellipsized as drawn (measured at the size drawn, not predicted).
+  const bool first_cut =
+      DrawLine(font, bin.substr(0, cut.first_end), x, width, baseline - style.size * 1.12, style)
+          .cut;
+  const bool second_cut =
+      DrawLine(font, bin.substr(cut.second_begin), x, width, baseline, style).cut;
+  return !first_cut && !second_cut;
 }
 
 /// False when the bin could not be printed whole (DrawBinValue).

@@ -22,7 +22,8 @@ constexpr const char* kFamilies =
 constexpr const char* kArabicFamily = "Noto Naskh Arabic";
 
 /// Byte ranges of `text` in the Arabic script, each with the spaces and punctuation between its
-/// words (whatever belongs to no script), so that a phrase is set in one face.
+/// words (whatever belongs to no script) and the marks on its letters (harakat, which inherit
+/// their letter's script), so that a phrase is set in one face.
 std::vector<std::pair<std::size_t, std::size_t>> ArabicRuns(std::string_view text) {
   std::vector<std::pair<std::size_t, std::size_t>> runs;
   std::optional<std::size_t> start;
@@ -37,6 +38,8 @@ std::vector<std::pair<std::size_t, std::size_t>> ArabicRuns(std::string_view tex
     if (script == G_UNICODE_SCRIPT_ARABIC) {
       if (!start) start = at;
       last_end = next;
+    } else if (script == G_UNICODE_SCRIPT_INHERITED && start && last_end == at) {
+      last_end = next;  // a mark on the run's last letter
     } else if (script != G_UNICODE_SCRIPT_COMMON && script != G_UNICODE_SCRIPT_INHERITED && start) {
       runs.emplace_back(*start, last_end);
       start.reset();
@@ -141,6 +144,7 @@ std::vector<std::string> LabelFont::familiesOf(std::string_view text, bool bold)
 
 std::vector<std::size_t> LabelFont::cutPoints(std::string_view text) {
   pango_layout_set_text(pango_->layout, text.data(), static_cast<int>(text.size()));
+  pango_layout_set_attributes(pango_->layout, nullptr);  // the last text's runs are not this one's
   int count = 0;
   const PangoLogAttr* attrs = pango_layout_get_log_attrs_readonly(pango_->layout, &count);
   // attrs[i] describes the position before the i-th character (count = characters + 1).

@@ -40,17 +40,19 @@ std::string CairoError(const char* what, cairo_status_t status) {
 }
 
 RenderedLabel Fail(std::string error) {
-  return {{}, std::move(error)};
+  return {{}, std::move(error), {}};
 }
 
-// Draws each label on its own page of a vector surface, then finishes the surface.
+// Draws each label on its own page of a vector surface, then finishes the surface. A label that
+// must not be printed ends it, and `refused` says which.
 std::string DrawPages(cairo_surface_t* surface, std::span<const LabelContent> labels,
-                      const label::LabelLayout& layout) {
+                      const label::LabelLayout& layout, std::optional<std::size_t>* refused) {
   Context cr(cairo_create(surface));
   cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
-  for (const LabelContent& content : labels) {
-    if (std::string refused = label::DrawLabel(cr.get(), content, layout, true); !refused.empty()) {
-      return refused;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (std::string why = label::DrawLabel(cr.get(), labels[i], layout, true); !why.empty()) {
+      *refused = i;
+      return why;
     }
     cairo_show_page(cr.get());
   }
@@ -204,7 +206,7 @@ RenderedLabel RenderLabelPng(const LabelContent& label, const LabelOptions& opti
   if (!error.empty()) return Fail(std::move(error));
   std::vector<std::uint8_t> bytes = EncodePng(image, options.dpi, &error);
   if (!error.empty()) return Fail(std::move(error));
-  return {std::move(bytes), {}};
+  return {std::move(bytes), {}, {}};
 }
 
 RenderedLabel RenderLabelsPdf(std::span<const LabelContent> labels, const LabelOptions& options) {
@@ -219,11 +221,15 @@ RenderedLabel RenderLabelsPdf(std::span<const LabelContent> labels, const LabelO
                                 : "PinTag labels (" + std::to_string(labels.size()) + ")";
   cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, title.c_str());
   cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR, "PinTag");
-  if (std::string why = DrawPages(surface.get(), labels, label::ComputeLayout(options.size));
+  std::optional<std::size_t> refused;
+  if (std::string why =
+          DrawPages(surface.get(), labels, label::ComputeLayout(options.size), &refused);
       !why.empty()) {
-    return Fail(why);
+    RenderedLabel failed = Fail(why);
+    failed.refused_label = refused;
+    return failed;
   }
-  return {std::move(bytes), {}};
+  return {std::move(bytes), {}, {}};
 }
 
 RenderedLabel RenderLabelPdf(const LabelContent& label, const LabelOptions& options) {
@@ -236,13 +242,16 @@ RenderedLabel RenderLabelSvg(const LabelContent& label, const LabelOptions& opti
   Surface surface(cairo_svg_surface_create_for_stream(AppendBytes, &bytes,
                                                       options.size.width_mm * kPointsPerMm,
                                                       options.size.height_mm * kPointsPerMm));
+  std::optional<std::size_t> refused;
   if (std::string why = DrawPages(surface.get(), std::span<const LabelContent>(&label, 1),
-                                  label::ComputeLayout(options.size));
+                                  label::ComputeLayout(options.size), &refused);
       !why.empty()) {
-    return Fail(why);
+    RenderedLabel failed = Fail(why);
+    failed.refused_label = refused;
+    return failed;
   }
   SizeSvgInMillimetres(bytes, options.size);
-  return {std::move(bytes), {}};
+  return {std::move(bytes), {}, {}};
 }
 
 }  // namespace pintag

@@ -68,8 +68,8 @@ std::string SanitizeUtf8(std::string_view text) {
   return out;
 }
 
-double DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
-                const LineStyle& style) {
+DrawnLine DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
+                   const LineStyle& style) {
   std::string line(text);
   double size = style.size;
   double advance = font.measure(line, style.bold, size).advance;
@@ -78,7 +78,8 @@ double DrawLine(LabelFont& font, std::string_view text, double x, double width, 
     size = std::max(style.min_size, style.size * width / advance * 0.999);
     advance = font.measure(line, style.bold, size).advance;
   }
-  if (advance > width) {
+  const bool cut = advance > width;
+  if (cut) {
     // Still too wide at the smallest size: keep the longest prefix that fits with an ellipsis.
     const std::vector<std::size_t> at = font.cutPoints(line);
     std::size_t lo = 0;
@@ -118,7 +119,7 @@ double DrawLine(LabelFont& font, std::string_view text, double x, double width, 
   cairo_clip(cr);
   font.show(line, style.bold, size, left, baseline);
   cairo_restore(cr);
-  return size;
+  return {size, cut};
 }
 
 }  // namespace pintag::label

@@ -22,12 +22,17 @@ struct LineStyle {
 
 /// Draws one line of sanitized text with its baseline at `baseline`, inside [x, x + width]:
 /// shrinks the font down to style.min_size to fit, then cuts whole characters (as a reader
-/// counts them) from the end and appends "…". Returns the font size used. Ink is clipped to the
+/// counts them) from the end and appends "…". Returns the font size used, and whether it cut. Ink
+/// is clipped to the
 /// line's band (1.3 sizes above the baseline, 0.6 below, a little either side of the width) and
 /// to style.within: a name of stacked combining marks, which the API accepts, drew over the
 /// pincode digits and the bin instead of staying on its row. Real text of every script the
 /// label prints stays inside the band.
-double DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
-                const LineStyle& style);
+struct DrawnLine {
+  double size = 0;   ///< the font size used
+  bool cut = false;  ///< characters were cut from the end for an ellipsis
+};
+DrawnLine DrawLine(LabelFont& font, std::string_view text, double x, double width, double baseline,
+                   const LineStyle& style);
 
 }  // namespace pintag::label

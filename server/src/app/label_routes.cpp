@@ -268,8 +268,12 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
       }
     }
   }
-  return Rendered(RenderLabelsPdf(labels, options), context, "application/pdf", "labels.pdf",
-                  labels.size());
+  RenderedLabel rendered = RenderLabelsPdf(labels, options);
+  if (rendered.refused_label) {
+    // Named as an item's other problems are, so a clerk finds the line to fix.
+    rendered.error = "pincodes[" + std::to_string(*rendered.refused_label) + "]: " + rendered.error;
+  }
+  return Rendered(rendered, context, "application/pdf", "labels.pdf", labels.size());
 }
 
 }  // namespace pintag::app

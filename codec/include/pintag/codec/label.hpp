@@ -77,6 +77,9 @@ LabelTagPixels TagPlacementPixels(const LabelOptions& options);
 struct RenderedLabel {
   std::vector<std::uint8_t> bytes;
   std::string error;
+  /// Which label (its index in the list given) could not be printed, when that was the error: its
+  /// sort bin did not fit whole.
+  std::optional<std::size_t> refused_label;
   explicit operator bool() const { return error.empty(); }
 };
 
