@@ -33,7 +33,7 @@ namespace {
   message += ": ";
   message += db != nullptr ? sqlite3_errmsg(db) : sqlite3_errstr(code);
   const int extended = db != nullptr ? sqlite3_extended_errcode(db) : code;
-  throw SqliteError(message, code & 0xff, extended);
+  throw SqliteError(message, code & 0xff, extended, db != nullptr ? sqlite3_system_errno(db) : 0);
 }
 
 void Check(sqlite3* db, int code, std::string_view context) {

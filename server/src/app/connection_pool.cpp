@@ -171,11 +171,10 @@ ConnectionPool::Lease ConnectionPool::acquire() {
         if (generation_ != generation) continue;
       }
       server::LogEvent("cannot open database " + path + ": " + e.what(), /*warning=*/true);
-      // A file that could not be opened at all (no file descriptor left, its permissions) may
-      // open on a later try, so the client is told when to ask again; one that opened and is no
-      // database will not.
+      // A process out of file descriptors opens the file on a later try, so the client is told
+      // when to ask again; a file it may not open, or one that is no database, stays so.
       const auto* sqlite = dynamic_cast<const db::SqliteError*>(&e);
-      const bool may_pass = sqlite != nullptr && sqlite->isCantOpen();
+      const bool may_pass = sqlite != nullptr && sqlite->outOfDescriptors();
       throw server::HttpError(server::Problem{503, "Service Unavailable",
                                               "the database is not reachable", "about:blank",
                                               may_pass ? 1 : 0});

@@ -130,9 +130,9 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
   std::optional<db::AppendedScans> appended;
   std::string error;
   // Worth waiting for: a lock held elsewhere, a disk that fills up, a file that cannot be opened
-  // now (the process is out of file descriptors), a file moved away (the pool refuses it until
-  // it is back). Anything else (a file that is not a database, an I/O error) would fail the same
-  // way again: that batch is lost at once.
+  // now because the process is out of file descriptors, a file moved away (the pool refuses it
+  // until it is back). Anything else (a file that is not a database or may not be opened, an
+  // I/O error) would fail the same way again: that batch is lost at once.
   bool passing = false;
   try {
     auto connection = log_->acquire();
@@ -146,8 +146,8 @@ bool ScanLogWriter::writeBatch(std::unique_lock<std::mutex>& lock) {
                 result.error().code == db::ErrorCode::kNoSpace;
     }
   } catch (const server::HttpError& e) {
-    // The pool could not lend a connection: it says when that may pass (a file it could not
-    // open, as with no descriptor left); it refuses a file moved away until it is put back.
+    // The pool could not lend a connection: it says when that may pass (no descriptor left to
+    // open the file with); it refuses a file moved away until it is put back.
     error = e.problem().detail;
     passing = e.problem().retry_after_seconds > 0 || !log_->servesFileAtPath();
   } catch (const std::exception& e) {

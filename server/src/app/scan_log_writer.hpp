@@ -10,7 +10,7 @@
 // lock is held elsewhere, or a write is that slow), append() returns at once until the backlog
 // is written: the scans are held in memory, up to kMaxBacklogScans and kMaxBacklogBytes of JSON;
 // past that a scan is dropped and counted. Only what may pass is waited for (a lock, a full disk,
-// a file that cannot be opened now, as with no file descriptor left, a file moved away); a log
+// no file descriptor left to open the file with, a file moved away); a log
 // that cannot be written otherwise (not a database, an I/O error) loses its scans at once,
 // counted.
 // finish() writes the backlog for at most kFinishTimeout from when it is called, each try cut to

@@ -12,6 +12,7 @@
 // unbound; two live Statements with the same SQL get separate compiled copies. A Connection must
 // outlive its Statements.
 
+#include <cerrno>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -24,22 +25,32 @@ struct sqlite3_stmt;
 
 namespace pintag::db {
 
-/// An SQLite failure: the message, and SQLite's primary and extended result codes.
+/// An SQLite failure: the message, SQLite's primary and extended result codes, and the errno of
+/// the system call that failed under it (0 when none did).
 class SqliteError : public std::runtime_error {
  public:
-  SqliteError(const std::string& message, int code, int extended_code)
-      : std::runtime_error(message), code_(code), extended_code_(extended_code) {}
+  SqliteError(const std::string& message, int code, int extended_code, int system_errno = 0)
+      : std::runtime_error(message),
+        code_(code),
+        extended_code_(extended_code),
+        system_errno_(system_errno) {}
   int code() const { return code_; }  ///< primary result code, e.g. 5 = SQLITE_BUSY
   int extendedCode() const { return extended_code_; }
   bool isBusy() const { return code_ == 5 || code_ == 6; }  ///< SQLITE_BUSY or SQLITE_LOCKED
   bool isConstraint() const { return code_ == 19; }         ///< SQLITE_CONSTRAINT
   bool isFull() const { return code_ == 13; }               ///< SQLITE_FULL: no room to write
   bool isReadOnly() const { return code_ == 8; }            ///< SQLITE_READONLY
-  bool isCantOpen() const { return code_ == 14; }           ///< SQLITE_CANTOPEN: the file itself
+  int systemErrno() const { return system_errno_; }
+  /// SQLITE_CANTOPEN because the process (EMFILE) or the system (ENFILE) had no file descriptor
+  /// left: the one failure to open that passes by itself.
+  bool outOfDescriptors() const {
+    return code_ == 14 && (system_errno_ == EMFILE || system_errno_ == ENFILE);
+  }
 
  private:
   int code_;
   int extended_code_;
+  int system_errno_;
 };
 
 class Connection;
