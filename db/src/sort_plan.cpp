@@ -124,8 +124,8 @@ std::optional<Error> UnmetCondition(std::string_view name, const std::optional<S
   if (condition.none_match && stored && condition.none_match->contains(version)) {
     return Error{ErrorCode::kPrecondition,
                  condition.none_match->any
-                     ? "a sort plan named " + quoted + " already exists"
-                     : "sort plan " + quoted + " is at a version the write excludes"};
+                     ? "sort plan " + quoted + " exists, and If-None-Match: * asks that none does"
+                     : "sort plan " + quoted + " is at a version If-None-Match excludes"};
   }
   return std::nullopt;
 }

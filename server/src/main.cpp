@@ -9,6 +9,7 @@
 
 #include "commands/commands.hpp"
 #include "pintag/db/database.hpp"
+#include "pintag/server/log.hpp"
 
 namespace {
 
@@ -21,6 +22,17 @@ int StdoutStatus() {
     return 1;
   }
   return 0;
+}
+
+/// Why the command failed: on stderr, or for `serve --log-format json` as a JSON log line like
+/// every other line it writes (a port taken, a database that cannot be opened).
+void Report(const CLI::App& app, const char* what) {
+  if (app.got_subcommand("serve") &&
+      pintag::server::ConfiguredLogFormat() == pintag::server::LogFormat::kJson) {
+    pintag::server::LogFatal(std::string("pintag: ") + what);
+    return;
+  }
+  std::cerr << "pintag: " << what << "\n";
 }
 
 }  // namespace
@@ -56,10 +68,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
     // CLI11 prints the message (or the help); its own codes (100 and up) mean a usage error too.
     return app.exit(e) == 0 ? StdoutStatus() : 2;
   } catch (const pintag::cli::UsageError& e) {
-    std::cerr << "pintag: " << e.what() << "\n";
+    Report(app, e.what());
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "pintag: " << e.what() << "\n";
+    Report(app, e.what());
     return 1;
   }
   // Not for serve, whose stdout is a banner and whose exit status says how it stopped.

@@ -210,6 +210,26 @@ TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLo
   EXPECT_EQ(result["error"]["status"], 500) << scans->front().result_json;
 }
 
+// With --log-format json, the line saying why serve could not start is JSON too: it was written
+// as "pintag: …" text, the one line of such a run a log pipeline could not parse.
+TEST_F(ServeLogTest, WithJsonLogsAServeThatCannotStartSaysWhyInJson) {
+  const CommandResult busy = RunPintag("serve --log-format json --bind 127.0.0.1 --port " +
+                                       std::to_string(server_->port()) + " --db " + db_path_);
+  EXPECT_EQ(busy.status, 1) << busy.out;
+  std::istringstream lines(busy.out);
+  bool said = false;
+  for (std::string line; std::getline(lines, line);) {
+    const json object = json::parse(line, nullptr, false);
+    ASSERT_TRUE(object.is_object()) << line;
+    if (object.value("level", "") == "error") {
+      said = object.value("message", "")
+                 .find("cannot listen on 127.0.0.1:" + std::to_string(server_->port())) !=
+             std::string::npos;
+    }
+  }
+  EXPECT_TRUE(said) << busy.out;
+}
+
 // Answers cpp-httplib makes before routing (a method it does not parse, a Range it cannot
 // parse, a head that never ends) name the client, keep the X-Request-Id the client sent when the
 // headers were read, and are timed: they were logged with client="" and 0 ms, and a 416 with a

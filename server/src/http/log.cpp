@@ -96,6 +96,10 @@ void ConfigureLog(LogFormat format) {
                        spdlog::pattern_time_type::utc);
 }
 
+LogFormat ConfiguredLogFormat() {
+  return g_format.load();
+}
+
 void SetAccessLogEnabled(bool enabled) {
   g_access_enabled = enabled;
 }
@@ -127,6 +131,10 @@ void LogEvent(std::string_view message, bool warning) {
   } else {
     Logger().info(line);
   }
+}
+
+void LogFatal(std::string_view message) {
+  Logger().error(Render("event", {{"message", std::string(message)}}));
 }
 
 std::string RequestIdFrom(std::optional<std::string_view> client_value) {

@@ -20,6 +20,8 @@ std::optional<LogFormat> ParseLogFormat(std::string_view text);
 
 /// Chooses the format of every later line; text until called. Call before serving.
 void ConfigureLog(LogFormat format);
+/// The format chosen (text until ConfigureLog).
+LogFormat ConfiguredLogFormat();
 
 /// Turns the access lines off (or on again): the fuzz targets answer millions of requests, and
 /// their reports must not drown. Errors and events are still written.
@@ -33,7 +35,7 @@ struct AccessRecord {
   std::string_view path;  ///< without the query: query values may hold secrets
   int status = 0;
   std::size_t bytes = 0;       ///< response body bytes
-  double seconds = 0;          ///< from the request's headers read to its answer built
+  double seconds = 0;          ///< from the request's head having arrived to its answer written
   std::string_view principal;  ///< the token id, or empty for open routes
   bool cut_off = false;        ///< the answer did not all reach the client (it went away)
 };
@@ -44,6 +46,8 @@ void LogRequestError(std::string_view request_id, std::string_view message);
 
 /// Anything else worth an operator's attention (`warning` raises the level from info).
 void LogEvent(std::string_view message, bool warning = false);
+/// What ends the process (a port taken, a database that cannot be opened), at level error.
+void LogFatal(std::string_view message);
 
 /// A request id from the client's X-Request-Id when it is sane (1 … 128 of A-Z a-z 0-9 - _ . :),
 /// else a new random one (32 hex digits).
