@@ -156,6 +156,16 @@ TEST(LabelPng, RefusesOutOfRangeDpiAndPixelBombs) {
   EXPECT_TRUE(RenderLabelPdf(test::SampleLabel(), {kLabel100x150, 0}));
 }
 
+TEST(LabelSvg, TheSameLabelIsTheSameBytes) {
+  // cairo numbered the page's group by every surface the process had made: three requests for
+  // one label gave three different files (a review found), which defeats caching and diffing.
+  const RenderedLabel first = RenderLabelSvg(test::SampleLabel());
+  ASSERT_TRUE(RenderLabelPng(test::SampleLabel(), {kLabel100x150, 72}));  // more surfaces made
+  const RenderedLabel second = RenderLabelSvg(test::SampleLabel());
+  ASSERT_TRUE(first && second);
+  EXPECT_EQ(first.bytes, second.bytes);
+}
+
 TEST(LabelSvg, IsSizedInMillimetresWithAPointViewBox) {
   const RenderedLabel svg = RenderLabelSvg(test::SampleLabel(), {kLabel4x6In, 300});
   ASSERT_TRUE(svg) << svg.error;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <string_view>
 #include <utility>
 
 #include "label/label_draw.hpp"
@@ -85,6 +86,14 @@ void SizeSvgInMillimetres(std::vector<std::uint8_t>& bytes, const LabelSize& siz
     char value[32];
     std::snprintf(value, sizeof value, "%.4fmm", mm);
     text.replace(from, to - from, value);
+  }
+  // cairo names the page's group after a counter of every surface the process has made
+  // (`<g id="surface11605">`), so one label drawn twice differed; nothing refers to the id.
+  static constexpr std::string_view kGroup = "<g id=\"surface";
+  if (const std::size_t group = text.find(kGroup); group != std::string::npos) {
+    const std::size_t digits = group + kGroup.size();
+    const std::size_t close = text.find('"', digits);
+    if (close != std::string::npos) text.replace(digits, close - digits, "1");
   }
   bytes.assign(text.begin(), text.end());
 }
