@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <string>
+#include <tuple>
 
 #include "pintag/codec/cells.hpp"
 #include "pintag/codec/geometry.hpp"
@@ -84,10 +85,17 @@ std::string RenderTagSvg(TagKey key, const TagSvgOptions& options) {
     const std::string r_red = Num(geometry::kRedRadius * frame.side);
     const std::string cx = Num(frame.x(c.x));
     const std::string cy = Num(frame.y(c.y));
-    svg += "    <circle class=\"underlay green\" cx=\"" + cx + "\" cy=\"" + cy + "\" r=\"" +
-           r_green + "\" fill=\"" + Hex(PaletteColour::kGreenZero) + "\"/>\n";
-    svg += "    <circle class=\"underlay red\" cx=\"" + cx + "\" cy=\"" + cy + "\" r=\"" + r_red +
-           "\" fill=\"" + Hex(PaletteColour::kRedZero) + "\"/>\n";
+    for (const auto& [name, radius, colour] :
+         {std::tuple{"green", r_green, PaletteColour::kGreenZero},
+          std::tuple{"red", r_red, PaletteColour::kRedZero}}) {
+      svg += "    <circle class=\"underlay ";
+      svg += name;
+      svg += "\" cx=\"" + cx;
+      svg += "\" cy=\"" + cy;
+      svg += "\" r=\"" + radius;
+      svg += "\" fill=\"" + Hex(colour);
+      svg += "\"/>\n";
+    }
     for (int s = 0; s < kGreenSectors; ++s) {
       const PaletteColour colour =
           cells.green[e][s] ? PaletteColour::kGreenOne : PaletteColour::kGreenZero;

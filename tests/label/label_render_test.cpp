@@ -422,7 +422,9 @@ TEST(LabelText, HostileNamesStillRender) {
   label.office = std::string(5000, 'W') + "\xff\xfe\x01\x02 \u202E evil";
   label.district = "\xe0\xa4";  // truncated Devanagari lead bytes
   label.state = "";
-  label.bin = "\xff9\x01-\u202E9";
+  label.bin =
+      "\xff"
+      "9\x01-\u202E9";
   label.plan = "\n\t";
   EXPECT_TRUE(RenderLabelPdf(label));
   EXPECT_TRUE(RenderLabelSvg(label));

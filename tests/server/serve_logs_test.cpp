@@ -38,6 +38,20 @@ std::vector<std::string> LogLines(const std::string& file, const std::string& ne
   return found;
 }
 
+/// Runs `sql` on the served database through a connection of its own, as another process would:
+/// a real storage failure under the running server. SQLite's result code.
+int ExecuteBehindTheServer(const std::string& path, const char* sql) {
+  sqlite3* raw = nullptr;
+  if (sqlite3_open(path.c_str(), &raw) != SQLITE_OK) {
+    sqlite3_close(raw);
+    return SQLITE_CANTOPEN;
+  }
+  sqlite3_busy_timeout(raw, 5000);
+  const int rc = sqlite3_exec(raw, sql, nullptr, nullptr, nullptr);
+  sqlite3_close(raw);
+  return rc;
+}
+
 class ServeLogTest : public ServeTest {
  protected:
   std::string stderrFile() const { return dir_.file("stderr.log"); }
@@ -174,17 +188,8 @@ TEST_F(ServeLogTest, JsonFormatWritesOneObjectPerLine) {
 TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLog) {
   // A real storage failure under the running server: the sort plans table disappears, so
   // looking up the plan for /detect fails with an SQLite error the client must not see.
-  {
-    sqlite3* raw = nullptr;
-    ASSERT_EQ(sqlite3_open(db_path_.c_str(), &raw), SQLITE_OK);
-    sqlite3_busy_timeout(raw, 5000);
-    char* message = nullptr;
-    const int rc = sqlite3_exec(raw, "PRAGMA foreign_keys=OFF; DROP TABLE sort_plans;", nullptr,
-                                nullptr, &message);
-    sqlite3_free(message);
-    sqlite3_close(raw);
-    ASSERT_EQ(rc, SQLITE_OK);
-  }
+  ASSERT_EQ(ExecuteBehindTheServer(db_path_, "PRAGMA foreign_keys=OFF; DROP TABLE sort_plans;"),
+            SQLITE_OK);
   httplib::MultipartFormDataItems form = {{"image", "not looked at", "p.jpg", "image/jpeg"}};
   httplib::Headers headers = scanner();
   headers.emplace("X-Request-Id", "detect-fails-1");
@@ -240,7 +245,7 @@ TEST_F(ServeLogTest, AnswersMadeBeforeRoutingNameTheClientKeepTheIdAndAreTimed) 
     const int fd = test::ConnectLoopback(server_->port());
     EXPECT_GE(fd, 0);
     EXPECT_TRUE(test::SendAll(fd, request));
-    const std::string answer = test::ReceiveUntil(fd, 5);
+    std::string answer = test::ReceiveUntil(fd, 5);
     ::close(fd);
     return answer;
   };
@@ -283,16 +288,7 @@ TEST_F(ServeLogTest, AnswersMadeBeforeRoutingNameTheClientKeepTheIdAndAreTimed) 
 // under the request's id with what the client was not told. It was answered without an error
 // line, so the failure could not be joined to the request.
 TEST_F(ServeLogTest, ATokenCheckTheDatabaseFailsIsLoggedWithTheRequestId) {
-  {
-    sqlite3* raw = nullptr;
-    ASSERT_EQ(sqlite3_open(db_path_.c_str(), &raw), SQLITE_OK);
-    sqlite3_busy_timeout(raw, 5000);
-    char* message = nullptr;
-    const int rc = sqlite3_exec(raw, "DROP TABLE api_tokens;", nullptr, nullptr, &message);
-    sqlite3_free(message);
-    sqlite3_close(raw);
-    ASSERT_EQ(rc, SQLITE_OK);
-  }
+  ASSERT_EQ(ExecuteBehindTheServer(db_path_, "DROP TABLE api_tokens;"), SQLITE_OK);
   httplib::Headers headers = admin();
   headers.emplace("X-Request-Id", "token-check-1");
   const json problem = ExpectProblem(client().Get("/api/v1/tokens", headers), 500);

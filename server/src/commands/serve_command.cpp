@@ -126,10 +126,10 @@ void Run(const ServeArgs& args) {
   }
   CheckReplicationArgs(args.replication, args.db);
   const bool read_only = args.replication.read_only || !args.replication.follow.empty();
-  if (!read_only)
-    OpenDb(args.db, [](const std::string& what) {
-      server::LogEvent(what);
-    });  // creates and seeds a missing file, migrates an old one
+  if (!read_only) {
+    // Creates and seeds a missing file, migrates an old one; says so in the server's log.
+    OpenDb(args.db, [](const std::string& what) { server::LogEvent(what); });
+  }
 
   app::AppConfig config;
   config.db_path = args.db;
