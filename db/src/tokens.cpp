@@ -147,6 +147,10 @@ Result<std::vector<TokenInfo>> ListTokens(Connection& connection) {
   });
 }
 
+Result<TokenInfo> GetToken(Connection& connection, std::int64_t id) {
+  return Guard([&]() -> Result<TokenInfo> { return LoadInfo(connection, id); });
+}
+
 Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id, LastAdmin last_admin) {
   return Guard([&]() -> Result<TokenInfo> {
     Transaction transaction(connection);

@@ -40,8 +40,8 @@ std::string CairoError(const char* what, cairo_status_t status) {
   return std::string(what) + ": " + cairo_status_to_string(status);
 }
 
-RenderedLabel Fail(std::string error) {
-  return {{}, std::move(error), {}};
+RenderedLabel Fail(std::string error, std::optional<std::size_t> refused_label = std::nullopt) {
+  return {{}, std::move(error), refused_label};
 }
 
 // Draws each label on its own page of a vector surface, then finishes the surface. A label that
@@ -234,9 +234,7 @@ RenderedLabel RenderLabelsPdf(std::span<const LabelContent> labels, const LabelO
   if (std::string why =
           DrawPages(surface.get(), labels, label::ComputeLayout(options.size), &refused);
       !why.empty()) {
-    RenderedLabel failed = Fail(why);
-    failed.refused_label = refused;
-    return failed;
+    return Fail(why, refused);
   }
   return {std::move(bytes), {}, {}};
 }
@@ -255,9 +253,7 @@ RenderedLabel RenderLabelSvg(const LabelContent& label, const LabelOptions& opti
   if (std::string why = DrawPages(surface.get(), std::span<const LabelContent>(&label, 1),
                                   label::ComputeLayout(options.size), &refused);
       !why.empty()) {
-    RenderedLabel failed = Fail(why);
-    failed.refused_label = refused;
-    return failed;
+    return Fail(why, refused);
   }
   SizeSvgInMillimetres(bytes, options.size);
   return {std::move(bytes), {}, {}};

@@ -69,13 +69,10 @@ void Revoke(const TokenArgs& args) {
   db::Connection connection = OpenExistingDb(args.db);
   // Said apart from a revocation made now: a script revoking a leaked token must not read an
   // old revocation as its own.
-  if (auto tokens = db::ListTokens(connection)) {
-    for (const db::TokenInfo& t : *tokens) {
-      if (t.id == args.id && t.revoked_at) {
-        std::cout << "token " << t.id << " was already revoked at " << *t.revoked_at << "\n";
-        return;
-      }
-    }
+  if (auto before = db::GetToken(connection, args.id); before && before->revoked_at) {
+    std::cout << "token " << before->id << " was already revoked at " << *before->revoked_at
+              << "\n";
+    return;
   }
   auto token = db::RevokeToken(connection, args.id);
   if (!token && token.error().code == db::ErrorCode::kBusy) {

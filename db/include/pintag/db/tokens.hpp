@@ -39,6 +39,8 @@ std::optional<Error> CheckTokenLabel(std::string_view label);
 
 Result<NewToken> CreateToken(Connection& connection, Role role, std::string_view label = "");
 Result<std::vector<TokenInfo>> ListTokens(Connection& connection);  ///< by id, revoked included
+/// One token (never its secret); kNotFound when there is none with that id.
+Result<TokenInfo> GetToken(Connection& connection, std::int64_t id);
 /// Whether RevokeToken may revoke the last active admin token.
 enum class LastAdmin {
   kMayRevoke,  ///< the command line: whoever runs it can make another
