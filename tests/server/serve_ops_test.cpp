@@ -88,9 +88,9 @@ TEST(ServeStartRefusals, AnEmptyBindAddressIsAUsageErrorNotEveryInterface) {
   EXPECT_NE(refused.out.find("--bind needs an address"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
-// A replica's options on a primary did nothing, without a word (no --scan-log file was made), and
-// a --snapshot naming the database itself was retried for ever: usage errors, before the database
-// is created and seeded.
+// A replica's options on a primary (and a follower's on a replica that follows no one) did
+// nothing, without a word (no --scan-log file was made), and a --snapshot naming the database
+// itself was retried for ever: usage errors, before the database is created and seeded.
 TEST(ServeStartRefusals, OptionsThatContradictTheRoleAreUsageErrors) {
   const TempDir dir;
   const std::string db = dir.file("new.db");
@@ -99,7 +99,8 @@ TEST(ServeStartRefusals, OptionsThatContradictTheRoleAreUsageErrors) {
        {"--scan-log " + dir.file("scans.db"), std::string("--primary http://127.0.0.1:1"),
         "--follow-token-file " + token, "--snapshot " + db, "--snapshot " + db + "-wal",
         "--snapshot " + (dir.path() / "." / "new.db").string(),
-        "--read-only --follow-token-file " + token}) {
+        "--read-only --follow-token-file " + token, std::string("--follow-interval-ms 200"),
+        std::string("--read-only --follow-interval-ms 200")}) {
     // Bounded: a server that starts regardless would serve until stopped.
     const CommandResult refused =
         RunShell("timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + db + " " +

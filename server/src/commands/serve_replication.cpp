@@ -103,15 +103,23 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
     for (const auto& [given, name] :
          {std::pair{!args.scan_log.empty(), "--scan-log"},
           std::pair{!args.primary.empty(), "--primary"},
-          std::pair{!args.follow_token_file.empty(), "--follow-token-file"}}) {
+          std::pair{!args.follow_token_file.empty(), "--follow-token-file"},
+          std::pair{args.follow_interval_ms.has_value(), "--follow-interval-ms"}}) {
       if (given) {
         throw UsageError(
             std::string(name) +
             " is for a replica (--read-only or --follow); a primary has no use for it");
       }
     }
-  } else if (!args.follow_token_file.empty() && args.follow.empty()) {
-    throw UsageError("--follow-token-file is the token for --follow; this replica follows no one");
+  } else if (args.follow.empty()) {
+    if (!args.follow_token_file.empty()) {
+      throw UsageError(
+          "--follow-token-file is the token for --follow; this replica follows no one");
+    }
+    if (args.follow_interval_ms) {
+      throw UsageError(
+          "--follow-interval-ms is how often --follow asks; this replica follows no one");
+    }
   }
   if (!args.snapshot.empty()) {
     std::error_code error;
@@ -143,9 +151,8 @@ void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
       ->envname("PINTAG_FOLLOW_TOKEN_FILE");
   serve
       ->add_option("--follow-interval-ms", args.follow_interval_ms,
-                   "how often to ask the primary for a newer snapshot")
+                   "how often to ask the primary for a newer snapshot (default 1000)")
       ->check(CLI::Range(50, 3'600'000))
-      ->capture_default_str()
       ->envname("PINTAG_FOLLOW_INTERVAL_MS");
   serve
       ->add_option("--primary", args.primary,
@@ -224,7 +231,7 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
                            /*warning=*/true);
         }
         last_error = error;
-        std::this_thread::sleep_for(std::chrono::milliseconds(args_.follow_interval_ms));
+        std::this_thread::sleep_for(std::chrono::milliseconds(args_.followIntervalMs()));
       }
     }
   }
@@ -263,7 +270,7 @@ void Replication::start() {
   watcher_->start(std::chrono::milliseconds(250));
   if (!follower_) return;
   follower_->start([watcher = watcher_.get()] { return watcher->servedVersion(); },
-                   std::chrono::milliseconds(args_.follow_interval_ms), follow_status_);
+                   std::chrono::milliseconds(args_.followIntervalMs()), follow_status_);
 }
 
 void Replication::reload() {

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "app/app.hpp"
@@ -19,7 +20,8 @@ struct ReplicationArgs {
   bool read_only = false;
   std::string follow;             ///< primary URL to pull snapshots from
   std::string follow_token_file;  ///< file holding the replica token (else PINTAG_FOLLOW_TOKEN)
-  int follow_interval_ms = 1000;
+  std::optional<int> follow_interval_ms;  ///< when given; only a following replica takes it
+  int followIntervalMs() const { return follow_interval_ms.value_or(1000); }
   std::string primary;   ///< named in refusals of writes (default: the --follow URL)
   std::string scan_log;  ///< a replica's own scan log (default: <db stem>-scans.db beside it)
   std::string snapshot;  ///< a primary publishes its snapshot here
@@ -29,7 +31,8 @@ void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args);
 
 /// The replication options that contradict each other or the role, checked before the database
 /// is opened or seeded: a replica's options (--scan-log, --primary, --follow-token-file) on a
-/// primary, and a --snapshot that names the database or one of its files. UsageError.
+/// primary, --follow-token-file and --follow-interval-ms on a server that follows no one, and a
+/// --snapshot that names the database or one of its files. UsageError.
 void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_path);
 
 class Replication {
