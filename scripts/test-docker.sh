@@ -165,6 +165,9 @@ check "nginx answers its own 413 as problem+json" bash -c \
 check "nginx's access log is in docker logs, with the request id" bash -c \
   "curl -s -o /dev/null -H 'X-Request-Id: test-docker-log-1' $front/livez; sleep 2;
    ${compose[*]} logs nginx 2>&1 | grep -q 'id=test-docker-log-1'"
+check "the server nginx sent it to logs the client nginx named, with nginx as the proxy" bash -c \
+  "${compose[*]} logs primary replica-1 replica-2 replica-3 2>&1 | grep 'id=test-docker-log-1' |
+     grep -q 'client=127.0.0.1 .* proxy=127.0.0.1'"
 
 say "adding pincode 999555 on the primary through nginx"
 added="$(curl -s -o /dev/null -w '%{http_code}' -X POST "$front/api/v1/pincodes" \

@@ -20,6 +20,7 @@ namespace pintag::serve_test {
 namespace {
 
 using nlohmann::json;
+using std::string_literals::operator""s;
 
 /// The server's stderr lines that mention `needle`, waiting up to 5 s until there are at least
 /// `expected` of them (the access line is written after the response, so it may trail the
@@ -183,6 +184,40 @@ TEST_F(ServeLogTest, JsonFormatWritesOneObjectPerLine) {
   EXPECT_EQ(line["client"], "127.0.0.1");
   EXPECT_TRUE(line["ms"].is_number());
   EXPECT_TRUE(line["time"].is_string());
+}
+
+// Behind nginx every request's peer is nginx; the client it forwarded for is in X-Forwarded-For,
+// believed only from the proxies the operator named. A client writing the header itself does not
+// change its name in the log.
+TEST_F(ServeLogTest, TheClientATrustedProxyForwardedForIsLoggedWithTheProxy) {
+  const auto client_and_proxy = [&](const std::string& id, const std::string& forwarded_for) {
+    auto r = client().Get("/livez", {{"X-Request-Id", id}, {"X-Forwarded-For", forwarded_for}});
+    EXPECT_TRUE(r);
+    const auto lines = LogLines(stderrFile(), "\"" + id + "\"");
+    EXPECT_EQ(lines.size(), 1U);
+    const json line = lines.empty() ? json() : json::parse(lines[0], nullptr, false);
+    return std::pair{line.value("client", ""), line.value("proxy", "")};
+  };
+  startServer({"--log-format", "json"});
+  EXPECT_EQ(client_and_proxy("untrusted", "198.51.100.7"), std::pair("127.0.0.1"s, ""s));
+
+  // Two flags, the second a list, as PINTAG_TRUSTED_PROXY gives one.
+  startServer({"--log-format", "json", "--trusted-proxy", "127.0.0.1", "--trusted-proxy",
+               "10.0.0.0/8,fd00::/8"});
+  EXPECT_EQ(client_and_proxy("forwarded", "198.51.100.7"),
+            std::pair("198.51.100.7"s, "127.0.0.1"s));
+  // What the client wrote before nginx appended its address is not believed.
+  EXPECT_EQ(client_and_proxy("spoofed", "6.6.6.6, 198.51.100.7, 10.1.2.3"),
+            std::pair("198.51.100.7"s, "127.0.0.1"s));
+  EXPECT_EQ(client_and_proxy("garbage", "<script>alert(1)</script>"), std::pair("127.0.0.1"s, ""s));
+
+  const CommandResult refused =
+      RunPintag("serve --port 0 --trusted-proxy nginx --db " + dir_.file("never.db"));
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--trusted-proxy 'nginx' is not an IPv4 or IPv6 address"),
+            std::string::npos)
+      << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_.file("never.db")));
 }
 
 TEST_F(ServeLogTest, AServerFailureIsLoggedWithTheRequestIdAndWrittenToTheScanLog) {
@@ -351,12 +386,26 @@ TEST_F(ServeLogTest, EnvironmentVariablesConfigureServeAndFlagsWin) {
 TEST(ServeHelp, NamesTheEnvironmentVariableOfEveryOption) {
   const CommandResult help = RunPintag("serve --help");
   ASSERT_EQ(help.status, 0) << help.out;
-  for (const char* name :
-       {"PINTAG_DB", "PINTAG_PORT", "PINTAG_BIND", "PINTAG_THREADS", "PINTAG_WEB",
-        "PINTAG_MAX_BODY_MB", "PINTAG_MAX_PIXELS", "PINTAG_MAX_BATCH", "PINTAG_MAX_TAG_PX",
-        "PINTAG_READ_TIMEOUT", "PINTAG_WRITE_TIMEOUT", "PINTAG_LOG_FORMAT", "PINTAG_READ_ONLY",
-        "PINTAG_FOLLOW", "PINTAG_FOLLOW_TOKEN_FILE", "PINTAG_FOLLOW_INTERVAL_MS", "PINTAG_PRIMARY",
-        "PINTAG_SCAN_LOG", "PINTAG_SNAPSHOT"}) {
+  for (const char* name : {"PINTAG_DB",
+                           "PINTAG_PORT",
+                           "PINTAG_BIND",
+                           "PINTAG_THREADS",
+                           "PINTAG_WEB",
+                           "PINTAG_MAX_BODY_MB",
+                           "PINTAG_MAX_PIXELS",
+                           "PINTAG_MAX_BATCH",
+                           "PINTAG_MAX_TAG_PX",
+                           "PINTAG_READ_TIMEOUT",
+                           "PINTAG_WRITE_TIMEOUT",
+                           "PINTAG_LOG_FORMAT",
+                           "PINTAG_READ_ONLY",
+                           "PINTAG_FOLLOW",
+                           "PINTAG_FOLLOW_TOKEN_FILE",
+                           "PINTAG_FOLLOW_INTERVAL_MS",
+                           "PINTAG_PRIMARY",
+                           "PINTAG_SCAN_LOG",
+                           "PINTAG_SNAPSHOT",
+                           "PINTAG_TRUSTED_PROXY"}) {
     EXPECT_NE(help.out.find(std::string(name) + ")"), std::string::npos) << name;
   }
   // Refused by the option's own check, before any database or port: the database's directory

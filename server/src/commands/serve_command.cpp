@@ -18,6 +18,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "app/app.hpp"
 #include "commands/commands.hpp"
@@ -31,6 +32,7 @@
 #include "pintag/server/http_server.hpp"
 #include "pintag/server/listen_check.hpp"
 #include "pintag/server/log.hpp"
+#include "pintag/server/trusted_proxies.hpp"
 
 namespace pintag::cli {
 namespace {
@@ -50,6 +52,7 @@ struct ServeArgs {
   int write_timeout_s = 5;
   int drain_timeout_s = 30;
   std::string log_format = "text";
+  std::vector<std::string> trusted_proxies;
   ReplicationArgs replication;
 };
 
@@ -108,6 +111,10 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
+  std::string proxy_error;
+  const std::optional<server::TrustedProxies> trusted_proxies =
+      server::TrustedProxies::Parse(args.trusted_proxies, &proxy_error);
+  if (!trusted_proxies) throw UsageError("--trusted-proxy " + proxy_error);
   // Two photos of the largest size at once by default: with a 40 MP limit, photos and PNGs in
   // flight hold about 0.6 GB at most, however many threads serve.
   const std::int64_t max_pixels_in_flight = args.max_pixels_in_flight.value_or(2 * args.max_pixels);
@@ -154,6 +161,7 @@ void Run(const ServeArgs& args) {
   options.threads = args.threads;
   options.read_timeout = std::chrono::seconds(args.read_timeout_s);
   options.write_timeout = std::chrono::seconds(args.write_timeout_s);
+  options.trusted_proxies = *trusted_proxies;
 
   // From here SIGINT and SIGTERM stop the server gracefully; blocked before any thread starts, so
   // that every worker thread inherits the mask and only the waiter below is interrupted.
@@ -337,6 +345,12 @@ void AddServeCommand(CLI::App& app) {
       ->check(CLI::IsMember({"text", "json"}))
       ->envname("PINTAG_LOG_FORMAT")
       ->capture_default_str();
+  cmd->add_option("--trusted-proxy", args->trusted_proxies,
+                  "a reverse proxy (address, or range such as 10.0.0.0/8; repeat or separate "
+                  "with commas) whose X-Forwarded-For names the client in the access log "
+                  "(default: none, the client is the connection's peer)")
+      ->delimiter(',')
+      ->envname("PINTAG_TRUSTED_PROXY");
   AddReplicationOptions(cmd, args->replication);
   // Every option can come from a PINTAG_* variable (shown in --help); a flag given wins.
   cmd->footer(

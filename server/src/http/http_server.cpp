@@ -655,6 +655,7 @@ struct HttpServer::Impl {
     api->metrics().observeRequest("unmatched", "other", problem.status, seconds);
     LogAccess({.request_id = id,
                .client = client,
+               .proxy = "",
                .method = "",
                .path = "",
                .status = problem.status,
@@ -680,16 +681,26 @@ struct HttpServer::Impl {
     }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::string client = req.remote_addr;
-    if (client.empty() && t_connection != nullptr) {
+    std::string peer = req.remote_addr;
+    if (peer.empty() && t_connection != nullptr) {
       int client_port = 0;
-      t_connection->get_remote_ip_and_port(client, client_port);
+      t_connection->get_remote_ip_and_port(peer, client_port);
+    }
+    std::string client = peer;
+    if (!options.trusted_proxies.empty()) {
+      std::string forwarded_for;
+      const auto [first, last] = req.headers.equal_range("X-Forwarded-For");
+      for (auto it = first; it != last; ++it) {
+        forwarded_for += (forwarded_for.empty() ? "" : ",") + it->second;
+      }
+      client = options.trusted_proxies.clientOf(peer, forwarded_for);
     }
     api->metrics().observeRequest(label, req.method, res.status, seconds);
     const std::string principal =
         t_state.admission.principal ? t_state.admission.principal->id : "";
     LogAccess({.request_id = t_state.request_id,
                .client = client,
+               .proxy = client == peer ? std::string() : peer,
                .method = req.method,
                .path = req.path,
                .status = res.status,

@@ -114,6 +114,7 @@ void LogAccess(const AccessRecord& r) {
                                {"bytes", r.bytes},
                                {"ms", std::round(r.seconds * 1e6) / 1e3}};
   if (!r.principal.empty()) fields.emplace_back("token", std::string(r.principal));
+  if (!r.proxy.empty()) fields.emplace_back("proxy", std::string(r.proxy));
   // The status is what the server answered; the client may not have received it.
   if (r.cut_off) fields.emplace_back("cut_off", true);
   Logger().info(Render("access", fields));

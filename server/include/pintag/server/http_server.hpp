@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "pintag/server/api.hpp"
+#include "pintag/server/trusted_proxies.hpp"
 
 namespace pintag::server {
 
@@ -25,6 +26,9 @@ struct ServerOptions {
   /// one whose keep-alive wait ends first is closed.
   int max_idle_connections = 1024;
   int listen_backlog = 128;  ///< pending connections queued by the kernel
+  /// Reverse proxies whose X-Forwarded-For names the client in the access log (default: none,
+  /// the client is the connection's peer).
+  TrustedProxies trusted_proxies;
 };
 
 class HttpServer {

@@ -30,7 +30,8 @@ void SetAccessLogEnabled(bool enabled);
 /// One answered request.
 struct AccessRecord {
   std::string_view request_id;
-  std::string_view client;  ///< remote address
+  std::string_view client;  ///< remote address, or the one a trusted proxy forwarded for
+  std::string_view proxy;   ///< the trusted proxy's address when `client` came from its header
   std::string_view method;
   std::string_view path;  ///< without the query: query values may hold secrets
   int status = 0;
