@@ -149,11 +149,15 @@ bool ParseArgs(int argc, char** argv, Args& args) {
       args.csv = next();
     } else {
       std::fprintf(stderr,
-                   "usage: pintag_genie_probe [--world held-out|tuning] [--seed N] "
+                   "usage: pintag_genie_probe [--world tuning|held-out] [--seed N] "
                    "[--frames-per-bin N] [--min-size PX] [--max-size PX] [--max-tilt DEG] "
                    "[--rivals N | --mismatch] [--threads N] [--csv FILE]\n");
       return false;
     }
+  }
+  if (const std::string error = TuningToolOptionsError(args.sweep); !error.empty()) {
+    std::fprintf(stderr, "pintag_genie_probe: %s\n", error.c_str());
+    return false;
   }
   // The CSV is written at the end of a run of many minutes: a path it cannot write is said now.
   if (!args.csv.empty()) {
@@ -431,6 +435,7 @@ int RunMismatch(const Args& args, const std::vector<FrameSpec>& frames,
 
 int Main(int argc, char** argv) {
   Args args;
+  args.sweep.world = scene::World::kTuning;  // what tuning may look at
   args.sweep.tagless_frames = 0;
   if (!ParseArgs(argc, argv, args)) return 2;
   const scene::Camera camera = CameraFor(args.sweep.world);

@@ -112,6 +112,7 @@ void PrintLeadTails(const std::vector<double>& fit, const std::vector<double>& n
 
 int Main(int argc, char** argv) {
   Args args;
+  args.sweep.world = scene::World::kTuning;  // what tuning may look at
   args.sweep.tagless_frames = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -170,7 +171,7 @@ int Main(int argc, char** argv) {
                                               4);  // as pintag_bench's
     } else {
       std::fprintf(stderr,
-                   "usage: pintag_reader_probe [--world held-out|tuning] [--seed N] "
+                   "usage: pintag_reader_probe [--world tuning|held-out] [--seed N] "
                    "[--frames-per-bin N] [--jitter PX --draws N] [--max-size PX] [--frame N] "
                    "[--jpeg-quality N] [--s-curve] [--vng-demosaic] [--no-mosaic] "
                    "[--sensor-scale K] [--threads N] "
@@ -178,9 +179,12 @@ int Main(int argc, char** argv) {
       return a == "--help" ? 0 : 2;
     }
   }
-  if (const std::string error = SweepOptionsError(args.sweep); !error.empty()) {
-    std::fprintf(stderr, "pintag_reader_probe: %s\n", error.c_str());
-    return 2;
+  for (const std::string& error :
+       {SweepOptionsError(args.sweep), TuningToolOptionsError(args.sweep)}) {
+    if (!error.empty()) {
+      std::fprintf(stderr, "pintag_reader_probe: %s\n", error.c_str());
+      return 2;
+    }
   }
   const scene::Camera camera = CameraFor(args.sweep.world);
   std::vector<FrameSpec> frames = MakeSweep(args.sweep, camera);

@@ -16,6 +16,7 @@ std::uint64_t Mix(std::uint64_t h, std::uint64_t v) {
 
 // The held-out world's salt: its frames' seeds are a stream the tuning world never draws from.
 constexpr std::uint64_t kHeldOutSalt = 0x48454C444F5554ULL;
+constexpr std::uint64_t kQuickSalt = 0x515549434BULL;
 
 FrameSpec TaggedFrame(std::uint64_t base, int round, bool hard, int size_index, int tilt_index,
                       const scene::Camera& camera) {
@@ -76,6 +77,15 @@ std::string SweepOptionsError(const SweepOptions& options) {
   return {};
 }
 
+std::string TuningToolOptionsError(const SweepOptions& options) {
+  if (options.world == scene::World::kHeldOut && options.seed == kHeadlineSeed) {
+    return "the held-out world's seed " + std::to_string(kHeadlineSeed) +
+           " is pintag_bench's headline, and a tool that informs tuning must not look at it: "
+           "use --world tuning (the default), or another held-out seed with --seed";
+  }
+  return {};
+}
+
 std::string ToString(Marker marker) {
   switch (marker) {
     case Marker::kPinTag:
@@ -90,7 +100,8 @@ std::string ToString(Marker marker) {
 
 std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camera& camera) {
   const bool held_out = options.world == scene::World::kHeldOut;
-  const std::uint64_t seed = held_out ? Mix(options.seed, kHeldOutSalt) : options.seed;
+  const std::uint64_t world_seed = held_out ? Mix(options.seed, kHeldOutSalt) : options.seed;
+  const std::uint64_t seed = options.quick ? Mix(world_seed, kQuickSalt) : world_seed;
   std::vector<FrameSpec> frames;
   // Rounds outermost: any stretch of the sweep mixes every bin, so drift in the machine's load
   // spreads over all bins instead of landing on a few.

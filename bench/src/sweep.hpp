@@ -32,11 +32,17 @@ scene::Camera CameraFor(scene::World world);
 /// The world's name in reports and on the command line: "tuning" or "held-out".
 std::string ToString(scene::World world);
 
+/// The held-out seed of pintag_bench's headline, its default. No tuning tool reads its frames.
+inline constexpr std::uint64_t kHeadlineSeed = 1;
+
 struct SweepOptions {
   scene::World world = scene::World::kHeldOut;
   int frames_per_bin = 8;   ///< frames per (size, tilt, photometry) bin
   int tagless_frames = 64;  ///< frames of photographs without a tag (moderate and hard alternate)
-  bool quick = false;       ///< one frame per (size, tilt), photometry alternating; few tagless
+  /// One frame per (size, tilt), photometry alternating, and at most 6 tagless: CI's check and
+  /// the load test's photos. Drawn from a seed of their own, so that they are none of the full
+  /// sweep's frames (until 2026-12-07 they were its first round).
+  bool quick = false;
   /// Base seed of the whole sweep. The held-out world mixes it with a salt of its own, so the two
   /// worlds never share a frame's seed.
   std::uint64_t seed = 1;
@@ -65,6 +71,10 @@ struct SweepOptions {
 /// Empty when the options go together, else what is wrong, worded for the command line: each
 /// world's own photometry options belong to it alone.
 std::string SweepOptionsError(const SweepOptions& options);
+
+/// Empty when a tool that informs tuning (the reader and genie probes) may look at these frames,
+/// else why not: the held-out world's headline seed is read by pintag_bench alone.
+std::string TuningToolOptionsError(const SweepOptions& options);
 
 struct FrameSpec {
   scene::World world = scene::World::kHeldOut;
