@@ -27,8 +27,8 @@ foreach(needle "### Accuracy" "### Speed" "| **PinTag** |" "| **ArUco** |" "| **
     message(FATAL_ERROR "BENCHMARKS.md lacks '${needle}'")
   endif()
 endforeach()
-# Every detector was timed: a number in the 1-thread wall and CPU median columns of the speed
-# table, and every detector has an accuracy row.
+# Every detector was timed: a number in the 1-thread wall mean (cell 2) and CPU mean (cell 6)
+# columns of the speed table, and every detector has an accuracy row.
 foreach(section_name "### Accuracy" "### Speed")
   string(FIND "${report}" "${section_name}" section_at)
   if(section_at LESS 0)
@@ -49,10 +49,10 @@ foreach(section_name "### Accuracy" "### Speed")
   if(section_name STREQUAL "### Speed")
     foreach(row IN LISTS rows)
       string(REPLACE "|" ";" cells "${row}")
-      foreach(column 2 4)
+      foreach(column 2 6)
         list(GET cells ${column} value)
         if(NOT value MATCHES "[0-9]+\\.[0-9]+")
-          message(FATAL_ERROR "no median time in column ${column} of: ${row}")
+          message(FATAL_ERROR "no mean time in cell ${column} of: ${row}")
         endif()
       endforeach()
     endforeach()

@@ -31,7 +31,13 @@ Outcome Score(const FrameSpec& frame, const std::vector<scene::MarkerTruth>& tru
   const cv::Point2d centre = Centre(t.corners_px);
   for (const Found& f : found) {
     const bool on_tag = cv::norm(Centre(f.corners) - centre) < 0.3 * t.square_px;
-    if (!on_tag || f.id != t.id) {
+    // A detection away from the tag read something in the background or the label's print, as
+    // a tagless frame's would: counted apart from a tag read as another id.
+    if (!on_tag) {
+      ++out.off_tag;
+      continue;
+    }
+    if (f.id != t.id) {
       ++out.misreads;
       continue;
     }
@@ -58,6 +64,7 @@ void MarkerStats::add(const FrameSpec& frame, const Outcome& outcome) {
   }
   ++tagged_frames;
   misreads += outcome.misreads;
+  off_tag += outcome.off_tag;
   if (!outcome.counted) {
     ++excluded;
     return;

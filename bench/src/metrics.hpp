@@ -20,7 +20,8 @@ inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct Outcome {
   bool counted = false;                 ///< a tag was rendered fully visible: counts towards recall
   bool found = false;                   ///< a detection with the right id lies on the tag
-  int misreads = 0;                     ///< tagged frame: detections with a wrong id or off the tag
+  int misreads = 0;                     ///< tagged frame: detections on the tag with a wrong id
+  int off_tag = 0;                      ///< tagged frame: detections away from the tag, any id
   int false_positives = 0;              ///< tagless frame: every detection
   double corner_error_px = kNaN;        ///< mean over the 4 corners of |detected − truth|
   double rotation_error_deg = kNaN;     ///< angle of R_detected · R_truthᵀ
@@ -61,7 +62,8 @@ struct MarkerStats {
   std::vector<PoseOutcome> poses;  ///< every counted tag, in the order scored
   int tagged_frames = 0;
   int excluded = 0;  ///< tags not fully visible (not counted)
-  int misreads = 0;
+  int misreads = 0;  ///< on the tag, wrong id
+  int off_tag = 0;   ///< on a tagged frame, away from its tag
   int tagless_frames = 0;
   int false_positives = 0;
   int false_positive_frames = 0;
