@@ -9,6 +9,8 @@
 #include <thread>
 
 namespace pintag::bench {
+
+extern const char kBuildCommit[];  // build_commit.cpp, written at build time
 namespace {
 
 std::string Trim(std::string s) {
@@ -57,12 +59,17 @@ MachineInfo GatherMachineInfo(const std::string& source_dir) {
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", &tm);
   info.date_utc = date;
+  // The commit the binary was built from. A tree moved on since (a later commit checked out, or
+  // edits not yet built) is said beside it: the report describes the code that ran.
+  info.commit = kBuildCommit;
   const std::string git = "git -C '" + source_dir + "' ";
-  info.commit = Run(git + "rev-parse --short=12 HEAD 2>/dev/null");
-  if (info.commit.empty()) {
-    info.commit = "unknown";
-  } else if (!Run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty()) {
-    info.commit += " + uncommitted changes in the working tree";
+  std::string now_at = Run(git + "rev-parse --short=12 HEAD 2>/dev/null");
+  if (!now_at.empty() &&
+      !Run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty()) {
+    now_at += " + uncommitted changes in the working tree";
+  }
+  if (!now_at.empty() && now_at != info.commit) {
+    info.commit += " (the source tree is now at " + now_at + ")";
   }
 #if defined(__clang__)
   info.compiler = "clang " __clang_version__;

@@ -11,7 +11,9 @@ struct MachineInfo {
   std::string load_start;  ///< /proc/loadavg (1, 5, 15 min) before the sweep
   std::string load_end;    ///< … and after
   std::string date_utc;    ///< ISO 8601
-  std::string commit;      ///< git HEAD of the source tree, "+ uncommitted changes" when dirty
+  /// The commit the binary was built from ("+ uncommitted changes" when the tree differed), and
+  /// the tree's own when it has moved on since.
+  std::string commit;
   std::string compiler;
   std::string opencv;
   std::string apriltag;  ///< Debian package version where dpkg knows it
