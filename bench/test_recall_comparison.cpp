@@ -52,6 +52,22 @@ TEST(BinsBehindByChance, BinsEveryoneFindsOrEveryoneMissesAreNeverBehind) {
   EXPECT_DOUBLE_EQ(chance.atMost(0), 1);
 }
 
+// A bin the reference found whole: with its observed rate of 1 no detector can trail it there;
+// smoothed, the rate is 16.5 / 17 and trailing is possible, as it is for a detector that misses.
+TEST(BinsBehindByChance, ASmoothedRateLetsABinFoundWholeBeTrailedIn) {
+  const std::vector<BinTally> whole{{16, 16}};
+  EXPECT_DOUBLE_EQ(ChanceOfBinsBehind(whole, BinRate::kObserved).expected, 0);
+  const double p = 16.5 / 17;
+  double tie = 0;
+  for (int k = 0; k <= 16; ++k) {
+    const double f = std::exp(std::lgamma(17.0) - std::lgamma(k + 1.0) - std::lgamma(17.0 - k) +
+                              k * std::log(p) + (16 - k) * std::log(1 - p));
+    tie += f * f;
+  }
+  EXPECT_NEAR(ChanceOfBinsBehind(whole, BinRate::kSmoothed).expected, (1 - tie) / 2, 1e-12);
+  EXPECT_GT(ChanceOfBinsBehind(whole, BinRate::kSmoothed).expected, 0.01);
+}
+
 TEST(BinsBehindByChance, AgreesWithSimulatedSweeps) {
   // Thirty bins of sixteen tags with rates from 0.3 to 1, as a sweep's target bins look.
   std::vector<BinTally> bins;

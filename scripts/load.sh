@@ -15,8 +15,10 @@
 #   PINTAG_LOAD_SECONDS=N           seconds per route (default 10)
 #   PINTAG_LOAD_CONNECTIONS=N       wrk connections (default 4; wrk uses 2 threads, 1 for 1 connection)
 #   PINTAG_LOAD_SERVER_THREADS=N    pintag serve --threads (default 4)
-#   PINTAG_LOAD_FRAMES=DIR          the JPEG scenes (default build/load-frames, made on first use
-#                                   by the benchmark's scene generator, pintag_bench --save-frames)
+#   PINTAG_LOAD_FRAMES=DIR          the JPEG scenes (default build/load-frames-2, made on first use
+#                                   by the benchmark's scene generator, pintag_bench --save-frames;
+#                                   "-2": the quick sweep's own frames since 2026-12-07, so a
+#                                   build tree's cache of the earlier ones is not taken for them)
 #   PINTAG_BUILD_DIR                build tree (default build/; needs pintag, and pintag_bench to
 #                                   make the frames: PINTAG_TESTS=ON scripts/build.sh)
 set -euo pipefail
@@ -26,7 +28,7 @@ seconds="${PINTAG_LOAD_SECONDS:-10}"
 connections="${PINTAG_LOAD_CONNECTIONS:-4}"
 server_threads="${PINTAG_LOAD_SERVER_THREADS:-4}"
 wrk_threads=$((connections < 2 ? connections : 2))  # wrk needs a connection per thread
-frames="${PINTAG_LOAD_FRAMES:-$build/load-frames}"
+frames="${PINTAG_LOAD_FRAMES:-$build/load-frames-2}"
 pintag="$build/server/pintag"
 routes=("$@")
 [[ ${#routes[@]} -gt 0 ]] || routes=(livez lookup detect label-pdf label-png tag-png)

@@ -36,7 +36,7 @@ double BinsBehindByChance::atMost(std::size_t k) const {
   return std::min(sum, 1.0);
 }
 
-BinsBehindByChance ChanceOfBinsBehind(std::span<const BinTally> reference_bins) {
+BinsBehindByChance ChanceOfBinsBehind(std::span<const BinTally> reference_bins, BinRate rate) {
   BinsBehindByChance chance;
   chance.probability = {1.0};
   for (const BinTally& bin : reference_bins) {
@@ -45,7 +45,9 @@ BinsBehindByChance ChanceOfBinsBehind(std::span<const BinTally> reference_bins) 
     double behind = 0;
     if (bin.tags > 0) {
       double tie = 0;
-      for (const double f : BinomialPmf(bin.tags, static_cast<double>(bin.found) / bin.tags)) {
+      const double p = rate == BinRate::kObserved ? static_cast<double>(bin.found) / bin.tags
+                                                  : (bin.found + 0.5) / (bin.tags + 1.0);
+      for (const double f : BinomialPmf(bin.tags, p)) {
         tie += f * f;
       }
       behind = std::max(0.0, (1 - tie) / 2);

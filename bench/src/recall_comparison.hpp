@@ -27,7 +27,13 @@ struct BinsBehindByChance {
   /// The chance of being behind in at most k bins.
   double atMost(std::size_t k) const;
 };
-BinsBehindByChance ChanceOfBinsBehind(std::span<const BinTally> reference_bins);
+/// How a bin's rate is estimated from the reference's count in it.
+enum class BinRate {
+  kObserved,  ///< found / tags: a bin the reference found whole can never be trailed in
+  kSmoothed,  ///< (found + ½) / (tags + 1): no bin's rate taken as certainly 0 or 1
+};
+BinsBehindByChance ChanceOfBinsBehind(std::span<const BinTally> reference_bins,
+                                      BinRate rate = BinRate::kObserved);
 
 /// What each of two detectors found on the same poses.
 struct PairedOutcomes {

@@ -90,18 +90,26 @@ void WriteRecallComparison(const MarkerStats& pintag, const MarkerStats& other, 
       bins.push_back({t.tags, t.found});
     }
   }
-  const BinsBehindByChance chance = ChanceOfBinsBehind(bins);
-  const double at_least_observed =
-      bins_behind > 0 ? 1 - chance.atMost(static_cast<std::size_t>(bins_behind) - 1) : 1.0;
+  const auto chance_sentence = [&](const BinsBehindByChance& chance) {
+    const double at_least_observed =
+        bins_behind > 0 ? 1 - chance.atMost(static_cast<std::size_t>(bins_behind) - 1) : 1.0;
+    return Fmt("%.1f", chance.expected) + " of these bins on average, in at most " +
+           std::to_string(kBinsBehindAllowed) + " of them in " +
+           Fmt("%.0f", 100 * chance.atMost(kBinsBehindAllowed)) +
+           " % of sweeps this size, and in " + std::to_string(bins_behind) + " or more in " +
+           Fmt("%.1f", 100 * at_least_observed) + " %";
+  };
   md << "\nA detector exactly as good as " << other.name
      << " in every bin, missing tags independently of it, would find fewer than it in "
-     << Fmt("%.1f", chance.expected) << " of these bins on average, in at most "
-     << kBinsBehindAllowed << " of them in " << Fmt("%.0f", 100 * chance.atMost(kBinsBehindAllowed))
-     << " % of sweeps this size, and in " << bins_behind << " or more in "
-     << Fmt("%.1f", 100 * at_least_observed)
-     << " % (on the same poses misses go together, which makes trailing rarer still). Paired over "
-        "the same poses (target bins; the interval is the normal 95 % one, p is McNemar's exact "
-        "two-sided test of equal recall):\n\n";
+     << chance_sentence(ChanceOfBinsBehind(bins, BinRate::kObserved))
+     << ", taking each bin's rate as " << other.name
+     << "'s found / tags; that rate makes a bin it found whole one no detector can trail in. "
+        "With (found + ½) / (tags + 1) instead: "
+     << chance_sentence(ChanceOfBinsBehind(bins, BinRate::kSmoothed))
+     << ". On the same poses misses go together, which makes trailing rarer than either says. "
+        "The count of bins behind moves this much with the estimate; the paired test is the "
+        "measure. Paired over the same poses (target bins; the interval is the normal 95 % one, p "
+        "is McNemar's exact two-sided test of equal recall):\n\n";
   md << Header({"light", "poses", "PinTag only", other.name + " only",
                 "PinTag − " + other.name + ", points (95 % interval)", "p"});
   std::map<int, bool> other_found;
