@@ -331,6 +331,28 @@ TEST(LabelLayout, TextStaysApartLegibleAndOffTheTagAtEverySize) {
   }
 }
 
+TEST(LabelText, APlanNameTooLongToPrintKeepsBothEnds) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // Cut at the end, plans named alike at the start printed alike beside their bins: both of these
+  // were "plan mumbai-central-sorting-hub-…". On the usual sizes; on the smallest the plan's
+  // corner holds a few characters either way.
+  const std::string start = "mumbai-central-sorting-hub-north-wing-conveyor-line-";
+  for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In}) {
+    for (const std::string end : {"inbound", "outbound"}) {
+      LabelContent label = test::SampleLabel();
+      label.plan = start + end;
+      const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+      ASSERT_TRUE(pdf) << pdf.error;
+      const std::string text = JoinedText(WordsOf(pdf));
+      const std::string where = ToString(size) + " " + *label.plan + ": " + text;
+      EXPECT_NE(text.find("\u2026"), std::string::npos) << where;  // too long: the test cuts
+      EXPECT_NE(text.find("planmumbai"), std::string::npos) << where;
+      EXPECT_NE(text.find(end), std::string::npos) << where;
+      EXPECT_EQ(text.find(start), std::string::npos) << where;
+    }
+  }
+}
+
 TEST(LabelText, ABinIsPrintedWholeOrTheLabelIsRefused) {
   if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
   // A bin without spaces was cut to one line at 3 mm and ellipsized: "…-CHUTE-12" and

@@ -259,11 +259,14 @@ bool DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
   if (label.plan) {
     const std::string plan = SanitizeUtf8(*label.plan);
     if (!plan.empty()) {
+      // Cut from the middle: plans are often named alike at the start ("mumbai-central-inbound",
+      // "mumbai-central-outbound"), and cut at the end they printed alike.
       DrawLine(font, "plan " + plan, right_x, right_w, box.y + kPadMm + kCaptionMm * 0.75,
                {.bold = false,
                 .size = kCaptionMm,
                 .min_size = 1.8,
                 .align = Align::kRight,
+                .cut_middle = true,
                 .within = &box});
     }
   }

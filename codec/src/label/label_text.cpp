@@ -80,23 +80,29 @@ DrawnLine DrawLine(LabelFont& font, std::string_view text, double x, double widt
   }
   const bool cut = advance > width;
   if (cut) {
-    // Still too wide at the smallest size: keep the longest prefix that fits with an ellipsis.
+    // Still too wide at the smallest size: keep the most characters that fit with an ellipsis,
+    // all from the start, or half from each end.
     const std::vector<std::size_t> at = font.cutPoints(line);
+    const std::size_t characters = at.size() - 1;
+    const auto kept = [&](std::size_t count) {
+      const std::size_t from_end = style.cut_middle ? count / 2 : 0;
+      std::string head = line.substr(0, at[count - from_end]);
+      while (!head.empty() && (head.back() == ' ' || head.back() == ',')) head.pop_back();
+      std::string tail = line.substr(at[characters - from_end]);
+      while (!tail.empty() && tail.front() == ' ') tail.erase(0, 1);
+      return head + "\u2026" + tail;
+    };
     std::size_t lo = 0;
-    std::size_t hi = at.size() - 1;
+    std::size_t hi = characters;
     while (lo < hi) {
       const std::size_t mid = (lo + hi + 1) / 2;
-      std::string candidate = line.substr(0, at[mid]);
-      while (!candidate.empty() && candidate.back() == ' ') candidate.pop_back();
-      if (font.measure(candidate + "\u2026", style.bold, size).advance <= width) {
+      if (font.measure(kept(mid), style.bold, size).advance <= width) {
         lo = mid;
       } else {
         hi = mid - 1;
       }
     }
-    line = line.substr(0, at[lo]);
-    while (!line.empty() && (line.back() == ' ' || line.back() == ',')) line.pop_back();
-    line += "\u2026";
+    line = kept(lo);
     advance = font.measure(line, style.bold, size).advance;
   }
   double left = x;
