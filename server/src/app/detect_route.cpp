@@ -130,8 +130,8 @@ void Log(const AppContext& context, const HttpRequest& request, std::size_t byte
 /// answer of about 330 tags passes (each tag's pose and corners take about 3 KB): past that each
 /// tag keeps what was read and where (key, pincode, status, bin, centre), and past that again the
 /// tags that fit, the rest counted in "tags_omitted". A row that says so beats a lost one.
-std::string ScanLogJson(const json& out) {
-  std::string whole = out.dump();
+/// `whole` is `out` as dumped.
+std::string ScanLogJson(const json& out, const std::string& whole) {
   if (whole.size() <= db::kMaxJsonBytes) return whole;
   json abridged = out;
   abridged["scan_log_abridged"] = true;
@@ -281,7 +281,10 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
   out["tags"] = std::move(tags);
   out["warnings"] = ToJson(result.warnings);
   out["time_ms"] = {{"decode", decode_ms}, {"detect", detect_ms}, {"total", Ms(start)}};
-  outcome->result_json = ScanLogJson(out);
+  // Dumped once: the answer as sent is the scan log's row, unless an overlay is added to it or
+  // it is too long for a row.
+  std::string body = out.dump();
+  outcome->result_json = ScanLogJson(out, body);
 
   switch (overlay) {
     case Overlay::kNone:
@@ -295,9 +298,10 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
     case Overlay::kInline:
       // Added after the scan log took its copy: the log keeps what was read, not the photo.
       out["overlay"] = DataUrl("image/png", OverlayPng(image.clone(), result, resolved));
+      body = out.dump();
       break;
   }
-  return HttpResponse::Json(out.dump());
+  return HttpResponse::Json(std::move(body));
 }
 
 /// Why a multipart body has no photo, naming the parts it has. cpp-httplib 0.11.4 reads a part's
