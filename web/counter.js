@@ -105,7 +105,7 @@ function renderTable() {
     });
     const previewButton = el('button', {
       type: 'button', class: 'link', 'aria-label': `Preview the label for ${which}`, disabled: retired,
-      onclick: () => select(index),
+      onclick: () => select(index).then(() => revealPreview(index)),
     }, 'Preview');
     // Preview goes under the pincode, and the district and state under the office, rather than
     // in columns of their own: the table then fits its card at every width, Preview in view, and
@@ -115,8 +115,9 @@ function renderTable() {
       el('td', { class: 'pin' }, el('span', { class: 'mono nowrap' }, pin),
         el('div', {}, retired ? el('span', { class: 'small muted' }, 'No new labels') : previewButton)),
       el('td', { class: 'office' }, officeCell(row, index, which, retired), retired ? [' ', badge(r.status)] : null,
+        // Isolated: an Urdu district and state ran together right to left, the state first.
         el('div', { class: 'place small' },
-          el('span', { class: 'district' }, place.district), ', ', el('span', { class: 'state' }, place.state))));
+          el('bdi', { class: 'district' }, place.district), ', ', el('bdi', { class: 'state' }, place.state))));
   }));
   $('results').hidden = rows.length === 0;
   markSelected();
@@ -134,6 +135,13 @@ async function lookup() {
   show($('lookup-msg'));
   show($('print-msg'));  // news of the last list's labels would read as news of this one's
   if (parsed.length === 0) {
+    // The table goes with the list it showed: its Batch PDF would print pincodes no longer listed.
+    lookupStop = null;
+    rows = [];
+    selected = null;
+    selectedRow = -1;
+    renderTable();
+    clearPreview('Look up a pincode to see its label here.');
     show($('lookup-msg'), messageBox('info', 'Type or paste at least one pincode, e.g. 110001.'));
     $('pins').focus();
     return;
@@ -142,7 +150,20 @@ async function lookup() {
   const answers = await lookupAll(unique, stop.signal);
   if (request !== lookupRequest) return;
   lookupStop = null;
-  rows = parsed.map((p) => ({ ...p, ...(answers.get(p.text) || {}), include: true, office: null }));
+  // A pincode already in the table keeps the clerk's choices: a list looked up again (one
+  // pincode added) printed every row with its record's office, ticked, without a word.
+  const kept = new Map(copies(rows).map((id, i) => [id, rows[i]]));
+  const wasSelected = selectedRow >= 0 ? copies(rows)[selectedRow] : null;
+  const ids = copies(parsed);
+  rows = parsed.map((p, i) => {
+    const row = { ...p, ...(answers.get(p.text) || {}), include: true, office: null };
+    const before = kept.get(ids[i]);
+    if (before && before.record && before.record.status === 'active' && row.record && row.record.status === 'active') {
+      row.include = before.include;
+      if (before.office && (row.record.offices || []).some((o) => o.name === before.office)) row.office = before.office;
+    }
+    return row;
+  });
   // A failure that is not about the pincode itself (server down, busy) is worth saying once.
   const general = [...answers.values()].find((a) => a.error && ![400, 404].includes(a.error.status));
   if (general) show($('lookup-msg'), problemBox(general.error));
@@ -150,12 +171,26 @@ async function lookup() {
   selected = null;
   selectedRow = -1;
   renderTable();
-  const first = rows.findIndex((r) => r.record && r.record.status === 'active');
+  // The label shown stays, when its row is still listed and printable; else the first printable.
+  const printableAt = (i) => i >= 0 && rows[i].record && rows[i].record.status === 'active';
+  const again = wasSelected ? ids.indexOf(wasSelected) : -1;
+  const first = printableAt(again) ? again : rows.findIndex((r, i) => printableAt(i));
   if (first >= 0) await select(first);
   else {
     clearPreview('No printable pincode in the list.');
     updateButtons();
   }
+}
+
+// Each row named by its pincode and which copy of it the row is: "110001#2" is the second row of
+// 110001, so a pincode listed twice keeps each row's choices.
+function copies(list) {
+  const seen = new Map();
+  return list.map(({ text }) => {
+    const n = (seen.get(text) || 0) + 1;
+    seen.set(text, n);
+    return `${text}#${n}`;
+  });
 }
 
 function clearPreview(text) {
@@ -184,11 +219,23 @@ async function select(index) {
   await refreshPreview();
 }
 
+// On a phone the preview is below the whole table: bring it into view when a row's Preview is
+// tapped, or the tap looks as if it did nothing. Not when another row was picked meanwhile.
+// Once the picture is decoded: before, it has no height, and the card scrolled to grew past the
+// screen's bottom.
+async function revealPreview(index) {
+  const picture = $('label-preview');
+  if (picture) await picture.decode().catch(() => {});
+  if (index !== selectedRow) return;
+  $('preview').closest('section').scrollIntoView({ block: 'nearest' });
+}
+
 // The district and state the label prints: the chosen office's (a pincode's offices can lie in
-// several districts), else the record's own.
+// several districts), else the record's own. A retired row prints nothing and shows its record's
+// office, so its record's place too.
 function placeOf(row) {
   const r = row.record;
-  const chosen = row.office ? (r.offices || []).find((o) => o.name === row.office) : null;
+  const chosen = row.office && r.status === 'active' ? (r.offices || []).find((o) => o.name === row.office) : null;
   return chosen ? { district: chosen.district, state: chosen.state } : { district: r.district, state: r.state };
 }
 
@@ -229,11 +276,13 @@ async function refreshPreview() {
     if (previewUrl) URL.revokeObjectURL(previewUrl);
     previewUrl = URL.createObjectURL(blob);
     const office = row.office || (row.record ? row.record.office : '');
-    const plan = `plan ${planValue() || 'default'}`;
+    // The office's and plan's names are isolated: an Urdu office turned the size after it round
+    // ("150 × 100", "mm" at the far end).
+    const parts = [selected, office ? el('bdi', {}, office) : null, sizeText[sizeValue()] || sizeValue(),
+      ['plan ', el('bdi', {}, planValue() || 'default')]].filter(Boolean);
     show($('preview'),
       el('img', { id: 'label-preview', src: previewUrl, alt: `Label for ${selected}${office ? ` (${office})` : ''}` }),
-      el('figcaption', { class: 'small muted space-above-md' },
-        [selected, office, sizeText[sizeValue()] || sizeValue(), plan].filter(Boolean).join(' · ')));
+      el('figcaption', { class: 'small muted space-above-md' }, parts.map((part, i) => (i ? [' · ', part] : part))));
   } catch (error) {
     if (request !== previewRequest) return;
     if (previewUrl) URL.revokeObjectURL(previewUrl);
@@ -272,6 +321,7 @@ function markRetired(pincode) {
     if (row.text === pincode && row.record) {
       row.record = { ...row.record, status: 'retired' };
       row.include = false;
+      row.office = null;  // its row shows the record's office (officeCell), and its place
     }
   }
   if (selected === pincode) {

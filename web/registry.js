@@ -51,7 +51,7 @@ function showRecord(record, note) {
         .filter(Boolean).map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])),
     offices.length > 1 ? el('details', { class: 'more space-above-md' },
       el('summary', {}, `All ${offices.length} offices`),
-      el('ul', { class: 'small' }, offices.map((o) => el('li', {}, `${o.name} — ${o.district}`)))) : null);
+      el('ul', { class: 'small' }, offices.map((o) => el('li', {}, el('bdi', {}, o.name), ' — ', el('bdi', {}, o.district))))) : null);
 }
 
 // The details card is far below a long result list (thousands of pixels on a phone): bring it
@@ -176,7 +176,10 @@ $('key-form').addEventListener('submit', (event) => {
       const record = await api(`/api/v1/keys/${encodeURIComponent(key)}`);
       if (latest()) showRecord(record);
       const where = record.office || record.district;
-      show($('key-msg'), messageBox('ok', `Key ${key} belongs to ${record.pincode}${where ? ` (${where})` : ''}.`));
+      // The office's name isolated, as in every sentence holding the server's names: written right
+      // to left, it took the brackets and words around it into its own order.
+      show($('key-msg'), messageBox('ok', `Key ${key} belongs to ${record.pincode}`,
+        where ? [' (', el('bdi', {}, where), ')'] : null, '.'));
     } catch (error) {
       show($('key-msg'), problemBox(error));
     }
@@ -240,10 +243,8 @@ $('retire-form').addEventListener('submit', (event) => {
     }
     const confirm = el('button', { type: 'button', class: 'danger', id: 'retire-yes' }, `Retire ${pin}`);
     // The buttons go with the box: focus goes back to the pincode field, not to the page's top.
-    const cancel = el('button', {
-      type: 'button', class: 'secondary',
-      onclick: () => { show($('retire-confirm')); $('r-pin').focus(); },
-    }, 'Cancel');
+    const close = () => { show($('retire-confirm')); $('r-pin').focus(); };
+    const cancel = el('button', { type: 'button', class: 'secondary', onclick: close }, 'Cancel');
     confirm.addEventListener('click', () => busy(confirm, async () => {
       const latest = claimDetail();
       try {
@@ -257,8 +258,17 @@ $('retire-form').addEventListener('submit', (event) => {
         show($('retire-msg'), problemBox(error));
       }
     }));
-    show($('retire-confirm'), el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': 'Confirm retiring' },
-      el('p', {}, `Retire ${pin} (${[record.office || record.district, `key ${record.key}`].filter(Boolean).join(', ')})? No new labels will be issued for it.`),
+    const where = record.office || record.district;
+    // Escape answers No, as in any dialog; not while the retirement is being sent.
+    const onkeydown = (event) => {
+      if (event.key === 'Escape' && !confirm.hasAttribute('aria-busy')) {
+        event.preventDefault();
+        close();
+      }
+    };
+    show($('retire-confirm'), el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': 'Confirm retiring', onkeydown },
+      el('p', {}, `Retire ${pin} (`, where ? [el('bdi', {}, where), ', '] : null,
+        `key ${record.key})? No new labels will be issued for it.`),
       el('div', { class: 'actions' }, confirm, cancel)));
     confirm.focus();
   });

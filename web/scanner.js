@@ -190,7 +190,7 @@ async function scan() {
     answer = await api(detectPath(), { method: 'POST', token: token(), body: form(file) });
   } catch (error) {
     if (run !== scanCount) return;
-    $('summary').textContent = 'The photo could not be read.';
+    $('summary').textContent = failureSummary(error);
     $('photo-caption').textContent = 'Your photo.';
     show($('scan-msg'), problemBox(error));
     reveal($('scan-msg'));
@@ -199,10 +199,12 @@ async function scan() {
   if (run !== scanCount) return;
   const approximate = answer.intrinsics && answer.intrinsics.source === 'assumed';
   const n = answer.tag_count;
-  $('summary').textContent = `${n === 0 ? 'No tag' : n === 1 ? '1 tag' : `${n} tags`} read in `
-    + `${Math.round(answer.time_ms.total)} ms · photo ${answer.image.width} × ${answer.image.height}`
-    + `${approximate ? ' · distances approximate (camera field of view assumed)' : ''}`
-    + `${photoUnshowable ? ' · this browser cannot show the photo itself (e.g. a TIFF)' : ''}`;
+  // The bins are the plan's the server used (its name isolated: it may be written right to left).
+  show($('summary'), `${n === 0 ? 'No tag' : n === 1 ? '1 tag' : `${n} tags`} read in `
+    + `${Math.round(answer.time_ms.total)} ms · photo ${answer.image.width} × ${answer.image.height} · plan `,
+    el('bdi', { class: 'plan-used' }, answer.plan || $('plan').value || 'default'),
+    approximate ? ' · distances approximate (camera field of view assumed)' : null,
+    photoUnshowable ? kUnshowable : null);
   show($('tags'), answer.tags.map((tag) => tagCard(tag, approximate)));
   if (n === 0) {
     // The server says when the photo itself could hold no tag (no colour): that, not the
@@ -220,6 +222,22 @@ async function scan() {
   reveal($('summary'));
 }
 
+// What the summary says when no answer came: what failed, not only that the photo was not read
+// (a token refused is not a photo that could not be read).
+function failureSummary(error) {
+  const status = error && error.status;
+  if (status === 401 || (status === 0 && error.title === 'Token not valid')) {
+    return 'Not read: the scanner token was not accepted.';
+  }
+  if (status === 403) return 'Not read: this token may not read photos (it needs the scanner or admin role).';
+  if (status === 0) return 'Not read: the server did not answer.';
+  if (status === 429 || status === 503) return 'Not read: the server is busy. Try the photo again shortly.';
+  if (status >= 500) return 'Not read: the server failed on this photo.';
+  return 'The photo could not be read.';
+}
+
+const kUnshowable = ' · this browser cannot show the photo itself (e.g. a TIFF)';
+
 // On a phone the answer lands below the screen: scroll to it unless it is already in view.
 function reveal(node) {
   const box = node.getBoundingClientRect();
@@ -231,7 +249,7 @@ $('scan-photo').addEventListener('error', () => {
   photoUnshowable = true;
   $('photo-figure').hidden = true;
   if ($('scan-photo').dataset.outlined && !$('summary').textContent.includes('cannot show the photo')) {
-    $('summary').textContent += ' · this browser cannot show the photo itself (e.g. a TIFF)';
+    $('summary').append(kUnshowable);
   }
 });
 
@@ -245,5 +263,24 @@ $('scan-form').addEventListener('submit', (event) => {
   event.preventDefault();
   busy($('scan'), scan);
 });
+// The bins follow the sort plan and the distances the label size: a change of either reads the
+// photo again, as the counter draws its preview again. Without a token the old answer goes, so
+// no bin of another plan stays on screen as if it were this one's.
+function settingsChanged() {
+  if (!$('photo').files.length) return;
+  if (token()) {
+    busy($('scan'), scan);
+    return;
+  }
+  ++scanCount;  // an answer still on its way was asked with the old settings
+  show($('scan-msg'));
+  show($('tags'));
+  $('outlines').replaceChildren();
+  $('scan-photo').removeAttribute('data-outlined');
+  $('photo-figure').hidden = true;
+  $('summary').textContent = 'The sort plan or label size changed: paste a scanner token above to read the photo again.';
+}
+$('plan').addEventListener('change', settingsChanged);
+$('label-size').addEventListener('change', settingsChanged);
 
 loadPlans($('plan'), 'default');

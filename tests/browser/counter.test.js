@@ -3,7 +3,7 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFile } from 'node:fs/promises';
 import { after, before, test } from 'node:test';
-import { createToken, launchBrowser, newPage, screenshot, startServer } from './harness.js';
+import { addPincode, createToken, launchBrowser, newPage, screenshot, startServer, textLefts } from './harness.js';
 
 let server;
 let browser;
@@ -439,3 +439,127 @@ for (const [width, options] of [[1280, {}], [390, { isMobile: true, hasTouch: tr
     assert.deepEqual(page.problems, []);
   });
 }
+
+test('a list looked up again keeps each listed row\'s office, tick and preview', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001\n110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  await page.getByLabel('Office printed on the label for 110001 (row 3)', { exact: true }).selectOption('Janpath');
+  await page.getByRole('checkbox', { name: 'Print a label for 560001', exact: true }).uncheck();
+  await page.getByRole('button', { name: 'Preview the label for 110001 (row 3)', exact: true }).click();
+  await page.waitForFunction(() => /Janpath/.test(document.getElementById('label-preview')?.alt || ''));
+  await page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).waitFor();
+
+  // One pincode more, put first: the rows already listed keep what the clerk chose.
+  await page.locator('#pins').fill('400001\n110001 560001\n110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('tr[data-pincode="400001"]').waitFor();
+  await page.getByRole('button', { name: /Batch PDF \(3 labels\)/ }).waitFor();
+  assert.equal(await page.getByLabel('Office printed on the label for 110001 (row 4)', { exact: true }).inputValue(), 'Janpath');
+  assert.equal(await page.getByLabel('Office printed on the label for 110001 (row 2)', { exact: true }).inputValue(), 'Bengali Market');
+  assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 560001', exact: true }).isChecked(), false);
+  assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).isChecked(), true);
+  // The label shown is still the one the clerk picked, with its office.
+  await page.locator('#preview figcaption').filter({ hasText: 'Janpath' }).waitFor();
+  assert.equal(await page.locator('tr.is-selected').getAttribute('data-row'), '3');
+  const [batch] = await Promise.all([page.waitForEvent('download'),
+    page.getByRole('button', { name: /Batch PDF \(3 labels\)/ }).click()]);
+  const batchPath = await batch.path();
+  const pageText = (n) => execFileSync('pdftotext', ['-f', String(n), '-l', String(n), batchPath, '-'], { encoding: 'utf8' });
+  assert.deepEqual(pdfPageSize(batchPath).pages, 3);
+  assert.match(pageText(2), /Bengali Market/);
+  assert.match(pageText(3), /Janpath/);
+  assert.doesNotMatch(pageText(3), /Bengali Market/);
+  assert.deepEqual(page.problems, []);
+});
+
+test('an empty lookup clears the table it replaced, and its Batch PDF', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).waitFor();
+  await page.locator('#label-preview').waitFor();
+  await page.locator('#pins').fill('   ');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#lookup-msg').filter({ hasText: 'Type or paste at least one pincode' }).waitFor();
+  assert.equal(await page.locator('#results').isHidden(), true);
+  const batch = page.locator('#batch-pdf');
+  assert.equal(await batch.isDisabled(), true);
+  assert.equal(await batch.textContent(), 'Batch PDF (0 labels)');
+  assert.equal(await page.locator('#label-preview').count(), 0);
+  assert.equal(await page.getByRole('button', { name: 'Download PDF' }).isDisabled(), true);
+  assert.deepEqual(page.problems, []);
+});
+
+test('an office written right to left leaves the caption and the row in their order', async () => {
+  const office = 'کراچی مرکزی ڈاک خانہ';
+  await addPincode(server, '999002', [{ name: office, district: 'لاہور', state: 'پنجاب' }]);
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('999002');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const caption = page.locator('#preview figcaption');
+  await caption.waitFor();
+  assert.equal(await caption.textContent(), `999002 · ${office} · 100 × 150 mm · plan default`);
+  // Left to right as written: the Urdu name kept to itself (its first word is its rightmost).
+  const [pin, first, last, w, h, mm, plan] = await textLefts(page, '#preview figcaption',
+    ['999002', 'کراچی', 'خانہ', '100', '150', 'mm', 'plan']);
+  assert.ok(pin < last && last < first && first < w && w < h && h < mm && mm < plan,
+    `caption drawn out of order: ${JSON.stringify({ pin, first, last, w, h, mm, plan })}`);
+  // District, then state, as in every other row.
+  const [district, state] = await textLefts(page, 'tr[data-pincode="999002"] .place', ['لاہور', 'پنجاب']);
+  assert.ok(district < state, `state drawn before district: ${district}, ${state}`);
+  await screenshot(page, 'counter-rtl-office');
+  assert.deepEqual(page.problems, []);
+});
+
+test('a row retired after its office was changed shows its record\'s office and place', async () => {
+  await addPincode(server, '999005', [{ name: 'Alpha Nagar', district: 'Alphapur', state: 'Alpha State' },
+    { name: 'Beta Nagar', district: 'Betapur', state: 'Beta State' }]);
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('999005 110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const row = page.locator('tr[data-pincode="999005"]');
+  await row.getByLabel('Office printed on the label for 999005').selectOption('Beta Nagar');
+  assert.equal(await row.locator('.district').textContent(), 'Betapur');
+  await page.waitForFunction(() => /Beta Nagar/.test(document.getElementById('label-preview')?.alt || ''));
+  const retired = await fetch(`${server.url}/api/v1/pincodes/999005/retire`,
+    { method: 'POST', headers: { Authorization: `Bearer ${server.adminToken}` } });
+  assert.equal(retired.status, 200);
+  await page.getByRole('button', { name: 'Download PDF' }).click();
+  await row.filter({ hasText: /retired/i }).waitFor();
+  assert.match(await row.locator('td.office').textContent(), /^Alpha Nagar/);
+  assert.equal(await row.locator('.district').textContent(), 'Alphapur');
+  assert.equal(await row.locator('.state').textContent(), 'Alpha State');
+  assert.deepEqual(page.problems, []);
+});
+
+test('on a phone, a row\'s Preview brings its label into view', async () => {
+  const page = await newPage(browser, { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001 400001 600001 700001 140119 380001 302001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#preview figcaption').filter({ hasText: '110001' }).waitFor();
+  const button = page.getByRole('button', { name: 'Preview the label for 302001' });
+  await button.tap();
+  await page.locator('#preview figcaption').filter({ hasText: '302001' }).waitFor();
+  await page.waitForFunction(() => document.getElementById('label-preview')?.complete);
+  // The scroll is smooth in some browsers: wait for it to settle.
+  await page.waitForFunction(() => {
+    const box = document.getElementById('label-preview').getBoundingClientRect();
+    return box.top >= 0 && box.bottom <= window.innerHeight;
+  }, null, { timeout: 5000 }).catch(() => {});
+  const box = await page.locator('#label-preview').boundingBox();
+  assert.ok(box.y >= 0 && box.y + box.height <= 844, `the label is out of view: ${JSON.stringify(box)}`);
+  await screenshot(page, 'counter-phone-preview');
+  assert.deepEqual(page.problems, []);
+});

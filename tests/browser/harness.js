@@ -157,3 +157,38 @@ export async function screenshot(page, name) {
   await page.screenshot({ path, fullPage: true });
   return path;
 }
+
+/**
+ * Where each of `parts` is drawn in the element `selector`: the left edge, in CSS pixels, of the
+ * first text of the element that holds it (null when none does). For checking the visual order of
+ * mixed-direction text, which the DOM's order does not tell.
+ */
+export function textLefts(page, selector, parts) {
+  return page.locator(selector).first().evaluate((root, wanted) => {
+    const walker = document.createTreeWalker(root, NodeFilter.SHOW_TEXT);
+    const nodes = [];
+    for (let node = walker.nextNode(); node; node = walker.nextNode()) nodes.push(node);
+    return wanted.map((part) => {
+      for (const node of nodes) {
+        const at = node.data.indexOf(part);
+        if (at < 0) continue;
+        const range = document.createRange();
+        range.setStart(node, at);
+        range.setEnd(node, at + part.length);
+        return Math.min(...[...range.getClientRects()].map((box) => box.left));
+      }
+      return null;
+    });
+  }, parts);
+}
+
+/** Adds `pincode` with `offices` ([{name, district, state}]) through the API with the admin token. */
+export async function addPincode(server, pincode, offices) {
+  const response = await fetch(`${server.url}/api/v1/pincodes`, {
+    method: 'POST',
+    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'application/json' },
+    body: JSON.stringify({ pincode, offices: offices.map((o) => ({ circle: 'Test', region: 'T', division: 'TD', ...o })) }),
+  });
+  if (response.status !== 201) throw new Error(`add ${pincode}: HTTP ${response.status} ${await response.text()}`);
+  return response.json();
+}

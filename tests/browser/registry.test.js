@@ -1,7 +1,7 @@
 // Registry: search with paging, key lookup, admin add and retire, and an error from the server.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { launchBrowser, newPage, screenshot, startReplica, startServer } from './harness.js';
+import { addPincode, launchBrowser, newPage, screenshot, startReplica, startServer, textLefts } from './harness.js';
 
 let server;
 let browser;
@@ -271,4 +271,43 @@ test('on a read-only replica a change is refused with the way to make it, not a 
   } finally {
     await replica.stop();
   }
+});
+
+test('office names written right to left sit in their sentences whole, and Escape closes the retire question', async () => {
+  const main = 'کراچی مرکزی ڈاک خانہ';
+  const added = await addPincode(server, '999031', [{ name: main, district: 'لاہور', state: 'پنجاب' },
+    { name: 'صدر ڈاک خانہ', district: 'کراچی', state: 'سندھ' }]);
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#key').fill(String(added.key));
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const message = page.locator('#key-msg');
+  await message.filter({ hasText: 'belongs to 999031' }).waitFor();
+  assert.equal(await message.textContent(), `Key ${added.key} belongs to 999031 (${main}).`);
+  assert.equal(await message.locator('bdi').textContent(), main);
+  // Each office as "name — district", left to right like every other: the whole line ran right
+  // to left, the district first.
+  await page.locator('#detail details summary').click();
+  for (const [i, [name, district]] of [[main, 'لاہور'], ['صدر ڈاک خانہ', 'کراچی']].entries()) {
+    const item = `#detail details li:nth-child(${i + 1})`;
+    assert.equal(await page.locator(item).textContent(), `${name} — ${district}`);
+    const [nameLeft, dash, districtLeft] = await textLefts(page, item, [name.split(' ').at(-1), '—', district]);
+    assert.ok(nameLeft < dash && dash < districtLeft, `${name}: ${JSON.stringify({ nameLeft, dash, districtLeft })}`);
+  }
+
+  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#r-pin').fill('999031');
+  await page.getByRole('button', { name: 'Retire…' }).click();
+  const question = page.getByRole('alertdialog', { name: 'Confirm retiring' });
+  await question.waitFor();
+  assert.equal(await question.locator('p').textContent(),
+    `Retire 999031 (${main}, key ${added.key})? No new labels will be issued for it.`);
+  assert.equal(await question.locator('bdi').textContent(), main);
+  await screenshot(page, 'registry-rtl-office');
+  await page.keyboard.press('Escape');
+  await question.waitFor({ state: 'detached' });
+  assert.equal(await page.evaluate(() => document.activeElement?.id), 'r-pin');
+  const record = await (await fetch(`${server.url}/api/v1/pincodes/999031`)).json();
+  assert.equal(record.status, 'active');
+  assert.deepEqual(page.problems, []);
 });

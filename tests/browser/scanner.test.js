@@ -104,6 +104,13 @@ test('scanner shows the problem for a non-image file and for a token of the wron
   await page.locator('#token').fill(counterToken);
   await page.locator('#photo').setInputFiles(labelPng);
   await alert.filter({ hasText: 'HTTP 403' }).waitFor();
+  // The summary says what failed: the token's role, not the photo.
+  assert.match(await page.locator('#summary').textContent(), /^Not read: this token may not read photos/);
+
+  await page.locator('#token').fill('pt_999_notarealtokennotarealtokennotarealtokenxx');
+  await page.locator('#photo').setInputFiles(join(dir, 'notes.txt'));
+  await alert.filter({ hasText: 'HTTP 401' }).waitFor();
+  assert.equal(await page.locator('#summary').textContent(), 'Not read: the scanner token was not accepted.');
 });
 
 // A file committed as a seed of the image fuzz target.
@@ -340,5 +347,54 @@ test('a tag whose mirror image is another pincode\'s says so on its card, mirror
   assert.equal(await mirroredCard.getAttribute('data-mirror-pincode'), '609405');
   assert.match(await mirroredCard.textContent(), /mirrored photo.*reads as 609405/);
   await screenshot(page, 'scanner-mirror-pair');
+  assert.deepEqual(page.problems, []);
+});
+
+test('a change of sort plan or label size reads the photo again, and the summary names the plan', async () => {
+  const put = await fetch(`${server.url}/api/v1/sortplans/hub`, {
+    method: 'PUT',
+    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv' },
+    body: 'prefix,bin\n*,manual\n11,delhi\n110001,parliament\n',
+  });
+  assert.ok([200, 201].includes(put.status), `PUT hub: ${put.status}`);
+  const uploads = [];
+  const page = await newPage(browser);
+  page.on('request', (request) => {
+    if (request.url().includes('/api/v1/detect')) uploads.push(new URL(request.url()).searchParams);
+  });
+  await page.goto(`${server.url}/scanner.html`);
+  await page.locator('#plan option[value="hub"]').waitFor({ state: 'attached' });
+  await page.locator('#token').fill(scannerToken);
+  await page.locator('#photo').setInputFiles(labelPng);
+  const bin = page.locator('.tag-card[data-pincode="110001"] .bin');
+  await bin.waitFor();
+  assert.equal(await bin.textContent(), '11');
+  const summary = page.locator('#summary');
+  assert.match(await summary.textContent(), /^1 tag read in \d+ ms · photo \d+ × \d+ · plan default/);
+
+  await page.locator('#plan').selectOption('hub');
+  await page.locator('.tag-card[data-pincode="110001"] .bin').filter({ hasText: 'parliament' }).waitFor();
+  await summary.filter({ hasText: /plan hub/ }).waitFor();
+  assert.equal(await page.locator('#summary bdi').textContent(), 'hub');
+  assert.equal(uploads.length, 2);
+  assert.equal(uploads[1].get('plan'), 'hub');
+  await page.locator('#scan-photo[data-outlined="1"]').waitFor();
+  await screenshot(page, 'scanner-plan-hub');
+
+  // The distances follow the tag's size: read again with the 4 × 6 in label's (and the plan).
+  await page.locator('#label-size').selectOption({ label: '4 × 6 in' });
+  // The outline goes as the new reading starts and comes back when it is drawn.
+  await page.locator('#scan-photo[data-outlined="1"]').waitFor();
+  assert.equal(uploads.length, 3);
+  assert.equal(uploads[2].get('tag_size_mm'), '58.889');
+  assert.equal(uploads[2].get('plan'), 'hub');
+
+  // Without a token, no bin of the plan before stays on screen as if it were this plan's.
+  await page.locator('#token-forget').click();
+  await page.locator('#plan').selectOption('default');
+  await summary.filter({ hasText: 'paste a scanner token' }).waitFor();
+  assert.equal(await page.locator('.tag-card').count(), 0);
+  assert.equal(await page.locator('#photo-figure').isHidden(), true);
+  assert.equal(uploads.length, 3);
   assert.deepEqual(page.problems, []);
 });
