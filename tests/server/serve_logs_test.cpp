@@ -20,7 +20,6 @@ namespace pintag::serve_test {
 namespace {
 
 using nlohmann::json;
-using std::string_literals::operator""s;
 
 /// The server's stderr lines that mention `needle`, waiting up to 5 s until there are at least
 /// `expected` of them (the access line is written after the response, so it may trail the
@@ -190,26 +189,28 @@ TEST_F(ServeLogTest, JsonFormatWritesOneObjectPerLine) {
 // believed only from the proxies the operator named. A client writing the header itself does not
 // change its name in the log.
 TEST_F(ServeLogTest, TheClientATrustedProxyForwardedForIsLoggedWithTheProxy) {
+  using ClientAndProxy = std::pair<std::string, std::string>;
   const auto client_and_proxy = [&](const std::string& id, const std::string& forwarded_for) {
     auto r = client().Get("/livez", {{"X-Request-Id", id}, {"X-Forwarded-For", forwarded_for}});
     EXPECT_TRUE(r);
     const auto lines = LogLines(stderrFile(), "\"" + id + "\"");
     EXPECT_EQ(lines.size(), 1U);
     const json line = lines.empty() ? json() : json::parse(lines[0], nullptr, false);
-    return std::pair{line.value("client", ""), line.value("proxy", "")};
+    return ClientAndProxy{line.value("client", ""), line.value("proxy", "")};
   };
   startServer({"--log-format", "json"});
-  EXPECT_EQ(client_and_proxy("untrusted", "198.51.100.7"), std::pair("127.0.0.1"s, ""s));
+  EXPECT_EQ(client_and_proxy("untrusted", "198.51.100.7"), ClientAndProxy("127.0.0.1", ""));
 
   // Two flags, the second a list, as PINTAG_TRUSTED_PROXY gives one.
   startServer({"--log-format", "json", "--trusted-proxy", "127.0.0.1", "--trusted-proxy",
                "10.0.0.0/8,fd00::/8"});
   EXPECT_EQ(client_and_proxy("forwarded", "198.51.100.7"),
-            std::pair("198.51.100.7"s, "127.0.0.1"s));
+            ClientAndProxy("198.51.100.7", "127.0.0.1"));
   // What the client wrote before nginx appended its address is not believed.
   EXPECT_EQ(client_and_proxy("spoofed", "6.6.6.6, 198.51.100.7, 10.1.2.3"),
-            std::pair("198.51.100.7"s, "127.0.0.1"s));
-  EXPECT_EQ(client_and_proxy("garbage", "<script>alert(1)</script>"), std::pair("127.0.0.1"s, ""s));
+            ClientAndProxy("198.51.100.7", "127.0.0.1"));
+  EXPECT_EQ(client_and_proxy("garbage", "<script>alert(1)</script>"),
+            ClientAndProxy("127.0.0.1", ""));
 
   const CommandResult refused =
       RunPintag("serve --port 0 --trusted-proxy nginx --db " + dir_.file("never.db"));
