@@ -157,7 +157,8 @@ std::string ReportMarkdown(const BenchResult& r) {
   md << "| | |\n|---|---|\n";
   md << "| world | **" << ToString(r.sweep.world) << "**"
      << (r.sweep.world == scene::World::kHeldOut
-             ? " (backgrounds, seeds and rendering path no tuning run has seen; see above)"
+             ? " (backgrounds, seeds, camera and rendering path the tuning world does not use; "
+               "a validation set, not a blind one: see above)"
              : " (the side the detector is tuned on: not evidence)")
      << " |\n";
   if (r.sweep.jpeg_quality > 0) {
