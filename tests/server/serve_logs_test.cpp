@@ -209,6 +209,8 @@ TEST_F(ServeLogTest, TheClientATrustedProxyForwardedForIsLoggedWithTheProxy) {
   // What the client wrote before nginx appended its address is not believed.
   EXPECT_EQ(client_and_proxy("spoofed", "6.6.6.6, 198.51.100.7, 10.1.2.3"),
             ClientAndProxy("198.51.100.7", "127.0.0.1"));
+  // A client on nginx's own host is still one nginx forwarded for (the Docker test's case).
+  EXPECT_EQ(client_and_proxy("same-host", "127.0.0.1"), ClientAndProxy("127.0.0.1", "127.0.0.1"));
   EXPECT_EQ(client_and_proxy("garbage", "<script>alert(1)</script>"),
             ClientAndProxy("127.0.0.1", ""));
 

@@ -686,7 +686,7 @@ struct HttpServer::Impl {
       int client_port = 0;
       t_connection->get_remote_ip_and_port(peer, client_port);
     }
-    std::string client = peer;
+    TrustedProxies::Client client{peer};
     if (!options.trusted_proxies.empty()) {
       std::string forwarded_for;
       const auto [first, last] = req.headers.equal_range("X-Forwarded-For");
@@ -699,8 +699,8 @@ struct HttpServer::Impl {
     const std::string principal =
         t_state.admission.principal ? t_state.admission.principal->id : "";
     LogAccess({.request_id = t_state.request_id,
-               .client = client,
-               .proxy = client == peer ? std::string() : peer,
+               .client = client.address,
+               .proxy = client.forwarded ? peer : std::string(),
                .method = req.method,
                .path = req.path,
                .status = res.status,

@@ -80,18 +80,23 @@ std::optional<TrustedProxies> TrustedProxies::Parse(const std::vector<std::strin
     }
     const std::optional<Address> address = ParseAddress(host);
     if (!address) return refuse("is not an IPv4 or IPv6 address (or a range such as 10.0.0.0/8)");
-    const int width = address->v6 ? 128 : 32;
-    int bits = width;
+    // An IPv4-mapped IPv6 range ("::ffff:10.0.0.0/104") is matched as the IPv4 range it maps
+    // (10.0.0.0/8): its prefix counts the 96 bits of the mapping.
+    const bool mapped = !address->v6 && host.find(':') != std::string_view::npos;
+    const int written_width = address->v6 || mapped ? 128 : 32;
+    const int least = mapped ? 96 : 0;
+    int bits = written_width;
     if (slash != std::string_view::npos) {
       const std::string_view digits = text.substr(slash + 1);
       const auto [end, failure] =
           std::from_chars(digits.data(), digits.data() + digits.size(), bits);
       if (digits.empty() || failure != std::errc() || end != digits.data() + digits.size() ||
-          bits < 0 || bits > width) {
-        return refuse("has a prefix length that is not a number from 0 to " +
-                      std::to_string(width));
+          bits < least || bits > written_width) {
+        return refuse("has a prefix length that is not a number from " + std::to_string(least) +
+                      " to " + std::to_string(written_width));
       }
     }
+    if (mapped) bits -= 96;
     proxies.ranges_.push_back({.v6 = address->v6, .bytes = address->bytes, .prefix_bits = bits});
   }
   return proxies;
@@ -114,8 +119,10 @@ bool TrustedProxies::trusts(std::string_view address_text) const {
   });
 }
 
-std::string TrustedProxies::clientOf(std::string_view peer, std::string_view forwarded_for) const {
+TrustedProxies::Client TrustedProxies::clientOf(std::string_view peer,
+                                                std::string_view forwarded_for) const {
   std::string_view client = peer;
+  bool forwarded = false;
   std::string_view rest = forwarded_for;
   while (!rest.empty() && trusts(client)) {
     const auto comma = rest.rfind(',');
@@ -125,8 +132,9 @@ std::string TrustedProxies::clientOf(std::string_view peer, std::string_view for
     if (entry.empty()) continue;  // "a, , b" or a trailing comma: nothing said there
     if (!ParseAddress(entry)) break;
     client = HostPart(entry);
+    forwarded = true;
   }
-  return std::string(client);
+  return {std::string(client), forwarded};
 }
 
 }  // namespace pintag::server

@@ -26,12 +26,17 @@ class TrustedProxies {
   /// Whether `address` (as the socket or the header writes it) is one of the proxies.
   bool trusts(std::string_view address) const;
 
+  struct Client {
+    std::string address;
+    bool forwarded = false;  ///< named by a trusted proxy's header, not the connection's peer
+  };
   /// The client of a request from `peer` whose X-Forwarded-For values, joined by commas, are
   /// `forwarded_for`: the peer when it is not trusted; else, walking the header from its right
   /// end, the first address that is not trusted (without a port, if the entry had one). An entry
   /// that is not an address stops the walk at the trusted hop that sent it, so the answer is
-  /// always an address some trusted proxy saw.
-  std::string clientOf(std::string_view peer, std::string_view forwarded_for) const;
+  /// always an address some trusted proxy saw. `forwarded` even when the address is the peer's
+  /// own (a client on the proxy's host).
+  Client clientOf(std::string_view peer, std::string_view forwarded_for) const;
 
  private:
   struct Range {
