@@ -261,12 +261,15 @@ bool DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
     if (!plan.empty()) {
       // Cut from the middle: plans are often named alike at the start ("mumbai-central-inbound",
       // "mumbai-central-outbound"), and cut at the end they printed alike.
-      DrawLine(font, "plan " + plan, right_x, right_w, box.y + kPadMm + kCaptionMm * 0.75,
+      static constexpr std::string_view kPlanPrefix = "plan ";
+      DrawLine(font, std::string(kPlanPrefix) + plan, right_x, right_w,
+               box.y + kPadMm + kCaptionMm * 0.75,
                {.bold = false,
                 .size = kCaptionMm,
                 .min_size = 1.8,
                 .align = Align::kRight,
                 .cut_middle = true,
+                .uncut_prefix = kPlanPrefix.size(),
                 .within = &box});
     }
   }

@@ -84,16 +84,20 @@ DrawnLine DrawLine(LabelFont& font, std::string_view text, double x, double widt
     // all from the start, or half from each end.
     const std::vector<std::size_t> at = font.cutPoints(line);
     const std::size_t characters = at.size() - 1;
+    std::size_t first = 0;  // the first character that may be cut
+    while (first < characters && at[first] < style.uncut_prefix) ++first;
     const auto kept = [&](std::size_t count) {
       const std::size_t from_end = style.cut_middle ? count / 2 : 0;
-      std::string head = line.substr(0, at[count - from_end]);
-      while (!head.empty() && (head.back() == ' ' || head.back() == ',')) head.pop_back();
+      std::string head = line.substr(0, at[first + count - from_end]);
+      while (head.size() > style.uncut_prefix && (head.back() == ' ' || head.back() == ',')) {
+        head.pop_back();
+      }
       std::string tail = line.substr(at[characters - from_end]);
       while (!tail.empty() && tail.front() == ' ') tail.erase(0, 1);
       return head + "\u2026" + tail;
     };
     std::size_t lo = 0;
-    std::size_t hi = characters;
+    std::size_t hi = characters - first;
     while (lo < hi) {
       const std::size_t mid = (lo + hi + 1) / 2;
       if (font.measure(kept(mid), style.bold, size).advance <= width) {

@@ -19,6 +19,8 @@ struct LineStyle {
   /// Too long at min_size: cut from the middle ("mumbai-c…-inbound"), keeping both ends, rather
   /// than from the end. For names that differ at either end, such as a plan's.
   bool cut_middle = false;
+  /// Bytes at the start never cut ("plan " before a plan's name): the cut shares out the rest.
+  std::size_t uncut_prefix = 0;
   /// The box the line belongs to (its ink is clipped to it as well); none: only the line's band.
   const Box* within = nullptr;
 };
