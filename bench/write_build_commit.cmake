@@ -2,13 +2,26 @@
 # working tree differed from it), so that a report names the code that ran, not the tree's HEAD
 # when it ran. Rewritten only when the text changes, so a build of the same commit relinks
 # nothing. Usage: cmake -DSOURCE=<repo> -DOUT=<file.cpp> -P write_build_commit.cmake
-execute_process(COMMAND git -C "${SOURCE}" rev-parse --short=12 HEAD
-                OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET
+# A source tree that is not itself a git work tree (a tarball unpacked inside another repository)
+# is "unknown", not the enclosing repository's commit.
+execute_process(COMMAND git -C "${SOURCE}" rev-parse --show-toplevel
+                OUTPUT_VARIABLE top OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET
                 RESULT_VARIABLE status)
-if(NOT status EQUAL 0 OR commit STREQUAL "")
+set(commit "")
+if(status EQUAL 0)
+  file(REAL_PATH "${SOURCE}" source_real)
+  file(REAL_PATH "${top}" top_real)
+  if(source_real STREQUAL top_real)
+    execute_process(COMMAND git -C "${SOURCE}" rev-parse --short=12 HEAD
+                    OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
+  endif()
+endif()
+if(commit STREQUAL "")
   set(commit "unknown")
 else()
-  execute_process(COMMAND git -C "${SOURCE}" status --porcelain --untracked-files=no
+  # --no-optional-locks: a build must not take the index lock from a git command running beside it.
+  execute_process(COMMAND git --no-optional-locks -C "${SOURCE}" status --porcelain
+                          --untracked-files=no
                   OUTPUT_VARIABLE changes ERROR_QUIET)
   if(NOT changes STREQUAL "")
     string(APPEND commit " + uncommitted changes in the working tree")

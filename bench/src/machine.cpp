@@ -59,10 +59,11 @@ MachineInfo GatherMachineInfo(const std::string& source_dir) {
   char date[32];
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", &tm);
   info.date_utc = date;
-  // The commit the binary was built from. A tree moved on since (a later commit checked out, or
-  // edits not yet built) is said beside it: the report describes the code that ran.
+  // The commit the binary was built from. A tree moved on since (another commit checked out, or
+  // uncommitted changes where the build had none) is said beside it: the report describes the
+  // code that ran. Edits made after a build from a tree already changed go unseen.
   info.commit = kBuildCommit;
-  const std::string git = "git -C '" + source_dir + "' ";
+  const std::string git = "git --no-optional-locks -C '" + source_dir + "' ";
   std::string now_at = Run(git + "rev-parse --short=12 HEAD 2>/dev/null");
   if (!now_at.empty() &&
       !Run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty()) {
