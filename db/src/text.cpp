@@ -1,5 +1,6 @@
 #include "pintag/db/text.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -86,8 +87,16 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
   if (!allow_empty && IsBlank(value))
     return invalid("is blank (only spaces or invisible characters)");
   if (value.size() > max_bytes) {
-    return invalid("is " + std::to_string(value.size()) + " bytes long; at most " +
-                   std::to_string(max_bytes) + " allowed");
+    // Said in characters too: a clerk counts letters, and a letter of an Indian script is three
+    // bytes, so "200 bytes" is about 66 of them.
+    std::size_t characters = 0;
+    for (std::size_t i = 0; i < value.size(); ++characters) {
+      i += std::max<std::size_t>(1, DecodeUtf8(value, i).length);
+    }
+    return invalid("is " + std::to_string(value.size()) + " bytes long in UTF-8 (" +
+                   std::to_string(characters) + " characters); at most " +
+                   std::to_string(max_bytes) +
+                   " bytes are allowed, where a letter of an Indian script takes 3");
   }
   for (std::size_t i = 0; i < value.size();) {
     const unsigned char c = static_cast<unsigned char>(value[i]);

@@ -140,6 +140,19 @@ TEST_F(Hostile, OfficeFieldsAndSearch) {
   EXPECT_EQ(LookupPincode(db_, Pincode(998000)).error().code, ErrorCode::kNotFound);
 }
 
+// A name too long is said in characters as well as bytes: "200 bytes" is about 66 Devanagari
+// letters, which a clerk counting letters could not tell.
+TEST_F(Hostile, ANameTooLongIsSaidInCharactersAndBytes) {
+  std::string hindi;
+  for (int i = 0; i < 80; ++i) hindi += "\u0915";  // क, 3 bytes
+  const auto added = AddPincode(db_, Pincode(998000), {OfficeOf(hindi)});
+  ASSERT_FALSE(added.ok());
+  EXPECT_EQ(added.error().code, ErrorCode::kInvalid);
+  EXPECT_NE(added.error().message.find("240 bytes long in UTF-8 (80 characters)"),
+            std::string::npos)
+      << added.error().message;
+}
+
 // A name of spaces and invisible characters only would be stored as one nobody can see or type.
 TEST_F(Hostile, InvisibleTextIsBlank) {
   for (const std::string& text : {std::string("\u200b"), std::string("\u00a0"),

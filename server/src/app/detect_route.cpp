@@ -208,7 +208,10 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
       // Not a JPEG, PNG, TIFF or WebP, or one no photo is (more than four channels).
       throw HttpError(415, loaded.error, "Unsupported Image Format");
     case ImageError::kTooLarge:
-      throw HttpError(413, loaded.error, "Image Too Large");
+      // A phone's full-resolution photo is the usual cause: say what the scanner can change.
+      throw HttpError(413,
+                      loaded.error + ": set the camera to a lower resolution and take it again",
+                      "Image Too Large");
     case ImageError::kCorrupt:
     case ImageError::kUnreadable:
       throw HttpError(400, loaded.error, "Corrupt Image");
