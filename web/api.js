@@ -202,14 +202,30 @@ export function isPincode(text) {
   return /^[1-9][0-9]{5}$/.test(text);
 }
 
+// The zero of each run of ten decimal digits an Indian clerk's keyboard may type: Arabic-Indic,
+// Urdu's extended Arabic-Indic, Devanagari, Bengali, Gurmukhi, Gujarati, Oriya, Tamil, Telugu,
+// Kannada, Malayalam, and fullwidth (a CJK input method).
+const kDigitZeros = [0x0660, 0x06f0, 0x0966, 0x09e6, 0x0a66, 0x0ae6, 0x0b66, 0x0be6, 0x0c66, 0x0ce6,
+  0x0d66, 0xff10];
+
+/** `text` with those digits written as 0–9: "११०००१" is 110001. Other characters are kept. */
+export function asciiDigits(text) {
+  return text.replace(/\p{Nd}/gu, (digit) => {
+    const code = digit.codePointAt(0);
+    const zero = kDigitZeros.find((z) => code >= z && code <= z + 9);
+    return zero === undefined ? digit : String(code - zero);
+  });
+}
+
 /**
  * The pincodes in pasted text: separated by spaces, commas, semicolons or new lines; "110 001"
  * (three and three digits) is read as one. Any Unicode space (a no-break space from a web page or
  * spreadsheet) counts as a space, and zero-width characters (U+200B, a byte order mark, …) are
- * dropped, since the clerk cannot see them. Returns [{text, valid}] in order, duplicates kept.
+ * dropped, since the clerk cannot see them; digits of Indian scripts are read as 0–9
+ * (asciiDigits). Returns [{text, valid}] in order, duplicates kept.
  */
 export function parsePincodes(text) {
-  const visible = text.replace(/[\u00ad\u180e\u200b-\u200d\u2060\ufeff]/g, '');
+  const visible = asciiDigits(text).replace(/[\u00ad\u180e\u200b-\u200d\u2060\ufeff]/g, '');
   const joined = visible.replace(/(^|[^0-9])([0-9]{3})\p{Zs}([0-9]{3})(?![0-9])/gu, '$1$2$3');
   return joined.split(/[\s,;]+/u).filter(Boolean).map((item) => ({ text: item, valid: isPincode(item) }));
 }

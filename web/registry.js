@@ -1,5 +1,7 @@
 // Registry: search offices, look up pincodes and keys; admins add and retire pincodes.
-import { api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode } from './api.js';
+import {
+  api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, asciiDigits,
+} from './api.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -121,7 +123,7 @@ async function runSearch() {
 
 $('search-form').addEventListener('submit', (event) => {
   event.preventDefault();
-  const pin = $('s-pin').value.trim();
+  const pin = asciiDigits($('s-pin').value.trim());  // "११०००१" typed on a Hindi keyboard
   busy($('search'), async () => {
     if (pin) {
       if (!isPincode(pin)) {
@@ -190,7 +192,7 @@ $('add-form').addEventListener('submit', (event) => {
   event.preventDefault();
   busy($('add'), async () => {
     show($('add-msg'));
-    const value = (id) => $(id).value.trim();
+    const value = (id) => (id === 'a-pin' ? asciiDigits($(id).value.trim()) : $(id).value.trim());
     if (needToken($('add-msg'))) return;
     if (!isPincode(value('a-pin'))) {
       show($('add-msg'), problemBox(notAPincode(value('a-pin'))));
@@ -221,7 +223,7 @@ $('add-form').addEventListener('submit', (event) => {
 
 $('retire-form').addEventListener('submit', (event) => {
   event.preventDefault();
-  const pin = $('r-pin').value.trim();
+  const pin = asciiDigits($('r-pin').value.trim());
   show($('retire-msg'));
   show($('retire-confirm'));
   if (needToken($('retire-msg'))) return;

@@ -315,6 +315,20 @@ test('pincodes pasted with no-break or zero-width spaces are read as typed', asy
   assert.deepEqual(page.problems, []);
 });
 
+test('pincodes typed in Devanagari, Tamil or Urdu digits are read as the pincodes they are', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  // A Hindi, Tamil or Urdu keyboard types its own digits; they were refused as "not a pincode".
+  await page.locator('#pins').fill('\u0967\u0967\u0966\u0966\u0966\u0967 \u0bEB\u0bEC\u0be6\u0be6\u0be6\u0be7 \u06f4\u06f0\u06f0\u06f0\u06f0\u06f1');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  const listed = await page.locator('#results-body tr').evaluateAll((trs) => trs.map((tr) => tr.dataset.pincode || tr.textContent));
+  assert.deepEqual(listed, ['110001', '560001', '400001']);
+  assert.equal(await page.locator('tr.is-error').count(), 0);
+  assert.deepEqual(page.problems, []);
+});
+
 test('a token pasted with invisible characters is used as it is meant, and Forget takes its preview', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);

@@ -146,6 +146,10 @@ test('a pasted pincode is checked whole, never cut to six characters', async () 
   await page.locator('#s-pin').fill(' 560001 ');
   await page.getByRole('button', { name: 'Search', exact: true }).click();
   await page.locator('#detail-pincode').filter({ hasText: '560001' }).waitFor();
+  // Typed on a Hindi keyboard (११०००१): the pincode 110001.
+  await page.locator('#s-pin').fill('\u0967\u0967\u0966\u0966\u0966\u0967');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  await page.locator('#detail-pincode').filter({ hasText: '110001' }).waitFor();
   await page.locator('#a-pin').fill('9990123');
   await page.getByRole('button', { name: 'Add pincode' }).click();
   await page.locator('#add-msg [role="alert"]').filter({ hasText: /Not a pincode/ }).waitFor();
