@@ -255,6 +255,8 @@ $('scan-photo').addEventListener('error', () => {
 
 $('photo').addEventListener('change', () => {
   $('scan').disabled = !$('photo').files.length;
+  // Which photo is being read, in the box that chose it (the input itself is hidden).
+  $('photo-name').textContent = $('photo').files.length ? `Chosen: ${$('photo').files[0].name}` : 'No photo chosen';
   $('scan-photo').removeAttribute('data-outlined');
   $('outlines').replaceChildren();
   busy($('scan'), scan);

@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import { execFile } from 'node:child_process';
 import { mkdtemp, readFile, rm, writeFile } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
-import { dirname, join } from 'node:path';
+import { basename, dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { promisify } from 'node:util';
 import { after, before, test } from 'node:test';
@@ -57,6 +57,8 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.match(text, /Bin11/);
   assert.match(text, /Distance\d+\.\d\d m/);
   assert.match(await page.locator('#summary').textContent(), /1 tag read/);
+  // The chosen photo is named in the box that chose it (the file input itself is hidden).
+  assert.equal(await page.locator('#photo-name').textContent(), `Chosen: ${basename(labelPng)}`);
   await page.locator('#scan-photo[data-outlined="1"]').waitFor();
   await page.waitForFunction(() => document.getElementById('scan-photo').naturalWidth > 0);
   assert.match(await page.locator('#scan-photo').getAttribute('alt'), /outlined: 110001/);
@@ -86,6 +88,21 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.equal(await page.locator('.tag-card').count(), 0);
   assert.doesNotMatch(await page.locator('#summary').textContent(), /tag/);
   assert.equal(await page.locator('#photo-figure').isHidden(), true);
+  assert.deepEqual(page.problems, []);
+});
+
+test('the photo box shows the keyboard focus, as every other control does', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/scanner.html`);
+  const outline = () => page.locator('label.drop').evaluate((box) => getComputedStyle(box).outlineStyle);
+  assert.equal(await outline(), 'none');
+  // Tab from the field before the hidden file input lands on it.
+  await page.locator('#token').focus();
+  for (let i = 0; i < 6 && await page.evaluate(() => document.activeElement?.id) !== 'photo'; ++i) {
+    await page.keyboard.press('Tab');
+  }
+  assert.equal(await page.evaluate(() => document.activeElement?.id), 'photo');
+  assert.equal(await outline(), 'solid');
   assert.deepEqual(page.problems, []);
 });
 
