@@ -188,14 +188,30 @@ $('key-form').addEventListener('submit', (event) => {
   });
 });
 
+// The fields a refusal is about are marked invalid and pointed at the message that says why, so a
+// screen reader announces it on the field and the field shows it (red border); the rest unmarked.
+function markInvalid(form, message, ids) {
+  for (const input of form.querySelectorAll('input')) {
+    if (ids.includes(input.id)) {
+      input.setAttribute('aria-invalid', 'true');
+      input.setAttribute('aria-describedby', message.id);
+    } else {
+      input.removeAttribute('aria-invalid');
+      input.removeAttribute('aria-describedby');
+    }
+  }
+}
+
 $('add-form').addEventListener('submit', (event) => {
   event.preventDefault();
   busy($('add'), async () => {
     show($('add-msg'));
+    markInvalid($('add-form'), $('add-msg'), []);
     const value = (id) => (id === 'a-pin' ? asciiDigits($(id).value.trim()) : $(id).value.trim());
     if (needToken($('add-msg'))) return;
     if (!isPincode(value('a-pin'))) {
       show($('add-msg'), problemBox(notAPincode(value('a-pin'))));
+      markInvalid($('add-form'), $('add-msg'), ['a-pin']);
       return;
     }
     const body = { pincode: value('a-pin') };
@@ -217,6 +233,12 @@ $('add-form').addEventListener('submit', (event) => {
       refreshSearch();
     } catch (error) {
       show($('add-msg'), problemBox(error));
+      // An office refused for its empty fields: those fields. A pincode already there: the pincode.
+      if (error.status === 400 && body.offices) {
+        markInvalid($('add-form'), $('add-msg'), required.filter(([, id]) => !value(id)).map(([, id]) => id));
+      } else if (error.status === 409) {
+        markInvalid($('add-form'), $('add-msg'), ['a-pin']);
+      }
     }
   });
 });

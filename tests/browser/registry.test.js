@@ -224,6 +224,11 @@ test('an office filled in part is refused with every missing field named, and no
   const alert = page.locator('#add-msg [role="alert"]');
   await alert.waitFor();
   assert.match(await alert.textContent(), /office 1 needs a non-empty name, district, state, circle, region \(/);
+  // The empty fields are marked, pointing at the message; the filled ones and the pincode are not.
+  const invalid = await page.locator('#add-form input[aria-invalid="true"]').evaluateAll((inputs) => inputs.map((i) => i.id));
+  assert.deepEqual(invalid.sort(), ['a-circle', 'a-district', 'a-office', 'a-region', 'a-state']);
+  assert.equal(await page.locator('#a-district').getAttribute('aria-describedby'), 'add-msg');
+  assert.equal(await page.locator('#a-division').getAttribute('aria-invalid'), null);
   const lookup = await fetch(`${server.url}/api/v1/pincodes/999012`);
   assert.equal(lookup.status, 404);
   assert.deepEqual(page.problems, []);
