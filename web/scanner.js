@@ -162,15 +162,22 @@ function tagCard(tag, approximate) {
     el('dl', { class: 'kv' }, rows.map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])));
 }
 
+// Nothing of the last answer stays on screen: its message, cards, outlines and photo.
+function clearResults() {
+  show($('scan-msg'));
+  show($('tags'));
+  $('outlines').replaceChildren();
+  $('scan-photo').removeAttribute('data-outlined');
+  $('photo-figure').hidden = true;
+}
+
 async function scan() {
   const file = $('photo').files[0];
   if (!file) return;
   const run = ++scanCount;
   // Nothing of the last scan stays on screen once another photo is chosen.
-  show($('scan-msg'));
-  show($('tags'));
+  clearResults();
   $('summary').textContent = '';
-  $('photo-figure').hidden = true;
   if (!token()) {
     show($('scan-msg'), el('div', { class: 'alert alert-error', role: 'alert' },
       el('strong', { class: 'problem-title' }, 'No scanner token'),
@@ -181,8 +188,6 @@ async function scan() {
   if (photoUrl) URL.revokeObjectURL(photoUrl);
   photoUrl = URL.createObjectURL(file);
   photoUnshowable = false;
-  $('outlines').replaceChildren();
-  $('scan-photo').removeAttribute('data-outlined');
   showPhoto(photoUrl, 'Your photo. Reading…', 'The photo being read');
   $('summary').textContent = 'Reading the photo…';
   let answer;
@@ -275,11 +280,7 @@ function settingsChanged() {
     return;
   }
   ++scanCount;  // an answer still on its way was asked with the old settings
-  show($('scan-msg'));
-  show($('tags'));
-  $('outlines').replaceChildren();
-  $('scan-photo').removeAttribute('data-outlined');
-  $('photo-figure').hidden = true;
+  clearResults();
   $('summary').textContent = 'The sort plan or label size changed: paste a scanner token above to read the photo again.';
 }
 $('plan').addEventListener('change', settingsChanged);

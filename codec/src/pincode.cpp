@@ -5,17 +5,6 @@
 namespace pintag {
 namespace {
 
-/// Characters as a person counts them: "１１０００１" is six, though 18 bytes. A byte that is not
-/// valid UTF-8 counts as one.
-std::size_t CharacterCount(std::string_view text) {
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < text.size(); ++count) {
-    const Utf8CodePoint point = DecodeUtf8(text, i);
-    i += point.length > 0 ? point.length : 1;
-  }
-  return count;
-}
-
 /// The scripts a pincode is likely typed in by mistake: the digit blocks of India's scripts,
 /// Arabic-Indic ones and fullwidth ones (an East Asian keyboard). Each block is ten code points.
 bool IsDigitOfAnotherScript(char32_t point) {
@@ -39,7 +28,7 @@ bool HasDigitOfAnotherScript(std::string_view text) {
 }  // namespace
 
 ParsedPincode ParsePincode(std::string_view text) {
-  const std::size_t characters = CharacterCount(text);
+  const std::size_t characters = Utf8CharacterCount(text);
   if (characters != 6) {
     return {std::nullopt,
             "a pincode has exactly 6 digits, got " + std::to_string(characters) + " characters"};

@@ -27,6 +27,15 @@ Utf8CodePoint DecodeUtf8(std::string_view text, std::size_t offset) {
   return {value, length};
 }
 
+std::size_t Utf8CharacterCount(std::string_view text) {
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < text.size(); ++count) {
+    const Utf8CodePoint point = DecodeUtf8(text, i);
+    i += point.length > 0 ? point.length : 1;
+  }
+  return count;
+}
+
 void AppendUtf8(std::string& out, char32_t code_point) {
   const auto put = [&](char32_t bits) { out += static_cast<char>(bits); };
   if (code_point < 0x80) {

@@ -1,6 +1,5 @@
 #include "pintag/db/text.hpp"
 
-#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -89,12 +88,8 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
   if (value.size() > max_bytes) {
     // Said in characters too: a clerk counts letters, and a letter of an Indian script is three
     // bytes, so "200 bytes" is about 66 of them.
-    std::size_t characters = 0;
-    for (std::size_t i = 0; i < value.size(); ++characters) {
-      i += std::max<std::size_t>(1, DecodeUtf8(value, i).length);
-    }
     return invalid("is " + std::to_string(value.size()) + " bytes long in UTF-8 (" +
-                   std::to_string(characters) + " characters); at most " +
+                   std::to_string(Utf8CharacterCount(value)) + " characters); at most " +
                    std::to_string(max_bytes) +
                    " bytes are allowed, where a letter of an Indian script takes 3");
   }

@@ -104,18 +104,20 @@ std::optional<TrustedProxies> TrustedProxies::Parse(const std::vector<std::strin
 
 bool TrustedProxies::trusts(std::string_view address_text) const {
   const std::optional<Address> address = ParseAddress(address_text);
-  if (!address) return false;
+  return address && trustsBytes(address->v6, address->bytes);
+}
+
+bool TrustedProxies::trustsBytes(bool v6, const std::array<unsigned char, 16>& bytes) const {
   return std::any_of(ranges_.begin(), ranges_.end(), [&](const Range& range) {
-    if (range.v6 != address->v6) return false;
+    if (range.v6 != v6) return false;
     const int whole_bytes = range.prefix_bits / 8;
-    if (!std::equal(range.bytes.begin(), range.bytes.begin() + whole_bytes,
-                    address->bytes.begin())) {
+    if (!std::equal(range.bytes.begin(), range.bytes.begin() + whole_bytes, bytes.begin())) {
       return false;
     }
     const int rest = range.prefix_bits % 8;
     if (rest == 0) return true;
     const auto mask = static_cast<unsigned char>(0xff << (8 - rest));
-    return (range.bytes[whole_bytes] & mask) == (address->bytes[whole_bytes] & mask);
+    return (range.bytes[whole_bytes] & mask) == (bytes[whole_bytes] & mask);
   });
 }
 
@@ -123,16 +125,19 @@ TrustedProxies::Client TrustedProxies::clientOf(std::string_view peer,
                                                 std::string_view forwarded_for) const {
   std::string_view client = peer;
   bool forwarded = false;
+  bool trusted = trusts(peer);  // of the address `client` holds; each entry is parsed once
   std::string_view rest = forwarded_for;
-  while (!rest.empty() && trusts(client)) {
+  while (trusted && !rest.empty()) {
     const auto comma = rest.rfind(',');
     const std::string_view entry =
         Trimmed(comma == std::string_view::npos ? rest : rest.substr(comma + 1));
     rest = comma == std::string_view::npos ? std::string_view() : rest.substr(0, comma);
     if (entry.empty()) continue;  // "a, , b" or a trailing comma: nothing said there
-    if (!ParseAddress(entry)) break;
+    const std::optional<Address> address = ParseAddress(entry);
+    if (!address) break;
     client = HostPart(entry);
     forwarded = true;
+    trusted = trustsBytes(address->v6, address->bytes);
   }
   return {std::string(client), forwarded};
 }

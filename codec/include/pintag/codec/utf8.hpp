@@ -18,6 +18,10 @@ struct Utf8CodePoint {
 /// The code point that starts at byte `offset` of `text`. Precondition: offset < text.size().
 Utf8CodePoint DecodeUtf8(std::string_view text, std::size_t offset);
 
+/// Characters as a person counts them (code points): "１１０００１" is six, though 18 bytes. A
+/// byte that is not valid UTF-8 counts as one.
+std::size_t Utf8CharacterCount(std::string_view text);
+
 /// Appends `code_point` as UTF-8. Precondition: a Unicode scalar value (at most U+10FFFF, not a
 /// surrogate), e.g. one DecodeUtf8 returned.
 void AppendUtf8(std::string& out, char32_t code_point);

@@ -39,6 +39,9 @@ class TrustedProxies {
   Client clientOf(std::string_view peer, std::string_view forwarded_for) const;
 
  private:
+  /// Whether a parsed address (network order, IPv4 in the first 4 bytes) lies in a range.
+  bool trustsBytes(bool v6, const std::array<unsigned char, 16>& bytes) const;
+
   struct Range {
     bool v6 = false;
     std::array<unsigned char, 16> bytes{};  ///< network order; IPv4 in the first 4
