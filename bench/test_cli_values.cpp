@@ -10,9 +10,11 @@ namespace {
 TEST(CliValues, WorldsAreNamedExactly) {
   EXPECT_EQ(ParseWorld("tuning"), scene::World::kTuning);
   EXPECT_EQ(ParseWorld("held-out"), scene::World::kHeldOut);
+  EXPECT_EQ(ParseWorld("blind"), scene::World::kBlind);
   EXPECT_FALSE(ParseWorld("tunning"));
   EXPECT_FALSE(ParseWorld("Tuning"));
   EXPECT_FALSE(ParseWorld(""));
+  EXPECT_FALSE(ParseWorld("Blind"));
 }
 
 TEST(CliValues, SeedsAreWholeDecimalNumbers) {

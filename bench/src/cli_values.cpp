@@ -9,6 +9,7 @@ namespace pintag::bench {
 std::optional<scene::World> ParseWorld(std::string_view text) {
   if (text == "held-out") return scene::World::kHeldOut;
   if (text == "tuning") return scene::World::kTuning;
+  if (text == "blind") return scene::World::kBlind;
   return std::nullopt;
 }
 
@@ -23,7 +24,7 @@ std::optional<std::uint64_t> ParseSeed(std::string_view text) {
 scene::World WorldOrExit(const char* tool, const char* text) {
   const std::optional<scene::World> world = ParseWorld(text);
   if (world) return *world;
-  std::fprintf(stderr, "%s: --world is held-out or tuning, got \"%s\"\n", tool, text);
+  std::fprintf(stderr, "%s: --world is held-out, tuning or blind, got \"%s\"\n", tool, text);
   std::exit(2);
 }
 

@@ -77,7 +77,9 @@ void Usage(FILE* to) {
       "  --frames-per-bin N    frames per size x tilt x photometry bin (default 8)\n"
       "  --tagless N           tagless photograph frames (default 64)\n"
       "  --seed N              base seed of the sweep (default 1)\n"
-      "  --world W             held-out (default) or tuning: which world's scenes\n"
+      "  --world W             held-out (default), tuning, or blind (run whole when an issue "
+      "about\n"
+      "                        the detector ends; docs/BENCHMARKS.md): which world's scenes\n"
       "  --jpeg-quality N      save every frame at JPEG quality N (1-100) instead of the "
       "quality its light draws\n"
       "  --jpeg-chroma C       420 (default, as phones save) or 444: JPEG colour resolution "
@@ -254,6 +256,21 @@ bool ParseArgs(int argc, char** argv, Args* args) {
   if (const std::string error = SweepOptionsError(args->sweep); !error.empty()) {
     std::fprintf(stderr, "pintag_bench: %s\n", error.c_str());
     return false;
+  }
+  // The blind world stays blind only while no one tunes on it or studies what it misses.
+  if (args->sweep.world == scene::World::kBlind) {
+    for (const auto& [given, option] :
+         {std::pair{!args->pintag_options.empty(), "--pintag-options"},
+          std::pair{!args->dump_misses.empty(), "--dump-misses"},
+          std::pair{!args->only_frames.empty(), "--frame"}}) {
+      if (given) {
+        std::fprintf(stderr,
+                     "pintag_bench: %s is for tuning and study, and the blind world is neither: "
+                     "use --world held-out or tuning\n",
+                     option);
+        return false;
+      }
+    }
   }
   return true;
 }

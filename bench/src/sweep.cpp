@@ -16,6 +16,8 @@ std::uint64_t Mix(std::uint64_t h, std::uint64_t v) {
 
 // The held-out world's salt: its frames' seeds are a stream the tuning world never draws from.
 constexpr std::uint64_t kHeldOutSalt = 0x48454C444F5554ULL;
+// The blind world's: a third stream.
+constexpr std::uint64_t kBlindSalt = 0x424C494E44ULL;
 constexpr std::uint64_t kQuickSalt = 0x515549434BULL;
 
 FrameSpec TaggedFrame(std::uint64_t base, int round, bool hard, int size_index, int tilt_index,
@@ -45,19 +47,61 @@ FrameSpec TaggedFrame(std::uint64_t base, int round, bool hard, int size_index, 
   return f;
 }
 
+// The held-out and blind worlds draw from streams of their own; the tuning world's seeds are as
+// given, so its frames stay those it was tuned on.
+std::uint64_t WorldSeed(scene::World world, std::uint64_t seed) {
+  switch (world) {
+    case scene::World::kTuning:
+      return seed;
+    case scene::World::kHeldOut:
+      return Mix(seed, kHeldOutSalt);
+    case scene::World::kBlind:
+      return Mix(seed, kBlindSalt);
+  }
+  return seed;
+}
+
 }  // namespace
 
 scene::Camera CameraFor(scene::World world) {
   scene::Camera camera;
-  if (world == scene::World::kHeldOut) camera.fx = camera.fy = 1500;
+  switch (world) {
+    case scene::World::kTuning:
+      camera.fx = camera.fy = 1400;
+      break;
+    case scene::World::kHeldOut:
+      camera.fx = camera.fy = 1500;
+      break;
+    case scene::World::kBlind:
+      camera.fx = camera.fy = 1650;
+      break;
+  }
   return camera;
 }
 
 std::string ToString(scene::World world) {
-  return world == scene::World::kHeldOut ? "held-out" : "tuning";
+  switch (world) {
+    case scene::World::kTuning:
+      return "tuning";
+    case scene::World::kHeldOut:
+      return "held-out";
+    case scene::World::kBlind:
+      return "blind";
+  }
+  return "?";
 }
 
 std::string SweepOptionsError(const SweepOptions& options) {
+  if (options.world == scene::World::kBlind) {
+    // Each look at the blind world by parts makes it less blind: it is run whole, as drawn.
+    if (options.quick)
+      return "--quick is for the tuning and held-out worlds; the blind one is run whole";
+    if (options.jpeg_quality != 0 || options.jpeg_full_chroma || options.no_mosaic ||
+        options.sensor_scale != 1) {
+      return "--jpeg-quality, --jpeg-chroma, --no-mosaic and --sensor-scale are analyses of the "
+             "held-out world; the blind world is run as drawn";
+    }
+  }
   if (options.s_curve && options.world != scene::World::kTuning) {
     return "--s-curve is for the tuning world (the held-out phone has its own)";
   }
@@ -78,6 +122,10 @@ std::string SweepOptionsError(const SweepOptions& options) {
 }
 
 std::string TuningToolOptionsError(const SweepOptions& options) {
+  if (options.world == scene::World::kBlind) {
+    return "the blind world is read by pintag_bench's whole sweep alone, when an issue about the "
+           "detector ends; a tool that informs tuning must not look at it";
+  }
   if (options.world == scene::World::kHeldOut && options.seed == kHeadlineSeed) {
     return "the held-out world's seed " + std::to_string(kHeadlineSeed) +
            " is pintag_bench's headline, and a tool that informs tuning must not look at it: "
@@ -99,8 +147,8 @@ std::string ToString(Marker marker) {
 }
 
 std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camera& camera) {
-  const bool held_out = options.world == scene::World::kHeldOut;
-  const std::uint64_t world_seed = held_out ? Mix(options.seed, kHeldOutSalt) : options.seed;
+  const bool printed = scene::DrawnAsPrinted(options.world);
+  const std::uint64_t world_seed = WorldSeed(options.world, options.seed);
   const std::uint64_t seed = options.quick ? Mix(world_seed, kQuickSalt) : world_seed;
   std::vector<FrameSpec> frames;
   // Rounds outermost: any stretch of the sweep mixes every bin, so drift in the machine's load
@@ -129,7 +177,7 @@ std::vector<FrameSpec> MakeSweep(const SweepOptions& options, const scene::Camer
     f.hard = i % 2 == 1;
     f.seed = Mix(Mix(seed, 0x7A6E55), static_cast<std::uint64_t>(i));
     f.background_photo = i % photos;
-    if (held_out) {
+    if (printed) {
       // A label without its tag (text, border, the white place) in view, as on a parcel whose
       // tag is out of the frame: the detector must not read a tag into a label's print.
       scene::Rng rng(Mix(f.seed, 0xB1A4C));
@@ -196,7 +244,7 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
     spec.photometry.bayer = true;
     spec.photometry.vng_demosaic = true;
   }
-  const bool held_out = frame.world == scene::World::kHeldOut;
+  const bool printed = scene::DrawnAsPrinted(frame.world);
   if (frame.tagless() && frame.blank_label_px == 0) return spec;
   scene::PlacedMarker placed;
   placed.square_side_m = kTagSideM;
@@ -211,16 +259,16 @@ scene::SceneSpec SceneFor(const FrameSpec& frame, Marker marker, const scene::Ca
   placed.id = TruthId(frame, marker);
   switch (marker) {
     case Marker::kPinTag:
-      placed.texture = held_out ? scene::PrintedLabel(scene::LabelMarker::kPinTag, placed.id)
-                                : scene::PinTagTexture(placed.id);
+      placed.texture = printed ? scene::PrintedLabel(scene::LabelMarker::kPinTag, placed.id)
+                               : scene::PinTagTexture(placed.id);
       break;
     case Marker::kAruco:
-      placed.texture = held_out ? scene::PrintedLabel(scene::LabelMarker::kAruco, placed.id)
-                                : scene::ArucoTexture(placed.id);
+      placed.texture = printed ? scene::PrintedLabel(scene::LabelMarker::kAruco, placed.id)
+                               : scene::ArucoTexture(placed.id);
       break;
     case Marker::kAprilTag:
-      placed.texture = held_out ? scene::PrintedLabel(scene::LabelMarker::kAprilTag, placed.id)
-                                : scene::AprilTagTexture(placed.id);
+      placed.texture = printed ? scene::PrintedLabel(scene::LabelMarker::kAprilTag, placed.id)
+                               : scene::AprilTagTexture(placed.id);
       break;
   }
   placed.pose =

@@ -25,11 +25,11 @@ enum class Marker { kPinTag, kAruco, kAprilTag };
 inline constexpr int kMarkerCount = 3;
 std::string ToString(Marker marker);
 
-/// The camera of each world: the tuning world's (f = 1400 px) or the held-out world's (f = 1500 px,
-/// as phones' main cameras at 1080p), both 1920 × 1080.
+/// The camera of each world, all 1920 × 1080: the tuning world's f = 1400 px, the held-out
+/// world's 1500 px (as phones' main cameras at 1080p), the blind world's 1650 px.
 scene::Camera CameraFor(scene::World world);
 
-/// The world's name in reports and on the command line: "tuning" or "held-out".
+/// The world's name in reports and on the command line: "tuning", "held-out" or "blind".
 std::string ToString(scene::World world);
 
 /// The held-out seed of pintag_bench's headline, its default. No tuning tool reads its frames.
@@ -43,8 +43,8 @@ struct SweepOptions {
   /// the load test's photos. Drawn from a seed of their own, so that they are none of the full
   /// sweep's frames (until 2026-12-07 they were its first round).
   bool quick = false;
-  /// Base seed of the whole sweep. The held-out world mixes it with a salt of its own, so the two
-  /// worlds never share a frame's seed.
+  /// Base seed of the whole sweep. The held-out and blind worlds mix it with salts of their own,
+  /// so no two worlds share a frame's seed.
   std::uint64_t seed = kHeadlineSeed;
   /// 0: every frame saved at the JPEG quality its light draws (the worlds' ranges); 1 … 100: every
   /// frame saved at this quality instead, the rest of its light unchanged (what a scanner app's
@@ -69,11 +69,12 @@ struct SweepOptions {
 };
 
 /// Empty when the options go together, else what is wrong, worded for the command line: each
-/// world's own photometry options belong to it alone.
+/// world's own photometry options belong to it alone, and the blind world is run whole, as drawn.
 std::string SweepOptionsError(const SweepOptions& options);
 
 /// Empty when a tool that informs tuning (the reader and genie probes) may look at these frames,
-/// else why not: the held-out world's headline seed is read by pintag_bench alone.
+/// else why not: the held-out world's headline seed and the whole blind world are read by
+/// pintag_bench alone.
 std::string TuningToolOptionsError(const SweepOptions& options);
 
 struct FrameSpec {

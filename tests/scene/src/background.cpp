@@ -20,8 +20,8 @@ struct PhotoSource {
 
 // Colour photographs (and, held out, a few grey ones and a colour wheel). Several hold red and
 // round things (fruit, sweets, a baboon's nose, a red cup, a motorcycle, a retina): the tagless
-// scenes need them to show that the detector does not read tags into them. The two worlds share
-// no photograph: nothing tuned on the first ever sees the second.
+// scenes need them to show that the detector does not read tags into them. No two worlds share a
+// photograph: nothing tuned on the first ever sees the others.
 const std::vector<PhotoSource>& PhotoSources(World world) {
   static const std::vector<PhotoSource> tuning = {
       {"opencv-doc",
@@ -48,7 +48,25 @@ const std::vector<PhotoSource>& PhotoSources(World world) {
        "/usr/share/backgrounds",
        {"Kleiber_by_Lukas_Baubkus.jpg", "Infinite-Sea_by_Aury88.jpg"}},
   };
-  return world == World::kHeldOut ? held_out : tuning;
+  // Photographs of another desktop's wallpapers, many of them red and green like the tag's
+  // elements (a ladybird, a red marigold, an orange gerbera, leaves and grass).
+  static const std::vector<PhotoSource> blind = {
+      {"mate-backgrounds",
+       "/usr/share/backgrounds/mate/nature",
+       {"Aqua.jpg", "Blinds.jpg", "Dune.jpg", "FreshFlower.jpg", "Garden.jpg", "GreenMeadow.jpg",
+        "LadyBird.jpg", "RainDrops.jpg", "Storm.jpg", "TwoWings.jpg", "Wood.jpg",
+        "YellowFlower.jpg"}},
+      {"mate-backgrounds", "/usr/share/backgrounds/mate/abstract", {"Elephants.jpg"}},
+  };
+  switch (world) {
+    case World::kTuning:
+      return tuning;
+    case World::kHeldOut:
+      return held_out;
+    case World::kBlind:
+      return blind;
+  }
+  return tuning;
 }
 
 // The fixed list, every file required: a missing photograph would silently change every frame.
@@ -98,12 +116,21 @@ cv::Scalar RandomColour(Rng& rng) {
 
 const std::vector<std::string>& BackgroundPhotos(World world) {
   // Each list is looked for on first use only: tuning runs need nothing held out installed.
-  if (world == World::kHeldOut) {
-    static const std::vector<std::string> held_out = FindPhotos(World::kHeldOut);
-    return held_out;
+  switch (world) {
+    case World::kTuning: {
+      static const std::vector<std::string> tuning = FindPhotos(World::kTuning);
+      return tuning;
+    }
+    case World::kHeldOut: {
+      static const std::vector<std::string> held_out = FindPhotos(World::kHeldOut);
+      return held_out;
+    }
+    case World::kBlind: {
+      static const std::vector<std::string> blind = FindPhotos(World::kBlind);
+      return blind;
+    }
   }
-  static const std::vector<std::string> tuning = FindPhotos(World::kTuning);
-  return tuning;
+  throw std::logic_error("scene: no such world");
 }
 
 namespace detail {
@@ -209,7 +236,7 @@ cv::Mat MakeBackground(const Camera& camera, World world, bool real, int photo, 
                             (tx + 1) * size.width / tiles - tx * size.width / tiles,
                             (ty + 1) * size.height / tiles - ty * size.height / tiles);
         // The tuning world keeps the frames it was tuned on (bilinear throughout).
-        CropPhoto(source, cell.size(), world == World::kHeldOut, rng).copyTo(out(cell));
+        CropPhoto(source, cell.size(), DrawnAsPrinted(world), rng).copyTo(out(cell));
         if (!name.empty()) name += '+';
         name += std::filesystem::path(photos[index]).filename().string();
       }

@@ -98,7 +98,7 @@ Scene RenderScene(const SceneSpec& spec) {
   Rng noise_rng(rng.fork());
 
   Scene scene;
-  const bool held_out = spec.world == World::kHeldOut;
+  const bool printed = DrawnAsPrinted(spec.world);
   scene.bgr = detail::MakeBackground(camera, spec.world, spec.real_background,
                                      spec.background_photo, background_rng, scene.background);
 
@@ -137,7 +137,7 @@ Scene RenderScene(const SceneSpec& spec) {
     MarkerTruth& truth = scene.truth[*it];
     const cv::Matx33d image_from_texture = truth.homography * TextureToSquare(marker.texture);
     bool drawn = false;
-    if (held_out) {
+    if (printed) {
       const detail::PrintErrors print =
           detail::PrintErrors::Random(spec.print_seed ^ (0x9E37ULL * (*it + 1)));
       drawn = detail::WarpThroughPyramid(scene.bgr, marker.texture, image_from_texture, print);
@@ -150,7 +150,7 @@ Scene RenderScene(const SceneSpec& spec) {
     if (!drawn) truth.fully_visible = false;  // part of the texture behind the camera
   }
 
-  if (held_out) {
+  if (printed) {
     detail::ApplyPhoneCapture(scene.bgr, spec.capture, noise_rng);
   } else {
     detail::ApplyPhotometry(scene.bgr, spec.photometry, noise_rng);
