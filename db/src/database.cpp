@@ -15,6 +15,7 @@ struct FileSchema {
   int version = 0;           ///< PRAGMA user_version
   std::int64_t objects = 0;  ///< tables, indexes, views and triggers; none in a new or empty file
   std::string names;         ///< the first few table and view names, for a message
+  bool registry_tables = false;  ///< `pincodes` and `tag_keys`, which every PinTag version has
 };
 
 /// Read in one statement, so that a pintag creating the file at the same moment (its schema and
@@ -23,21 +24,27 @@ FileSchema ReadFileSchema(Connection& connection) {
   Statement read = connection.prepare(
       "SELECT user_version, (SELECT count(*) FROM sqlite_master), "
       "(SELECT group_concat(name, ', ') FROM (SELECT name FROM sqlite_master "
-      "WHERE type IN ('table', 'view') ORDER BY name LIMIT 3)) FROM pragma_user_version");
+      "WHERE type IN ('table', 'view') ORDER BY name LIMIT 3)), "
+      "(SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ('pincodes', "
+      "'tag_keys')) FROM pragma_user_version");
   read.step();
-  return {read.getInt(0), read.getInt64(1), read.getText(2)};
+  return {read.getInt(0), read.getInt64(1), read.getText(2), read.getInt(3) == 2};
 }
 
-/// Version 0 and yet tables: an SQLite file PinTag did not write (each migration step sets the
-/// version in the transaction that creates its tables). Seeding it would put PinTag's schema
-/// and 154,874 offices into someone else's data.
+/// An SQLite file PinTag did not write: version 0 and yet tables (each migration step sets the
+/// version in the transaction that creates its tables), or a version without PinTag's registry
+/// tables (another program's user_version, a browser's history at 74). Seeding it would put
+/// PinTag's schema and 154,874 offices into someone else's data; even switching it to WAL would
+/// change their file.
 std::optional<Error> RefuseForeignFile(const std::string& path, const FileSchema& schema) {
-  if (schema.version != 0 || schema.objects == 0) return std::nullopt;
+  if (schema.objects == 0 || (schema.version != 0 && schema.registry_tables)) return std::nullopt;
+  const std::string holds = schema.names.empty() ? "a schema" : "tables (" + schema.names + ")";
   return Error{ErrorCode::kConflict,
-               "database " + path + " is not a PinTag database: it already holds " +
-                   (schema.names.empty() ? "a schema" : "tables (" + schema.names + ")") +
-                   " and no PinTag schema version; give a PinTag database, or a new or empty "
-                   "file to create one in"};
+               "database " + path + " is not a PinTag database: it already holds " + holds +
+                   (schema.version == 0 ? " and no PinTag schema version"
+                                        : " and schema version " + std::to_string(schema.version) +
+                                              " but not PinTag's tables") +
+                   "; give a PinTag database, or a new or empty file to create one in"};
 }
 
 }  // namespace
@@ -71,7 +78,6 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
     Connection& connection = opened.connection;
     const FileSchema schema = ReadFileSchema(connection);
     if (auto foreign = RefuseForeignFile(path, schema)) return *foreign;
-    if (!options.read_only) connection.execute("PRAGMA journal_mode=WAL");
     const int version = schema.version;
     opened.upgraded_from = version;
     if (version > kSchemaVersion) {
@@ -80,6 +86,8 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
                        ", newer than this pintag supports (" + std::to_string(kSchemaVersion) +
                        "); use a newer pintag"};
     }
+    // Only now: a file refused above is left exactly as it was.
+    if (!options.read_only) connection.execute("PRAGMA journal_mode=WAL");
     if (version == kSchemaVersion) return opened;
     if (options.read_only) {
       return Error{ErrorCode::kConflict, "database " + path + " has schema version " +

@@ -45,6 +45,19 @@ bool IsTrimmedSpace(char32_t c) {
          c == 0x202F || c == 0x205F || c == 0x2060 || c == 0x3000 || c == 0xFEFF;
 }
 
+/// What CheckText refuses beyond the C0 controls, or nothing: the C1 controls (a terminal takes
+/// U+009B as an escape), the line and paragraph separators (a line break in a one-line name), and
+/// the bidi embeddings, overrides and isolates, which reorder the text after them ("Evil" + U+202E
+/// + "ecilop" shows as "Evilpolice"). The marks U+200E and U+200F stay: Urdu text needs them.
+const char* RefusedCodePoint(char32_t c) {
+  if (c >= 0x80 && c <= 0x9F) return "control character";
+  if (c == 0x2028 || c == 0x2029) return "line or paragraph separator";
+  if ((c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069)) {
+    return "bidi embedding, override or isolate";
+  }
+  return nullptr;
+}
+
 }  // namespace
 
 std::string_view TrimUnicodeSpaces(std::string_view text) {
@@ -99,9 +112,15 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
       return invalid("contains control character " + std::to_string(c) + " at byte " +
                      std::to_string(i));
     }
-    const std::size_t length = DecodeUtf8(value, i).length;
-    if (length == 0) return invalid("is not valid UTF-8 at byte " + std::to_string(i));
-    i += length;
+    const Utf8CodePoint decoded = DecodeUtf8(value, i);
+    if (decoded.length == 0) return invalid("is not valid UTF-8 at byte " + std::to_string(i));
+    if (const char* what = RefusedCodePoint(decoded.value)) {
+      char code[16];
+      std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(decoded.value));
+      return invalid("contains " + std::string(what) + " " + code + " at byte " +
+                     std::to_string(i));
+    }
+    i += decoded.length;
   }
   return std::nullopt;
 }

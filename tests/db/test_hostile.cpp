@@ -30,10 +30,19 @@ const std::vector<std::string> kAccepted = {
     "  padded  ",
 };
 
-// Rejected: a NUL byte, very long text, invalid UTF-8, control characters.
+// Rejected: a NUL byte, very long text, invalid UTF-8, control characters (C0, and C1's CSI, which
+// a terminal takes as an escape), a line separator, and a bidi override ("Evilpolice" on screen).
 const std::vector<std::string> kRejected = {
-    std::string("nul\0byte", 8), std::string(10000, 'a'), "\xff\xfe bad utf-8",
-    "\xc0\xaf overlong",         "line\nbreak",           "tab\there",
+    std::string("nul\0byte", 8),
+    std::string(10000, 'a'),
+    "\xff\xfe bad utf-8",
+    "\xc0\xaf overlong",
+    "line\nbreak",
+    "tab\there",
+    "Ab\u009b2Jcd",
+    "Line\u2028Sep",
+    "Evil\u202eecilop",
+    "Iso\u2066late\u2069",
 };
 
 std::string JsonString(const std::string& text) {

@@ -172,6 +172,55 @@ TEST(Migrations, AnotherApplicationsFileIsRefusedAndLeftAsItWas) {
   EXPECT_EQ(CountRegistry(created.value().connection).value().pincodes_active, 19159);
 }
 
+// Another program's file may set user_version too (Firefox's places.sqlite is at 74): a version
+// without PinTag's tables is refused as foreign, not read as a newer or older PinTag schema, and
+// the file is left byte for byte, not even switched to WAL.
+TEST(Migrations, AnotherApplicationsVersionedFileIsRefusedAndLeftAsItWas) {
+  TempDir dir;
+  for (const int version : {2, kSchemaVersion, 74}) {
+    const std::string other = dir.file("other" + std::to_string(version) + ".db");
+    {
+      Connection connection(other);
+      connection.execute(
+          "PRAGMA journal_mode=DELETE; CREATE TABLE moz_places (a); PRAGMA "
+          "user_version=" +
+          std::to_string(version));
+    }
+    const std::string bytes = test::ReadFile(other);
+    for (const OpenOptions& options : {OpenOptions{}, OpenOptions{.read_only = true}}) {
+      const auto opened = OpenDatabase(other, options);
+      ASSERT_FALSE(opened.ok()) << version;
+      EXPECT_EQ(opened.error().code, ErrorCode::kConflict);
+      EXPECT_EQ(opened.error().message,
+                "database " + other +
+                    " is not a PinTag database: it already holds tables (moz_places) and schema "
+                    "version " +
+                    std::to_string(version) +
+                    " but not PinTag's tables; give a PinTag database, or a new or empty file to "
+                    "create one in");
+    }
+    EXPECT_EQ(test::ReadFile(other), bytes) << version;
+    EXPECT_FALSE(std::filesystem::exists(other + "-wal"));
+  }
+}
+
+// A PinTag file newer than this build is refused as newer, and not switched to WAL by the look.
+TEST(Migrations, ANewerPinTagFileIsRefusedAndLeftAsItWas) {
+  TempDir dir;
+  const std::string path = test::CopyOfSeeded(dir);
+  {
+    Connection connection(path);
+    connection.execute("PRAGMA journal_mode=DELETE; PRAGMA user_version=" +
+                       std::to_string(kSchemaVersion + 1));
+  }
+  const std::string bytes = test::ReadFile(path);
+  const auto opened = OpenDatabase(path);
+  ASSERT_FALSE(opened.ok());
+  EXPECT_NE(opened.error().message.find("newer than this pintag supports"), std::string::npos)
+      << opened.error().message;
+  EXPECT_EQ(test::ReadFile(path), bytes);
+}
+
 TEST(Migrations, ReadOnlyOpenWorksOnCurrentFiles) {
   TempDir dir;
   const std::string path = test::CopyOfSeeded(dir);

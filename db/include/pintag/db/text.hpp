@@ -34,8 +34,10 @@ std::string_view TrimUnicodeSpaces(std::string_view text);
 /// and variation selectors. Invalid UTF-8 is not blank (CheckText refuses it on its own).
 bool IsBlank(std::string_view text);
 
-/// Nothing when `value` is acceptable for `field`; else the kInvalid error saying why. Unless
-/// `allow_empty`, a blank value (IsBlank) is refused too.
+/// Nothing when `value` is acceptable for `field`; else the kInvalid error saying why: longer than
+/// `max_bytes`, invalid UTF-8, a control character (C0, DEL, C1), U+2028/U+2029, or a bidi
+/// embedding, override or isolate (U+202A–U+202E, U+2066–U+2069). Unless `allow_empty`, a blank
+/// value (IsBlank) is refused too.
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty = false);
 
