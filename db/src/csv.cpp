@@ -8,11 +8,16 @@ CsvReader::CsvReader(std::string_view text) : text_(text) {
   if (text_.starts_with("\xEF\xBB\xBF")) position_ = 3;
 }
 
+bool CsvReader::endsLine(std::size_t at) const {
+  return text_[at] == '\n' ||
+         (text_[at] == '\r' && (at + 1 == text_.size() || text_[at + 1] != '\n'));
+}
+
 std::optional<CsvRecord> CsvReader::next(std::string* error) {
   error->clear();
   // Blank lines between records are skipped (a trailing newline must not make an empty record).
   while (position_ < text_.size() && (text_[position_] == '\n' || text_[position_] == '\r')) {
-    if (text_[position_] == '\n') ++line_;
+    if (endsLine(position_)) ++line_;
     ++position_;
   }
   if (position_ >= text_.size()) return std::nullopt;
@@ -44,7 +49,7 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
           quoted = false;
         }
       } else {
-        if (c == '\n') ++line_;
+        if (endsLine(position_ - 1)) ++line_;
         field += c;
       }
       continue;
@@ -55,6 +60,7 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
       was_quoted = false;
     } else if (c == '\n' || c == '\r') {
       if (c == '\r' && position_ < text_.size() && text_[position_] == '\n') ++position_;
+      record.last_line = line_;
       ++line_;
       keep(std::move(field));
       return record;
@@ -63,6 +69,7 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
       if (!was_quoted && field.find_first_not_of(' ') == std::string::npos) {
         field.clear();
         quoted = was_quoted = true;
+        record.quote_line = line_;
       } else {
         fail("stray double quote");
         field += c;
@@ -75,6 +82,7 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
   }
   // Overrides an earlier fault of the record: the rest of the file has gone into this field.
   if (quoted) *error = kUnterminatedQuote;
+  record.last_line = line_;
   keep(std::move(field));
   return record;
 }

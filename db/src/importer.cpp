@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include <unordered_set>
 
 #include "guard.hpp"
+#include "pintag/codec/utf8.hpp"
 #include "pintag/db/csv.hpp"
 #include "pintag/db/text.hpp"
 #include "registry_internal.hpp"
@@ -238,6 +240,33 @@ bool MergeRepeat(PostOffice& kept, const PostOffice& later) {
   return true;
 }
 
+/// A field's text as a message may quote it: at most 40 bytes (cut at a character), control bytes
+/// written as \xNN. A coordinate field of a megabyte, or one holding a terminal's escape
+/// sequences, would otherwise be printed as it is.
+std::string ShownField(std::string_view text) {
+  constexpr std::size_t kMaxShown = 40;
+  std::string shown;
+  std::size_t i = 0;
+  while (i < text.size() && i < kMaxShown) {
+    const Utf8CodePoint decoded = DecodeUtf8(text, i);
+    const bool control = decoded.length == 0 || decoded.value < 0x20 || decoded.value == 0x7F ||
+                         (decoded.value >= 0x80 && decoded.value <= 0x9F);
+    const std::size_t length = decoded.length == 0 ? 1 : decoded.length;
+    if (control) {
+      for (std::size_t k = i; k < i + length; ++k) {
+        char escaped[8];
+        std::snprintf(escaped, sizeof escaped, "\\x%02X", static_cast<unsigned char>(text[k]));
+        shown += escaped;
+      }
+    } else {
+      shown.append(text.substr(i, length));
+    }
+    i += length;
+  }
+  if (i < text.size()) shown += "...";
+  return shown;
+}
+
 /// One data record into a row, or the reason it is bad.
 Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   if (record.fields.size() != mapping.width) {
@@ -285,12 +314,20 @@ Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
         std::tuple{kLongitude, &office.longitude, "longitude"}}) {
     if (const auto text = optional(column)) {
       *target = ParseNumber(*text);
-      if (!*target)
-        return Error{ErrorCode::kInvalid, std::string(name) + " '" + *text + "' is not a number"};
+      if (!*target) {
+        return Error{ErrorCode::kInvalid,
+                     std::string(name) + " '" + ShownField(*text) + "' is not a number"};
+      }
     }
   }
   if (auto error = detail::CheckOffice(office)) return *error;
   return row;
+}
+
+/// Counts a bad row, and keeps its message while fewer than kMaxProblemsKept are kept.
+void AddProblem(ImportReport& report, RowProblem problem) {
+  ++report.bad_rows;
+  if (report.problems.size() < kMaxProblemsKept) report.problems.push_back(std::move(problem));
 }
 
 }  // namespace
@@ -329,17 +366,30 @@ Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions
       // The reader ran to the end of the file inside the quote: every line after it is lost
       // in one field, and which of them were rows cannot be told.
       return Error{ErrorCode::kInvalid,
-                   "line " + std::to_string(record->line) +
+                   "line " + std::to_string(record->quote_line) +
                        ": a quoted field opens here and is never closed, so the rest of the "
                        "file cannot be read as rows; nothing was imported"};
     }
+    if (record->last_line > record->line) {
+      // No directory field holds a line break. One quote too many (a remark "see note) joins
+      // every line up to the next quote into one field, in a column the importer may not read,
+      // so the record would otherwise pass with those lines' offices gone unnoticed.
+      AddProblem(report, {record->line,
+                          "lines " + std::to_string(record->line) + "-" +
+                              std::to_string(record->last_line) +
+                              " were read as one row: a quoted field opening on line " +
+                              std::to_string(record->quote_line) +
+                              " holds line breaks, which no directory field has (an unbalanced "
+                              "quote?); none of these lines was imported"});
+      continue;
+    }
     if (!error.empty()) {
-      report.problems.push_back({record->line, error});
+      AddProblem(report, {record->line, error});
       continue;
     }
     Result<ImportRow> row = ParseRow(*mapping, *record);
     if (!row) {
-      report.problems.push_back({record->line, row.error().message});
+      AddProblem(report, {record->line, row.error().message});
       continue;
     }
     const auto [first, inserted] =
@@ -349,10 +399,10 @@ Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions
       if (MergeRepeat(kept.office, row->office)) {
         ++report.repeated_rows;
       } else {
-        report.problems.push_back({record->line, "office '" + row->office.name + "' of " +
-                                                     row->pincode.str() + " is on line " +
-                                                     std::to_string(kept.line) +
-                                                     " too, with other details; that one is kept"});
+        AddProblem(report,
+                   {record->line, "office '" + row->office.name + "' of " + row->pincode.str() +
+                                      " is on line " + std::to_string(kept.line) +
+                                      " too, with other details; that one is kept"});
       }
       continue;
     }
@@ -374,7 +424,7 @@ Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport pars
   ImportReport& report = parsed.report;
   const std::vector<ImportRow>& rows = parsed.rows;
   report.applied = false;
-  if (options.strict && !report.problems.empty()) return report;  // applied stays false
+  if (options.strict && report.bad_rows > 0) return report;  // applied stays false
 
   const std::string source = options.source.empty() ? std::string(report.layout == CsvLayout::kNewer
                                                                       ? "import:india-post-newer"

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <memory>
@@ -53,12 +54,14 @@ class ProgressBar {
 };
 
 /// The bad rows, as FILE:LINE: reason, the first kProblemsShown of them.
-void PrintProblems(const std::string& file, const std::vector<db::RowProblem>& problems) {
+void PrintProblems(const std::string& file, const db::ImportReport& report) {
+  const std::vector<db::RowProblem>& problems = report.problems;
   for (std::size_t i = 0; i < problems.size() && i < kProblemsShown; ++i) {
     std::cerr << file << ":" << problems[i].line << ": " << problems[i].message << "\n";
   }
-  if (problems.size() > kProblemsShown) {
-    std::cerr << "... and " << problems.size() - kProblemsShown << " more bad rows\n";
+  const std::int64_t shown = static_cast<std::int64_t>(std::min(problems.size(), kProblemsShown));
+  if (report.bad_rows > shown) {
+    std::cerr << "... and " << report.bad_rows - shown << " more bad rows\n";
   }
 }
 
@@ -80,12 +83,12 @@ void Run(const ImportArgs& args) {
     bar.reset();
     throw std::runtime_error(args.file + ": " + parsed.error().message);
   }
-  const std::vector<db::RowProblem>& bad = parsed->report.problems;
-  if (!bad.empty() && (args.strict || parsed->rows.empty())) {
+  const std::int64_t bad_rows = parsed->report.bad_rows;
+  if (bad_rows > 0 && (args.strict || parsed->rows.empty())) {
     bar.reset();
-    PrintProblems(args.file, bad);
+    PrintProblems(args.file, parsed->report);
     if (args.strict) {
-      throw std::runtime_error("--strict: " + std::to_string(bad.size()) +
+      throw std::runtime_error("--strict: " + std::to_string(bad_rows) +
                                " bad rows, nothing imported");
     }
     throw std::runtime_error(args.file + ": none of its " + std::to_string(parsed->report.rows) +
@@ -102,12 +105,12 @@ void Run(const ImportArgs& args) {
   }
   if (!result) throw std::runtime_error(args.file + ": " + result.error().message);
   const db::ImportReport& report = *result;
-  PrintProblems(args.file, report.problems);
+  PrintProblems(args.file, report);
   std::cout << "imported " << args.file << " (" << db::ToString(report.layout)
             << " layout): " << report.rows << " rows, " << report.offices_added
             << " offices added, " << report.offices_updated << " updated, "
             << report.offices_unchanged << " unchanged, " << report.pincodes_added.size()
-            << " new pincodes, " << report.problems.size() << " bad rows skipped";
+            << " new pincodes, " << report.bad_rows << " bad rows skipped";
   if (report.repeated_rows > 0) std::cout << ", " << report.repeated_rows << " repeated rows";
   std::cout << "\n";
   constexpr std::size_t kNewKeysShown = 20;

@@ -1,7 +1,7 @@
 #pragma once
 // RFC 4180 CSV reading: comma-separated, fields optionally in double quotes ("" inside quotes is
-// one quote; quoted fields may hold commas and line breaks), CRLF or LF line ends, a leading
-// UTF-8 byte-order mark skipped.
+// one quote; quoted fields may hold commas and line breaks), CRLF, LF or CR line ends (each counts
+// one line), a leading UTF-8 byte-order mark skipped.
 
 #include <cstddef>
 #include <cstdint>
@@ -14,6 +14,9 @@ namespace pintag::db {
 
 struct CsvRecord {
   std::int64_t line = 0;  ///< 1-based line on which the record starts
+  /// The line it ends on: later than `line` when a quoted field holds line breaks.
+  std::int64_t last_line = 0;
+  std::int64_t quote_line = 0;  ///< the line where its last quoted field opened (0: none)
   std::vector<std::string> fields;
 };
 
@@ -35,6 +38,8 @@ class CsvReader {
   std::size_t position() const { return position_; }  ///< bytes consumed so far
 
  private:
+  bool endsLine(std::size_t at) const;  ///< LF, or a CR not followed by LF
+
   std::string_view text_;
   std::size_t position_ = 0;
   std::int64_t line_ = 1;
