@@ -213,6 +213,37 @@ std::string StripTypeSuffix(std::string name, const std::optional<std::string>& 
   return name;
 }
 
+/// The seed keeps a type suffix in a few names ("Dumrawan SO", "Khanapur  BO", twelve of them),
+/// which an import's "Dumrawan S.O" loses: such a stored office, when no office has the stripped
+/// name yet, is renamed to it, so the import updates it instead of adding a second office that
+/// would become the pincode's main one. True when one was renamed.
+bool RenameSuffixedTwin(Connection& connection, Pincode pincode, const PostOffice& office) {
+  Statement named =
+      connection.prepare("SELECT count(*) FROM offices WHERE pincode = ?1 AND trim(name) = ?2");
+  named.bind(1, std::int64_t{pincode.value()}).bind(2, office.name);
+  named.step();
+  if (named.getInt64(0) > 0) return false;
+  std::vector<std::pair<std::int64_t, std::string>> longer;  // id, name
+  {
+    Statement find = connection.prepare(
+        "SELECT id, name FROM offices WHERE pincode = ?1 AND "
+        "substr(name, 1, length(?2) + 1) = ?2 || ' ' ORDER BY id");
+    find.bind(1, std::int64_t{pincode.value()}).bind(2, office.name);
+    while (find.step()) longer.emplace_back(find.getInt64(0), find.getText(1));
+  }
+  for (const auto& [id, name] : longer) {
+    if (StripTypeSuffix(name, office.branch_type) != office.name) continue;
+    connection
+        .prepare(std::string("UPDATE offices SET name = ?2, updated_at = ") + detail::kNowSql +
+                 " WHERE id = ?1")
+        .bind(1, id)
+        .bind(2, office.name)
+        .run();
+    return true;
+  }
+  return false;
+}
+
 /// An optional detail the two rows agree on, or that only one of them knows.
 template <typename T>
 bool Agree(const std::optional<T>& a, const std::optional<T>& b) {
@@ -449,6 +480,7 @@ Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport pars
         }
         report.pincodes_added.emplace_back(row.pincode, *key);
       }
+      const bool renamed = RenameSuffixedTwin(connection, row.pincode, row.office);
       const detail::OfficeMatch match =
           detail::ClaimOffice(connection, row.pincode, row.office.name);
       detail::BindOffice(upsert, row.pincode, row.office, source);
@@ -456,7 +488,7 @@ Result<ImportReport> ApplyDirectoryCsv(Connection& connection, ParsedImport pars
       upsert.reset();
       if (match == detail::OfficeMatch::kNone) {
         ++report.offices_added;
-      } else if (changed > 0 || match == detail::OfficeMatch::kClaimed) {
+      } else if (changed > 0 || renamed || match == detail::OfficeMatch::kClaimed) {
         ++report.offices_updated;
       } else {
         ++report.offices_unchanged;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 
@@ -212,6 +213,33 @@ TEST_F(Importer, APostOfficeNamedAsASubOfficeMatchesItsSeededName) {
 
 // India Post writes NA for what it does not know. In an optional field that is unknown; in a
 // required one (a place a label prints) it is a bad row, as an empty field is.
+// Twelve seeded names keep their type suffix ("Dumrawan SO" of 805132). India Post's "Dumrawan
+// S.O" loses it on import, and was added beside the seeded office as a second one.
+TEST_F(Importer, ASeededNameThatKeptItsSuffixIsTheOfficeAnImportNames) {
+  const auto before = LookupPincode(db_, Pincode(805132)).value();
+  ASSERT_EQ(std::count_if(before.offices.begin(), before.offices.end(),
+                          [](const PostOffice& o) { return o.name == "Dumrawan SO"; }),
+            1);
+  const std::string csv = kOlderHeader +
+                          "Dumrawan S.O,805132,S.O,Delivery,Nawadha,Patna HQ,Bihar,Nawada,"
+                          "Nawada,Bihar\n";
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->offices_added, 0);
+  EXPECT_EQ(report->offices_updated, 1);
+  const auto after = LookupPincode(db_, Pincode(805132)).value();
+  EXPECT_EQ(after.offices.size(), before.offices.size());
+  const auto dumrawan = std::find_if(after.offices.begin(), after.offices.end(),
+                                     [](const PostOffice& o) { return o.name == "Dumrawan"; });
+  ASSERT_NE(dumrawan, after.offices.end());
+  EXPECT_EQ(dumrawan->branch_type, "SO");
+  EXPECT_EQ(dumrawan->taluk, "Nawada");
+
+  const auto again = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->offices_unchanged, 1);
+}
+
 TEST_F(Importer, ARequiredFieldThatSaysNaIsABadRow) {
   const std::string csv = kOlderHeader +
                           "Alpha B.O,999061,BO,Delivery,APS,APS,APS,NA,NA,APS\n"   // district
