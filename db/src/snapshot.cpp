@@ -230,6 +230,27 @@ bool InWalMode(const std::string& path) {
          header[19] == 2;
 }
 
+/// Whether `path` holds keys a replica serves: a whole, readable PinTag file with its key table,
+/// of any schema version. A replica just upgraded to a newer pintag still holds its last snapshot
+/// of the older schema, which VerifySnapshot refuses; the next snapshot must keep its keys all the
+/// same (it was installed without the comparison before 2026-12-07).
+bool HoldsServedKeys(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error) || InWalMode(path)) return false;
+  try {
+    Connection connection(path, {.create = false, .read_only = true});
+    if (SchemaVersion(connection) == 0) return false;
+    if (connection.queryInt64("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND "
+                              "name = 'tag_keys'") != 1) {
+      return false;
+    }
+    Statement check = connection.prepare("PRAGMA quick_check");
+    return check.step() && check.getText(0) == "ok";
+  } catch (const std::exception&) {
+    return false;  // damaged or not SQLite: replaced, as before
+  }
+}
+
 }  // namespace
 
 std::string LiveDatabaseAt(const std::string& path) {
@@ -376,7 +397,7 @@ Result<SnapshotInfo> InstallSnapshot(std::string_view bytes, const std::string& 
     if (!verified) return Error{verified.error().code, named_by_target(verified.error().message)};
     // A registry served now (a replica's last snapshot) is replaced only by one that keeps its
     // keys. A file there that is not a snapshot is replaced, as a damaged one must be.
-    if (VerifySnapshot(path)) {
+    if (HoldsServedKeys(path)) {
       std::string lost;
       try {
         lost = KeysNotKept(path, temporary.path());

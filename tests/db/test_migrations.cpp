@@ -47,6 +47,55 @@ TEST(Migrations, AnOlderFileIsUpgradedKeepingItsData) {
   EXPECT_EQ(routed->bin, "56");
 }
 
+// A key, once given, stays with its pincode whatever a writer asks: UPDATE and DELETE were
+// refused from version 1; INSERT OR REPLACE, whose delete fires no DELETE trigger, from version 5.
+// A version-4 file gets the new trigger on open.
+TEST(Migrations, TheKeyTableRefusesEveryWayOfReKeyingFromVersion4On) {
+  TempDir dir;
+  const std::string path = dir.file("v4.db");
+  std::int64_t key_of_110001 = 0;
+  {
+    Connection connection(path);
+    MigrateTo(connection, 4);
+    connection.execute(
+        "INSERT INTO pincodes (pincode, added_at, source) VALUES (110001, 'then', 'v4'), "
+        "(110002, 'then', 'v4');"
+        "INSERT INTO tag_keys (pincode, tag_key, allocated_at) VALUES (110001, 11684, 'then'), "
+        "(110002, 20000, 'then');");
+    key_of_110001 = 11684;
+    // What version 4 let through: the key moved to 110002, and 110001 lost its own.
+    connection.execute("BEGIN");
+    connection.execute("INSERT OR REPLACE INTO tag_keys VALUES (110002, 11684, 'x')");
+    EXPECT_EQ(connection.queryInt64("SELECT pincode FROM tag_keys WHERE tag_key = 11684"), 110002);
+    connection.execute("ROLLBACK");
+  }
+  auto opened = OpenDatabase(path);
+  ASSERT_TRUE(opened.ok()) << opened.error().message;
+  Connection& connection = opened.value().connection;
+  for (const std::string& rekey :
+       {std::string("INSERT OR REPLACE INTO tag_keys VALUES (110002, 11684, 'x')"),
+        std::string("REPLACE INTO tag_keys VALUES (110001, 30000, 'x')"),
+        std::string("INSERT INTO tag_keys VALUES (110001, 30000, 'x') ON CONFLICT DO NOTHING"),
+        std::string("INSERT OR IGNORE INTO tag_keys VALUES (110002, 11684, 'x')"),
+        std::string("UPDATE tag_keys SET tag_key = 30000 WHERE pincode = 110001"),
+        std::string("DELETE FROM tag_keys WHERE pincode = 110001")}) {
+    try {
+      connection.execute(rekey);
+      ADD_FAILURE() << "not refused: " << rekey;
+    } catch (const SqliteError& e) {
+      EXPECT_NE(std::string(e.what()).find("append-only"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(connection.queryInt64("SELECT tag_key FROM tag_keys WHERE pincode = 110001"),
+            key_of_110001);
+  EXPECT_EQ(connection.queryInt64("SELECT tag_key FROM tag_keys WHERE pincode = 110002"), 20000);
+  // A new pincode still gets a new key.
+  connection.execute(
+      "INSERT INTO pincodes (pincode, added_at, source) VALUES (110003, 'now', 'test');"
+      "INSERT INTO tag_keys (pincode, tag_key, allocated_at) VALUES (110003, 30000, 'now');");
+  EXPECT_EQ(connection.queryInt64("SELECT tag_key FROM tag_keys WHERE pincode = 110003"), 30000);
+}
+
 TEST(Migrations, Version2TokensAndTheirScansSurviveTheReplicaRoleRebuild) {
   TempDir dir;
   const std::string path = dir.file("v2.db");

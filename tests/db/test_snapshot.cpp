@@ -555,6 +555,42 @@ TEST(Snapshot, InstallRefusesASnapshotThatDoesNotKeepTheServedKeys) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 }
 
+// A replica upgraded to a newer pintag holds its last snapshot of the older schema, which
+// VerifySnapshot refuses as another version; the next snapshot must keep its keys all the same.
+TEST(Snapshot, InstallComparesKeysWithAServedSnapshotOfAnOlderSchema) {
+  TempDir dir;
+  const std::string primary_path = test::CopyOfSeeded(dir);
+  const std::string backup_path = dir.file("backup.db");
+  std::filesystem::copy_file(primary_path, backup_path);
+  Connection primary = test::OpenExisting(primary_path);
+  const auto lost = AddPincode(primary, Pincode(100016), {TestOffice("Lost Nagar")});
+  ASSERT_TRUE(lost.ok()) << lost.error().message;
+  const std::string target = dir.file("replica.db");
+  ASSERT_TRUE(WriteSnapshot(primary, target).ok());
+  {
+    Connection served(target, {.wal = false});
+    served.execute("PRAGMA user_version = " + std::to_string(kSchemaVersion - 1));
+  }
+  ASSERT_FALSE(VerifySnapshot(target).ok());  // another schema version
+  const std::string served = test::ReadFile(target);
+
+  Connection restored = test::OpenExisting(backup_path);
+  ASSERT_TRUE(WriteSnapshot(restored, dir.file("restored.db")).ok());
+  const auto refused = InstallSnapshot(test::ReadFile(dir.file("restored.db")), target);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+  EXPECT_NE(refused.error().message.find("key " + std::to_string(lost->key.value()) +
+                                         " (pincode 100016) is missing"),
+            std::string::npos)
+      << refused.error().message;
+  EXPECT_EQ(test::ReadFile(target), served);
+
+  // The primary's own next snapshot, which keeps the keys, replaces it.
+  ASSERT_TRUE(WriteSnapshot(primary, dir.file("after.db")).ok());
+  const auto newer = InstallSnapshot(test::ReadFile(dir.file("after.db")), target);
+  EXPECT_TRUE(newer.ok()) << newer.error().message;
+}
+
 // A registry a server writes is never replaced by a received snapshot, open (its log beside it)
 // or closed (in WAL mode, which no snapshot is): renamed over an open one, its log corrupted the
 // new file at the next checkpoint.

@@ -11,8 +11,9 @@ namespace pintag::db {
 
 /// The schema version this build writes. Version 1: pincodes, offices, key table. Version 2:
 /// sort plans and rules, API tokens, scan log (and the default plan when pincodes exist).
-/// Version 3: the `replica` token role. Version 4: the registry version (snapshot.hpp).
-inline constexpr int kSchemaVersion = 4;
+/// Version 3: the `replica` token role. Version 4: the registry version (snapshot.hpp). Version 5:
+/// the key table refuses an insert that meets an existing pincode or key (INSERT OR REPLACE).
+inline constexpr int kSchemaVersion = 5;
 
 struct OpenOptions {
   bool create = true;          ///< create the file when it does not exist
