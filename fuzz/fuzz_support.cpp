@@ -2,7 +2,9 @@
 
 #include <stdlib.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <vector>
 
@@ -34,8 +36,15 @@ FuzzRegistry Make() {
   // Token 4, for the revoke seed: revoking token 1 (the admin's) locked every later input out of
   // the admin routes for the rest of a campaign.
   token(db::Role::kScanner);
+  // A web directory, so that static files are served too (a page and a script, and a folder
+  // whose index.html is served for its bare path).
+  std::filesystem::create_directories(dir + "/web/docs");
+  std::ofstream(dir + "/web/index.html") << "<!doctype html><title>PinTag</title>\n";
+  std::ofstream(dir + "/web/app.js") << "export const ready = true;\n";
+  std::ofstream(dir + "/web/docs/index.html") << "<!doctype html><title>docs</title>\n";
   app::AppConfig config;
   config.db_path = registry.db_path;
+  config.web_dir = dir + "/web";
   config.max_pixels = 1 << 20;  // small photos keep executions fast; limits are tested elsewhere
   config.max_batch = 4;
   config.max_tag_px = 256;
@@ -66,6 +75,31 @@ void RemoveDirectoryAtExit(const std::string& dir) {
 const FuzzRegistry& Registry() {
   static const FuzzRegistry registry = Make();
   return registry;
+}
+
+DatabaseReset::DatabaseReset(const std::string& path)
+    : live_(path, {.create = false}), saved_(":memory:", {.wal = false}) {
+  live_.backupInto(saved_);
+  version_ = live_.queryInt64("PRAGMA data_version");
+}
+
+void DatabaseReset::operator()() {
+  // data_version changes only with other connections' commits: the server's pool, the scan log
+  // writer, the importer's; never with this connection's own restore.
+  const std::int64_t version = live_.queryInt64("PRAGMA data_version");
+  if (version == version_) return;
+  saved_.backupInto(live_);
+  version_ = live_.queryInt64("PRAGMA data_version");
+}
+
+void ResetRegistry() {
+  static DatabaseReset reset(Registry().db_path);
+  reset();
+}
+
+bool ExpectSuccess() {
+  static const bool expect = std::getenv("PINTAG_FUZZ_EXPECT_SUCCESS") != nullptr;
+  return expect;
 }
 
 std::string WithTokens(std::string text) {

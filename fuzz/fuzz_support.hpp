@@ -1,10 +1,13 @@
 #pragma once
 // What several fuzz targets share: a seeded registry in a temporary file, made once per fuzzing
-// process, with one token per role, and the real application over it.
+// process, with one token per role, and the real application over it; the database put back as
+// it was before each input; the check that the seeds meant to succeed still do.
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
+#include "pintag/db/sqlite.hpp"
 #include "pintag/server/api.hpp"
 
 namespace pintag::fuzz {
@@ -17,6 +20,33 @@ struct FuzzRegistry {
 
 /// Made on first call (seeding takes a second or two), then the same for the whole process.
 const FuzzRegistry& Registry();
+
+/// Puts a database file back, before each input, to the state it had when this was made. One
+/// input's writes (a revoked token, a retired pincode, a logged scan) would otherwise change every
+/// later answer, and a failure that needed them would not replay from its saved input.
+class DatabaseReset {
+ public:
+  /// Copies the database at `path` into memory.
+  explicit DatabaseReset(const std::string& path);
+  /// Copies it back with SQLite's backup API when any connection has committed to the file
+  /// since the last call (PRAGMA data_version), so that an input that wrote nothing costs one
+  /// query instead of a copy of the whole registry.
+  void operator()();
+
+ private:
+  db::Connection live_;
+  db::Connection saved_;
+  std::int64_t version_ = 0;
+};
+
+/// Registry()'s database put back as it was made (DatabaseReset). Call at the start of each input,
+/// and once before the first (LLVMFuzzerInitialize) so that the copy is of the fresh registry.
+void ResetRegistry();
+
+/// Whether PINTAG_FUZZ_EXPECT_SUCCESS is set: scripts/fuzz.sh then runs the seeds listed in
+/// fuzz/expect-success.txt, and a target aborts on any input it does not answer with success
+/// (a 2xx, an applied import), so a seed that stops reaching its handler fails the run.
+bool ExpectSuccess();
 
 /// Removes `dir` and what it holds when the process exits normally (a fuzz registry is about
 /// 34 MB); a crash leaves it, beside the reproducer.

@@ -1,11 +1,12 @@
 // JSON request bodies into every route that takes one, through Api::handle (auth, limits, the
 // problem+json wrapper, the real handlers) with an admin token. The first byte picks the route;
 // the rest is the body. Any answer is fine except a 500 (an unexpected exception) or an error
-// that is not problem+json.
+// that is not problem+json. Each input starts from the same registry (ResetRegistry).
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -31,12 +32,13 @@ constexpr std::array<Target, 5> kTargets = {{
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   pintag::server::SetAccessLogEnabled(false);
-  pintag::fuzz::Registry();
+  pintag::fuzz::ResetRegistry();
   return 0;
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
+  pintag::fuzz::ResetRegistry();
   const Target& target = kTargets[data[0] % kTargets.size()];
   pintag::server::HttpRequest request;
   request.method = target.method;
@@ -50,5 +52,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (response.status == 500) std::abort();
   if (response.status >= 400 && response.content_type != pintag::server::kProblemContentType)
     std::abort();
+  if (pintag::fuzz::ExpectSuccess() && (response.status < 200 || response.status > 299)) {
+    std::fprintf(stderr, "expected a 2xx from %s %s, got %d: %.300s\n", target.method, target.path,
+                 response.status, response.body.c_str());
+    std::abort();
+  }
   return 0;
 }

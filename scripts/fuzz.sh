@@ -13,8 +13,13 @@
 #                                       (all workers together), whichever limit comes first;
 #                                       Ctrl-C stops it too, and is recorded as stopped by hand
 #   scripts/fuzz.sh --smoke [target …]  the bounded run of the test suite: every seed and every
-#                                       regression input once, then PINTAG_FUZZ_SMOKE_RUNS
-#                                       (default 500) mutations from a fixed seed
+#                                       regression input once, then a run from a fixed seed of
+#                                       PINTAG_FUZZ_SMOKE_RUNS (default 500) executions in all,
+#                                       the seeds' and regression inputs' included; it fails on
+#                                       any slow-unit file (an input over 10 s) as on a crash
+# Both first replay each seed and regression input alone, and the seeds listed in
+# fuzz/expect-success.txt with PINTAG_FUZZ_EXPECT_SUCCESS set: each of those must succeed (a 2xx,
+# a clean import), so a seed that no longer reaches its handler fails the run.
 # Targets: image_detect http_request json_body csv_import parsers (default: all). Each run's
 # executions are appended to build-fuzz/fuzz-runs.txt (docs/RELIABILITY.md records them).
 set -euo pipefail
@@ -58,9 +63,28 @@ for target in "${targets[@]}"; do
   inputs=()
   [[ -d "$regressions" ]] && inputs+=("$regressions"/*)
   [[ -d "$seeds" ]] && inputs+=("$seeds"/*)
+  # libFuzzer's default timeout is 1200 s; a kept input is a small one. Artifacts (a slow unit
+  # too) go beside the crashes, not into the working directory.
+  limits=(-timeout=30 -rss_limit_mb=2048 -artifact_prefix="$crashes/")
   # Every kept input once, as plain files (a regression must stay fixed).
-  if [[ ${#inputs[@]} -gt 0 ]] && ! "$exe" -runs=1 "${inputs[@]}" >"$log" 2>&1; then
+  if [[ ${#inputs[@]} -gt 0 ]] && ! "$exe" "${limits[@]}" -runs=1 "${inputs[@]}" >"$log" 2>&1; then
     echo "fuzz.sh: $target fails on a kept input:" >&2
+    tail -40 "$log" >&2
+    status=1
+    continue
+  fi
+  # The seeds meant to succeed must still reach their handlers and succeed there: fuzzing a
+  # refusal at validation would leave the handler behind it untested while everything passes.
+  expected=()
+  while read -r listed _; do
+    [[ "$listed" == "$target"/* ]] || continue
+    [[ -f "$root/fuzz/corpus/$listed" ]] ||
+      { echo "fuzz.sh: fuzz/expect-success.txt names a missing seed $listed" >&2; exit 2; }
+    expected+=("$root/fuzz/corpus/$listed")
+  done < <(grep -v '^#' "$root/fuzz/expect-success.txt")
+  if [[ ${#expected[@]} -gt 0 ]] &&
+    ! PINTAG_FUZZ_EXPECT_SUCCESS=1 "$exe" "${limits[@]}" -runs=1 "${expected[@]}" >>"$log" 2>&1; then
+    echo "fuzz.sh: $target: a seed of fuzz/expect-success.txt did not succeed:" >&2
     tail -40 "$log" >&2
     status=1
     continue
@@ -69,9 +93,11 @@ for target in "${targets[@]}"; do
   mkdir -p "$corpus"
   if [[ $smoke == 1 ]]; then
     corpus="$(mktemp -d)"
-    args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-500}" -seed=1 -max_len=65536 -timeout=30)
+    args=(-runs="${PINTAG_FUZZ_SMOKE_RUNS:-500}" -seed=1 -max_len=65536 -timeout=30
+          -rss_limit_mb=2048)
   else
-    args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30)
+    args=(-max_total_time="${PINTAG_FUZZ_SECONDS:-1800}" -max_len=1048576 -timeout=30
+          -rss_limit_mb=2048)
     if [[ -n "${PINTAG_FUZZ_RUNS:-}" ]]; then
       [[ "$PINTAG_FUZZ_RUNS" =~ ^[0-9]+$ ]] ||
         { echo "fuzz.sh: PINTAG_FUZZ_RUNS must be a number" >&2; exit 2; }
@@ -83,8 +109,10 @@ for target in "${targets[@]}"; do
     # process does.
     if [[ "$jobs" -gt 1 ]]; then args+=(-fork="$jobs" -ignore_timeouts=0 -ignore_ooms=0); fi
   fi
+  # New inputs go to the first folder only; the seeds and regressions are read, never written.
   dirs=("$corpus")
   [[ -d "$seeds" ]] && dirs+=("$seeds")
+  [[ -d "$regressions" ]] && dirs+=("$regressions")
   artifacts_before="$(find "$crashes" -type f | wc -l)"
   outcome=0
   "$exe" "${args[@]}" -artifact_prefix="$crashes/" -print_final_stats=1 "${dirs[@]}" \
@@ -96,6 +124,12 @@ for target in "${targets[@]}"; do
     tail -40 "$log" | grep -q 'libFuzzer: run interrupted'; then
     outcome=0
     how="stopped by hand, no failure"
+  fi
+  # libFuzzer exits 0 after writing a slow-unit file; in the bounded run, on seeds and a few
+  # hundred mutations, an input that slow is a finding.
+  if ((outcome == 0 && smoke == 1 && artifacts_after > artifacts_before)); then
+    echo "fuzz.sh: $target: an input took over 10 s (a slow-unit file in $crashes/)" >&2
+    outcome=1
   fi
   if ((outcome == 0)); then
     workers=""

@@ -2,7 +2,7 @@
 # Soak: one `pintag serve` on loopback under wrk's mixed traffic (scripts/soak.lua: lookups,
 # searches, routes, label PDFs and PNGs, detections of a 1080p JPEG), every answer checked.
 #   scripts/soak.sh                       60 s at 64 connections after a 30 s warm-up
-#   SOAK_SECONDS=8 SOAK_WARMUP_SECONDS=8 SOAK_CONNECTIONS=8 scripts/soak.sh    (the test suite's)
+#   SOAK_SECONDS=8 SOAK_WARMUP_SECONDS=16 SOAK_CONNECTIONS=8 scripts/soak.sh   (the test suite's)
 # Passes when no answer was wrong or missing (0 errors, 0 socket errors, 0 timeouts) and the
 # server's peak resident memory in the measured phase is less than 10 % above its warm-up peak.
 # Prints one `soak-result` line with mean, p50, p90, p99 and max latency (docs/RELIABILITY.md
