@@ -30,13 +30,20 @@ class DatabaseReset {
   explicit DatabaseReset(const std::string& path);
   /// Copies it back with SQLite's backup API when any connection has committed to the file
   /// since the last call (PRAGMA data_version), so that an input that wrote nothing costs one
-  /// query instead of a copy of the whole registry.
+  /// query instead of a copy of the whole registry; one that only logged scans has their rows
+  /// deleted instead.
   void operator()();
 
  private:
+  static std::int64_t RegistryVersionOf(db::Connection& connection);
+  static std::int64_t ScanCount(db::Connection& connection);
+
   db::Connection live_;
   db::Connection saved_;
-  std::int64_t version_ = 0;
+  std::int64_t version_ = 0;           ///< PRAGMA data_version after the last reset
+  std::int64_t registry_version_ = 0;  ///< the registry version when saved
+  std::int64_t scans_ = 0;             ///< scan log rows when saved
+  std::int64_t last_scan_ = 0;         ///< their largest id
 };
 
 /// Registry()'s database put back as it was made (DatabaseReset). Call at the start of each input,

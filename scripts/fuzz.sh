@@ -24,6 +24,8 @@
 # executions are appended to build-fuzz/fuzz-runs.txt (docs/RELIABILITY.md records them).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# "-dirty" when tracked files differ from the commit (the build has them too).
+commit="$(git -C "$root" describe --always --dirty --abbrev=12 2>/dev/null || echo "unknown commit")"
 build="${PINTAG_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 smoke=0
 if [[ "${1:-}" == "--smoke" ]]; then
@@ -114,6 +116,7 @@ for target in "${targets[@]}"; do
   [[ -d "$seeds" ]] && dirs+=("$seeds")
   [[ -d "$regressions" ]] && dirs+=("$regressions")
   artifacts_before="$(find "$crashes" -type f | wc -l)"
+  started=$SECONDS
   outcome=0
   "$exe" "${args[@]}" -artifact_prefix="$crashes/" -print_final_stats=1 "${dirs[@]}" \
     >>"$log" 2>&1 || outcome=$?
@@ -142,7 +145,8 @@ for target in "${targets[@]}"; do
       runs="$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || true)"
     fi
     echo "fuzz.sh: $target: ${runs:-?} executions, $how"
-    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}$workers, $how" \
+    # The tree it was built from: a figure quoted later must say which code it covers.
+    echo "$(date -u +%FT%TZ) $target $( [[ $smoke == 1 ]] && echo smoke || echo long ) ${runs:-?}$workers, $how, $((SECONDS - started)) s, built from $commit" \
       >>"$build/fuzz-runs.txt"
   else
     echo "fuzz.sh: $target FAILED; the input is in $crashes/:" >&2
