@@ -49,7 +49,10 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
           quoted = false;
         }
       } else {
-        if (endsLine(position_ - 1)) ++line_;
+        if (endsLine(position_ - 1)) {
+          if (record.line_break_quote_line == 0) record.line_break_quote_line = record.quote_line;
+          ++line_;
+        }
         field += c;
       }
       continue;

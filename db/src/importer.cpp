@@ -213,10 +213,10 @@ std::string StripTypeSuffix(std::string name, const std::optional<std::string>& 
   return name;
 }
 
-/// The seed keeps a type suffix in a few names ("Dumrawan SO", "Khanapur  BO", twelve of them),
-/// which an import's "Dumrawan S.O" loses: such a stored office, when no office has the stripped
-/// name yet, is renamed to it, so the import updates it instead of adding a second office that
-/// would become the pincode's main one. True when one was renamed.
+/// The seed keeps a type suffix in a few names ("Dumrawan SO", "Khanapur  BO", "Akhodad So": 22 of
+/// them), which an import's "Dumrawan S.O" loses: such a stored office, when no office has the
+/// stripped name yet, is renamed to it, so the import updates it instead of adding a second office
+/// that would become the pincode's main one. True when one was renamed.
 bool RenameSuffixedTwin(Connection& connection, Pincode pincode, const PostOffice& office) {
   Statement named =
       connection.prepare("SELECT count(*) FROM offices WHERE pincode = ?1 AND trim(name) = ?2");
@@ -272,7 +272,8 @@ bool MergeRepeat(PostOffice& kept, const PostOffice& later) {
 }
 
 /// A field's text as a message may quote it: at most 40 bytes (cut at a character), control bytes
-/// written as \xNN. A coordinate field of a megabyte, or one holding a terminal's escape
+/// and the code points CheckText refuses (a bidi override would reorder the line) written as
+/// \xNN. A coordinate field of a megabyte, or one holding a terminal's escape
 /// sequences, would otherwise be printed as it is.
 std::string ShownField(std::string_view text) {
   constexpr std::size_t kMaxShown = 40;
@@ -281,7 +282,7 @@ std::string ShownField(std::string_view text) {
   while (i < text.size() && i < kMaxShown) {
     const Utf8CodePoint decoded = DecodeUtf8(text, i);
     const bool control = decoded.length == 0 || decoded.value < 0x20 || decoded.value == 0x7F ||
-                         (decoded.value >= 0x80 && decoded.value <= 0x9F);
+                         RefusedCodePoint(decoded.value) != nullptr;
     const std::size_t length = decoded.length == 0 ? 1 : decoded.length;
     if (control) {
       for (std::size_t k = i; k < i + length; ++k) {
@@ -409,7 +410,7 @@ Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions
                           "lines " + std::to_string(record->line) + "-" +
                               std::to_string(record->last_line) +
                               " were read as one row: a quoted field opening on line " +
-                              std::to_string(record->quote_line) +
+                              std::to_string(record->line_break_quote_line) +
                               " holds line breaks, which no directory field has (an unbalanced "
                               "quote?); none of these lines was imported"});
       continue;

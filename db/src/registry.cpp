@@ -116,7 +116,7 @@ Result<SearchPage> Search(Connection& connection, const SearchQuery& query) {
   for (const auto& [field, value] :
        {std::pair{"name prefix", &query.name_prefix}, std::pair{"district", &query.district},
         std::pair{"state", &query.state}}) {
-    if (auto error = CheckText(field, *value, kMaxNameBytes, true)) return *error;
+    if (auto error = CheckQueryText(field, *value, kMaxNameBytes)) return *error;
   }
   return Guard([&]() -> Result<SearchPage> {
     // Fixed SQL fragments; every value is a bound parameter.

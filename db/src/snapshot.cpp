@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string_view>
@@ -230,24 +231,48 @@ bool InWalMode(const std::string& path) {
          header[19] == 2;
 }
 
-/// Whether `path` holds keys a replica serves: a whole, readable PinTag file with its key table,
-/// of any schema version. A replica just upgraded to a newer pintag still holds its last snapshot
-/// of the older schema, which VerifySnapshot refuses; the next snapshot must keep its keys all the
-/// same (it was installed without the comparison before 2026-12-07).
-bool HoldsServedKeys(const std::string& path) {
+/// VerifySnapshot's checks but the schema version's: a regular file, not in WAL mode (opened
+/// read-only it would miss what its log holds), of a PinTag schema version, whole (quick_check).
+/// Its schema version, with `connection` open on it; throws SqliteError when SQLite cannot open it.
+Result<int> OpenWholeRegistry(const std::string& path, std::optional<Connection>& connection) {
   std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error) || InWalMode(path)) return false;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    return Error{ErrorCode::kNotFound, "snapshot " + path + " does not exist"};
+  }
+  if (InWalMode(path)) {
+    return Error{ErrorCode::kConflict,
+                 "snapshot " + path +
+                     " is in WAL mode, as a live registry database is; a replica serves a "
+                     "snapshot (`pintag snapshot --db LIVE --out FILE` writes one)"};
+  }
+  connection.emplace(path, ConnectionOptions{.create = false, .read_only = true});
+  const int version = SchemaVersion(*connection);
+  if (version == 0) {
+    return Error{ErrorCode::kConflict, "snapshot " + path +
+                                           " holds no PinTag registry (it is empty, or another "
+                                           "application's SQLite database)"};
+  }
+  Statement check = connection->prepare("PRAGMA quick_check");
+  const std::string verdict = check.step() ? check.getText(0) : "no answer";
+  if (verdict != "ok") {
+    return Error{ErrorCode::kStorage, "snapshot " + path + " is damaged: " + verdict};
+  }
+  return version;
+}
+
+/// Whether `path` holds keys a replica serves: a whole PinTag file with its key table, of any
+/// schema version. A replica just upgraded to a newer pintag still holds its last snapshot of the
+/// older schema, which VerifySnapshot refuses; the next snapshot must keep its keys all the same
+/// (it was installed without the comparison before 2026-12-07).
+bool HoldsServedKeys(const std::string& path) {
   try {
-    Connection connection(path, {.create = false, .read_only = true});
-    if (SchemaVersion(connection) == 0) return false;
-    if (connection.queryInt64("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND "
-                              "name = 'tag_keys'") != 1) {
-      return false;
-    }
-    Statement check = connection.prepare("PRAGMA quick_check");
-    return check.step() && check.getText(0) == "ok";
+    std::optional<Connection> connection;
+    if (!OpenWholeRegistry(path, connection)) return false;
+    return connection->queryInt64(
+               "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND "
+               "name = 'tag_keys'") == 1;
   } catch (const std::exception&) {
-    return false;  // damaged or not SQLite: replaced, as before
+    return false;  // not SQLite: replaced, as a damaged file is
   }
 }
 
@@ -444,37 +469,16 @@ void RemoveSnapshotTemporariesOnSignal() noexcept {
 }
 
 Result<SnapshotInfo> VerifySnapshot(const std::string& path) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) {
-    return Error{ErrorCode::kNotFound, "snapshot " + path + " does not exist"};
-  }
-  // A WAL-mode file opened read-only misses what its log holds, and leaves -wal and -shm files.
-  if (InWalMode(path)) {
-    return Error{ErrorCode::kConflict,
-                 "snapshot " + path +
-                     " is in WAL mode, as a live registry database is; a replica serves a "
-                     "snapshot (`pintag snapshot --db LIVE --out FILE` writes one)"};
-  }
   try {
-    Connection connection(path, {.create = false, .read_only = true});
-    const int version = SchemaVersion(connection);
-    if (version == 0) {
-      return Error{ErrorCode::kConflict,
-                   "snapshot " + path +
-                       " holds no PinTag registry (it is empty, or another application's "
-                       "SQLite database)"};
-    }
-    if (version != kSchemaVersion) {
+    std::optional<Connection> connection;
+    const Result<int> version = OpenWholeRegistry(path, connection);
+    if (!version) return version.error();
+    if (*version != kSchemaVersion) {
       return Error{ErrorCode::kConflict, "snapshot " + path + " has schema version " +
-                                             std::to_string(version) + "; this pintag reads " +
+                                             std::to_string(*version) + "; this pintag reads " +
                                              std::to_string(kSchemaVersion)};
     }
-    Statement check = connection.prepare("PRAGMA quick_check");
-    const std::string verdict = check.step() ? check.getText(0) : "no answer";
-    if (verdict != "ok") {
-      return Error{ErrorCode::kStorage, "snapshot " + path + " is damaged: " + verdict};
-    }
-    Result<std::int64_t> registry_version = RegistryVersion(connection);
+    Result<std::int64_t> registry_version = RegistryVersion(*connection);
     if (!registry_version) return registry_version.error();
     return SnapshotInfo{path, *registry_version, std::filesystem::file_size(path)};
   } catch (const SqliteError& e) {

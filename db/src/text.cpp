@@ -45,10 +45,8 @@ bool IsTrimmedSpace(char32_t c) {
          c == 0x202F || c == 0x205F || c == 0x2060 || c == 0x3000 || c == 0xFEFF;
 }
 
-/// What CheckText refuses beyond the C0 controls, or nothing: the C1 controls (a terminal takes
-/// U+009B as an escape), the line and paragraph separators (a line break in a one-line name), and
-/// the bidi embeddings, overrides and isolates, which reorder the text after them ("Evil" + U+202E
-/// + "ecilop" shows as "Evilpolice"). The marks U+200E and U+200F stay: Urdu text needs them.
+}  // namespace
+
 const char* RefusedCodePoint(char32_t c) {
   if (c >= 0x80 && c <= 0x9F) return "control character";
   if (c == 0x2028 || c == 0x2029) return "line or paragraph separator";
@@ -57,8 +55,6 @@ const char* RefusedCodePoint(char32_t c) {
   }
   return nullptr;
 }
-
-}  // namespace
 
 std::string_view TrimUnicodeSpaces(std::string_view text) {
   while (!text.empty()) {
@@ -89,8 +85,10 @@ bool IsBlank(std::string_view text) {
   return true;
 }
 
-std::optional<Error> CheckText(std::string_view field, std::string_view value,
-                               std::size_t max_bytes, bool allow_empty) {
+namespace {
+
+std::optional<Error> CheckTextAs(std::string_view field, std::string_view value,
+                                 std::size_t max_bytes, bool allow_empty, bool stored) {
   const auto invalid = [&](const std::string& why) {
     return Error{ErrorCode::kInvalid, std::string(field) + " " + why};
   };
@@ -114,7 +112,7 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
     }
     const Utf8CodePoint decoded = DecodeUtf8(value, i);
     if (decoded.length == 0) return invalid("is not valid UTF-8 at byte " + std::to_string(i));
-    if (const char* what = RefusedCodePoint(decoded.value)) {
+    if (const char* what = stored ? RefusedCodePoint(decoded.value) : nullptr) {
       char code[16];
       std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(decoded.value));
       return invalid("contains " + std::string(what) + " " + code + " at byte " +
@@ -123,6 +121,18 @@ std::optional<Error> CheckText(std::string_view field, std::string_view value,
     i += decoded.length;
   }
   return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<Error> CheckText(std::string_view field, std::string_view value,
+                               std::size_t max_bytes, bool allow_empty) {
+  return CheckTextAs(field, value, max_bytes, allow_empty, true);
+}
+
+std::optional<Error> CheckQueryText(std::string_view field, std::string_view value,
+                                    std::size_t max_bytes) {
+  return CheckTextAs(field, value, max_bytes, true, false);
 }
 
 std::optional<Error> CheckShownName(std::string_view field, std::string_view value,

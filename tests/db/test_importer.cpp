@@ -211,10 +211,8 @@ TEST_F(Importer, APostOfficeNamedAsASubOfficeMatchesItsSeededName) {
   EXPECT_EQ(type_of["Shastri Bhawan SO"], "BO");
 }
 
-// India Post writes NA for what it does not know. In an optional field that is unknown; in a
-// required one (a place a label prints) it is a bad row, as an empty field is.
-// Twelve seeded names keep their type suffix ("Dumrawan SO" of 805132). India Post's "Dumrawan
-// S.O" loses it on import, and was added beside the seeded office as a second one.
+// 22 seeded names keep a type suffix ("Dumrawan SO" of 805132). India Post's "Dumrawan S.O"
+// loses it on import, and was added beside the seeded office as a second one.
 TEST_F(Importer, ASeededNameThatKeptItsSuffixIsTheOfficeAnImportNames) {
   const auto before = LookupPincode(db_, Pincode(805132)).value();
   ASSERT_EQ(std::count_if(before.offices.begin(), before.offices.end(),
@@ -240,6 +238,8 @@ TEST_F(Importer, ASeededNameThatKeptItsSuffixIsTheOfficeAnImportNames) {
   EXPECT_EQ(again->offices_unchanged, 1);
 }
 
+// India Post writes NA for what it does not know. In an optional field that is unknown; in a
+// required one (a place a label prints) it is a bad row, as an empty field is.
 TEST_F(Importer, ARequiredFieldThatSaysNaIsABadRow) {
   const std::string csv = kOlderHeader +
                           "Alpha B.O,999061,BO,Delivery,APS,APS,APS,NA,NA,APS\n"   // district
@@ -525,7 +525,7 @@ TEST_F(Importer, LineNumbersCountLoneCarriageReturnsAsLineEnds) {
   EXPECT_EQ(report->problems[2].line, 7);
 }
 
-TEST_F(Importer, AMillionBadRowsAreCountedAndTheFirstThousandDescribed) {
+TEST_F(Importer, ThousandsOfBadRowsAreCountedAndTheFirstThousandDescribed) {
   std::string csv = kOlderHeader;
   for (int i = 0; i < 3000; ++i) csv += "a\n";
   csv += "Good B.O,999081,BO,Delivery,APS,APS,APS,T,APS,APS\n";
@@ -555,6 +555,26 @@ TEST_F(Importer, AFieldQuotedInAMessageIsCutAndItsControlBytesEscaped) {
   EXPECT_NE(escaped.find("latitude '\\x1B]0;pwned\\x07\\x1B[2J28.6' is not a number"),
             std::string::npos)
       << escaped;
+  const std::string bidi = ParseDirectoryCsv(kNewerHeader + row_start + "12\u202Eabc,77.2\n")
+                               ->report.problems.at(0)
+                               .message;
+  EXPECT_NE(bidi.find("latitude '12\\xE2\\x80\\xAEabc' is not a number"), std::string::npos)
+      << bidi;
+}
+
+TEST_F(Importer, ARecordSpanningLinesNamesTheQuoteThatHeldTheLineBreak) {
+  // The line break is in the name, quoted on line 2; a later field of the record, on line 3, is
+  // quoted too.
+  const std::string csv = kOlderHeader +
+                          "\"Alpha\nB.O\",999111,BO,Delivery,APS,APS,APS,T,APS,\"APS\"\n"
+                          "Gamma B.O,999112,BO,Delivery,APS,APS,APS,T,APS,APS\n";
+  const auto parsed = ParseDirectoryCsv(csv);
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  ASSERT_EQ(parsed->report.problems.size(), 1u);
+  EXPECT_NE(parsed->report.problems[0].message.find(
+                "lines 2-3 were read as one row: a quoted field opening on line 2"),
+            std::string::npos)
+      << parsed->report.problems[0].message;
 }
 
 TEST_F(Importer, AQuoteNeverClosedIsNamedOnTheLineItOpens) {

@@ -17,6 +17,8 @@ struct CsvRecord {
   /// The line it ends on: later than `line` when a quoted field holds line breaks.
   std::int64_t last_line = 0;
   std::int64_t quote_line = 0;  ///< the line where its last quoted field opened (0: none)
+  /// The line where the first quoted field holding a line break opened (0: none).
+  std::int64_t line_break_quote_line = 0;
   std::vector<std::string> fields;
 };
 

@@ -41,6 +41,19 @@ bool IsBlank(std::string_view text);
 std::optional<Error> CheckText(std::string_view field, std::string_view value,
                                std::size_t max_bytes, bool allow_empty = false);
 
+/// CheckText for text that is looked for, not stored (a search's name prefix, district, state):
+/// the same length, control-character and UTF-8 checks, but not RefusedCodePoint's, so a value
+/// stored before those were refused can still be searched for.
+std::optional<Error> CheckQueryText(std::string_view field, std::string_view value,
+                                    std::size_t max_bytes);
+
+/// What CheckText refuses in stored text beyond the C0 controls and DEL, named for a message, or
+/// nothing: the C1 controls (a terminal takes U+009B as an escape), the line and paragraph
+/// separators (a line break in a one-line name), and the bidi embeddings, overrides and isolates,
+/// which reorder the text after them ("Evil" + U+202E + "ecilop" shows as "Evilpolice"). The
+/// marks U+200E and U+200F are not among them: Urdu text needs them.
+const char* RefusedCodePoint(char32_t c);
+
 /// CheckText, and more for a name people tell apart by how it reads (a sort plan's name, a bin):
 /// no space or invisible character (IsBlank's) at either end, nor one inside but the plain space
 /// and the zero-width joiners Indic words need (U+200C, U+200D, which may also end a word, as in
