@@ -101,12 +101,16 @@ TEST(Worlds, TheBlindWorldIsRunWholeAsDrawn) {
   SweepOptions quality = options;
   quality.jpeg_quality = 90;
   EXPECT_NE(SweepOptionsError(quality).find("--jpeg-quality"), std::string::npos);
+  // Every other world's photometry option, the held-out world's analyses included.
   SweepOptions full_chroma = options;
   full_chroma.jpeg_full_chroma = true;
   EXPECT_NE(SweepOptionsError(full_chroma), "");
   SweepOptions no_mosaic = options;
   no_mosaic.no_mosaic = true;
   EXPECT_NE(SweepOptionsError(no_mosaic), "");
+  SweepOptions sensor = options;
+  sensor.sensor_scale = 2;
+  EXPECT_NE(SweepOptionsError(sensor), "");
   SweepOptions tone = options;
   tone.s_curve = true;
   EXPECT_NE(SweepOptionsError(tone), "");

@@ -262,11 +262,13 @@ bool ParseArgs(int argc, char** argv, Args* args) {
     for (const auto& [given, option] :
          {std::pair{!args->pintag_options.empty(), "--pintag-options"},
           std::pair{!args->dump_misses.empty(), "--dump-misses"},
-          std::pair{!args->only_frames.empty(), "--frame"}}) {
+          std::pair{!args->save_frames.empty(), "--save-frames"},
+          std::pair{!args->only_frames.empty(), "--frame"},
+          std::pair{frames_per_bin_given || tagless_given, "a sweep of another size"}}) {
       if (given) {
         std::fprintf(stderr,
                      "pintag_bench: %s is for tuning and study, and the blind world is neither: "
-                     "use --world held-out or tuning\n",
+                     "it is run whole (use --world held-out or tuning)\n",
                      option);
         return false;
       }

@@ -93,13 +93,12 @@ std::string ToString(scene::World world) {
 
 std::string SweepOptionsError(const SweepOptions& options) {
   if (options.world == scene::World::kBlind) {
-    // Each look at the blind world by parts makes it less blind: it is run whole, as drawn.
+    // Each look at the blind world by parts makes it less blind: it is run whole, as drawn (the
+    // held-out world's analyses are refused below for every world but that one).
     if (options.quick)
       return "--quick is for the tuning and held-out worlds; the blind one is run whole";
-    if (options.jpeg_quality != 0 || options.jpeg_full_chroma || options.no_mosaic ||
-        options.sensor_scale != 1) {
-      return "--jpeg-quality, --jpeg-chroma, --no-mosaic and --sensor-scale are analyses of the "
-             "held-out world; the blind world is run as drawn";
+    if (options.jpeg_quality != 0) {
+      return "--jpeg-quality is an analysis of the held-out world; the blind world is run as drawn";
     }
   }
   if (options.s_curve && options.world != scene::World::kTuning) {
