@@ -16,6 +16,14 @@
 namespace pintag::fuzz {
 namespace {
 
+std::int64_t RegistryVersionOf(db::Connection& connection) {
+  return connection.queryInt64("SELECT version FROM registry_version");
+}
+
+std::int64_t ScanCount(db::Connection& connection) {
+  return connection.queryInt64("SELECT count(*) FROM scan_log");
+}
+
 FuzzRegistry Make() {
   std::string dir = (std::filesystem::temp_directory_path() / "pintag-fuzz-XXXXXX").string();
   if (::mkdtemp(dir.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
@@ -84,14 +92,6 @@ DatabaseReset::DatabaseReset(const std::string& path)
   scans_ = ScanCount(live_);
   last_scan_ = live_.queryInt64("SELECT coalesce(max(id), 0) FROM scan_log");
   version_ = live_.queryInt64("PRAGMA data_version");
-}
-
-std::int64_t DatabaseReset::RegistryVersionOf(db::Connection& connection) {
-  return connection.queryInt64("SELECT version FROM registry_version");
-}
-
-std::int64_t DatabaseReset::ScanCount(db::Connection& connection) {
-  return connection.queryInt64("SELECT count(*) FROM scan_log");
 }
 
 void DatabaseReset::operator()() {

@@ -35,9 +35,6 @@ class DatabaseReset {
   void operator()();
 
  private:
-  static std::int64_t RegistryVersionOf(db::Connection& connection);
-  static std::int64_t ScanCount(db::Connection& connection);
-
   db::Connection live_;
   db::Connection saved_;
   std::int64_t version_ = 0;           ///< PRAGMA data_version after the last reset

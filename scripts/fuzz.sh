@@ -20,8 +20,8 @@
 # Both first replay each seed and regression input alone, and the seeds listed in
 # fuzz/expect-success.txt with PINTAG_FUZZ_EXPECT_SUCCESS set: each of those must succeed (a 2xx,
 # a clean import), so a seed that no longer reaches its handler fails the run.
-# Targets: image_detect http_request json_body csv_import parsers (default: all). Each run's
-# executions are appended to build-fuzz/fuzz-runs.txt (docs/RELIABILITY.md records them).
+# Targets: image_detect http_request http_connection json_body csv_import parsers (default: all).
+# Each run's executions are appended to build-fuzz/fuzz-runs.txt (docs/RELIABILITY.md records them).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # "-dirty" when tracked files differ from the commit (the build has them too).
@@ -33,7 +33,7 @@ if [[ "${1:-}" == "--smoke" ]]; then
   shift
 fi
 targets=("$@")
-[[ ${#targets[@]} -gt 0 ]] || targets=(image_detect http_request json_body csv_import parsers)
+[[ ${#targets[@]} -gt 0 ]] || targets=(image_detect http_request http_connection json_body csv_import parsers)
 
 for tool in clang++-14; do
   command -v "$tool" >/dev/null ||
