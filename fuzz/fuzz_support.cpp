@@ -2,6 +2,7 @@
 
 #include <stdlib.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -120,6 +121,36 @@ void ResetRegistry() {
 bool ExpectSuccess() {
   static const bool expect = std::getenv("PINTAG_FUZZ_EXPECT_SUCCESS") != nullptr;
   return expect;
+}
+
+std::string_view HeaderValue(std::string_view head, std::string_view name) {
+  const std::string key = "\r\n" + std::string(name) + ": ";
+  const std::size_t at = head.find(key);
+  if (at == std::string_view::npos) return {};
+  const std::size_t from = at + key.size();
+  return head.substr(from, head.find("\r\n", from) - from);
+}
+
+std::size_t CheckHttpAnswer(std::string_view answer, bool only_answer) {
+  const auto fail = [&](const char* why) {
+    std::fprintf(stderr, "%s:\n%.600s\n", why, std::string(answer.substr(0, 600)).c_str());
+    std::abort();
+  };
+  if (answer.rfind("HTTP/1.1 ", 0) != 0) fail("not an HTTP/1.1 response");
+  const std::size_t head_end = answer.find("\r\n\r\n");
+  if (head_end == std::string_view::npos) fail("a response head without its end");
+  const int status = std::atoi(std::string(answer.substr(9, 3)).c_str());
+  if (status < 100 || status > 599) fail("a status out of range");
+  if (status == 500) fail("answered 500");
+  if (status >= 400) {
+    const std::string_view type = HeaderValue(answer.substr(0, head_end + 2), "Content-Type");
+    const bool has_body = answer.size() > head_end + 4;
+    if (type.empty() ? only_answer && has_body : type != "application/problem+json") {
+      fail("error answered without problem+json");
+    }
+  }
+  if (ExpectSuccess() && (status < 200 || status > 299)) fail("expected a 2xx");
+  return head_end + 4;
 }
 
 std::string WithTokens(std::string text) {

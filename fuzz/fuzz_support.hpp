@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "pintag/db/sqlite.hpp"
 #include "pintag/server/api.hpp"
@@ -59,5 +60,16 @@ void RemoveDirectoryAtExit(const std::string& dir);
 /// `text` with @ADMIN@, @COUNTER@ and @SCANNER@ replaced by those tokens' secrets, so seeds
 /// reach the handlers behind auth and mutations of them reach the auth checks.
 std::string WithTokens(std::string text);
+
+/// The value of a header in an answer's head, matched at a line's start in cpp-httplib's spelling
+/// (an echoed header value may hold the same words), or empty.
+std::string_view HeaderValue(std::string_view head, std::string_view name);
+
+/// Aborts unless `answer` starts with one well-formed HTTP/1.1 response whose head is complete:
+/// a status of 100 … 599 and not 500 (an unexpected exception or storage failure), an error's
+/// Content-Type problem+json, and a 2xx when ExpectSuccess(). With `only_answer` (the bytes after
+/// the head are its body, none other) an error without a Content-Type must have no body. Returns
+/// the length of the head, its blank line included.
+std::size_t CheckHttpAnswer(std::string_view answer, bool only_answer);
 
 }  // namespace pintag::fuzz
