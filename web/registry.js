@@ -1,7 +1,9 @@
-// Registry: search offices, look up pincodes and keys; admins add and retire pincodes.
+// Registry: search offices, look up pincodes and keys; admins add and retire pincodes and edit
+// the sort plans (plans.js).
 import {
   api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, asciiDigits,
 } from './api.js';
+import { setUpSortPlans } from './plans.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -11,10 +13,10 @@ const token = bindToken({
 
 let search = null;  // {q, district, state, limit, offset}
 
-// Adding and retiring need an admin token: asked for before anything is sent or confirmed.
+// Every change needs an admin token: asked for before anything is sent or confirmed.
 function needToken(message) {
   if (token()) return false;
-  show(message, messageBox('info', 'Paste an admin token above first: adding and retiring pincodes need one.'));
+  show(message, messageBox('info', 'Paste an admin token above first: changes to the registry need one.'));
   $('token').focus();
   return true;
 }
@@ -297,3 +299,5 @@ $('retire-form').addEventListener('submit', (event) => {
     confirm.focus();
   });
 });
+
+setUpSortPlans({ token, needToken });
