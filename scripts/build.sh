@@ -12,7 +12,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${PINTAG_BUILD_DIR:-$root/build}"
 options=(-G Ninja -DCMAKE_BUILD_TYPE=Release)
 command -v ccache >/dev/null && options+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-[[ -n "${PINTAG_SANITIZE:-}" ]] && options+=(-DPINTAG_SANITIZE="$PINTAG_SANITIZE")
+# Always passed: a cached ON from one sanitized build must not stay in the tree's later builds.
+options+=(-DPINTAG_SANITIZE="${PINTAG_SANITIZE:-OFF}")
 if [[ -n "${PINTAG_TESTS:-}" ]]; then
   cmake -S "$root" -B "$build" "${options[@]}" -DPINTAG_TESTS="$PINTAG_TESTS"
 elif [[ ! -f "$build/build.ninja" ]]; then

@@ -49,10 +49,9 @@ build_targets=()
 for target in "${targets[@]}"; do build_targets+=(--target "fuzz_$target"); done
 cmake --build "$build" --parallel "$(nproc)" "${build_targets[@]}"
 
-export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
-# fontconfig keeps its caches until exit (the label renderer loads the font): not our leak.
-export LSAN_OPTIONS="suppressions=$root/tests/sanitize/lsan.supp:print_suppressions=0"
-export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# shellcheck source=scripts/lib.sh
+source "$root/scripts/lib.sh"
+sanitizer_env
 status=0
 for target in "${targets[@]}"; do
   exe="$build/fuzz/fuzz_$target"

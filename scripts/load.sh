@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Load figures for docs/PERFORMANCE.md: starts `pintag serve` on loopback with a scratch database,
-# then drives it with wrk (keep-alive, scripts/load/request.lua checks every answer) for a bounded
-# time per route:
+# then drives it with wrk (keep-alive, scripts/load/request.lua checks every answer's status) for a
+# bounded time per route; fails when any answer had another status or a socket error:
 #   livez      GET /livez
 #   lookup     GET /api/v1/pincodes/110001
 #   detect     POST /api/v1/detect, a mixed set of 1080p phone JPEG scenes in rotation (tags from
@@ -31,50 +31,52 @@ wrk_threads=$((connections < 2 ? connections : 2))  # wrk needs a connection per
 frames="${PINTAG_LOAD_FRAMES:-$build/load-frames-2}"
 pintag="$build/server/pintag"
 routes=("$@")
-[[ ${#routes[@]} -gt 0 ]] || routes=(livez lookup detect label-pdf label-png tag-png)
+known_routes=(livez lookup detect label-pdf label-png tag-png)
+[[ ${#routes[@]} -gt 0 ]] || routes=("${known_routes[@]}")
+# Every name checked before anything runs: a typo at the end came after minutes of the others.
+for route in "${routes[@]}"; do
+  [[ " ${known_routes[*]} " == *" $route "* ]] ||
+    { echo "load.sh: unknown route '$route' (${known_routes[*]})" >&2; exit 2; }
+done
 
 command -v wrk >/dev/null || { echo "load.sh: wrk is missing (Debian package wrk)" >&2; exit 1; }
 [[ -x "$pintag" ]] || { echo "load.sh: no $pintag; run scripts/build.sh pintag" >&2; exit 1; }
 
 make_frames() {
   # The quick sweep's frames: one per size x tilt bin (49) and 6 tagless, rendered as PNG, then
-  # saved as 4:2:0 JPEG at quality 90 as a phone would.
+  # saved as 4:2:0 JPEG at quality 90 as a phone would. Made beside the cache and moved into
+  # place whole: a run stopped halfway left a part of the set that later runs took for all of it.
   local bench="$build/bench/pintag_bench"
   [[ -x "$bench" ]] || { echo "load.sh: no $bench to render the scenes" >&2; exit 1; }
-  local png="$frames/png"
-  mkdir -p "$png"
+  local partial="$frames.partial"
+  rm -rf "$partial"
+  mkdir -p "$partial/png"
   echo "load.sh: rendering the scenes into $frames (once)" >&2
-  "$bench" --quick --detectors pintag --one-thread-only --quiet --save-frames "$png" \
-    --out "$frames/bench" >/dev/null
-  for f in "$png"/*.png; do
-    iconvert --quality 90 "$f" "$frames/$(basename "${f%.png}").jpg"
+  "$bench" --quick --detectors pintag --one-thread-only --quiet --save-frames "$partial/png" \
+    --out "$partial/bench" >/dev/null
+  for f in "$partial/png"/*.png; do
+    iconvert --quality 90 "$f" "$partial/$(basename "${f%.png}").jpg"
   done
-  rm -rf "$png" "$frames/bench"
+  rm -rf "$partial/png" "$partial/bench"
+  rm -rf "$frames"
+  mv "$partial" "$frames"
 }
 if [[ " ${routes[*]} " == *" detect "* ]] && ! compgen -G "$frames/*.jpg" >/dev/null; then
   make_frames
 fi
 
+# shellcheck source=scripts/lib.sh
+source "$root/scripts/lib.sh"
 scratch="$(mktemp -d)"
-server_pid=""
 cleanup() {
-  [[ -n "$server_pid" ]] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null
+  stop_scratch_server
   rm -rf "$scratch"
 }
 trap cleanup EXIT
 
-db="$scratch/pintag.db"
-"$pintag" serve --db "$db" --port 0 --bind 127.0.0.1 --threads "$server_threads" \
-  >"$scratch/serve.log" 2>&1 &
-server_pid=$!
-port=""
-for _ in $(seq 1 300); do
-  port="$(sed -n 's|.*http://127\.0\.0\.1:\([0-9]*\)/.*|\1|p' "$scratch/serve.log" | head -1)"
-  [[ -n "$port" ]] && break
-  kill -0 "$server_pid" 2>/dev/null || { cat "$scratch/serve.log" >&2; exit 1; }
-  sleep 0.1
-done
-[[ -n "$port" ]] || { echo "load.sh: the server did not start" >&2; exit 1; }
+db="$scratch/scratch.db"
+start_scratch_server "$pintag" "$scratch" "$scratch/serve.log" --threads "$server_threads"
+port="$server_port"
 counter="$("$pintag" token create --role counter --label load --db "$db" 2>/dev/null | tail -1)"
 scanner="$("$pintag" token create --role scanner --label load --db "$db" 2>/dev/null | tail -1)"
 ls "$frames"/*.jpg >"$scratch/frames.txt" 2>/dev/null || true
@@ -85,6 +87,7 @@ echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(n
 server_cpu_ticks() {  # user + system clock ticks the server has used so far
   awk '{print $14 + $15}' "/proc/$server_pid/stat"
 }
+failures=0
 run() {  # name method path token bodies
   local before after line requests
   before="$(server_cpu_ticks)"
@@ -98,6 +101,7 @@ run() {  # name method path token bodies
   echo "$line" | sed "1s/\$/ server_cpu_ms_per_request=$(awk -v t=$((after - before)) \
     -v hz="$(getconf CLK_TCK)" -v n="${requests:-0}" \
     'BEGIN { if (n > 0) printf "%.3f", t * 1000 / hz / n; else print "n/a" }')/"
+  if ! grep -q ' wrong=0 errors=0$' <<<"$(head -1 <<<"$line")"; then failures=$((failures + 1)); fi
 }
 for route in "${routes[@]}"; do
   case "$route" in
@@ -109,6 +113,10 @@ for route in "${routes[@]}"; do
     label-pdf) run label-pdf GET /api/v1/labels/110001.pdf "$counter" "" ;;
     label-png) run label-png GET "/api/v1/labels/110001.png?dpi=300" "$counter" "" ;;
     tag-png) run tag-png GET "/api/v1/tags/110001.png?px=512" "$counter" "" ;;
-    *) echo "load.sh: unknown route '$route'" >&2; exit 2 ;;
   esac
 done
+# Figures from a run with wrong answers or socket errors are not figures of a working server.
+if ((failures > 0)); then
+  echo "load.sh: FAILED: $failures of ${#routes[@]} routes had wrong answers or errors" >&2
+  exit 1
+fi

@@ -41,4 +41,13 @@ if ((EUID != 0)); then
 fi
 echo "setup: installing ${missing[*]}"
 "${sudo[@]}" apt-get update -qq
-DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# Through env: sudo's env_reset drops DEBIAN_FRONTEND, and debconf then asks its questions.
+"${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
+
+# nginx's package enables and starts its own service (port 80 on every address) where systemd
+# runs; the tests only run the binary with their own configuration, on loopback. A service this
+# script installed is stopped and disabled again; one that was there before is left as it was.
+if [[ " ${missing[*]} " == *" nginx-light "* ]] && [[ -d /run/systemd/system ]]; then
+  echo "setup: stopping and disabling the nginx service the package started (the tests run nginx themselves)"
+  "${sudo[@]}" systemctl disable --now nginx.service >/dev/null 2>&1 || true
+fi

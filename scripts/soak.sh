@@ -19,13 +19,22 @@ for tool in wrk oiiotool; do
 done
 [[ -x "$exe" ]] || { echo "soak.sh: no $exe (scripts/build.sh builds it)" >&2; exit 1; }
 
+# shellcheck source=scripts/lib.sh
+source "$root/scripts/lib.sh"
 work="$(mktemp -d)"
-server=""
+sampler=""
 cleanup() {
-  [[ -n "$server" ]] && kill "$server" 2>/dev/null && wait "$server" 2>/dev/null
+  [[ -n "$sampler" ]] && { kill "$sampler" 2>/dev/null || true; }
+  stop_scratch_server
   rm -rf "$work"
 }
 trap cleanup EXIT
+# The server's own log, shown whenever the soak fails: a crash or a refusal says why there.
+failed() {
+  echo "soak.sh: FAILED: $1; the server's log ends:" >&2
+  tail -n 40 "$work/server.log" >&2
+  exit 1
+}
 
 # A 1080p photo: the committed photo of 110001's tag on a plain background.
 oiiotool "$root/docker/load/tag-110001.jpg" \
@@ -33,21 +42,16 @@ oiiotool "$root/docker/load/tag-110001.jpg" \
 export PINTAG_PHOTO="$work/photo.jpg"
 
 # One worker thread per connection: cpp-httplib holds a worker for each kept-alive connection.
-"$exe" serve --db "$work/soak.db" --port 0 --threads "$connections" --log-format json \
-  >"$work/out.txt" 2>"$work/server.log" &
-server=$!
-for _ in $(seq 1 600); do
-  grep -q "Stop with Ctrl-C." "$work/out.txt" 2>/dev/null && break
-  kill -0 "$server" 2>/dev/null || { cat "$work/server.log" >&2; exit 1; }
-  sleep 0.1
-done
-port="$(grep -o 'serving http://127.0.0.1:[0-9]*' "$work/out.txt" | grep -o '[0-9]*$')"
-[[ -n "$port" ]] || { echo "soak.sh: the server did not start" >&2; cat "$work/out.txt" >&2; exit 1; }
-token() { "$exe" token create --role "$1" --db "$work/soak.db" 2>/dev/null | tail -1; }
+start_scratch_server "$exe" "$work" "$work/server.log" --threads "$connections" --log-format json
+port="$server_port"
+token() { "$exe" token create --role "$1" --db "$work/scratch.db" 2>/dev/null | tail -1; }
 export PINTAG_COUNTER PINTAG_SCANNER
 PINTAG_COUNTER="$(token counter)"
 PINTAG_SCANNER="$(token scanner)"
-rss() { awk '/^VmRSS:/ {print $2}' "/proc/$server/status"; }
+rss() {
+  kill -0 "$server_pid" 2>/dev/null || failed "the server died"
+  awk '/^VmRSS:/ {print $2}' "/proc/$server_pid/status"
+}
 
 run() {  # seconds
   wrk -t "$connections" -c "$connections" -d "${1}s" --timeout 30s \
@@ -55,19 +59,19 @@ run() {  # seconds
 }
 check() {  # a soak-result line
   local line="$1" name
+  [[ "$line" == soak-result* ]] || failed "wrk gave no soak-result line"
   for name in wrong http_errors socket_errors timeouts; do
-    if ! grep -q " $name=0 " <<<"$line "; then
-      echo "soak.sh: FAILED: $name is not 0" >&2
-      return 1
-    fi
+    grep -q " $name=0 " <<<"$line " || failed "$name is not 0"
   done
 }
 
 # Resident memory is sampled every 0.5 s in both phases and their peaks are compared: one 1080p
 # detection or 300 dpi label holds tens of MB for a moment, so two single samples differ by ±8 %
 # on a healthy server; a leak raises the peak of the measured phase over the warm-up's.
-sample_rss() {  # file: appends a sample every 0.5 s until killed
-  while sleep 0.5; do printf '%s\n' "$(rss)"; done >>"$1" 2>/dev/null
+sample_rss() {  # file: appends a sample every 0.5 s until killed or the server is gone
+  while sleep 0.5 && kill -0 "$server_pid" 2>/dev/null; do
+    awk '/^VmRSS:/ {print $2}' "/proc/$server_pid/status"
+  done >>"$1" 2>/dev/null
 }
 peak() { sort -n "$1" | tail -1; }
 
@@ -76,9 +80,10 @@ peak() { sort -n "$1" | tail -1; }
 phase() {
   echo "soak.sh: $3 ${2}s at $connections connections"
   sample_rss "$work/rss-$1.txt" &
-  local sampler=$!
-  phase_result="$(run "$2")"
+  sampler=$!
+  phase_result="$(run "$2" || true)"
   kill "$sampler" 2>/dev/null || true
+  sampler=""
   echo "$phase_result"
   rss >>"$work/rss-$1.txt"
   phase_peak="$(peak "$work/rss-$1.txt")"
@@ -94,7 +99,6 @@ echo "soak-memory-series-kib $(awk 'NR % 10 == 0' "$work/rss-run.txt" | tr '\n' 
 growth="$(awk -v a="$rss_warm" -v b="$rss_end" 'BEGIN {printf "%.1f", (b - a) * 100 / a}')"
 echo "soak-memory peak_warmup_kib=$rss_warm peak_run_kib=$rss_end growth_percent=$growth"
 check "$result"
-awk -v g="$growth" 'BEGIN {exit !(g < 10)}' ||
-  { echo "soak.sh: FAILED: resident memory grew $growth % (limit 10 %)" >&2; exit 1; }
-kill -0 "$server" || { echo "soak.sh: FAILED: the server died" >&2; exit 1; }
+awk -v g="$growth" 'BEGIN {exit !(g < 10)}' || failed "resident memory grew $growth % (limit 10 %)"
+kill -0 "$server_pid" 2>/dev/null || failed "the server died"
 echo "soak.sh: passed"
