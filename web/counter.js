@@ -382,8 +382,15 @@ $('print-pdf').addEventListener('click', (event) => {
       }
       const url = URL.createObjectURL(blob);
       win.location.href = url;
-      // The tab has loaded it by then; keeping the URL would hold every printed PDF until reload.
-      setTimeout(() => URL.revokeObjectURL(url), 60_000);
+      // Released when the tab closes, not before: the PDF viewer's reload and download read the
+      // URL again, and a clerk may print minutes later. Kept for good, it would hold every printed
+      // PDF until this page reloads.
+      const watch = setInterval(() => {
+        if (win.closed) {
+          clearInterval(watch);
+          URL.revokeObjectURL(url);
+        }
+      }, 5_000);
       show($('print-msg'), messageBox('ok', `The label for ${pincode} opened in a new tab: print it from there at 100 % (actual size).`));
     } catch (error) {
       if (win) win.close();

@@ -577,3 +577,35 @@ test('on a phone, a row\'s Preview brings its label into view', async () => {
   await screenshot(page, 'counter-phone-preview');
   assert.deepEqual(page.problems, []);
 });
+
+test('Open PDF to print shows the label in a new tab, and keeps it until that tab is closed', async () => {
+  const page = await newPage(browser);
+  // The page's clock, moved on by hand: minutes pass in an instant. The page's CSP keeps it from
+  // fetching a blob: URL, so what it lets go is recorded as it lets it go.
+  await page.clock.install();
+  await page.addInitScript(() => {
+    window.revokedUrls = [];
+    const revoke = URL.revokeObjectURL.bind(URL);
+    URL.revokeObjectURL = (url) => { window.revokedUrls.push(url); revoke(url); };
+  });
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('tr[data-pincode="110001"]').waitFor();
+  await page.waitForFunction(() => !document.getElementById('print-pdf').disabled);
+  const [tab] = await Promise.all([page.context().waitForEvent('page'),
+    page.getByRole('button', { name: 'Open PDF to print' }).click()]);
+  await tab.waitForURL(/^blob:/);
+  const url = tab.url();
+  await page.getByText('The label for 110001 opened in a new tab').waitFor();
+  const revoked = () => page.evaluate((u) => window.revokedUrls.includes(u), url);
+  // Minutes later the clerk may still print, reload or save it from the tab.
+  await page.clock.fastForward('05:00');
+  assert.equal(await revoked(), false);
+  // Closed, the tab's PDF is let go.
+  await tab.close();
+  await page.clock.fastForward('00:10');
+  assert.equal(await revoked(), true);
+  assert.deepEqual(page.problems, []);
+});
