@@ -12,8 +12,9 @@
 namespace pintag {
 namespace {
 
-/// Writes all of `bytes` to `fd` and closes it: 0, or the errno of the first failure.
-int WriteAndClose(int fd, std::string_view bytes) {
+/// Writes all of `bytes` to `fd`, with `sync` flushes them to the disk, and closes it: 0, or the
+/// errno of the first failure.
+int WriteAndClose(int fd, std::string_view bytes, bool sync) {
   int failure = 0;
   for (std::size_t written = 0; written < bytes.size() && failure == 0;) {
     const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
@@ -25,16 +26,36 @@ int WriteAndClose(int fd, std::string_view bytes) {
       failure = EIO;  // a write that took nothing and said nothing is still a failure
     }
   }
+  // Before the rename: else a crash can leave the new name on a file whose bytes never landed.
+  if (sync && failure == 0 && ::fsync(fd) != 0) failure = errno;
   if (::close(fd) != 0 && failure == 0) failure = errno;
   return failure;
 }
 
-/// Creates a new file beside `destination` as open() creates one (0666 less the umask), and
-/// names it in `name`: its descriptor, or -1 with errno set.
-int CreateBeside(const std::string& destination, std::string& name) {
+/// The directory `path` is in ("." for a bare name).
+std::string DirectoryOf(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+/// Makes a rename in `directory` durable: 0, or the errno of the failure. A file system that
+/// cannot sync a directory (EINVAL) is taken at its word.
+int SyncDirectory(const std::string& directory) {
+  const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return errno == EACCES ? 0 : errno;  // a directory we may write but not read
+  int failure = ::fsync(fd) != 0 && errno != EINVAL ? errno : 0;
+  if (::close(fd) != 0 && failure == 0) failure = errno;
+  return failure;
+}
+
+/// Creates a new file in `directory` as open() creates one (0666 less the umask), and names it in
+/// `name`: its descriptor, or -1 with errno set. The name is short whatever the destination's:
+/// the destination's own name with a suffix overran NAME_MAX for a legal name of 246 bytes.
+int CreateIn(const std::string& directory, std::string& name) {
   std::random_device random;
   for (int attempt = 0; attempt < 100; ++attempt) {
-    name = destination + ".tmp-" + std::to_string(random());
+    name = directory + "/.pintag-" + std::to_string(random()) + ".tmp";
     const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0 || errno != EEXIST) return fd;
   }
@@ -52,7 +73,7 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
   const auto in_place = [&]() -> std::string {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd < 0) return std::strerror(errno);
-    const int failure = WriteAndClose(fd, bytes);
+    const int failure = WriteAndClose(fd, bytes, false);  // fsync fails on a pipe or a tty
     return failure == 0 ? std::string() : std::strerror(failure);
   };
   if ((exists && !S_ISREG(target.st_mode)) || dangling) return in_place();
@@ -64,8 +85,9 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
       std::free(resolved);
     }
   }
+  const std::string directory = DirectoryOf(destination);
   std::string temporary;
-  const int fd = CreateBeside(destination, temporary);
+  const int fd = CreateIn(directory, temporary);
   if (fd < 0) {
     // A file that may be written in a directory that may not: written in place, as before.
     if (exists && (errno == EACCES || errno == EPERM || errno == EROFS)) return in_place();
@@ -76,13 +98,15 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
   if (failure != 0) {
     ::close(fd);
   } else {
-    failure = WriteAndClose(fd, bytes);
+    failure = WriteAndClose(fd, bytes, true);
   }
   if (failure == 0 && ::rename(temporary.c_str(), destination.c_str()) != 0) failure = errno;
   if (failure != 0) {
     ::unlink(temporary.c_str());
     return std::strerror(failure);
   }
+  // The rename itself is durable only once the directory is synced.
+  if (const int synced = SyncDirectory(directory); synced != 0) return std::strerror(synced);
   return {};
 }
 

@@ -10,8 +10,9 @@ namespace pintag {
 
 /// Writes `bytes` to `path`, replacing it: "" when all of it reached the file and the file was
 /// closed, else why not (strerror's text). A regular file (or a path not there yet) is written
-/// beside itself and renamed over, so a write that fails leaves what was there before, never a
-/// file cut short (a process killed while writing leaves `FILE.tmp-N` beside it); through a
+/// to a new file in its directory, synced to the disk, and renamed over it, the directory synced
+/// after: a write that fails, or a crash, leaves what was there before, never a file cut short
+/// or empty (a process killed while writing leaves `.pintag-N.tmp` in the directory); through a
 /// symbolic link, the file it names is the one replaced. Anything else (/dev/stdout, a pipe, a
 /// device), and a file in a directory this process may not create files in, is written in place.
 std::string WriteWholeFile(const std::string& path, std::string_view bytes);
