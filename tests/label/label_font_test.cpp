@@ -3,6 +3,7 @@
 #include <cairo.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +66,45 @@ TEST_F(LabelFontTest, CutsNeverSeparateALetterFromItsSigns) {
           << " at byte " << std::dec << cut;
     }
   }
+}
+
+TEST_F(LabelFontTest, CutsNeverSplitAConjunct) {
+  // Pango put a cursor position after each virama: क्|षे, स्|त्|र. A line cut there ended in a
+  // visible halant and the next began with a bare consonant.
+  const auto is_virama = [](char32_t c) {
+    return c == 0x094D || c == 0x09CD || c == 0x0A4D || c == 0x0ACD || c == 0x0B4D || c == 0x0C4D ||
+           c == 0x0CCD || c == 0x0D4D;
+  };
+  for (const std::string text : {
+           "\u0915\u094D\u0937\u0947\u0924\u094D\u0930\u0940\u092F",  // क्षेत्रीय
+           "\u0938\u094D\u0924\u094D\u0930",                          // स्त्र
+           "\u0938\u094D\u0924\u094D\u0930\u0938\u094D\u0924\u094D\u0930",
+           "\u0989\u09A4\u09CD\u09A4\u09B0",        // Bengali উত্তর
+           "\u0C95\u0CB0\u0CCD\u0CA8\u0CBE\u0C9F",  // Kannada ಕರ್ನಾಟ
+           "\u0915\u094D\u200D\u0937",              // a half form asked for with a ZWJ
+       }) {
+    const std::vector<std::size_t> cuts = font_.cutPoints(text);
+    ASSERT_GE(cuts.size(), 2U) << text;
+    for (const std::size_t cut : cuts) {
+      if (cut == 0 || cut == text.size()) continue;
+      std::size_t before = 0;  // the code point before the cut, through a ZWJ
+      for (std::size_t i = 0; i < cut;) {
+        const Utf8CodePoint c = DecodeUtf8(text, i);
+        if (c.value != 0x200D) before = c.value;
+        i += c.length;
+      }
+      EXPECT_FALSE(is_virama(static_cast<char32_t>(before)))
+          << text << ": cut after a virama at byte " << cut;
+    }
+  }
+  // Each conjunct is one piece: स्त्रस्त्र cuts once, between its two conjuncts.
+  const std::string twice = "\u0938\u094D\u0924\u094D\u0930\u0938\u094D\u0924\u094D\u0930";
+  EXPECT_EQ(font_.cutPoints(twice), (std::vector<std::size_t>{0, twice.size() / 2, twice.size()}));
+  // Tamil writes a dead consonant apart from the next: மத்திய still cuts after its pulli.
+  const std::string tamil = "\u0BAE\u0BA4\u0BCD\u0BA4\u0BBF\u0BAF";
+  const std::size_t after_pulli = std::string("\u0BAE\u0BA4\u0BCD").size();
+  const std::vector<std::size_t> cuts = font_.cutPoints(tamil);
+  EXPECT_NE(std::find(cuts.begin(), cuts.end(), after_pulli), cuts.end());
 }
 
 TEST_F(LabelFontTest, AdvancesScaleWithTheSizeAndShapingJoinsConjuncts) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "label/label_layout.hpp"
 #include "label_test_util.hpp"
 #include "pintag/codec/label.hpp"
 
@@ -164,6 +166,19 @@ TEST(LabelSvg, TheSameLabelIsTheSameBytes) {
   const RenderedLabel second = RenderLabelSvg(test::SampleLabel());
   ASSERT_TRUE(first && second);
   EXPECT_EQ(first.bytes, second.bytes);
+}
+
+TEST(LabelPdf, TheSameLabelsAreTheSameBytes) {
+  // cairo wrote the time of writing as /CreationDate: a label asked for twice differed.
+  std::vector<LabelContent> labels = {test::SampleLabel(), test::SampleLabel(560001, 4321)};
+  const RenderedLabel first = RenderLabelsPdf(labels, {kLabel100x150, 300});
+  ASSERT_TRUE(RenderLabelPng(test::SampleLabel(), {kLabel100x150, 72}));  // more surfaces made
+  const RenderedLabel second = RenderLabelsPdf(labels, {kLabel100x150, 300});
+  ASSERT_TRUE(first && second) << first.error << second.error;
+  EXPECT_EQ(first.bytes, second.bytes);
+  // Renders within one second were equal before too: the date itself must be gone.
+  EXPECT_EQ(AsText(first.bytes).find("/CreationDate"), std::string::npos);
+  EXPECT_NE(AsText(first.bytes).find("/Creator (PinTag)"), std::string::npos);  // the rest stays
 }
 
 TEST(LabelSvg, IsSizedInMillimetresWithAPointViewBox) {
@@ -547,6 +562,173 @@ TEST(LabelLayout, TagIsLargeAndItsQuietZoneStaysOnTheLabel) {
     EXPECT_LE(p.square_y_mm + p.square_side_mm + quiet, size.height_mm - 3.0) << ToString(size);
   }
   EXPECT_GT(TagPlacement(kLabel100x150).square_side_mm, 50.0);
+}
+
+/// The words of `pdf` whose text is one of `names`' words, in order found.
+std::vector<Word> WordsFrom(const std::vector<Word>& words, const std::string& names) {
+  std::vector<Word> found;
+  std::istringstream in(names);
+  std::vector<std::string> wanted;
+  for (std::string word; in >> word;) wanted.push_back(word);
+  for (const Word& word : words) {
+    if (std::find(wanted.begin(), wanted.end(), word.text) != wanted.end()) found.push_back(word);
+  }
+  return found;
+}
+
+TEST(LabelText, ALongOfficeNamePrintsWholeOnTwoLinesOfOneSize) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // The first line took as many words as fit at the two-line size and the second shrank alone,
+  // then was cut ("…upati Urban North" lost), though two balanced lines held the whole name.
+  for (const auto& [size, office] :
+       {std::pair{kLabel100x150,
+                  "Sri Venkateswara Nagar Extension Colony Branch Post Office Near Old Railway "
+                  "Station Road Tirupati Urban North"},
+        std::pair{LabelSize{70, 50}, "Old Town Market Yard East S.O"}}) {
+    LabelContent label = test::SampleLabel();
+    label.office = office;
+    label.district = "Chittoor";
+    label.state = "Andhra Pradesh";
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << pdf.error;
+    const std::vector<Word> words = WordsOf(pdf);
+    const std::string where = ToString(size) + " '" + label.office + "': " + JoinedText(words);
+    std::string whole = label.office;
+    std::erase(whole, ' ');
+    EXPECT_NE(JoinedText(words).find(whole), std::string::npos) << where;  // not ellipsized
+    const std::vector<Word> office = WordsFrom(words, label.office);
+    ASSERT_FALSE(office.empty()) << where;
+    EXPECT_GT(office.back().baseline(), office.front().baseline() + 1) << where << ": one line";
+    for (const Word& word : office) {
+      EXPECT_NEAR(word.size(), office.front().size(), 0.02) << where << " '" << word.text << "'";
+    }
+  }
+}
+
+TEST(LabelLayout, TheBinKeepsAGutterFromTheSmallPrint) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // The bin's column ended where the small print's began: "Bay 12" ran into "key 4321" with
+  // 0.1 mm between them on 70 x 50 mm.
+  for (const auto& [size, bin] :
+       {std::pair{LabelSize{70, 50}, "Bay 12"}, std::pair{LabelSize{75, 50}, "Bay 12"},
+        std::pair{kLabel100x150, "WWWWWWW-12"}}) {
+    LabelContent label = test::SampleLabel(110001, 32767);  // the widest key, whole
+    label.bin = bin;
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << pdf.error;
+    const std::vector<Word> words = WordsOf(pdf);
+    const std::string where = ToString(size) + " '" + bin + "': " + JoinedText(words);
+    const std::vector<Word> bin_words = WordsFrom(words, bin);
+    const std::vector<Word> small_print = WordsFrom(words, "key 32767 PinTag v1");
+    ASSERT_EQ(bin_words.size(), std::string(bin).find(' ') == std::string::npos ? 1U : 2U) << where;
+    ASSERT_EQ(small_print.size(), 4U) << where;
+    double bin_right = 0;
+    for (const Word& word : bin_words) bin_right = std::max(bin_right, word.x1);
+    // It fills its column: the gap is the gutter, not room left over.
+    const label::LabelLayout layout = label::ComputeLayout(size);
+    EXPECT_GT(bin_right, (layout.bin.x + 0.58 * layout.bin.w - 4) * kPointsPerMm) << where;
+    for (const Word& word : small_print) {
+      EXPECT_GE(word.x0 - bin_right, 1.0 * kPointsPerMm) << where << " '" << word.text << "'";
+    }
+  }
+}
+
+TEST(LabelText, MarksOverTheBinStayClearOfItsCaption) {
+  // A one-line bin is set large, and a tilde stacked over a circumflex ("Ỗ") ran through the N of
+  // "SORT BIN" above it: the caption's rows are to hold the caption alone, whatever the bin.
+  constexpr double kDpi = 300;
+  const double px_per_mm = kDpi / 25.4;
+  std::string accents = "B";
+  for (int i = 0; i < 12; ++i) accents += "\u0301";
+  for (const LabelSize& size : {kLabel100x150, LabelSize{70, 50}}) {
+    const label::Box box = label::ComputeLayout(size).bin;
+    // From the box's rule to a little under the caption's baseline (2 mm pad, 2.4 mm caption).
+    const int from = static_cast<int>((box.y + 0.5) * px_per_mm);
+    const int to = static_cast<int>(std::ceil((box.y + 2.0 + 0.75 * 2.4 + 0.2) * px_per_mm));
+    LabelContent plain = test::SampleLabel();
+    plain.bin.reset();
+    const auto without = test::ReadPng(RenderLabelPng(plain, {size, kDpi}).bytes);
+    ASSERT_TRUE(without);
+    for (const std::string& bin :
+         {std::string("\u01FA\u1ED6 7"), std::string("\u1ED6\u1EAA"), accents}) {
+      LabelContent label = plain;
+      label.bin = bin;
+      const RenderedLabel png = RenderLabelPng(label, {size, kDpi});
+      ASSERT_TRUE(png) << png.error;
+      const auto with = test::ReadPng(png.bytes);
+      ASSERT_TRUE(with);
+      int differ = 0;
+      for (int y = from; y <= to; ++y) {
+        for (int x = 0; x < with->image.width; ++x) {
+          for (int c = 0; c < 3; ++c) {
+            const std::size_t i = (static_cast<std::size_t>(y) * with->image.width + x) * 3 + c;
+            differ += with->image.pixels[i] != without->image.pixels[i];
+          }
+        }
+      }
+      EXPECT_EQ(differ, 0) << ToString(size) << " '" << bin << "': the bin's ink reaches rows "
+                           << from << " to " << to;
+    }
+  }
+}
+
+TEST(LabelText, DevanagariBinLinesNeverEndInAVirama) {
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  // Broken between स् and त्र, a line ended in a visible halant and the conjunct was lost.
+  for (const auto& [size, repeats] :
+       {std::pair{LabelSize{70, 50}, 5}, std::pair{LabelSize{70, 50}, 7},
+        std::pair{LabelSize{50, 75}, 9}}) {
+    LabelContent label = test::SampleLabel();
+    std::string bin;
+    for (int i = 0; i < repeats; ++i) bin += "\u0938\u094D\u0924\u094D\u0930";  // स्त्र
+    label.bin = bin;
+    const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
+    ASSERT_TRUE(pdf) << ToString(size) << " " << repeats << ": " << pdf.error;
+    const auto text = Poppler("pdftotext", pdf);
+    ASSERT_TRUE(text.has_value());
+    EXPECT_NE(JoinedText(WordsOf(pdf)).find(bin), std::string::npos) << *text;
+    std::istringstream lines(*text);
+    int bin_lines = 0;
+    for (std::string line; std::getline(lines, line);) {
+      if (line.find("\u0938") == std::string::npos) continue;
+      ++bin_lines;
+      while (!line.empty() && line.back() == ' ') line.pop_back();
+      EXPECT_FALSE(line.ends_with("\u094D")) << ToString(size) << ": '" << line << "'";
+    }
+    EXPECT_EQ(bin_lines, 2) << ToString(size) << " " << repeats << ": " << *text;
+  }
+  // An ellipsized name keeps its conjuncts too: never "क्…".
+  LabelContent label = test::SampleLabel();
+  label.office.clear();
+  for (int i = 0; i < 60; ++i) label.office += "\u0915\u094D\u0937";  // क्ष
+  const auto text = Poppler("pdftotext", RenderLabelPdf(label, {LabelSize{50, 75}, 300}));
+  ASSERT_TRUE(text.has_value());
+  EXPECT_NE(text->find("\u2026"), std::string::npos) << *text;
+  EXPECT_EQ(text->find("\u094D\u2026"), std::string::npos) << *text;
+}
+
+TEST(LabelText, ABinLongerThanALabelDrawsIsRefusedNotCut) {
+  // Text is cut to 200 code points before it is measured: 215 "i" and "CHUTE9" fit a 300 x 150
+  // mm label's two lines once cut, and printed 200 i's without the chute.
+  LabelContent label = test::SampleLabel();
+  label.bin = std::string(215, 'i') + "CHUTE9";
+  for (const RenderedLabel& refused : {RenderLabelPdf(label, {LabelSize{300, 150}, 300}),
+                                       RenderLabelPng(label, {LabelSize{300, 150}, 72})}) {
+    EXPECT_FALSE(refused);
+    EXPECT_NE(refused.error.find("too long to print whole"), std::string::npos) << refused.error;
+    EXPECT_FALSE(refused.internal_error);  // the content's fault: a 400, not a 500
+  }
+  // The same at the limit prints.
+  label.bin = std::string(194, 'i') + "CHUTE9";
+  EXPECT_TRUE(RenderLabelPdf(label, {LabelSize{300, 150}, 300}));
+  // A name cut at the limit shows it.
+  if (!test::HavePoppler()) GTEST_SKIP() << "poppler-utils not installed";
+  label.office.clear();
+  for (int i = 0; i < 30; ++i) label.office += "iiiiiiiii ";
+  const RenderedLabel pdf = RenderLabelPdf(label, {LabelSize{300, 150}, 300});
+  ASSERT_TRUE(pdf) << pdf.error;
+  const std::string text = JoinedText(WordsOf(pdf));
+  EXPECT_NE(text.find(std::string(180, 'i') + "\u2026"), std::string::npos) << text;
 }
 
 }  // namespace

@@ -36,6 +36,17 @@ TEST(LabelText, CutsVeryLongText) {
   std::string long_multibyte;
   for (int i = 0; i < 1000; ++i) long_multibyte += "\u0101";
   EXPECT_EQ(SanitizeUtf8(long_multibyte).size(), 2 * kMaxDrawnCodePoints);
+  // Whether it was cut: a bin cut short must be refused, not printed.
+  bool cut = false;
+  EXPECT_EQ(SanitizeUtf8(long_text, &cut).size(), kMaxDrawnCodePoints);
+  EXPECT_TRUE(cut);
+  const std::string at_limit(kMaxDrawnCodePoints, 'x');
+  EXPECT_EQ(SanitizeUtf8(at_limit + " \t\x01 ", &cut), at_limit);  // only spaces and controls left
+  EXPECT_FALSE(cut);
+  // Cut at a space, it does not end in one.
+  EXPECT_EQ(SanitizeUtf8(std::string(kMaxDrawnCodePoints - 1, 'x') + " yz", &cut),
+            std::string(kMaxDrawnCodePoints - 1, 'x'));
+  EXPECT_TRUE(cut);
 }
 
 }  // namespace

@@ -20,6 +20,8 @@ constexpr double kPadMm = 2.0;         // text inset from the rules
 constexpr double kCaptionMm = 2.4;     // font size of "PIN CODE", "SORT BIN"
 constexpr double kSmallPrintMm = 2.2;  // font size of the key line
 constexpr double kMinNameMm = 2.2;     // names shrink to this, then ellipsize
+constexpr double kGutterMm = 1.8;      // between the bin and the small print beside it
+constexpr double kCaptionGapMm = 0.8;  // from a caption's baseline to the ink below it
 
 void SetColour(cairo_t* cr, PaletteColour colour) {
   const Rgb8 c = SrgbFor(colour);
@@ -65,14 +67,26 @@ void DrawPin(LabelFont& font, const LabelContent& label, const Box& box) {
   font.show(text, true, size, x, y);
 }
 
+// A name as drawn: sanitized, and ending in "…" when it was longer than a label draws, so that
+// the cut shows (a bin is never cut: DrawBin refuses it).
+std::string NameText(std::string_view text) {
+  bool cut = false;
+  std::string name = SanitizeUtf8(text, &cut);
+  if (cut) name += "\u2026";
+  return name;
+}
+
 struct TextLine {
   std::string text;
   double size;
   bool bold;
 };
 
-// The office on one line when it fits at 3/4 of the preferred size or more, else wrapped at a word
-// boundary onto two lines (the second shrinks, then ellipsizes, if still too long).
+// The office on one line when it fits at 3/4 of the preferred size or more, else on two lines of
+// one size, broken at the space that makes the longer line shortest: filling the first line
+// greedily left the second to shrink alone and be cut, though balanced lines held the whole name
+// at one size. When even the balanced lines are too long at the smallest size, the first line
+// takes as many words as fit there and the second is ellipsized.
 void AddOfficeLines(LabelFont& font, const std::string& office, double width, double size,
                     double two_line_size, std::vector<TextLine>& lines) {
   const double fit = width / std::max(font.advancePerSize(office, true), 1e-9);
@@ -81,12 +95,27 @@ void AddOfficeLines(LabelFont& font, const std::string& office, double width, do
     return;
   }
   std::size_t cut = office.find(' ');
-  for (std::size_t next = cut; next != std::string::npos; next = office.find(' ', next + 1)) {
-    if (font.advancePerSize(office.substr(0, next), true) * two_line_size > width) break;
-    cut = next;
+  double longer = std::numeric_limits<double>::infinity();
+  for (std::size_t at = cut; at != std::string::npos; at = office.find(' ', at + 1)) {
+    const double advance = std::max(font.advancePerSize(office.substr(0, at), true),
+                                    font.advancePerSize(office.substr(at + 1), true));
+    if (advance < longer) {
+      longer = advance;
+      cut = at;
+    }
   }
-  lines.push_back({office.substr(0, cut), two_line_size, true});
-  lines.push_back({office.substr(cut + 1), two_line_size, true});
+  // Just under the size that fits, so DrawLine does not shrink either line on its own.
+  double common = std::min(two_line_size, width / std::max(longer, 1e-9) * 0.999);
+  if (common < kMinNameMm) {
+    common = kMinNameMm;
+    cut = office.find(' ');
+    for (std::size_t next = cut; next != std::string::npos; next = office.find(' ', next + 1)) {
+      if (font.advancePerSize(office.substr(0, next), true) * common > width) break;
+      cut = next;
+    }
+  }
+  lines.push_back({office.substr(0, cut), common, true});
+  lines.push_back({office.substr(cut + 1), common, true});
 }
 
 void DrawAddress(LabelFont& font, const LabelContent& label, const Box& box) {
@@ -97,11 +126,11 @@ void DrawAddress(LabelFont& font, const LabelContent& label, const Box& box) {
       kMinNameMm, std::min(0.75 * office_size, (box.h - 1.2 * line2_size - 2 * kPadMm) / 2.4));
 
   std::vector<TextLine> lines;
-  const std::string office = SanitizeUtf8(label.office);
+  const std::string office = NameText(label.office);
   AddOfficeLines(font, office.empty() ? std::string("\u2014") : office, width, office_size,
                  two_line_size, lines);
-  const std::string district = SanitizeUtf8(label.district);
-  const std::string state = SanitizeUtf8(label.state);
+  const std::string district = NameText(label.district);
+  const std::string state = NameText(label.state);
   std::string place = district;
   if (!district.empty() && !state.empty()) place += ", ";
   place += state;
@@ -180,13 +209,17 @@ std::pair<LineBreak, double> ShortestBreak(LabelFont& font, const std::string& b
 // start, so it is not cut off while a break can show it. When the preferred breaks (a space,
 // punctuation) leave a line too long at the 2.2 mm floor, any break between two characters that
 // fits is taken. When none fits, the second line keeps the longest end that fits and the first
-// is ellipsized, and the caller refuses the label.
+// is ellipsized, and the caller refuses the label. The ink is clipped to `box`; marks stacked
+// above the letters ("ǺỖ") make the size smaller, down to the 2.2 mm floor, so that they stay in
+// it whole rather than clipped.
 /// Draws `bin` on one line or two; false when it was not drawn whole (a line was ellipsized).
 bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, double x, double width,
                   double baseline, double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
   const std::vector<LineBreak> breaks = BinBreaks(font, bin);
   if (font.advancePerSize(bin, true) * kOneLineMinMm <= width || breaks.empty()) {
+    const double above = -font.measure(bin, true, size).ink_y;
+    if (above > baseline - box.y) size = std::max(size * (baseline - box.y) / above, kMinNameMm);
     return !DrawLine(font, bin, x, width, baseline,
                      {.bold = true, .size = size, .min_size = kMinNameMm, .within = &box})
                 .cut;
@@ -222,7 +255,12 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
     }
     longer = width / kMinNameMm;
   }
-  const double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
+  double fitted = std::min({size * 0.62, height / 2.3, width / std::max(longer, 1e-9)});
+  // The first line's ink top, in sizes above the lower baseline (1.12 sizes between the lines).
+  constexpr double kMeasureMm = 16;
+  const double above =
+      1.12 - font.measure(bin.substr(0, cut.first_end), true, kMeasureMm).ink_y / kMeasureMm;
+  fitted = std::min(fitted, (baseline - box.y) / above);
   const LineStyle style{
       .bold = true, .size = std::max(fitted, kMinNameMm), .min_size = kMinNameMm, .within = &box};
   // Whole when neither line was ellipsized as drawn (measured at the size drawn, not predicted).
@@ -236,28 +274,38 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
 
 /// False when the bin could not be printed whole (DrawBinValue).
 bool DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
-  font.show("SORT BIN", true, kCaptionMm, box.x + kPadMm, box.y + kPadMm + kCaptionMm * 0.75);
+  const double caption_baseline = box.y + kPadMm + kCaptionMm * 0.75;
+  font.show("SORT BIN", true, kCaptionMm, box.x + kPadMm, caption_baseline);
 
-  // The bin value big on the left half; the plan and the key in small print on the right.
+  // The bin value big on the left half; the plan and the key in small print on the right, a
+  // gutter between (the bin's last letter touched "key 4321" on 70 x 50 mm).
   const double value_top = box.y + kPadMm + kCaptionMm + 0.8;
   const double value_h = box.bottom() - kPadMm - value_top;
   const double value_size = std::min(value_h * 1.05, 14.0);
-  const double left_w = box.w * 0.58 - kPadMm;
-  const std::string bin = label.bin ? SanitizeUtf8(*label.bin) : std::string();
-  bool whole = true;
+  const double divide = box.x + box.w * 0.58;  // the gutter's middle
+  const double left_w = divide - kGutterMm / 2 - box.x - kPadMm;
+  // The bin's ink stays below the caption's baseline (a tilde over "Ỗ" ran through its N) and
+  // left of the gutter's middle.
+  const Box value_box{box.x, caption_baseline + kCaptionGapMm, divide - box.x,
+                      box.bottom() - caption_baseline - kCaptionGapMm};
+  bool cut = false;
+  const std::string bin = label.bin ? SanitizeUtf8(*label.bin, &cut) : std::string();
+  // Cut to the drawn length, a bin would print short, as a bin cut to fit would: refused alike.
+  bool whole = !cut;
   if (bin.empty()) {
     // No plan chosen (or the plan has no bin for this pincode): say so quietly.
     DrawLine(font, "none", box.x + kPadMm, left_w, box.bottom() - kPadMm - value_h * 0.08,
              {.bold = false, .size = std::min(value_size, 5.0), .min_size = 2.0});
   } else {
-    whole = DrawBinValue(font, bin, box, box.x + kPadMm, left_w,
-                         box.bottom() - kPadMm - value_h * 0.08, value_size, value_h);
+    whole = DrawBinValue(font, bin, value_box, box.x + kPadMm, left_w,
+                         box.bottom() - kPadMm - value_h * 0.08, value_size, value_h) &&
+            whole;
   }
 
-  const double right_x = box.x + box.w * 0.58;
+  const double right_x = divide + kGutterMm / 2;
   const double right_w = box.right() - kPadMm - right_x;
   if (label.plan) {
-    const std::string plan = SanitizeUtf8(*label.plan);
+    const std::string plan = NameText(*label.plan);
     if (!plan.empty()) {
       // Cut from the middle: plans are often named alike at the start ("mumbai-central-inbound",
       // "mumbai-central-outbound"), and cut at the end they printed alike.
@@ -273,9 +321,11 @@ bool DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
                 .within = &box});
     }
   }
+  // Down to 1.4 mm, as the line under it: the gutter left "key 12345" 7.9 mm on 70 x 50 mm, too
+  // little at 1.6 mm, and a key must print whole.
   DrawLine(font, "key " + std::to_string(label.key.value()), right_x, right_w,
            box.bottom() - kPadMm - kSmallPrintMm * 1.2,
-           {.bold = false, .size = kSmallPrintMm, .min_size = 1.6, .align = Align::kRight});
+           {.bold = false, .size = kSmallPrintMm, .min_size = 1.4, .align = Align::kRight});
   DrawLine(font, "PinTag v1", right_x, right_w, box.bottom() - kPadMm,
            {.bold = false, .size = kSmallPrintMm * 0.85, .min_size = 1.4, .align = Align::kRight});
   return whole;

@@ -53,6 +53,30 @@ std::vector<std::pair<std::size_t, std::size_t>> ArabicRuns(std::string_view tex
 // Advances are measured at this size and scaled: Pango's units are 1/1024 of a user unit.
 constexpr double kMeasureSize = 16.0;
 
+// The Brahmic scripts whose virama joins the next consonant into a conjunct (Unicode's GB9c):
+// Devanagari, Bengali, Gurmukhi, Gujarati, Oriya, Telugu, Kannada and Malayalam, each a block of
+// 128 with the virama at +0x4D. Tamil's pulli (U+0BCD) is left out: Tamil writes a dead consonant
+// and the next one apart, so a cut there splits nothing.
+constexpr gunichar kConjunctBlocks[] = {0x0900, 0x0980, 0x0A00, 0x0A80,
+                                        0x0B00, 0x0C00, 0x0C80, 0x0D00};
+
+// The block of `c` when it is one of those scripts' viramas, else 0.
+gunichar ViramaBlock(gunichar c) {
+  for (const gunichar block : kConjunctBlocks) {
+    if (c == block + 0x4D) return block;
+  }
+  return 0;
+}
+
+// A consonant of the block starting at `block`: the letters KA … HA, and the nukta forms at
+// +0x58 … +0x5F (Devanagari's QA … YYA, Bengali's RRA … YYA, Oriya's RRA … YYA).
+bool IsConsonantOf(gunichar c, gunichar block) {
+  if (c < block || c >= block + 0x80) return false;
+  const gunichar offset = c - block;
+  const bool consonant = (offset >= 0x15 && offset <= 0x39) || (offset >= 0x58 && offset <= 0x5F);
+  return consonant && g_unichar_type(c) == G_UNICODE_OTHER_LETTER;
+}
+
 }  // namespace
 
 struct LabelFont::Pango {
@@ -110,7 +134,7 @@ TextExtents LabelFont::measure(std::string_view text, bool bold, double size) {
   TextExtents extents;
   extents.advance = logical.width / static_cast<double>(PANGO_SCALE);
   extents.ink_x = ink.x / static_cast<double>(PANGO_SCALE);
-  extents.ink_y = (ink.y - baseline) / PANGO_SCALE;
+  extents.ink_y = (ink.y - baseline) / static_cast<double>(PANGO_SCALE);
   extents.ink_width = ink.width / static_cast<double>(PANGO_SCALE);
   extents.ink_height = ink.height / static_cast<double>(PANGO_SCALE);
   return extents;
@@ -148,11 +172,17 @@ std::vector<std::size_t> LabelFont::cutPoints(std::string_view text) {
   int count = 0;
   const PangoLogAttr* attrs = pango_layout_get_log_attrs_readonly(pango_->layout, &count);
   // attrs[i] describes the position before the i-th character (count = characters + 1).
+  // Pango 1.50 puts a cursor position after a virama ("क्|ष", "स्|त्|र"): a line cut there ends
+  // in a visible halant and the conjunct is lost, so such positions are not cuts here.
   std::vector<std::size_t> cuts;
   std::size_t byte = 0;
+  gunichar virama_block = 0;  // the block of the virama just passed, through any ZWJ or ZWNJ
   for (int i = 0; i < count; ++i) {
-    if (i == 0 || i == count - 1 || attrs[i].is_cursor_position) cuts.push_back(byte);
+    const gunichar c = byte < text.size() ? g_utf8_get_char(text.data() + byte) : 0;
+    const bool joins = virama_block != 0 && IsConsonantOf(c, virama_block);
+    if (i == 0 || i == count - 1 || (attrs[i].is_cursor_position && !joins)) cuts.push_back(byte);
     if (byte < text.size()) {
+      if (c != 0x200C && c != 0x200D) virama_block = ViramaBlock(c);
       byte = static_cast<std::size_t>(g_utf8_next_char(text.data() + byte) - text.data());
     }
   }

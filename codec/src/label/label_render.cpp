@@ -44,8 +44,13 @@ RenderedLabel Fail(std::string error, std::optional<std::size_t> refused_label =
   return {{}, std::move(error), refused_label};
 }
 
+// The renderer's own failure (cairo out of memory, the PNG encoder), not the label's.
+RenderedLabel InternalFailure(std::string error) {
+  return {{}, std::move(error), std::nullopt, true};
+}
+
 // Draws each label on its own page of a vector surface, then finishes the surface. A label that
-// must not be printed ends it, and `refused` says which.
+// must not be printed ends it, and `refused` says which; any other error is cairo's.
 std::string DrawPages(cairo_surface_t* surface, std::span<const LabelContent> labels,
                       const label::LabelLayout& layout, std::optional<std::size_t>* refused) {
   Context cr(cairo_create(surface));
@@ -136,8 +141,13 @@ LabelTagPixels TagPlacementPixels(const LabelOptions& options) {
           static_cast<int>(std::lround(p.square_side_mm * scale))};
 }
 
-RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& options,
-                           std::string* error) {
+namespace {
+
+/// RenderLabelRaster, and `internal` set when the error is the renderer's own (cairo's), not the
+/// options' or the label's.
+RgbImage RenderRaster(const LabelContent& label, const LabelOptions& options, std::string* error,
+                      bool* internal) {
+  *internal = false;
   if (std::string why = ValidateLabelOptions(options, true); !why.empty()) {
     *error = std::move(why);
     return {};
@@ -151,6 +161,7 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
   Surface surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, px.width, px.height));
   if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
     *error = CairoError("cannot create label raster", cairo_surface_status(surface.get()));
+    *internal = true;
     return {};
   }
   {
@@ -168,6 +179,7 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
     }
     if (cairo_status(cr.get()) != CAIRO_STATUS_SUCCESS) {
       *error = CairoError("cannot draw label", cairo_status(cr.get()));
+      *internal = true;
       return {};
     }
   }
@@ -209,12 +221,21 @@ RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& option
   return image;
 }
 
+}  // namespace
+
+RgbImage RenderLabelRaster(const LabelContent& label, const LabelOptions& options,
+                           std::string* error) {
+  bool internal = false;
+  return RenderRaster(label, options, error, &internal);
+}
+
 RenderedLabel RenderLabelPng(const LabelContent& label, const LabelOptions& options) {
   std::string error;
-  const RgbImage image = RenderLabelRaster(label, options, &error);
-  if (!error.empty()) return Fail(std::move(error));
+  bool internal = false;
+  const RgbImage image = RenderRaster(label, options, &error, &internal);
+  if (!error.empty()) return internal ? InternalFailure(std::move(error)) : Fail(std::move(error));
   std::vector<std::uint8_t> bytes = EncodePng(image, options.dpi, &error);
-  if (!error.empty()) return Fail(std::move(error));
+  if (!error.empty()) return InternalFailure(std::move(error));
   return {std::move(bytes), {}, {}};
 }
 
@@ -225,16 +246,23 @@ RenderedLabel RenderLabelsPdf(std::span<const LabelContent> labels, const LabelO
   Surface surface(cairo_pdf_surface_create_for_stream(AppendBytes, &bytes,
                                                       options.size.width_mm * kPointsPerMm,
                                                       options.size.height_mm * kPointsPerMm));
+  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
+    return InternalFailure(
+        CairoError("cannot create label PDF", cairo_surface_status(surface.get())));
+  }
   const std::string title = labels.size() == 1
                                 ? "PinTag label " + labels.front().pincode.str()
                                 : "PinTag labels (" + std::to_string(labels.size()) + ")";
   cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, title.c_str());
   cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATOR, "PinTag");
+  // cairo dates the file when it writes it, so one label gave other bytes every time. An empty
+  // date leaves /CreationDate out; cairo 1.16 writes a fixed one without its "D:", malformed.
+  cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATE_DATE, "");
   std::optional<std::size_t> refused;
   if (std::string why =
           DrawPages(surface.get(), labels, label::ComputeLayout(options.size), &refused);
       !why.empty()) {
-    return Fail(why, refused);
+    return refused ? Fail(why, refused) : InternalFailure(why);
   }
   return {std::move(bytes), {}, {}};
 }
@@ -249,11 +277,15 @@ RenderedLabel RenderLabelSvg(const LabelContent& label, const LabelOptions& opti
   Surface surface(cairo_svg_surface_create_for_stream(AppendBytes, &bytes,
                                                       options.size.width_mm * kPointsPerMm,
                                                       options.size.height_mm * kPointsPerMm));
+  if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
+    return InternalFailure(
+        CairoError("cannot create label SVG", cairo_surface_status(surface.get())));
+  }
   std::optional<std::size_t> refused;
   if (std::string why = DrawPages(surface.get(), std::span<const LabelContent>(&label, 1),
                                   label::ComputeLayout(options.size), &refused);
       !why.empty()) {
-    return Fail(why, refused);
+    return refused ? Fail(why, refused) : InternalFailure(why);
   }
   SizeSvgInMillimetres(bytes, options.size);
   return {std::move(bytes), {}, {}};

@@ -45,18 +45,23 @@ bool IsControl(char32_t c) {
 
 }  // namespace
 
-std::string SanitizeUtf8(std::string_view text) {
+std::string SanitizeUtf8(std::string_view text, bool* cut) {
   std::string out;
   out.reserve(text.size());
   std::size_t count = 0;
   bool pending_space = false;
-  for (std::size_t i = 0; i < text.size() && count < kMaxDrawnCodePoints;) {
+  bool dropped = false;  // a code point that would print was left out for the limit
+  for (std::size_t i = 0; i < text.size();) {
     const char32_t c = Next(text, i);
     if (IsSpace(c)) {
       pending_space = !out.empty();
       continue;
     }
     if (IsControl(c)) continue;
+    if (count + (pending_space ? 2 : 1) > kMaxDrawnCodePoints) {
+      dropped = true;
+      break;
+    }
     if (pending_space) {
       out += ' ';
       ++count;
@@ -65,6 +70,7 @@ std::string SanitizeUtf8(std::string_view text) {
     AppendUtf8(out, c);
     ++count;
   }
+  if (cut != nullptr) *cut = dropped;
   return out;
 }
 

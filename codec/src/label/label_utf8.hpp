@@ -11,7 +11,8 @@ inline constexpr std::size_t kMaxDrawnCodePoints = 200;  // longer text is cut b
 
 /// Valid UTF-8 for any input: invalid or overlong sequences and surrogates become U+FFFD, control
 /// and bidi-override characters are dropped, runs of white space become one space, ends are
-/// trimmed, and the result is cut to kMaxDrawnCodePoints code points.
-std::string SanitizeUtf8(std::string_view text);
+/// trimmed, and the result is cut to kMaxDrawnCodePoints code points; `cut`, when given, says
+/// whether it was (a bin cut short must not print, a name shows its cut).
+std::string SanitizeUtf8(std::string_view text, bool* cut = nullptr);
 
 }  // namespace pintag::label

@@ -91,6 +91,10 @@ HttpResponse Named(HttpResponse response, const std::string& filename) {
 
 HttpResponse Rendered(const RenderedLabel& rendered, const AppContext& context, std::string type,
                       const std::string& filename, std::size_t labels = 1) {
+  // The label's content or options are the request's to fix; the renderer failing is ours.
+  if (!rendered && rendered.internal_error) {
+    throw HttpError(500, rendered.error, "Label Rendering Failed");
+  }
   if (!rendered) throw HttpError(400, rendered.error, "Cannot Render Label");
   context.metrics->increment(kLabelsRenderedCounter, static_cast<double>(labels));
   return Named(HttpResponse::Bytes(std::move(type), rendered.bytes), filename);

@@ -3,9 +3,10 @@
 // district and state, the sort bin of the chosen plan and the key in small print.
 //
 // PDF is vector at the exact page size (points, 1 pt = 1/72 in) with subset fonts embedded, one
-// page per label; SVG is vector too (cairo SVG surface, millimetre document units); PNG is a raster
-// at the asked dpi with the dpi recorded in the file. Text is UTF-8 (invalid bytes are replaced,
-// control characters dropped); long names shrink to a minimum size and are then ellipsized.
+// page per label, and undated (the same labels are the same bytes); SVG is vector too (cairo SVG
+// surface, millimetre document units); PNG is a raster at the asked dpi with the dpi recorded in
+// the file. Text is UTF-8 (invalid bytes are replaced, control characters dropped); long names
+// shrink to a minimum size and are then ellipsized; a bin that cannot print whole is refused.
 
 #include <cstdint>
 #include <optional>
@@ -78,8 +79,11 @@ struct RenderedLabel {
   std::vector<std::uint8_t> bytes;
   std::string error;
   /// Which label (its index in the list given) could not be printed, when that was the error: its
-  /// sort bin did not fit whole.
+  /// sort bin did not fit whole, or was longer than a label draws.
   std::optional<std::size_t> refused_label;
+  /// The error is the renderer's own (cairo out of memory, the PNG encoder failing), not the
+  /// options' or the content's: a server's fault, not the request's. False by default.
+  bool internal_error = false;
   explicit operator bool() const { return error.empty(); }
 };
 
