@@ -185,6 +185,31 @@ export async function busy(button, work) {
   }
 }
 
+let confirmCount = 0;
+
+/**
+ * A confirmation asked in the page (an alertdialog, not window.confirm, which a screen reader and
+ * a test harness handle worse): `message` and two buttons. Yes runs `onYes` with its button busy;
+ * No, and Escape while yes is not running, run `onNo`. Returns the box and its yes button (to be
+ * shown, then focused).
+ */
+export function confirmBox({ label, message, yes, yesId, yesClass = 'danger', no = 'Cancel', onYes, onNo }) {
+  const yesButton = el('button', { type: 'button', class: yesClass, id: yesId }, yes);
+  const noButton = el('button', { type: 'button', class: 'secondary', onclick: onNo }, no);
+  yesButton.addEventListener('click', () => busy(yesButton, onYes));
+  const text = el('p', { id: `confirm-text-${++confirmCount}` }, message);
+  const onkeydown = (event) => {
+    if (event.key === 'Escape' && !yesButton.hasAttribute('aria-busy')) {
+      event.preventDefault();
+      onNo();
+    }
+  };
+  // Described by its text, so that a screen reader says what is asked, not only the label.
+  const box = el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': label,
+    'aria-describedby': text.id, onkeydown }, text, el('div', { class: 'actions' }, yesButton, noButton));
+  return { box, yesButton };
+}
+
 /** Saves a blob under a file name, as a download. */
 export function downloadBlob(blob, filename) {
   const url = URL.createObjectURL(blob);

@@ -1,7 +1,7 @@
 // Registry: search offices, look up pincodes and keys; admins add and retire pincodes and edit
 // the sort plans (plans.js).
 import {
-  api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, asciiDigits,
+  api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, asciiDigits, confirmBox,
 } from './api.js';
 import { setUpSortPlans } from './plans.js';
 
@@ -267,36 +267,32 @@ $('retire-form').addEventListener('submit', (event) => {
       show($('retire-msg'), messageBox('info', `${pin} is already retired.`));
       return;
     }
-    const confirm = el('button', { type: 'button', class: 'danger', id: 'retire-yes' }, `Retire ${pin}`);
-    // The buttons go with the box: focus goes back to the pincode field, not to the page's top.
+    // The box goes with the buttons: focus goes back to the pincode field, not to the page's top.
     const close = () => { show($('retire-confirm')); $('r-pin').focus(); };
-    const cancel = el('button', { type: 'button', class: 'secondary', onclick: close }, 'Cancel');
-    confirm.addEventListener('click', () => busy(confirm, async () => {
-      const latest = claimDetail();
-      try {
-        const retired = await api(`/api/v1/pincodes/${pin}/retire`, { method: 'POST', token: token() });
-        show($('retire-confirm'));
-        show($('retire-msg'), messageBox('ok', `${pin} is retired. It keeps key ${retired.key}.`));
-        if (latest()) showRecord(retired);
-        refreshSearch();
-        $('r-pin').focus();
-      } catch (error) {
-        show($('retire-msg'), problemBox(error));
-      }
-    }));
     const where = record.office || record.district;
-    // Escape answers No, as in any dialog; not while the retirement is being sent.
-    const onkeydown = (event) => {
-      if (event.key === 'Escape' && !confirm.hasAttribute('aria-busy')) {
-        event.preventDefault();
-        close();
-      }
-    };
-    show($('retire-confirm'), el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': 'Confirm retiring', onkeydown },
-      el('p', {}, `Retire ${pin} (`, where ? [el('bdi', {}, where), ', '] : null,
-        `key ${record.key})? No new labels will be issued for it.`),
-      el('div', { class: 'actions' }, confirm, cancel)));
-    confirm.focus();
+    const { box, yesButton } = confirmBox({
+      label: 'Confirm retiring',
+      message: [`Retire ${pin} (`, where ? [el('bdi', {}, where), ', '] : null,
+        `key ${record.key})? No new labels will be issued for it.`],
+      yes: `Retire ${pin}`,
+      yesId: 'retire-yes',
+      onNo: close,
+      onYes: async () => {
+        const latest = claimDetail();
+        try {
+          const retired = await api(`/api/v1/pincodes/${pin}/retire`, { method: 'POST', token: token() });
+          show($('retire-confirm'));
+          show($('retire-msg'), messageBox('ok', `${pin} is retired. It keeps key ${retired.key}.`));
+          if (latest()) showRecord(retired);
+          refreshSearch();
+          $('r-pin').focus();
+        } catch (error) {
+          show($('retire-msg'), problemBox(error));
+        }
+      },
+    });
+    show($('retire-confirm'), box);
+    yesButton.focus();
   });
 });
 

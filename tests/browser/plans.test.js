@@ -125,7 +125,7 @@ test('a save over someone else\'s newer save is refused and keeps the text typed
   const kept = await apiJson('/api/v1/sortplans/hub-race');
   assert.deepEqual(kept.body.rules.map((r) => r.prefix), ['1', '2']);
   // Opening the saved plan shows the other admin's version; saved on it, the change is kept.
-  await page.getByRole('button', { name: 'Open the saved hub-race' }).click();
+  await page.getByRole('button', { name: 'Discard my text and open the saved hub-race' }).click();
   await valueHolds(page, '#p-rules', '2,west');
   await page.locator('#p-rules').fill('prefix,bin\n*,manual\n1,north\n2,west\n3,south\n');
   await page.getByRole('button', { name: 'Save plan' }).click();
@@ -144,6 +144,11 @@ test('unsaved changes are not dropped by opening another plan', async () => {
   await page.getByRole('button', { name: 'Keep editing' }).click();
   assert.equal(await page.locator('#p-description').inputValue(), 'edited, not saved');
   assert.equal(await page.locator('#plan-edit-h').textContent(), 'Plan default');
+  // Escape is Keep editing too.
+  await page.getByRole('button', { name: 'Close' }).click();
+  await page.getByRole('button', { name: 'Discard my changes' }).press('Escape');
+  assert.equal(await page.getByRole('alertdialog').count(), 0);
+  assert.equal(await page.locator('#p-description').inputValue(), 'edited, not saved');
   await page.getByRole('button', { name: 'Close' }).click();
   await page.getByRole('button', { name: 'Discard my changes' }).click();
   assert.ok(await page.locator('#plan-form').isHidden());
@@ -152,16 +157,23 @@ test('unsaved changes are not dropped by opening another plan', async () => {
 });
 
 test('a plan is deleted after a confirmation, and Undo restores it whole', async () => {
-  const created = await fetch(`${server.url}/api/v1/sortplans/hub-gone`, {
-    method: 'PUT',
-    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'application/json' },
-    body: JSON.stringify({ fallback_bin: 'floor', description: 'to be deleted', rules: [{ prefix: '4', bin: 'west' }] }),
+  // More rules than the server reads as JSON (250,000 items, 3 a rule): put back as JSON the
+  // undo was refused. A bin with a comma and quotes checks the page's CSV against the server's.
+  const rows = ['prefix,bin', '*,floor', '4,"west, ""A"""',
+    ...Array.from({ length: 84_000 }, (_, i) => `${500000 + i},b${i % 50}`)];
+  const created = await fetch(`${server.url}/api/v1/sortplans/hub-gone?description=to%20be%20deleted`, {
+    method: 'PUT', body: `${rows.join('\n')}\n`,
+    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv' },
   });
   assert.equal(created.status, 201);
   const before = await apiJson('/api/v1/sortplans/hub-gone');
   const page = await openRegistry();
+  page.setDefaultTimeout(60_000);  // 84,000 rules are read, deleted and put back: seconds each
   await page.locator('#token').fill(server.adminToken);
   await page.getByRole('button', { name: 'Open plan hub-gone' }).click();
+  await valueHolds(page, '#p-rules', 'west, ""A""');
+  const csv = await (await fetch(`${server.url}/api/v1/sortplans/hub-gone?format=csv`)).text();
+  assert.equal(await page.locator('#p-rules').inputValue(), csv);
   await page.getByRole('button', { name: 'Delete…' }).click();
   // Escape answers No: nothing is deleted.
   await page.getByRole('button', { name: 'Delete hub-gone' }).press('Escape');
@@ -177,5 +189,61 @@ test('a plan is deleted after a confirmation, and Undo restores it whole', async
   assert.equal(after.status, 200);
   assert.equal(after.etag, before.etag, 'restored whole: the same version');
   await page.locator('#plans-body tr', { hasText: 'hub-gone' }).waitFor();
+  assert.deepEqual(page.problems, []);
+});
+
+test('a plan deleted while it is edited: the open that fails leaves the editor as it was, and Save offers it as a new plan', async () => {
+  const put = (name, body) => fetch(`${server.url}/api/v1/sortplans/${name}`, {
+    method: 'PUT', body, headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv' },
+  });
+  const remove = (name) => fetch(`${server.url}/api/v1/sortplans/${name}`, {
+    method: 'DELETE', headers: { Authorization: `Bearer ${server.adminToken}` },
+  });
+  assert.equal((await put('hub-a', 'prefix,bin\n*,manual\n1,north\n')).status, 201);
+  assert.equal((await put('hub-b', 'prefix,bin\n*,manual\n2,west\n')).status, 201);
+  const page = await openRegistry();
+  await page.locator('#token').fill(server.adminToken);
+  await page.getByRole('button', { name: 'Open plan hub-a' }).click();
+  await valueHolds(page, '#p-rules', '1,north');
+  const mine = 'prefix,bin\n*,manual\n1,north\n3,south\n';
+  await page.locator('#p-rules').fill(mine);
+  // Another admin deletes hub-b; opening it over the edits fails, and the edits stay, guarded.
+  assert.equal((await remove('hub-b')).status, 200);
+  await page.getByRole('button', { name: 'Open plan hub-b' }).click();
+  await page.getByRole('button', { name: 'Discard my changes' }).click();
+  await page.locator('#plan-msg').filter({ hasText: 'HTTP 404' }).waitFor();
+  assert.equal(await page.locator('#plan-edit-h').textContent(), 'Plan hub-a');
+  assert.equal(await page.locator('#p-rules').inputValue(), mine);
+  await page.getByRole('button', { name: 'Close' }).click();
+  await page.getByRole('alertdialog', { name: 'Unsaved changes' }).waitFor();
+  await page.getByRole('button', { name: 'Keep editing' }).click();
+  // Now hub-a goes too: the save is refused, said to be a deletion, and offered as a new plan.
+  assert.equal((await remove('hub-a')).status, 200);
+  await page.getByRole('button', { name: 'Save plan' }).click();
+  await page.locator('#plan-msg').filter({ hasText: 'Someone deleted this plan after you opened it' }).waitFor();
+  assert.equal(await page.locator('#p-rules').inputValue(), mine);
+  await page.getByRole('button', { name: 'Save it as a new plan' }).click();
+  await page.locator('#plan-msg').filter({ hasText: 'Saved hub-a: 2 rules' }).waitFor();
+  assert.deepEqual((await apiJson('/api/v1/sortplans/hub-a')).body.rules.map((r) => r.bin), ['north', 'south']);
+  assert.deepEqual(page.problems, []);
+});
+
+test('a name a web address cannot carry, or a description over its limit, is refused before it is sent', async () => {
+  const page = await openRegistry();
+  await page.locator('#token').fill(server.adminToken);
+  let sent = 0;
+  page.on('request', (request) => { if (request.method() === 'PUT') ++sent; });
+  await page.getByRole('button', { name: 'New plan' }).click();
+  for (const name of ['a/b', '..', 'x&y', 'n'.repeat(65)]) {
+    await page.locator('#p-name').fill(name);
+    await page.getByRole('button', { name: 'Save plan' }).click();
+    await page.locator('#plan-msg [role="alert"]').filter({ hasText: /Name not usable|Name too long/ }).waitFor();
+  }
+  await page.locator('#p-name').fill('hub-long');
+  await page.locator('#p-description').fill('d'.repeat(201));
+  await page.getByRole('button', { name: 'Save plan' }).click();
+  await page.locator('#plan-msg [role="alert"]').filter({ hasText: 'Description too long' }).waitFor();
+  assert.equal(sent, 0);
+  assert.equal((await apiJson('/api/v1/sortplans/hub-long')).status, 404);
   assert.deepEqual(page.problems, []);
 });
