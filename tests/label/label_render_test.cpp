@@ -596,11 +596,13 @@ TEST(LabelText, ALongOfficeNamePrintsWholeOnTwoLinesOfOneSize) {
     std::string whole = label.office;
     std::erase(whole, ' ');
     EXPECT_NE(JoinedText(words).find(whole), std::string::npos) << where;  // not ellipsized
-    const std::vector<Word> office = WordsFrom(words, label.office);
-    ASSERT_FALSE(office.empty()) << where;
-    EXPECT_GT(office.back().baseline(), office.front().baseline() + 1) << where << ": one line";
-    for (const Word& word : office) {
-      EXPECT_NEAR(word.size(), office.front().size(), 0.02) << where << " '" << word.text << "'";
+    const std::vector<Word> office_words = WordsFrom(words, label.office);
+    ASSERT_FALSE(office_words.empty()) << where;
+    EXPECT_GT(office_words.back().baseline(), office_words.front().baseline() + 1)
+        << where << ": one line";
+    for (const Word& word : office_words) {
+      EXPECT_NEAR(word.size(), office_words.front().size(), 0.02)
+          << where << " '" << word.text << "'";
     }
   }
 }
