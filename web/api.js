@@ -333,9 +333,12 @@ export async function loadPlans(select, preferred = 'default') {
   try {
     const { plans } = await api('/api/v1/sortplans');
     const current = select.value;
+    // An option holds text only, no <bdi>: a name or description written right to left is
+    // isolated with FSI … PDI, so it does not take the dash and the other part into its order.
+    const isolated = (text) => `\u2068${text}\u2069`;
     for (const plan of plans) {
-      let text = plan.name;
-      if (plan.description) text += ` — ${plan.description.length > 44 ? `${plan.description.slice(0, 43)}…` : plan.description}`;
+      let text = isolated(plan.name);
+      if (plan.description) text += ` — ${isolated(plan.description.length > 44 ? `${plan.description.slice(0, 43)}…` : plan.description)}`;
       const known = [...select.options].find((o) => o.value === plan.name);
       if (known) {
         // An option the page starts with (the default plan): give it its description too.
