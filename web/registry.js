@@ -1,9 +1,10 @@
-// Registry: search offices, look up pincodes and keys; admins add and retire pincodes and edit
-// the sort plans (plans.js).
+// Registry: search offices, look up pincodes and keys; admins add and retire pincodes, edit the
+// sort plans (plans.js) and manage the API tokens (tokens.js).
 import {
   api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, asciiDigits, confirmBox,
 } from './api.js';
 import { setUpSortPlans } from './plans.js';
+import { setUpTokens } from './tokens.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -297,3 +298,4 @@ $('retire-form').addEventListener('submit', (event) => {
 });
 
 setUpSortPlans({ token, needToken });
+setUpTokens({ token, needToken });

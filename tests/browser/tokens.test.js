@@ -1,0 +1,97 @@
+// API tokens on the registry page: a token made in the page signs in to the same server with its
+// role, a revoked one is refused, and the last admin token is kept.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+
+let server;
+let browser;
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+});
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+});
+
+// The status the server gives `secret` on an admin-only route: 200 admin, 403 another role,
+// 401 not a token (or a revoked one).
+async function statusWith(secret) {
+  const response = await fetch(`${server.url}/api/v1/tokens`, { headers: { Authorization: `Bearer ${secret}` } });
+  return response.status;
+}
+
+async function openRegistry() {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  return page;
+}
+
+test('a token made in the page works with its role, and a revoked one is refused', async () => {
+  const page = await openRegistry();
+  // Without the admin token nothing is asked of the server.
+  await page.getByRole('button', { name: 'Show tokens' }).click();
+  await page.locator('#tokens-msg').filter({ hasText: 'Paste an admin token above first' }).waitFor();
+  await page.locator('#token').fill(server.adminToken);
+
+  await page.locator('#t-role').selectOption('scanner');
+  await page.locator('#t-label').fill('handheld 7');
+  await page.getByRole('button', { name: 'Create token' }).click();
+  const secretField = page.locator('#token-secret');
+  await secretField.waitFor();
+  const scanner = await secretField.inputValue();
+  assert.match(scanner, /^pt_\d+_/);
+  assert.equal(await statusWith(scanner), 403, 'a scanner token: valid, not an admin');
+  assert.match(await page.locator('#token-created').textContent(), /\(scanner, handheld 7\).*shown only now/);
+
+  await page.getByRole('button', { name: 'Show tokens' }).click();
+  const id = scanner.match(/^pt_(\d+)_/)[1];
+  const row = page.locator(`#tokens-body tr[data-token="${id}"]`);
+  await row.waitFor();
+  assert.match(await row.textContent(), /scanner\s*handheld 7.*active/);
+  // The page's own admin token is marked as such.
+  assert.match(await page.locator('#tokens-body tr[data-token="1"]').textContent(), /this page’s/);
+  await screenshot(page, 'registry-tokens');
+
+  // Escape keeps it; Revoke revokes it, and the server refuses it from then on.
+  await page.getByRole('button', { name: `Revoke token ${id}`, exact: true }).click();
+  await page.locator('#token-revoke-yes').press('Escape');
+  assert.equal(await statusWith(scanner), 403);
+  await page.getByRole('button', { name: `Revoke token ${id}`, exact: true }).click();
+  await page.locator('#token-revoke-yes').click();
+  await page.locator('#tokens-msg').filter({ hasText: `Token ${id} is revoked.` }).waitFor();
+  assert.equal(await statusWith(scanner), 401);
+  await row.filter({ hasText: 'revoked' }).waitFor();
+  assert.equal(await row.getByRole('button').count(), 0);
+  assert.deepEqual(page.problems, []);
+});
+
+test('the last admin token is not revoked, and a second one made in the page can revoke the first', async () => {
+  const page = await openRegistry();
+  await page.locator('#token').fill(server.adminToken);
+  await page.getByRole('button', { name: 'Show tokens' }).click();
+  await page.locator('#tokens-body tr[data-token="1"]').waitFor();
+  await page.getByRole('button', { name: 'Revoke token 1', exact: true }).click();
+  assert.match(await page.getByRole('alertdialog').textContent(), /the token this page uses/);
+  await page.locator('#token-revoke-yes').click();
+  await page.locator('#tokens-msg').filter({ hasText: 'HTTP 409' }).waitFor();
+  assert.equal(await statusWith(server.adminToken), 200);
+
+  await page.locator('#t-role').selectOption('admin');
+  await page.locator('#t-label').fill('second admin');
+  await page.getByRole('button', { name: 'Create token' }).click();
+  await page.locator('#token-secret').waitFor();
+  const second = await page.locator('#token-secret').inputValue();
+  assert.equal(await statusWith(second), 200);
+  // Signed in with the second, the page revokes the first.
+  await page.locator('#token').fill(second);
+  await page.getByRole('button', { name: 'Show tokens' }).click();
+  await page.getByRole('button', { name: 'Revoke token 1', exact: true }).click();
+  await page.locator('#token-revoke-yes').click();
+  await page.locator('#tokens-msg').filter({ hasText: 'Token 1 is revoked.' }).waitFor();
+  assert.equal(await statusWith(server.adminToken), 401);
+  assert.equal(await statusWith(second), 200);
+  assert.deepEqual(page.problems, []);
+});
