@@ -185,6 +185,20 @@ export async function busy(button, work) {
   }
 }
 
+let roleAnswer = null;
+
+/** The server's part in replication ({role, primary, …} of /api/v1/registry), asked once a page; null when unknown. */
+export function serverRole() {
+  roleAnswer ??= api('/api/v1/registry').catch(() => null);
+  return roleAnswer;
+}
+
+/** What a read-only replica says about `what` (plans, tokens): read here, changed on its primary. */
+export function replicaNote(what, primary) {
+  return messageBox('info', `This server is a read-only copy of the registry: ${what} are read here and changed on the primary`,
+    primary ? [' (', el('a', { href: `${primary.replace(/\/$/, '')}/registry.html` }, primary), ')'] : '', '.');
+}
+
 let confirmCount = 0;
 
 /**

@@ -2,7 +2,8 @@
 // so one admin's save never undoes another's), create, delete with an undo, and route a pincode
 // by the plan as saved. The server checks every plan; the page shows its problem as it says it.
 import {
-  api, el, show, problemBox, messageBox, busy, isPincode, asciiDigits, confirmBox, downloadBlob,
+  api, el, show, problemBox, messageBox, busy, isPincode, asciiDigits, confirmBox, downloadBlob, serverRole,
+  replicaNote,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -347,18 +348,13 @@ export function setUpSortPlans({ token, needToken }) {
   // A read-only replica refuses every change: said once, and the buttons that would ask for one
   // are not offered.
   async function noteReplica() {
-    try {
-      const registry = await api('/api/v1/registry');
-      if (registry.role !== 'replica') return;
-      readOnlyServer = true;
-      $('plan-new').hidden = true;
-      $('plan-save').hidden = true;
-      $('plan-delete').hidden = true;
-      show($('plans-replica'), messageBox('info', 'This server is a read-only copy of the registry: plans are read here and changed on the primary',
-        registry.primary ? [' (', el('a', { href: `${registry.primary.replace(/\/$/, '')}/registry.html` }, registry.primary), ')'] : '', '.'));
-    } catch {
-      // Unknown: the buttons stay, and a change is refused with its own message if it must be.
-    }
+    const registry = await serverRole();
+    if (registry?.role !== 'replica') return;
+    readOnlyServer = true;
+    $('plan-new').hidden = true;
+    $('plan-save').hidden = true;
+    $('plan-delete').hidden = true;
+    show($('plans-replica'), replicaNote('plans', registry.primary));
   }
 
   $('plan-new').addEventListener('click', () => askToOpen(newPlan));

@@ -8,8 +8,10 @@ import { setUpTokens } from './tokens.js';
 
 const $ = (id) => document.getElementById(id);
 
+let forgetTokens = null;  // set below: Forget takes the token list and any new secret shown too
 const token = bindToken({
   name: 'admin', input: $('token'), status: $('token-status'), forget: $('token-forget'), toggle: $('token-toggle'),
+  onForget: () => forgetTokens?.(),
 });
 
 let search = null;  // {q, district, state, limit, offset}
@@ -298,4 +300,4 @@ $('retire-form').addEventListener('submit', (event) => {
 });
 
 setUpSortPlans({ token, needToken });
-setUpTokens({ token, needToken });
+forgetTokens = setUpTokens({ token, needToken });

@@ -1,6 +1,9 @@
-// API tokens on the registry page: list them, create one (its secret shown once, here), revoke
-// one after a confirmation. Every call takes the admin token of the page's admin section.
-import { api, el, show, problemBox, messageBox, busy, confirmBox } from './api.js';
+// API tokens on the registry page: list them, create one (its secret shown once, here, until
+// dismissed), revoke one after a confirmation. Every call takes the admin token of the page's
+// admin section; Forget there takes the list and any secret shown with it.
+import {
+  api, el, show, problemBox, messageBox, busy, confirmBox, serverRole, replicaNote,
+} from './api.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -10,102 +13,175 @@ function idOfSecret(secret) {
   return match ? Number(match[1]) : null;
 }
 
+// The text into the clipboard: the Clipboard API where the page may use it (https, localhost),
+// else the browser's copy command on the selected field (a hub's server on plain http).
+async function copyText(field, text) {
+  field.focus();
+  field.select();
+  try {
+    await navigator.clipboard.writeText(text);
+    return true;
+  } catch {
+    return document.execCommand('copy');
+  }
+}
+
 /**
  * Sets up the token section. `token()` gives the admin token; `needToken(messageBox)` says one is
- * missing (and returns true) before anything is sent.
+ * missing (and returns true) before anything is sent. Returns `forget()`, which takes the list
+ * and any secret shown off the page (for the admin section's Forget).
  */
 export function setUpTokens({ token, needToken }) {
-  let shown = false;  // the list is drawn: drawn again after each change
+  let tokens = null;         // the list as last read, or null when none is shown
+  let showRevoked = false;
+  let readOnlyServer = false;
+  let listRequest = 0;       // only the latest list read draws
+  let newest = null;         // the id of the token made last, marked in the list
+
+  // The list as read, drawn again when the page's own token (marked) or the filter changes.
+  function draw() {
+    if (tokens === null) {
+      show($('tokens-body'));
+      $('tokens-list').hidden = true;
+      $('tokens-filter').hidden = true;
+      return;
+    }
+    const mine = idOfSecret(token());
+    const rows = [...tokens].reverse().filter((t) => showRevoked || !t.revoked_at);
+    show($('tokens-body'), rows.map((t) => el('tr', { 'data-token': t.id, class: t.id === newest ? 'is-selected' : (t.revoked_at ? 'muted' : null) },
+      el('td', { class: 'num mono' }, String(t.id)),
+      el('td', {}, t.role),
+      el('td', { class: 'token-label' }, t.label ? el('bdi', {}, t.label) : '—', t.id === mine ? el('span', { class: 'hint' }, ' (this page’s)') : null),
+      el('td', { class: 'hide-narrow nowrap' }, `${t.created_at.slice(0, 16).replace('T', ' ')} UTC`),
+      el('td', {}, t.revoked_at ? el('span', { title: `revoked ${t.revoked_at}` }, 'revoked') : 'active'),
+      el('td', {}, t.revoked_at || readOnlyServer ? null : el('button', { type: 'button', class: 'link', onclick: () => askToRevoke(t),
+        'aria-label': `Revoke token ${t.id}` }, 'Revoke…')))));
+    const active = tokens.filter((t) => !t.revoked_at).length;
+    const total = tokens.length === 1 ? '1 token' : `${tokens.length} tokens`;
+    $('tokens-caption').textContent = `${total}, ${active} active, newest first${showRevoked ? '' : '; revoked ones hidden'}` +
+      (readOnlyServer ? ' (as of this replica’s copy of the registry)' : '');
+    $('tokens-list').hidden = false;
+    $('tokens-filter').hidden = false;
+  }
 
   async function listTokens() {
+    const request = ++listRequest;
     try {
-      const { tokens } = await api('/api/v1/tokens', { token: token() });
-      const mine = idOfSecret(token());
-      show($('tokens-body'), tokens.map((t) => el('tr', { class: t.revoked_at ? 'muted' : null, 'data-token': t.id },
-        el('td', { class: 'num mono' }, String(t.id)),
-        el('td', {}, t.role),
-        el('td', {}, t.label ? el('bdi', {}, t.label) : '—', t.id === mine ? el('span', { class: 'hint' }, ' (this page’s)') : null),
-        el('td', { class: 'hide-narrow nowrap' }, t.created_at),
-        el('td', {}, t.revoked_at ? `revoked ${t.revoked_at}` : 'active'),
-        el('td', {}, t.revoked_at ? null : el('button', { type: 'button', class: 'link', onclick: () => askToRevoke(t, mine),
-          'aria-label': `Revoke token ${t.id}` }, 'Revoke…')))));
-      const active = tokens.filter((t) => !t.revoked_at).length;
-      $('tokens-caption').textContent = `${tokens.length} tokens, ${active} active`;
-      $('tokens-list').hidden = false;
-      shown = true;
+      const answer = await api('/api/v1/tokens', { token: token() });
+      if (request !== listRequest) return;
+      tokens = answer.tokens;
+      draw();
     } catch (error) {
-      $('tokens-list').hidden = true;
-      shown = false;
+      if (request !== listRequest) return;
+      tokens = null;
+      draw();
       show($('tokens-msg'), problemBox(error));
     }
   }
 
-  function askToRevoke(t, mine) {
+  function hideSecret() {
+    show($('token-created'));
+  }
+
+  function clearConfirm() {
+    show($('token-confirm'));
+    for (const row of $('tokens-body').querySelectorAll('tr.confirm-row')) row.remove();
+  }
+
+  function forget() {
+    ++listRequest;
+    tokens = null;
+    newest = null;
+    hideSecret();
+    clearConfirm();
     show($('tokens-msg'));
-    const row = () => $('tokens-body').querySelector(`tr[data-token="${t.id}"] button`);
-    const close = () => { show($('token-confirm')); (row() || $('tokens-show')).focus(); };
+    draw();
+  }
+
+  function askToRevoke(t) {
+    show($('tokens-msg'));
+    if (needToken($('tokens-msg'))) return;
+    const rowButton = () => $('tokens-body').querySelector(`tr[data-token="${t.id}"] button`);
+    const close = () => { clearConfirm(); (rowButton() || $('tokens-show')).focus(); };
+    // Whose token the page uses is read now: the field may have changed since the list was drawn.
+    const own = idOfSecret(token()) === t.id;
     const { box, yesButton } = confirmBox({
       label: 'Confirm revoking',
       message: [`Revoke token ${t.id} (${t.role}`, t.label ? [', ', el('bdi', {}, t.label)] : null,
         ')? Whatever signs in with it is refused from now on. This cannot be undone.',
-        t.id === mine ? ' It is the token this page uses: the page will need another admin token.' : ''],
+        own ? ' It is the token this page uses: the page will need another admin token.' : ''],
       yes: `Revoke token ${t.id}`, yesId: 'token-revoke-yes',
       onNo: close,
       onYes: async () => {
         try {
           await api(`/api/v1/tokens/${t.id}`, { method: 'DELETE', token: token() });
-          show($('token-confirm'));
-          show($('tokens-msg'), messageBox('ok', `Token ${t.id} is revoked.`));
-          // The page's own token, revoked, can list nothing more.
-          if (t.id === mine) {
-            $('tokens-list').hidden = true;
-          } else {
-            await listTokens();
+          clearConfirm();
+          if (own) {
+            // Nothing more can be listed with it: the list goes, and the page says what to do.
+            forget();
+            show($('tokens-msg'), messageBox('ok', `Token ${t.id} is revoked. It was this page’s token: paste another admin token above to go on.`));
+            $('token').focus();
+            return;
           }
-          $('tokens-msg').focus();
+          t.revoked_at = t.revoked_at || 'now';
+          draw();
+          show($('tokens-msg'), messageBox('ok', `Token ${t.id} is revoked.`));
+          await listTokens();
+          (rowButton() || $('tokens-msg')).focus();
         } catch (error) {
           close();
           show($('tokens-msg'), problemBox(error));
         }
       },
     });
-    show($('token-confirm'), box);
-    box.scrollIntoView({ block: 'nearest' });
+    // Shown under the token's row, not below a list that may be thousands of pixels long.
+    const row = $('tokens-body').querySelector(`tr[data-token="${t.id}"]`);
+    clearConfirm();
+    if (row) row.after(el('tr', { class: 'confirm-row' }, el('td', { colspan: 6 }, box)));
+    else show($('token-confirm'), box);
     yesButton.focus();
   }
 
   async function create() {
     show($('tokens-msg'));
-    show($('token-created'));
+    hideSecret();
     if (needToken($('tokens-msg'))) return;
     const role = $('t-role').value;
     const label = $('t-label').value.trim();
     try {
       const made = await api('/api/v1/tokens', { method: 'POST', token: token(), json: label ? { role, label } : { role } });
-      const secret = el('input', { type: 'text', id: 'token-secret', readonly: true, value: made.secret,
-        class: 'mono', 'aria-label': `Secret of token ${made.id}`, spellcheck: 'false' });
+      // A text area, so a phone shows the whole secret to check by eye; never inside a form, so
+      // no browser offers to save it.
+      const secret = el('textarea', { id: 'token-secret', readonly: true, rows: 2, class: 'mono secret',
+        'aria-label': `Secret of token ${made.id}`, spellcheck: 'false', autocomplete: 'off' });
+      secret.value = made.secret;
       const copy = el('button', { type: 'button', class: 'secondary' }, 'Copy');
       copy.addEventListener('click', async () => {
-        secret.select();
-        try {
-          await navigator.clipboard.writeText(made.secret);
-          copy.textContent = 'Copied';
-        } catch {
-          // No clipboard here (a page not served over https, say): the text is selected to copy.
-          copy.textContent = 'Selected: copy it';
-        }
+        copy.textContent = (await copyText(secret, made.secret)) ? 'Copied' : 'Selected: press Ctrl+C (or long-press) to copy';
       });
+      const done = el('button', { type: 'button', id: 'token-secret-done', class: 'secondary' }, 'Done: hide the secret');
+      done.addEventListener('click', () => { hideSecret(); $('token-create').focus(); });
       show($('token-created'), messageBox('ok',
         el('p', {}, `Token ${made.id} (${made.role}`, made.label ? [', ', el('bdi', {}, made.label)] : null,
-          ') is made. Its secret is shown only now: copy it to the device that will use it.'),
-        el('div', { class: 'row' }, el('div', { class: 'grow' }, secret), copy)));
+          ') is made. Its secret is shown only now: copy it to the device that will use it, then hide it.'),
+        secret, el('div', { class: 'actions' }, copy, done)));
       secret.focus();
       secret.select();
       $('t-label').value = '';
-      if (shown) await listTokens();
+      newest = made.id;
+      if (tokens !== null) await listTokens();
     } catch (error) {
       show($('tokens-msg'), problemBox(error));
     }
+  }
+
+  async function noteReplica() {
+    const registry = await serverRole();
+    if (registry?.role !== 'replica') return;
+    readOnlyServer = true;
+    $('token-create-form').hidden = true;
+    show($('tokens-replica'), replicaNote('tokens', registry.primary));
+    draw();
   }
 
   $('token-create-form').addEventListener('submit', (event) => {
@@ -117,4 +193,15 @@ export function setUpTokens({ token, needToken }) {
     if (needToken($('tokens-msg'))) return;
     busy($('tokens-show'), listTokens);
   });
+  $('tokens-revoked').addEventListener('change', (event) => {
+    showRevoked = event.currentTarget.checked;
+    draw();
+  });
+  // The "this page's" mark follows the token field.
+  $('token').addEventListener('input', draw);
+  // A secret is not left on a page that is put away (or kept in the back-forward cache).
+  window.addEventListener('pagehide', hideSecret);
+
+  noteReplica();
+  return forget;
 }

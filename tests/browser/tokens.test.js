@@ -53,6 +53,9 @@ test('a token made in the page works with its role, and a revoked one is refused
   assert.match(await row.textContent(), /scanner\s*handheld 7.*active/);
   // The page's own admin token is marked as such.
   assert.match(await page.locator('#tokens-body tr[data-token="1"]').textContent(), /this page’s/);
+  // Done hides the secret (a screenshot of the list must not carry one).
+  await page.getByRole('button', { name: 'Done: hide the secret' }).click();
+  assert.equal(await page.locator('#token-secret').count(), 0);
   await screenshot(page, 'registry-tokens');
 
   // Escape keeps it; Revoke revokes it, and the server refuses it from then on.
@@ -63,8 +66,26 @@ test('a token made in the page works with its role, and a revoked one is refused
   await page.locator('#token-revoke-yes').click();
   await page.locator('#tokens-msg').filter({ hasText: `Token ${id} is revoked.` }).waitFor();
   assert.equal(await statusWith(scanner), 401);
+  // Revoked tokens are listed only when asked for, and offer nothing to do.
+  await row.waitFor({ state: 'detached' });
+  await page.getByLabel('Show revoked tokens').check();
   await row.filter({ hasText: 'revoked' }).waitFor();
   assert.equal(await row.getByRole('button').count(), 0);
+  assert.deepEqual(page.problems, []);
+});
+
+test('Forget takes the token list and a new secret off the page', async () => {
+  const page = await openRegistry();
+  await page.locator('#token').fill(server.adminToken);
+  await page.getByRole('button', { name: 'Show tokens' }).click();
+  await page.locator('#tokens-list').waitFor();
+  await page.locator('#t-role').selectOption('counter');
+  await page.getByRole('button', { name: 'Create token' }).click();
+  await page.locator('#token-secret').waitFor();
+  await page.getByRole('button', { name: 'Forget' }).click();
+  assert.equal(await page.locator('#token-secret').count(), 0);
+  assert.ok(await page.locator('#tokens-list').isHidden());
+  assert.equal(await page.locator('#tokens-body').textContent(), '');
   assert.deepEqual(page.problems, []);
 });
 
@@ -85,10 +106,15 @@ test('the last admin token is not revoked, and a second one made in the page can
   await page.locator('#token-secret').waitFor();
   const second = await page.locator('#token-secret').inputValue();
   assert.equal(await statusWith(second), 200);
-  // Signed in with the second, the page revokes the first.
+  // Signed in with the second, the page revokes the first; which token is the page's follows
+  // the field, not the list as it was drawn.
   await page.locator('#token').fill(second);
-  await page.getByRole('button', { name: 'Show tokens' }).click();
+  const secondId = second.match(/^pt_(\d+)_/)[1];
+  await page.getByRole('button', { name: `Revoke token ${secondId}`, exact: true }).click();
+  assert.match(await page.getByRole('alertdialog').textContent(), /the token this page uses/);
+  await page.getByRole('button', { name: 'Cancel' }).click();
   await page.getByRole('button', { name: 'Revoke token 1', exact: true }).click();
+  assert.doesNotMatch(await page.getByRole('alertdialog').textContent(), /the token this page uses/);
   await page.locator('#token-revoke-yes').click();
   await page.locator('#tokens-msg').filter({ hasText: 'Token 1 is revoked.' }).waitFor();
   assert.equal(await statusWith(server.adminToken), 401);
