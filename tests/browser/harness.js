@@ -5,6 +5,7 @@
 //   PINTAG_CHROMIUM        the browser (default /usr/bin/chromium)
 //   PINTAG_SCREENSHOT_DIR  where screenshots go (default: a folder in the temp dir)
 
+import { after, before } from 'node:test';
 import { spawn } from 'node:child_process';
 import { existsSync } from 'node:fs';
 import { mkdir, mkdtemp, rm } from 'node:fs/promises';
@@ -191,4 +192,21 @@ export async function addPincode(server, pincode, offices) {
   });
   if (response.status !== 201) throw new Error(`add ${pincode}: HTTP ${response.status} ${await response.text()}`);
   return response.json();
+}
+
+/**
+ * The server and browser a test file shares: a fresh `pintag serve` and Chromium started before
+ * the file's tests and stopped after them. Returns {server, browser}, filled in by then.
+ */
+export function serverAndBrowser() {
+  const session = {};
+  before(async () => {
+    session.server = await startServer();
+    session.browser = await launchBrowser();
+  });
+  after(async () => {
+    await session.browser?.close();
+    await session.server?.stop();
+  });
+  return session;
 }

@@ -2,23 +2,13 @@
 // over another's save), refused with the server's reason, routed by, deleted and restored. Every
 // effect is checked through the API of the same server, not only on the page.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+import { test } from 'node:test';
+import { newPage, screenshot, serverAndBrowser } from './harness.js';
 
-let server;
-let browser;
-
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+const session = serverAndBrowser();
 
 async function apiJson(path, options = {}) {
-  const response = await fetch(`${server.url}${path}`, options);
+  const response = await fetch(`${session.server.url}${path}`, options);
   return { status: response.status, etag: response.headers.get('ETag'), body: await response.json() };
 }
 
@@ -28,8 +18,8 @@ function valueHolds(page, selector, text) {
 }
 
 async function openRegistry() {
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/registry.html`);
+  const page = await newPage(session.browser);
+  await page.goto(`${session.server.url}/registry.html`);
   await page.locator('#plans-caption').filter({ hasText: /^\d+ plans?$/ }).waitFor();
   return page;
 }
@@ -42,7 +32,7 @@ test('the seeded plan is listed and opens as its CSV; the default plan has no De
   await page.getByRole('button', { name: 'Open plan default' }).click();
   await page.locator('#plan-edit-h').filter({ hasText: 'Plan default' }).waitFor();
   const text = await page.locator('#p-rules').inputValue();
-  const csv = await (await fetch(`${server.url}/api/v1/sortplans/default?format=csv`)).text();
+  const csv = await (await fetch(`${session.server.url}/api/v1/sortplans/default?format=csv`)).text();
   assert.equal(text, csv);
   assert.equal(await page.locator('#p-description').inputValue(), seeded.body.description);
   assert.ok(await page.locator('#p-name').evaluate((input) => input.readOnly));
@@ -67,7 +57,7 @@ test('a new plan is saved, refused with the line named when wrong, and routes pi
   await page.locator('#plan-msg').filter({ hasText: 'Paste an admin token above first' }).waitFor();
   assert.equal((await apiJson('/api/v1/sortplans/hub-north')).status, 404);
 
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   await page.getByRole('button', { name: 'Save plan' }).click();
   await page.locator('#plan-msg').filter({ hasText: 'Saved hub-north: 2 rules, fallback bin floor.' }).waitFor();
   const stored = await apiJson('/api/v1/sortplans/hub-north');
@@ -106,13 +96,13 @@ test('a new plan is saved, refused with the line named when wrong, and routes pi
 });
 
 test('a save over someone else\'s newer save is refused and keeps the text typed', async () => {
-  const put = (etagHeaders, body) => fetch(`${server.url}/api/v1/sortplans/hub-race`, {
+  const put = (etagHeaders, body) => fetch(`${session.server.url}/api/v1/sortplans/hub-race`, {
     method: 'PUT', body,
-    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv', ...etagHeaders },
+    headers: { Authorization: `Bearer ${session.server.adminToken}`, 'Content-Type': 'text/csv', ...etagHeaders },
   });
   assert.equal((await put({}, 'prefix,bin\n*,manual\n1,north\n')).status, 201);
   const page = await openRegistry();
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   await page.getByRole('button', { name: 'Open plan hub-race' }).click();
   await page.locator('#plan-edit-h').filter({ hasText: 'Plan hub-race' }).waitFor();
   // Another admin saves while this page has the plan open.
@@ -161,18 +151,18 @@ test('a plan is deleted after a confirmation, and Undo restores it whole', async
   // undo was refused. A bin with a comma and quotes checks the page's CSV against the server's.
   const rows = ['prefix,bin', '*,floor', '4,"west, ""A"""',
     ...Array.from({ length: 84_000 }, (_, i) => `${500000 + i},b${i % 50}`)];
-  const created = await fetch(`${server.url}/api/v1/sortplans/hub-gone?description=to%20be%20deleted`, {
+  const created = await fetch(`${session.server.url}/api/v1/sortplans/hub-gone?description=to%20be%20deleted`, {
     method: 'PUT', body: `${rows.join('\n')}\n`,
-    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv' },
+    headers: { Authorization: `Bearer ${session.server.adminToken}`, 'Content-Type': 'text/csv' },
   });
   assert.equal(created.status, 201);
   const before = await apiJson('/api/v1/sortplans/hub-gone');
   const page = await openRegistry();
   page.setDefaultTimeout(60_000);  // 84,000 rules are read, deleted and put back: seconds each
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   await page.getByRole('button', { name: 'Open plan hub-gone' }).click();
   await valueHolds(page, '#p-rules', 'west, ""A""');
-  const csv = await (await fetch(`${server.url}/api/v1/sortplans/hub-gone?format=csv`)).text();
+  const csv = await (await fetch(`${session.server.url}/api/v1/sortplans/hub-gone?format=csv`)).text();
   assert.equal(await page.locator('#p-rules').inputValue(), csv);
   await page.getByRole('button', { name: 'Delete…' }).click();
   // Escape answers No: nothing is deleted.
@@ -193,16 +183,16 @@ test('a plan is deleted after a confirmation, and Undo restores it whole', async
 });
 
 test('a plan deleted while it is edited: the open that fails leaves the editor as it was, and Save offers it as a new plan', async () => {
-  const put = (name, body) => fetch(`${server.url}/api/v1/sortplans/${name}`, {
-    method: 'PUT', body, headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv' },
+  const put = (name, body) => fetch(`${session.server.url}/api/v1/sortplans/${name}`, {
+    method: 'PUT', body, headers: { Authorization: `Bearer ${session.server.adminToken}`, 'Content-Type': 'text/csv' },
   });
-  const remove = (name) => fetch(`${server.url}/api/v1/sortplans/${name}`, {
-    method: 'DELETE', headers: { Authorization: `Bearer ${server.adminToken}` },
+  const remove = (name) => fetch(`${session.server.url}/api/v1/sortplans/${name}`, {
+    method: 'DELETE', headers: { Authorization: `Bearer ${session.server.adminToken}` },
   });
   assert.equal((await put('hub-a', 'prefix,bin\n*,manual\n1,north\n')).status, 201);
   assert.equal((await put('hub-b', 'prefix,bin\n*,manual\n2,west\n')).status, 201);
   const page = await openRegistry();
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   await page.getByRole('button', { name: 'Open plan hub-a' }).click();
   await valueHolds(page, '#p-rules', '1,north');
   const mine = 'prefix,bin\n*,manual\n1,north\n3,south\n';
@@ -230,7 +220,7 @@ test('a plan deleted while it is edited: the open that fails leaves the editor a
 
 test('a name a web address cannot carry, or a description over its limit, is refused before it is sent', async () => {
   const page = await openRegistry();
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   let sent = 0;
   page.on('request', (request) => { if (request.method() === 'PUT') ++sent; });
   await page.getByRole('button', { name: 'New plan' }).click();

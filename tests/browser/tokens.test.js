@@ -1,31 +1,21 @@
 // API tokens on the registry page: a token made in the page signs in to the same server with its
 // role, a revoked one is refused, and the last admin token is kept.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+import { test } from 'node:test';
+import { newPage, screenshot, serverAndBrowser } from './harness.js';
 
-let server;
-let browser;
-
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+const session = serverAndBrowser();
 
 // The status the server gives `secret` on an admin-only route: 200 admin, 403 another role,
 // 401 not a token (or a revoked one).
 async function statusWith(secret) {
-  const response = await fetch(`${server.url}/api/v1/tokens`, { headers: { Authorization: `Bearer ${secret}` } });
+  const response = await fetch(`${session.server.url}/api/v1/tokens`, { headers: { Authorization: `Bearer ${secret}` } });
   return response.status;
 }
 
 async function openRegistry() {
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/registry.html`);
+  const page = await newPage(session.browser);
+  await page.goto(`${session.server.url}/registry.html`);
   return page;
 }
 
@@ -34,7 +24,7 @@ test('a token made in the page works with its role, and a revoked one is refused
   // Without the admin token nothing is asked of the server.
   await page.getByRole('button', { name: 'Show tokens' }).click();
   await page.locator('#tokens-msg').filter({ hasText: 'Paste an admin token above first' }).waitFor();
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
 
   await page.locator('#t-role').selectOption('scanner');
   await page.locator('#t-label').fill('handheld 7');
@@ -76,7 +66,7 @@ test('a token made in the page works with its role, and a revoked one is refused
 
 test('Forget takes the token list and a new secret off the page', async () => {
   const page = await openRegistry();
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   await page.getByRole('button', { name: 'Show tokens' }).click();
   await page.locator('#tokens-list').waitFor();
   await page.locator('#t-role').selectOption('counter');
@@ -91,14 +81,14 @@ test('Forget takes the token list and a new secret off the page', async () => {
 
 test('the last admin token is not revoked, and a second one made in the page can revoke the first', async () => {
   const page = await openRegistry();
-  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#token').fill(session.server.adminToken);
   await page.getByRole('button', { name: 'Show tokens' }).click();
   await page.locator('#tokens-body tr[data-token="1"]').waitFor();
   await page.getByRole('button', { name: 'Revoke token 1', exact: true }).click();
   assert.match(await page.getByRole('alertdialog').textContent(), /the token this page uses/);
   await page.locator('#token-revoke-yes').click();
   await page.locator('#tokens-msg').filter({ hasText: 'HTTP 409' }).waitFor();
-  assert.equal(await statusWith(server.adminToken), 200);
+  assert.equal(await statusWith(session.server.adminToken), 200);
 
   await page.locator('#t-role').selectOption('admin');
   await page.locator('#t-label').fill('second admin');
@@ -117,7 +107,7 @@ test('the last admin token is not revoked, and a second one made in the page can
   assert.doesNotMatch(await page.getByRole('alertdialog').textContent(), /the token this page uses/);
   await page.locator('#token-revoke-yes').click();
   await page.locator('#tokens-msg').filter({ hasText: 'Token 1 is revoked.' }).waitFor();
-  assert.equal(await statusWith(server.adminToken), 401);
+  assert.equal(await statusWith(session.server.adminToken), 401);
   assert.equal(await statusWith(second), 200);
   assert.deepEqual(page.problems, []);
 });
