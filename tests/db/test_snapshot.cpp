@@ -438,6 +438,7 @@ TEST(Snapshot, TemporaryFilesOfAKilledWriterAreRemovedByTheNext) {
   const std::string exe = test::PintagExe();
   std::vector<std::string> args = {exe, "snapshot", "--db", live, "--out", out};
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);
   // Tried again when a copy ends before it is seen (one takes tens of milliseconds here).

@@ -102,9 +102,10 @@ TEST(ServeStartRefusals, OptionsThatContradictTheRoleAreUsageErrors) {
         "--read-only --follow-token-file " + token, std::string("--follow-interval-ms 200"),
         std::string("--read-only --follow-interval-ms 200")}) {
     // Bounded: a server that starts regardless would serve until stopped.
-    const CommandResult refused =
-        RunShell("timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + db + " " +
-                 options + " 2>&1");
+    std::string command = "timeout 30 " + PintagExe();
+    command += " serve --port 0 --bind 127.0.0.1 --db " + db + " ";
+    command += options + " 2>&1";
+    const CommandResult refused = RunShell(command);
     EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
     EXPECT_FALSE(std::filesystem::exists(db)) << options;
     EXPECT_FALSE(std::filesystem::exists(dir.file("scans.db"))) << options;
