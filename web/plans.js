@@ -18,8 +18,9 @@ function planPath(name, params = '') {
   return `/api/v1/sortplans/${encodeURIComponent(name)}${params}`;
 }
 
+// The version digits of a plan's JSON ETag ("<hex>").
 function versionOf(etag) {
-  return (etag || '').replace(/^"|"$/g, '').replace(/-csv$/, '');
+  return (etag || '').replace(/^"|"$/g, '');
 }
 
 // A plan as the CSV the server reads (docs/API.md): the header, the * row for the fallback, then
@@ -61,12 +62,13 @@ export function setUpSortPlans({ token, needToken }) {
   async function listPlans() {
     try {
       const { plans } = await api('/api/v1/sortplans');
-      show($('plans-body'), plans.map((plan) => el('tr', { class: open?.version && open.name === plan.name ? 'is-selected' : null },
+      show($('plans-body'), plans.map((plan) => el('tr', {},
         el('td', { class: 'plan-name' }, el('button', { type: 'button', class: 'link', onclick: () => askToOpen(() => openPlan(plan.name)),
           'aria-label': `Open plan ${plan.name}`, 'data-plan': plan.name }, el('bdi', {}, plan.name))),
         el('td', {}, el('bdi', {}, plan.fallback_bin)),
         el('td', { class: 'num' }, String(plan.rules)),
         el('td', { class: 'hide-narrow' }, plan.description ? el('bdi', {}, plan.description) : '—'))));
+      markSelected();
       $('plans-caption').textContent = plans.length === 1 ? '1 plan' : `${plans.length} plans`;
       // Only the list's own problem goes with a list read again; a deletion's note stays.
       if (listFailed) show($('plans-msg'));

@@ -114,17 +114,17 @@ export function setUpTokens({ token, needToken }) {
       onNo: close,
       onYes: async () => {
         try {
+          // The token sent is the field's now, which may have changed since the box opened.
+          const ownNow = idOfSecret(token()) === t.id;
           await api(`/api/v1/tokens/${t.id}`, { method: 'DELETE', token: token() });
           clearConfirm();
-          if (own) {
+          if (ownNow) {
             // Nothing more can be listed with it: the list goes, and the page says what to do.
             forget();
             show($('tokens-msg'), messageBox('ok', `Token ${t.id} is revoked. It was this page’s token: paste another admin token above to go on.`));
             $('token').focus();
             return;
           }
-          t.revoked_at = t.revoked_at || 'now';
-          draw();
           show($('tokens-msg'), messageBox('ok', `Token ${t.id} is revoked.`));
           await listTokens();
           (rowButton() || $('tokens-msg')).focus();
