@@ -155,6 +155,7 @@ TEST_F(LoopbackTest, ProblemFor413WithContentLength) {
   auto r = client_->Post("/api/v1/upload", auth, std::string(kMaxBody + 1, 'x'),
                          "application/octet-stream");
   ExpectProblem(r, 413);
+  EXPECT_EQ(nlohmann::json::parse(r->body)["max_body_bytes"], kMaxBody) << r->body;
   r = client_->Post("/api/v1/upload", auth, std::string(kMaxBody, 'x'), "application/octet-stream");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200) << r->body;
@@ -180,6 +181,7 @@ TEST_F(LoopbackTest, ProblemFor413WithChunkedBody) {
   EXPECT_EQ(answer.rfind("HTTP/1.1 413", 0), 0U) << answer.substr(0, 300);
   EXPECT_NE(answer.find("application/problem+json"), std::string::npos);
   EXPECT_NE(answer.find("at most 65536 bytes"), std::string::npos);
+  EXPECT_NE(answer.find("\"max_body_bytes\":65536"), std::string::npos) << answer.substr(0, 400);
   // A small chunked body passes.
   answer = raw(head.substr(0, head.size() - 2) + "Connection: close\r\n\r\n" +
                "a\r\n0123456789\r\n0\r\n\r\n");

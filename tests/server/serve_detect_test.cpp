@@ -524,14 +524,19 @@ TEST_F(ServeTest, BodyAndPixelLimitsAreFlags) {
 
   // Smaller limits from the command line: a 60 KiB body over a 50 KiB limit, a 2 MP photo over a
   // 1 MP limit, a batch of 3 labels over a limit of 2.
+  // Each 413 gives its limit as a number too, which the scanner page shrinks a photo by.
   startServer({"--max-body-mb", "0.05", "--max-pixels", "1000000", "--max-batch", "2"});
-  ExpectProblem(client().Post("/api/v1/detect", scanner(), std::string(std::size_t{60} * 1024, 'x'),
-                              "image/jpeg"),
-                413);
+  json p = ExpectProblem(client().Post("/api/v1/detect", scanner(),
+                                       std::string(std::size_t{60} * 1024, 'x'), "image/jpeg"),
+                         413);
+  EXPECT_EQ(p["max_body_bytes"], 52428) << p.dump();  // 0.05 MiB is 52,428.8 bytes
   const std::string photo = SmallJpeg(1920, 1080);
   ASSERT_LT(photo.size(), 50U * 1024);
-  json p = ExpectProblem(client().Post("/api/v1/detect", scanner(), photo, "image/jpeg"), 413);
+  p = ExpectProblem(client().Post("/api/v1/detect", scanner(), photo, "image/jpeg"), 413);
   EXPECT_NE(p["detail"].get<std::string>().find("1920 x 1080"), std::string::npos);
+  EXPECT_EQ(p["max_pixels"], 1000000) << p.dump();
+  EXPECT_EQ(p["width"], 1920);
+  EXPECT_EQ(p["height"], 1080);
   EXPECT_EQ(ExpectJson(client().Post("/api/v1/detect", scanner(), SmallJpeg(1000, 1000),
                                      "image/jpeg"))["image"]["width"],
             1000);

@@ -207,11 +207,19 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
     case ImageError::kUnsupported:
       // Not a JPEG, PNG, TIFF or WebP, or one no photo is (more than four channels).
       throw HttpError(415, loaded.error, "Unsupported Image Format");
-    case ImageError::kTooLarge:
-      // A phone's full-resolution photo is the usual cause: say what the scanner can change.
-      throw HttpError(413,
-                      loaded.error + ": set the camera to a lower resolution and take it again",
-                      "Image Too Large");
+    case ImageError::kTooLarge: {
+      // A phone's full-resolution photo is the usual cause: say what the scanner can change, and
+      // give the numbers, so that a client (the scanner page) can shrink the photo to fit.
+      server::Problem problem{
+          413, "Image Too Large",
+          loaded.error + ": set the camera to a lower resolution and take it again"};
+      problem.numbers = {{"max_pixels", context.max_pixels}};
+      if (loaded.claimed_width > 0 && loaded.claimed_height > 0) {
+        problem.numbers.emplace_back("width", loaded.claimed_width);
+        problem.numbers.emplace_back("height", loaded.claimed_height);
+      }
+      throw HttpError(std::move(problem));
+    }
     case ImageError::kCorrupt:
     case ImageError::kUnreadable:
       throw HttpError(400, loaded.error, "Corrupt Image");

@@ -210,9 +210,7 @@ Admission Api::admit(std::string_view method, std::string_view path, const Heade
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), bytes);
     if (ec == std::errc::result_out_of_range ||
         (ec == std::errc() && bytes > options_.max_body_bytes)) {
-      admission.rejection =
-          ProblemResponse(413, "the request body may be at most " +
-                                   std::to_string(options_.max_body_bytes) + " bytes");
+      admission.rejection = BodyTooLargeResponse(options_.max_body_bytes);
       return admission;
     }
     if (ec != std::errc() || end != text.data() + text.size()) {
@@ -256,8 +254,7 @@ HttpResponse Api::handle(HttpRequest request) const {
       admit(request.method, request.path, request.headers, request.request_id);
   HttpResponse response;
   if (!admission.rejection && request.body.size() > options_.max_body_bytes) {
-    response = ProblemResponse(413, "the request body may be at most " +
-                                        std::to_string(options_.max_body_bytes) + " bytes");
+    response = BodyTooLargeResponse(options_.max_body_bytes);
   } else {
     response = invoke(admission, std::move(request));
   }

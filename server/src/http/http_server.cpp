@@ -364,10 +364,7 @@ struct HttpServer::Impl {
   int port = 0;
   std::thread thread;
 
-  HttpResponse tooLarge() const {
-    return ProblemResponse(413, "the request body may be at most " +
-                                    std::to_string(api->options().max_body_bytes) + " bytes");
-  }
+  HttpResponse tooLarge() const { return BodyTooLargeResponse(api->options().max_body_bytes); }
 
   /// Expect: 100-continue is answered before routing: admit the request first, so a refusal
   /// (no token, a replica's write, a body over the limit) is sent instead of "100 Continue" and

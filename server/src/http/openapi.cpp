@@ -128,7 +128,19 @@ std::string OpenApiJson(const Router& router, const ApiInfo& info) {
              {{"type", {{"type", "string"}, {"format", "uri-reference"}}},
               {"title", {{"type", "string"}}},
               {"status", {{"type", "integer"}}},
-              {"detail", {{"type", "string"}}}}}}}}}}},
+              {"detail", {{"type", "string"}}},
+              {"max_pixels",
+               {{"type", "integer"},
+                {"description", "413 Image Too Large: the server's pixel limit per photo"}}},
+              {"width",
+               {{"type", "integer"},
+                {"description", "413 Image Too Large: the photo's width as stored"}}},
+              {"height",
+               {{"type", "integer"},
+                {"description", "413 Image Too Large: the photo's height as stored"}}},
+              {"max_body_bytes",
+               {{"type", "integer"},
+                {"description", "413 for a body over the limit: the limit in bytes"}}}}}}}}}}},
   };
   if (any_secured) {
     doc["components"]["securitySchemes"] = {{"bearer", {{"type", "http"}, {"scheme", "bearer"}}}};

@@ -64,10 +64,13 @@ std::string_view StatusTitle(int status) {
 HttpResponse ProblemResponse(Problem problem) {
   if (problem.title.empty()) problem.title = std::string(StatusTitle(problem.status));
   if (problem.type.empty()) problem.type = "about:blank";
-  const nlohmann::json body = {{"type", problem.type},
-                               {"title", problem.title},
-                               {"status", problem.status},
-                               {"detail", problem.detail}};
+  nlohmann::json body = {{"type", problem.type},
+                         {"title", problem.title},
+                         {"status", problem.status},
+                         {"detail", problem.detail}};
+  for (const auto& [name, value] : problem.numbers) {
+    if (!body.contains(name)) body[name] = value;
+  }
   // Replace invalid UTF-8 (details may quote user input) instead of throwing.
   HttpResponse response{problem.status,
                         std::string(kProblemContentType),
@@ -81,6 +84,13 @@ HttpResponse ProblemResponse(Problem problem) {
 
 HttpResponse ProblemResponse(int status, std::string detail) {
   return ProblemResponse(Problem{status, {}, std::move(detail), "about:blank"});
+}
+
+HttpResponse BodyTooLargeResponse(std::size_t max_body_bytes) {
+  Problem problem{
+      413, {}, "the request body may be at most " + std::to_string(max_body_bytes) + " bytes"};
+  problem.numbers = {{"max_body_bytes", static_cast<std::int64_t>(max_body_bytes)}};
+  return ProblemResponse(std::move(problem));
 }
 
 HttpResponse InvokeHandler(const Handler& handler, const HttpRequest& request) {
