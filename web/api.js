@@ -4,12 +4,14 @@
 
 /** An answer that was not 2xx (or no answer): the problem's title and detail, fit to show. */
 export class ApiError extends Error {
-  constructor(status, title, detail) {
+  constructor(status, title, detail, numbers = {}) {
     super(detail ? `${title}: ${detail}` : title);
     this.name = 'ApiError';
     this.status = status;
     this.title = title;
     this.detail = detail;
+    // The problem's numeric extension members (a 413's max_pixels, say): what a page can act on.
+    this.numbers = numbers;
   }
 }
 
@@ -26,6 +28,7 @@ const kReasons = {
 async function problemFrom(response) {
   let title = response.statusText || kReasons[response.status] || 'Error';
   let detail = '';
+  const numbers = {};
   const type = response.headers.get('Content-Type') || '';
   try {
     if (type.includes('json')) {
@@ -33,6 +36,9 @@ async function problemFrom(response) {
       if (problem && typeof problem === 'object') {
         if (problem.title) title = String(problem.title);
         if (problem.detail) detail = String(problem.detail);
+        for (const [name, value] of Object.entries(problem)) {
+          if (name !== 'status' && Number.isFinite(value)) numbers[name] = value;
+        }
       }
     } else if (type.includes('text/plain')) {
       detail = (await response.text()).trim().slice(0, 300);
@@ -43,7 +49,7 @@ async function problemFrom(response) {
   } catch {
     // An unreadable body: the status line is all there is.
   }
-  return new ApiError(response.status, title, detail);
+  return new ApiError(response.status, title, detail, numbers);
 }
 
 /**

@@ -162,6 +162,53 @@ function tagCard(tag, approximate) {
     el('dl', { class: 'kv' }, rows.map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])));
 }
 
+// A photo over the server's limits (a phone's 50 MP mode is over the default 40 MP; a large PNG
+// may be over the body limit) is drawn again here, upright and smaller, as a JPEG, from the
+// limits the server's 413 gives, and that is read instead: a smaller photo rather than none.
+// Null when the answer gives no limit or the browser cannot draw the file (a TIFF).
+const kShrinkQuality = 0.92;
+// Room for the multipart form around the photo, which counts toward the body limit.
+const kFormOverheadBytes = 4096;
+
+async function shrunkToFit(file, error) {
+  const { max_pixels: maxPixels, max_body_bytes: maxBodyBytes } = error.numbers || {};
+  if (error.status !== 413 || !(maxPixels > 0 || maxBodyBytes > kFormOverheadBytes)) return null;
+  let bitmap;
+  try {
+    bitmap = await createImageBitmap(file, { imageOrientation: 'from-image' });
+  } catch {
+    return null;
+  }
+  try {
+    const { width, height } = bitmap;
+    // Just under the limit: a side rounded up must not carry it over.
+    let scale = maxPixels > 0 ? Math.min(1, Math.sqrt((maxPixels * 0.995) / (width * height))) : 1;
+    const maxBytes = maxBodyBytes > kFormOverheadBytes ? maxBodyBytes - kFormOverheadBytes : Infinity;
+    // A JPEG's size falls about as its pixels do; a few tries find one under the body limit.
+    for (let attempt = 0; attempt < 5; ++attempt) {
+      const canvas = document.createElement('canvas');
+      canvas.width = Math.max(1, Math.floor(width * scale));
+      canvas.height = Math.max(1, Math.floor(height * scale));
+      const context = canvas.getContext('2d');
+      context.imageSmoothingQuality = 'high';
+      context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
+      const blob = await new Promise((done) => canvas.toBlob(done, 'image/jpeg', kShrinkQuality));
+      if (!blob) return null;
+      if (blob.size <= maxBytes) {
+        return { blob, width: canvas.width, height: canvas.height, fromWidth: width, fromHeight: height };
+      }
+      scale *= Math.sqrt((maxBytes * 0.9) / blob.size);
+    }
+    return null;
+  } finally {
+    bitmap.close();
+  }
+}
+
+function megapixels(pixels) {
+  return `${(pixels / 1e6).toFixed(pixels < 1e7 ? 1 : 0)} MP`;
+}
+
 // Nothing of the last answer stays on screen: its message, cards, outlines and photo.
 function clearResults() {
   show($('scan-msg'));
@@ -191,8 +238,25 @@ async function scan() {
   showPhoto(photoUrl, 'Your photo. Reading…', 'The photo being read');
   $('summary').textContent = 'Reading the photo…';
   let answer;
+  let shrunk = null;
   try {
-    answer = await api(detectPath(), { method: 'POST', token: token(), body: form(file) });
+    try {
+      answer = await api(detectPath(), { method: 'POST', token: token(), body: form(file) });
+    } catch (error) {
+      if (run !== scanCount) return;
+      shrunk = await shrunkToFit(file, error);
+      if (!shrunk) throw error;
+      if (run !== scanCount) return;
+      // What is read is what is shown: the outlines are in the smaller photo's pixels.
+      URL.revokeObjectURL(photoUrl);
+      photoUrl = URL.createObjectURL(shrunk.blob);
+      photoUnshowable = false;
+      showPhoto(photoUrl, 'Your photo, made smaller. Reading…', 'The photo being read, made smaller');
+      $('summary').textContent = `The photo is over the server's limit: reading it at ${shrunk.width} × ${shrunk.height}…`;
+      answer = await api(detectPath(), {
+        method: 'POST', token: token(), body: form(new File([shrunk.blob], 'photo-smaller.jpg', { type: 'image/jpeg' })),
+      });
+    }
   } catch (error) {
     if (run !== scanCount) return;
     $('summary').textContent = failureSummary(error);
@@ -210,6 +274,12 @@ async function scan() {
     el('bdi', { class: 'plan-used' }, answer.plan || $('plan').value || 'default'),
     approximate ? ' · distances approximate (camera field of view assumed)' : null,
     photoUnshowable ? kUnshowable : null);
+  if (shrunk) {
+    // Smaller tags are harder to read, and the camera's details went with the file's metadata.
+    $('summary').append(el('span', { class: 'shrunk-note' },
+      ` · made smaller to fit the server's limit (${shrunk.fromWidth} × ${shrunk.fromHeight}, `
+      + `${megapixels(shrunk.fromWidth * shrunk.fromHeight)}): set the camera to a lower resolution`));
+  }
   show($('tags'), answer.tags.map((tag) => tagCard(tag, approximate)));
   if (n === 0) {
     // The server says when the photo itself could hold no tag (no colour): that, not the

@@ -71,14 +71,15 @@ async function spawnServer(args, { token, dir, timeoutMs }) {
 }
 
 /**
- * Starts `pintag serve --port 0` on a fresh database; resolves once it printed its URL and the
- * first-start admin token. Returns {url, adminToken, db, stop(), stderr()}.
+ * Starts `pintag serve --port 0` on a fresh database, with `args` added (limits, say); resolves
+ * once it printed its URL and the first-start admin token. Returns {url, adminToken, db, stop(),
+ * stderr()}.
  */
-export async function startServer({ timeoutMs = 30_000 } = {}) {
+export async function startServer({ timeoutMs = 30_000, args = [] } = {}) {
   const dir = await mkdtemp(join(tmpdir(), 'pintag-browser-'));
   const db = join(dir, 'pintag.db');
   const server = await spawnServer(
-    ['serve', '--db', db, '--port', '0', '--bind', '127.0.0.1', '--web', webDir],
+    ['serve', '--db', db, '--port', '0', '--bind', '127.0.0.1', '--web', webDir, ...args],
     { token: true, dir, timeoutMs });
   return { ...server, db };
 }

@@ -415,3 +415,85 @@ test('a change of sort plan or label size reads the photo again, and the summary
   assert.equal(uploads.length, 3);
   assert.deepEqual(page.problems, []);
 });
+
+test('a photo over the server\'s pixel or body limit is read made smaller, and the page says so', async () => {
+  // Limits far below the defaults, so that small files go over them: 1 MP and half a MiB.
+  const limited = await startServer({ args: ['--max-pixels', '1000000', '--max-body-mb', '0.5'] });
+  try {
+    const token = await createToken(limited, 'scanner');
+    const read = async (file) => {
+      const page = await newPage(browser);
+      const uploads = [];
+      page.on('request', (request) => {
+        if (request.url().includes('/api/v1/detect')) uploads.push(request.method());
+      });
+      await page.goto(`${limited.url}/scanner.html`);
+      await page.locator('#token').fill(token);
+      await page.locator('#photo').setInputFiles(file);
+      await page.locator('#summary').filter({ hasText: /read in/ }).waitFor();
+      return { page, uploads };
+    };
+    const photoSize = async (page) => {
+      const [, width, height] = (await page.locator('#summary').textContent()).match(/photo (\d+) × (\d+)/);
+      return [Number(width), Number(height)];
+    };
+
+    // Over the pixel limit: the label at twice its size, 2.2 MP, as a JPEG turned by its EXIF
+    // orientation (6, a quarter turn), well under the body limit.
+    const big = join(dir, 'label-2x-exif6.jpg');
+    await promisify(execFile)('oiiotool', [labelPng, '--resize', '200%', '--attrib', 'Orientation', '6',
+      '--quality', '90', '-o', big]);
+    const [storedWidth, storedHeight] = (await promisify(execFile)('oiiotool', ['--info', big]))
+      .stdout.match(/(\d+) x\s+(\d+)/).slice(1).map(Number);
+    assert.ok(storedWidth * storedHeight > 1_000_000, `${storedWidth} x ${storedHeight}`);
+    assert.ok((await readFile(big)).length < 500_000);
+    let { page, uploads } = await read(big);
+    await page.locator('.tag-card[data-pincode="110001"]').waitFor();
+    let summary = await page.locator('#summary').textContent();
+    assert.match(summary, /^1 tag read/);
+    // Drawn upright: the photo's sides swapped by the orientation, as the server's answer has them.
+    assert.match(summary, new RegExp(`made smaller to fit the server's limit \\(${storedHeight} × ${storedWidth}, 2\\.\\d MP\\)`));
+    assert.match(summary, /set the camera to a lower resolution/);
+    let [width, height] = await photoSize(page);
+    assert.ok(width * height <= 1_000_000 && width * height > 900_000, `${width} × ${height}`);
+    // Drawn by its orientation: the stored portrait label is shown, and read, on its side.
+    assert.ok(width > height, `${width} × ${height}, turned`);
+    assert.equal(uploads.length, 2, 'the photo as chosen, then made smaller');
+    assert.equal(await page.locator('.alert-error').count(), 0);
+    // The picture shown is the one read, and the outline sits on its tag.
+    await expectOutlineOnTheTag(page, 'a photo made smaller');
+    assert.equal(await page.evaluate(() => document.getElementById('scan-photo').naturalWidth), width);
+    await screenshot(page, 'scanner-made-smaller');
+    assert.deepEqual(page.problems, []);
+
+    // Over the body limit alone: a noisy PNG of 0.9 MP, which no PNG encoder can keep small.
+    const noisy = join(dir, 'label-noisy.png');
+    await promisify(execFile)('oiiotool', [labelPng, '--resize', '800x1128', '--noise:type=gaussian:stddev=0.04',
+      '-o', noisy]);
+    assert.ok((await readFile(noisy)).length > 0.5 * 1024 * 1024, 'the PNG is over the body limit');
+    ({ page, uploads } = await read(noisy));
+    await page.locator('.tag-card[data-pincode="110001"]').waitFor();
+    summary = await page.locator('#summary').textContent();
+    assert.match(summary, /^1 tag read/);
+    assert.match(summary, /made smaller to fit the server's limit \(800 × 1128, 0\.9 MP\)/);
+    [width, height] = await photoSize(page);
+    assert.ok(width <= 800 && height <= 1128, `${width} × ${height}`);
+    // The server read the second upload, so it was under the body limit it enforces.
+    assert.equal(uploads.length, 2);
+    assert.deepEqual(page.problems, []);
+
+    // A TIFF over the pixel limit cannot be drawn here: the server's problem is shown as it was.
+    const bigTiff = join(dir, 'label-2x.tif');
+    await promisify(execFile)('oiiotool', [labelPng, '--resize', '200%', '-o', bigTiff]);
+    page = await newPage(browser);
+    await page.goto(`${limited.url}/scanner.html`);
+    await page.locator('#token').fill(token);
+    await page.locator('#photo').setInputFiles(bigTiff);
+    const problem = page.locator('#scan-msg [role="alert"]');
+    await problem.waitFor();
+    assert.match(await problem.textContent(), /Image Too Large.*lower resolution/);
+    assert.equal(await page.locator('.tag-card').count(), 0);
+  } finally {
+    await limited.stop();
+  }
+});
