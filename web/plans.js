@@ -49,6 +49,9 @@ export function setUpSortPlans({ token, needToken }) {
   // only once a read or save succeeded: a failed one leaves the editor as it was.
   let open = null;
   let readOnlyServer = false;  // a replica: plans are read here, changed on the primary
+  // A save on its way: the editor is not closed, deleted or replaced under it, since its answer
+  // fills the editor when it comes.
+  let saving = false;
 
   const fields = { name: $('p-name'), description: $('p-description'), rules: $('p-rules'), pincode: $('p-try') };
   const dirty = () => open !== null &&
@@ -130,6 +133,10 @@ export function setUpSortPlans({ token, needToken }) {
   // Opening another plan, or closing, over unsaved changes would drop them: asked first.
   function askToOpen(then) {
     show($('plan-confirm'));
+    if (saving) {
+      show($('plan-msg'), messageBox('info', 'The plan is being saved: wait for the save, then open another.'));
+      return;
+    }
     if (!dirty()) {
       then();
       return;
@@ -249,6 +256,9 @@ export function setUpSortPlans({ token, needToken }) {
     // The fields are held while the plan is on its way: the stored plan is shown when it comes
     // back, and what was typed meanwhile would be lost.
     $('plan-fields').disabled = true;
+    saving = true;
+    $('plan-delete').disabled = true;
+    $('plan-close').disabled = true;
     try {
       const response = await api(planPath(name, `?description=${encodeURIComponent(description)}`), {
         method: 'PUT', token: token(), body: text, as: 'response',
@@ -271,6 +281,9 @@ export function setUpSortPlans({ token, needToken }) {
       }
     } finally {
       $('plan-fields').disabled = false;
+      saving = false;
+      $('plan-delete').disabled = false;
+      $('plan-close').disabled = false;
     }
   }
 

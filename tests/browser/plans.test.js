@@ -237,3 +237,44 @@ test('a name a web address cannot carry, or a description over its limit, is ref
   assert.equal((await apiJson('/api/v1/sortplans/hub-long')).status, 404);
   assert.deepEqual(page.problems, []);
 });
+
+test('while a save is on its way the plan cannot be closed, deleted or swapped for another', async () => {
+  const put = (name, body) => fetch(`${session.server.url}/api/v1/sortplans/${name}`, {
+    method: 'PUT', body,
+    headers: { Authorization: `Bearer ${session.server.adminToken}`, 'Content-Type': 'text/csv' },
+  });
+  assert.equal((await put('hub-slow', 'prefix,bin\n*,manual\n1,north\n')).status, 201);
+  assert.equal((await put('hub-other', 'prefix,bin\n*,manual\n2,west\n')).status, 201);
+  const page = await openRegistry();
+  await page.locator('#token').fill(session.server.adminToken);
+  await page.getByRole('button', { name: 'Open plan hub-slow' }).click();
+  await page.locator('#plan-edit-h').filter({ hasText: 'Plan hub-slow' }).waitFor();
+  // The save is held in the browser until the test lets it go.
+  let release;
+  const released = new Promise((done) => { release = done; });
+  await page.route('**/api/v1/sortplans/hub-slow?*', async (route) => {
+    if (route.request().method() !== 'PUT') return route.continue();
+    await released;
+    return route.continue();
+  });
+  await page.locator('#p-rules').fill('prefix,bin\n*,manual\n1,north\n3,south\n');
+  await page.getByRole('button', { name: 'Save plan' }).click();
+  await page.waitForFunction(() => document.getElementById('plan-fields').disabled);
+  assert.equal(await page.locator('#plan-close').isDisabled(), true);
+  assert.equal(await page.locator('#plan-delete').isDisabled(), true);
+  // Another plan from the list, or a new one, is not opened over the save.
+  await page.getByRole('button', { name: 'Open plan hub-other' }).click();
+  await page.locator('#plan-msg').filter({ hasText: 'The plan is being saved' }).waitFor();
+  await page.getByRole('button', { name: 'New plan' }).click();
+  assert.match(await page.locator('#plan-edit-h').textContent(), /Plan hub-slow/);
+  assert.equal(await page.locator('#plan-confirm').textContent(), '');
+  release();
+  await page.locator('#plan-msg').filter({ hasText: 'Saved hub-slow: 2 rules' }).waitFor();
+  assert.deepEqual((await apiJson('/api/v1/sortplans/hub-slow')).body.rules.map((r) => r.bin), ['north', 'south']);
+  assert.equal(await page.locator('#plan-close').isDisabled(), false);
+  assert.equal(await page.locator('#plan-delete').isDisabled(), false);
+  // Once saved, the other plan opens as before.
+  await page.getByRole('button', { name: 'Open plan hub-other' }).click();
+  await page.locator('#plan-edit-h').filter({ hasText: 'Plan hub-other' }).waitFor();
+  assert.deepEqual(page.problems, []);
+});
