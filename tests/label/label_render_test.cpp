@@ -396,6 +396,17 @@ TEST(LabelText, ABinIsPrintedWholeOrTheLabelIsRefused) {
       const RenderedLabel svg = RenderLabelSvg(label, {size, 300});
       EXPECT_EQ(static_cast<bool>(png), static_cast<bool>(pdf)) << where;
       EXPECT_EQ(static_cast<bool>(svg), static_cast<bool>(pdf)) << where;
+      // In a batch, between labels that print, the same verdict and reason (a batch checks its
+      // bins before it draws a page).
+      LabelContent short_bin = test::SampleLabel();
+      short_bin.bin = "N-07";
+      const std::vector<LabelContent> batch = {short_bin, label, short_bin};
+      const RenderedLabel batched = RenderLabelsPdf(batch, {size, 300});
+      EXPECT_EQ(static_cast<bool>(batched), static_cast<bool>(pdf)) << where;
+      if (!pdf) {
+        EXPECT_EQ(batched.refused_label, std::optional<std::size_t>{1}) << where;
+        EXPECT_EQ(batched.error, pdf.error) << where;
+      }
       if (!pdf) {
         ++refused;
         EXPECT_NE(pdf.error.find("'" + bin + "'"), std::string::npos) << where << pdf.error;
@@ -452,6 +463,33 @@ TEST(LabelText, ABinBreaksBetweenWordsNotInsideThem) {
   ASSERT_TRUE(text.has_value());
   EXPECT_NE(text->find("A BLR-OUTBOUND-"), std::string::npos) << *text;
   EXPECT_NE(text->find("CONVEYOR-CHUTE-12"), std::string::npos) << *text;
+}
+
+TEST(LabelText, ABatchIsRefusedAtItsFirstLabelWhoseBinDoesNotPrint) {
+  // Bins that repeat are tried once; the refusal names the first label that cannot print, as
+  // drawing page by page would, whatever bins follow it.
+  const auto with_bin = [](std::uint32_t pincode, std::optional<std::string> bin) {
+    LabelContent label = test::SampleLabel(pincode);
+    label.bin = std::move(bin);
+    return label;
+  };
+  const std::string too_long = std::string(54, 'W') + "CHUTE12";
+  const std::string also_too_long = std::string(60, 'M');
+  const std::vector<LabelContent> batch = {
+      with_bin(110001, "N-07"),        with_bin(110002, std::nullopt), with_bin(110003, "N-07"),
+      with_bin(110004, also_too_long), with_bin(110005, too_long),     with_bin(110006, "N-07")};
+  const LabelOptions small{LabelSize{70, 50}, 300};
+  const RenderedLabel refused = RenderLabelsPdf(batch, small);
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.refused_label, std::optional<std::size_t>{3});
+  EXPECT_NE(refused.error.find("'" + also_too_long + "' of pincode 110004"), std::string::npos)
+      << refused.error;
+  EXPECT_TRUE(refused.bytes.empty());
+  // Without the two long bins the other four print, a page each.
+  const std::vector<LabelContent> printable = {batch[0], batch[1], batch[2], batch[5]};
+  const RenderedLabel printed = RenderLabelsPdf(printable, small);
+  ASSERT_TRUE(printed) << printed.error;
+  EXPECT_EQ(MediaBoxes(AsText(printed.bytes)).size(), 4U);
 }
 
 TEST(LabelText, HostileNamesStillRender) {

@@ -424,4 +424,12 @@ std::string DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout&
          "bin a shorter name in its plan";
 }
 
+bool BinPrintsWhole(cairo_t* cr, const LabelContent& label, const LabelLayout& layout) {
+  cairo_save(cr);
+  LabelFont font(cr);
+  const bool whole = DrawBin(font, label, layout.bin);
+  cairo_restore(cr);
+  return whole;
+}
+
 }  // namespace pintag::label

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <set>
 #include <string_view>
 #include <utility>
 
@@ -49,10 +50,37 @@ RenderedLabel InternalFailure(std::string error) {
   return {{}, std::move(error), std::nullopt, true};
 }
 
+// The first label whose bin does not print whole and DrawLabel's reason, found before any page is
+// drawn: a batch refused at its last label drew every page before it for nothing. Each distinct
+// bin is tried once, at its first label, on a recording surface that is thrown away (a batch's
+// labels mostly share a plan's few bins). The label font's options are its own, so the bin is
+// laid out here as on the page.
+std::optional<std::pair<std::size_t, std::string>> FirstUnprintableBin(
+    std::span<const LabelContent> labels, const label::LabelLayout& layout) {
+  Surface scratch(cairo_recording_surface_create(CAIRO_CONTENT_COLOR, nullptr));
+  Context cr(cairo_create(scratch.get()));
+  cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
+  std::set<std::optional<std::string>> tried;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (!tried.insert(labels[i].bin).second) continue;
+    if (label::BinPrintsWhole(cr.get(), labels[i], layout)) continue;
+    if (std::string why = label::DrawLabel(cr.get(), labels[i], layout, false); !why.empty()) {
+      return std::pair{i, std::move(why)};
+    }
+  }
+  return std::nullopt;
+}
+
 // Draws each label on its own page of a vector surface, then finishes the surface. A label that
 // must not be printed ends it, and `refused` says which; any other error is cairo's.
 std::string DrawPages(cairo_surface_t* surface, std::span<const LabelContent> labels,
                       const label::LabelLayout& layout, std::optional<std::size_t>* refused) {
+  if (labels.size() > 1) {
+    if (auto unprintable = FirstUnprintableBin(labels, layout)) {
+      *refused = unprintable->first;
+      return std::move(unprintable->second);
+    }
+  }
   Context cr(cairo_create(surface));
   cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
   for (std::size_t i = 0; i < labels.size(); ++i) {
