@@ -170,7 +170,9 @@ ConnectionPool::Lease ConnectionPool::acquire() {
         const std::lock_guard lock(mutex_);
         if (generation_ != generation) continue;
       }
-      server::LogEvent("cannot open database " + path + ": " + e.what(), /*warning=*/true);
+      if (auto line = open_failures_.admit("cannot open database " + path + ": " + e.what())) {
+        server::LogEvent(*line, /*warning=*/true);
+      }
       // A process out of file descriptors opens the file on a later try, so the client is told
       // when to ask again; a file it may not open, or one that is no database, stays so.
       const auto* sqlite = dynamic_cast<const db::SqliteError*>(&e);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "pintag/db/sqlite.hpp"
+#include "pintag/server/log_throttle.hpp"
 
 namespace pintag::app {
 
@@ -82,6 +83,8 @@ class ConnectionPool {
   std::uint64_t inode_ = 0;
   bool moved_ = false;
   bool told_log_kept_ = false;  ///< a try to empty the log failed and was logged, this departure
+  /// Every request fails the same way while the file cannot be opened: one warning in 10 s.
+  server::LogThrottle open_failures_;
 
   void emptyLogOfMovedFile();
 };

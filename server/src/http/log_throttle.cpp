@@ -1,0 +1,23 @@
+#include "pintag/server/log_throttle.hpp"
+
+#include <utility>
+
+namespace pintag::server {
+
+std::optional<std::string> LogThrottle::admit(std::string message, Clock::time_point now) {
+  const std::lock_guard lock(mutex_);
+  if (last_written_ && now - *last_written_ < interval_) {
+    ++left_out_;
+    return std::nullopt;
+  }
+  if (left_out_ > 0) {
+    const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - *last_written_);
+    message += " (and " + std::to_string(left_out_) + " more" + " like it in the " +
+               std::to_string(seconds.count()) + " s before)";
+  }
+  last_written_ = now;
+  left_out_ = 0;
+  return message;
+}
+
+}  // namespace pintag::server

@@ -1,0 +1,40 @@
+// The throttle that keeps a warning repeated by every request (the database that cannot be
+// opened) to one line an interval, without losing count of the rest.
+
+#include "pintag/server/log_throttle.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <optional>
+#include <string>
+
+namespace pintag::server {
+namespace {
+
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+TEST(LogThrottle, WritesTheFirstThenOneAnIntervalWithHowManyWereLeftOut) {
+  LogThrottle throttle(seconds(10));
+  const LogThrottle::Clock::time_point start{};
+  EXPECT_EQ(throttle.admit("cannot open database", start), "cannot open database");
+  for (int i = 1; i <= 37; ++i) {
+    EXPECT_EQ(throttle.admit("cannot open database", start + milliseconds(200) * i), std::nullopt)
+        << i;
+  }
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(10) - milliseconds(1)),
+            std::nullopt);
+  // The interval is over: written, with the 38 left out and how long they took.
+  EXPECT_EQ(throttle.admit("cannot open database: disk I/O error", start + seconds(12)),
+            "cannot open database: disk I/O error (and 38 more like it in the 12 s before)");
+  // The count starts again; one left out is said as one.
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(13)), std::nullopt);
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(22)),
+            "cannot open database (and 1 more like it in the 10 s before)");
+  // After a quiet spell nothing was left out: the line is written as it came.
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(600)), "cannot open database");
+}
+
+}  // namespace
+}  // namespace pintag::server
