@@ -2,21 +2,16 @@
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { readFile } from 'node:fs/promises';
-import { after, before, test } from 'node:test';
-import { addPincode, createToken, launchBrowser, newPage, screenshot, startServer, textLefts } from './harness.js';
+import { test } from 'node:test';
+import { addPincode, createToken, newPage, screenshot, serverAndBrowser, textLefts } from './harness.js';
 
 let server;
 let browser;
 let counterToken;
 
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
+serverAndBrowser(async (session) => {
+  ({ server, browser } = session);
   counterToken = await createToken(server, 'counter');
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
 });
 
 // poppler-utils is in scripts/debian-packages-test.txt: without it these throw, and the test fails.

@@ -197,13 +197,16 @@ export async function addPincode(server, pincode, offices) {
 
 /**
  * The server and browser a test file shares: a fresh `pintag serve` and Chromium started before
- * the file's tests and stopped after them. Returns {server, browser}, filled in by then.
+ * the file's tests and stopped after them, and then `setUp(session)` when given (a file's tokens
+ * and inputs: a hook of the file's own may run before these are started). Returns {server,
+ * browser}, filled in by then.
  */
-export function serverAndBrowser() {
+export function serverAndBrowser(setUp) {
   const session = {};
   before(async () => {
     session.server = await startServer();
     session.browser = await launchBrowser();
+    await setUp?.(session);
   });
   after(async () => {
     await session.browser?.close();

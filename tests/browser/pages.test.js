@@ -1,18 +1,13 @@
 // Every page loads from the server without errors, links the others, and labels its fields.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { launchBrowser, newPage, screenshot, startServer } from './harness.js';
+import { test } from 'node:test';
+import { newPage, screenshot, serverAndBrowser } from './harness.js';
 
 let server;
 let browser;
 
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
+serverAndBrowser(async (session) => {
+  ({ server, browser } = session);
 });
 
 test('the home page links the three pages and reports the server ready', async () => {

@@ -1,18 +1,13 @@
 // Registry: search with paging, key lookup, admin add and retire, and an error from the server.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { addPincode, launchBrowser, newPage, screenshot, startReplica, startServer, textLefts } from './harness.js';
+import { test } from 'node:test';
+import { addPincode, newPage, screenshot, serverAndBrowser, startReplica, textLefts } from './harness.js';
 
 let server;
 let browser;
 
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
+serverAndBrowser(async (session) => {
+  ({ server, browser } = session);
 });
 
 test('registry search finds offices by district and pages through them', async () => {

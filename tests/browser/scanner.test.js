@@ -7,8 +7,8 @@ import { tmpdir } from 'node:os';
 import { basename, dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { promisify } from 'node:util';
-import { after, before, test } from 'node:test';
-import { createToken, launchBrowser, newPage, screenshot, startServer } from './harness.js';
+import { after, test } from 'node:test';
+import { createToken, newPage, screenshot, serverAndBrowser, startServer } from './harness.js';
 
 let server;
 let browser;
@@ -17,9 +17,8 @@ let counterToken;
 let dir;
 let labelPng;
 
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
+serverAndBrowser(async (session) => {
+  ({ server, browser } = session);
   scannerToken = await createToken(server, 'scanner');
   counterToken = await createToken(server, 'counter');
   dir = await mkdtemp(join(tmpdir(), 'pintag-scan-'));
@@ -31,8 +30,6 @@ before(async () => {
   await writeFile(join(dir, 'notes.txt'), 'this is not a photo\n');
 });
 after(async () => {
-  await browser?.close();
-  await server?.stop();
   if (dir) await rm(dir, { recursive: true, force: true });
 });
 
