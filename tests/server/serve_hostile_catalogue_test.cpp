@@ -654,6 +654,42 @@ TEST_F(HostileCatalogue, ChunkExtensionsWithinTheLimitAreRead) {
   EXPECT_EQ(answer.status, 200) << answer.head << "\n" << answer.body.substr(0, 300);
   EXPECT_TRUE(json::parse(answer.body, nullptr, false).contains("tags")) << answer.body;
 }
+TEST_F(HostileCatalogue, ChunkFramingARelaxedReaderWouldTakeIsRefused) {
+  // cpp-httplib read "0x5", "+5" and "5zz" as 5, and ended the body at a chunk longer than its
+  // size, reading the rest as the next request. Each is refused, saying why, and closed.
+  for (const auto& [framing, says] : std::vector<std::pair<std::string, std::string>>{
+           {"0x5\r\nhello\r\n0\r\n\r\n", "hexadecimal digits only"},
+           {"+5\r\nhello\r\n0\r\n\r\n", "must start with a hexadecimal digit"},
+           {"5zz\r\nhello\r\n0\r\n\r\n", "hexadecimal digits only"},
+           {"5\nhello\r\n0\r\n\r\n", "not a bare LF"},
+           {"5\r\nhelloEXTRA\r\n0\r\n\r\n", "longer than its size says"},
+           {"5\r\nhello\r\n0\r\nX-Trailer: 1\r\n\r\n", "trailer fields"}}) {
+    const Answer answer = Send(server_->port(), chunkedDetectHead() + framing);
+    EXPECT_EQ(answer.status, 400) << framing << "\n" << answer.head;
+    EXPECT_NE(answer.head.find("Connection: close"), std::string::npos) << answer.head;
+    const std::string detail = json::parse(answer.body, nullptr, false).value("detail", "");
+    EXPECT_EQ(detail.rfind("the chunked body is malformed: ", 0), 0U) << answer.body;
+    EXPECT_NE(detail.find(says), std::string::npos) << framing << ": " << answer.body;
+  }
+  expectHealthy();
+}
+TEST_F(HostileCatalogue, ARequestHiddenAfterAChunkLongerThanItsSizeIsNotAnswered) {
+  // On a kept-alive connection: before, the body ended after "hello" and the server answered the
+  // request that followed in the chunk as a second one, which a proxy never saw.
+  const std::string smuggled = "GET /livez HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
+  const std::string head = "POST /api/v1/detect HTTP/1.1\r\nHost: x\r\n" + scannerAuth() +
+                           "\r\nContent-Type: image/jpeg\r\nTransfer-Encoding: chunked\r\n\r\n";
+  const std::string everything =
+      test::SendRaw(server_->port(), head + "5\r\nhello" + smuggled, /*quiet_s=*/5);
+  EXPECT_EQ(everything.rfind("HTTP/1.1 400", 0), 0U) << everything.substr(0, 300);
+  std::size_t answers = 0;
+  for (std::size_t at = everything.find("HTTP/1.1 "); at != std::string::npos;
+       at = everything.find("HTTP/1.1 ", at + 1)) {
+    ++answers;
+  }
+  EXPECT_EQ(answers, 1U) << everything;
+  expectHealthy();
+}
 TEST_F(HostileCatalogue, RequestLineWithoutEndIsAnswered431) {
   // cpp-httplib writes nothing when the read of a request line fails: the server answers itself.
   const Answer answer =

@@ -133,6 +133,7 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
       buffered_end_ = static_cast<std::size_t>(got);
     }
   }
+  if (head_read_ && chunked_ && !chunked_->take(std::string_view(ptr, n))) return -1;
   if (!head_read_) {
     handed_out_ += n;
   } else if (size == 1 && *ptr != '\n') {

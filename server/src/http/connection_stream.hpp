@@ -12,7 +12,9 @@
 // chunk-size line took a server from 200 to 262 MB resident).
 //
 // And it checks the head's syntax as it hands it out (RequestHeadCheck): a head that breaks a
-// rule fails the read that brought the offending byte, and `headRefusal` says why.
+// rule fails the read that brought the offending byte, and `headRefusal` says why. A chunked
+// body's framing is checked the same way (ChunkedBodyCheck, once `expectChunkedBody` is called),
+// and `chunkedRefusal` says why.
 //
 // Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; the head is
 // read through a 4 KiB buffer (cpp-httplib reads it one byte at a time); a write first checks
@@ -30,6 +32,7 @@
 #include <string>
 #include <string_view>
 
+#include "chunked_body_check.hpp"
 #include "request_head_check.hpp"
 
 namespace pintag::server {
@@ -60,6 +63,12 @@ class ConnectionStream final : public httplib::Stream {
   }
   /// True once a read was refused because a line of the body ran past kMaxBodyLineBytes.
   bool bodyLineTooLong() const { return body_line_too_long_; }
+  /// The body is chunked: its framing is checked from here on (ChunkedBodyCheck).
+  void expectChunkedBody() { chunked_.emplace(); }
+  /// Why a read was refused because the chunked body's framing broke; nothing when it was not.
+  std::optional<std::string> chunkedRefusal() const {
+    return chunked_ ? chunked_->refusal() : std::nullopt;
+  }
 
   /// Why the last read that failed on the socket failed: no byte within the read timeout, the
   /// peer closed its sending side, or the socket failed (kNone: none did).
@@ -100,6 +109,7 @@ class ConnectionStream final : public httplib::Stream {
   RequestHeadCheck head_check_;      ///< fed the head's bytes as they are taken from the socket
   std::size_t body_line_bytes_ = 0;  ///< bytes of the body's current line read one at a time
   bool body_line_too_long_ = false;
+  std::optional<ChunkedBodyCheck> chunked_;  ///< fed a chunked body's bytes as they are read
   ReadEnd read_end_ = ReadEnd::kNone;
   std::size_t unread_ = 0;
   bool answered_ = false;

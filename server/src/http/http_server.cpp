@@ -457,6 +457,10 @@ struct HttpServer::Impl {
     };
     bool ok = false;
     bool too_many_parts = false;
+    // Only chunked is let this far as a transfer coding (UnknownTransferCoding).
+    if (t_connection != nullptr && req.has_header("Transfer-Encoding")) {
+      t_connection->expectChunkedBody();
+    }
     if (req.is_multipart_form_data()) {
       ok = reader(
           [&](const httplib::MultipartFormData& part) {
@@ -505,6 +509,14 @@ struct HttpServer::Impl {
       Apply(tooLarge(), res);
       leaveBodyUnread(req, res);
       return;
+    }
+    if (!ok && t_connection != nullptr) {
+      if (const std::optional<std::string> refusal = t_connection->chunkedRefusal()) {
+        // What follows the broken framing cannot be told from a next request: close.
+        Apply(ProblemResponse(400, *refusal), res);
+        res.set_header("Connection", "close");
+        return;
+      }
     }
     if (!ok && t_connection != nullptr && t_connection->bodyLineTooLong()) {
       Apply(ProblemResponse(400,
