@@ -96,7 +96,9 @@ say "starting everything as docker/compose.yaml says: up -d, then the replica to
 wait_ready "$PINTAG_PRIMARY_PORT" 120 || { "${compose[@]}" logs primary; exit 1; }
 token() { "${compose[@]}" exec -T primary pintag token create --role "$1" --label test-docker \
   --db /var/lib/pintag/pintag.db "${@:2}" 2>/dev/null | tr -d '\r\n'; }
-admin="$(token admin)" counter="$(token counter)" scanner="$(token scanner)"
+# The first admin token, from the file the primary wrote it to; then the other roles' tokens.
+admin="$("${compose[@]}" exec -T primary cat /var/lib/pintag/first-admin.token | tr -d '\r\n')"
+counter="$(token counter)" scanner="$(token scanner)"
 token replica --out /var/lib/pintag-follow/replica.token
 # The replicas, started before the token was there, start again until they find it.
 for port in "${replica_ports[@]}"; do
@@ -113,6 +115,11 @@ check "the replicas still serve after it" bash -c \
   "for p in ${replica_ports[*]}; do [[ \$(curl -s -o /dev/null -w '%{http_code}' http://127.0.0.1:\$p/readyz) == 200 ]] || exit 1; done"
 check "the replica token is in no container's environment" bash -c \
   "! ${DOCKER[*]} inspect $("${compose[@]}" ps -q | tr '\n' ' ') | grep -q 'pt_[0-9]'"
+check "the first admin token is in the primary's volume, and works" test \
+  "$(curl -s -o /dev/null -w '%{http_code}' -H "Authorization: Bearer $admin" \
+    "http://127.0.0.1:$PINTAG_PRIMARY_PORT/api/v1/tokens")" = 200
+check "no secret is in any container's log" bash -c \
+  "! ${compose[*]} logs 2>&1 | grep -q 'pt_[0-9]*_'"
 healthy() {  # healthy SERVICE: Docker's HEALTHCHECK says so within 60 s
   local i
   for ((i = 0; i < 60; ++i)); do

@@ -80,6 +80,46 @@ TEST(ServeFirstStart, CreatesSeedsAndPrintsOneAdminTokenOnStdoutOnly) {
   EXPECT_NE(again.out().find("pintag token create"), std::string::npos);
 }
 
+TEST(ServeFirstStart, WritesTheFirstAdminTokenToTheFileAskedForAndNotToStdout) {
+  // A container's stdout is kept in its log: with --admin-token-out the secret goes to a file.
+  const TempDir dir;
+  const std::string db_path = dir.file("new.db");
+  const std::string token_file = dir.file("first-admin.token");
+  {
+    ServerProcess server({"--db", db_path, "--admin-token-out", token_file},
+                         dir.file("stderr.log"));
+    ASSERT_TRUE(server.ok()) << server.out() << ReadFile(dir.file("stderr.log"));
+    EXPECT_TRUE(Secrets(server.out()).empty()) << server.out();
+    EXPECT_NE(server.out().find("secret is in " + token_file), std::string::npos) << server.out();
+    const std::set<std::string> in_file = Secrets(ReadFile(token_file));
+    ASSERT_EQ(in_file.size(), 1U) << ReadFile(token_file);
+    EXPECT_EQ(std::filesystem::status(token_file).permissions() & std::filesystem::perms::all,
+              std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+    httplib::Client client("127.0.0.1", server.port());
+    auto r = client.Get("/api/v1/tokens", {{"Authorization", "Bearer " + *in_file.begin()}});
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_EQ(json::parse(r->body)["tokens"][0]["role"], "admin");
+    EXPECT_EQ(server.stop(SIGTERM), 0);
+  }
+  EXPECT_TRUE(Secrets(ReadFile(dir.file("stderr.log"))).empty());
+  // A later start makes no token, and writes no file.
+  std::filesystem::remove(token_file);
+  {
+    ServerProcess again({"--db", db_path, "--admin-token-out", token_file}, dir.file("stderr.log"));
+    ASSERT_TRUE(again.ok());
+    EXPECT_TRUE(Secrets(again.out()).empty()) << again.out();
+  }
+  EXPECT_FALSE(std::filesystem::exists(token_file));
+  // A file in a directory that is not there: refused before the database is made.
+  const CommandResult refused =
+      RunPintag("serve --port 0 --bind 127.0.0.1 --db " + dir.file("other.db") +
+                " --admin-token-out " + dir.file("missing/first-admin.token"));
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--admin-token-out"), std::string::npos) << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("other.db")));
+}
+
 // Starts refused before anything is opened or created, each saying what to do instead.
 TEST(ServeStartRefusals, AnEmptyBindAddressIsAUsageErrorNotEveryInterface) {
   const TempDir dir;

@@ -43,6 +43,7 @@ struct ServeArgs {
   std::string bind = "127.0.0.1";
   int threads = 4;
   std::string web;
+  std::string admin_token_out;
   double max_body_mb = 25;
   std::int64_t max_pixels = 40'000'000;
   std::optional<std::int64_t> max_pixels_in_flight;  // none: twice max_pixels
@@ -55,6 +56,9 @@ struct ServeArgs {
   std::vector<std::string> trusted_proxies;
   ReplicationArgs replication;
 };
+
+/// Followed by the database's path and a closing backquote.
+constexpr const char* kMakeAdminToken = "`pintag token create --role admin --db ";
 
 /// On an empty token table, creates the first admin token and returns it; nothing when tokens
 /// already exist. Called once the port is bound, so a start that cannot listen does not create a
@@ -111,6 +115,8 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
+  // A mistyped path is said now, before a token is made for it.
+  if (!args.admin_token_out.empty()) CheckFileToWrite("--admin-token-out", args.admin_token_out);
   std::string proxy_error;
   const std::optional<server::TrustedProxies> trusted_proxies =
       server::TrustedProxies::Parse(args.trusted_proxies, &proxy_error);
@@ -192,7 +198,20 @@ void Run(const ServeArgs& args) {
     std::cout << "  " << role << "\n";
   std::cout << "  API: " << url << "/api/v1/   OpenAPI: " << url
             << "/openapi.json   health: " << url << "/readyz\n";
-  if (first_admin) {
+  if (first_admin && !args.admin_token_out.empty()) {
+    // A container's stdout is kept in its log, where a working secret must not sit.
+    db::Connection connection(args.db, {.create = false});
+    try {
+      RevokeIfUnwritten(connection, first_admin->info.id, args.admin_token_out,
+                        WriteSecretFile(args.admin_token_out, first_admin->secret));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string(e.what()) + "; make an admin token with " +
+                               kMakeAdminToken + args.db + "`");
+    }
+    std::cout << "First start: an admin token was created. Its secret is in "
+              << args.admin_token_out
+              << " (mode 0600) and shown nowhere else: read it, keep it, delete the file.\n";
+  } else if (first_admin) {
     std::cout << "First start: an admin token was created. Its secret is shown only now (the "
                  "database keeps a hash):\n"
               << "  " << first_admin->secret << "\n"
@@ -210,10 +229,8 @@ void Run(const ServeArgs& args) {
     try {
       RevokeIfStdoutFailed(connection, first_admin->info.id);
     } catch (const std::exception& e) {
-      throw std::runtime_error(std::string(e.what()) +
-                               "; make an admin token with `pintag token create --role admin "
-                               "--db " +
-                               args.db + "`");
+      throw std::runtime_error(std::string(e.what()) + "; make an admin token with " +
+                               kMakeAdminToken + args.db + "`");
     }
   }
 
@@ -303,6 +320,10 @@ void AddServeCommand(CLI::App& app) {
       ->envname("PINTAG_THREADS");
   cmd->add_option("--web", args->web, "serve static files from this directory (default: none)")
       ->envname("PINTAG_WEB");
+  cmd->add_option("--admin-token-out", args->admin_token_out,
+                  "on a first start, write the first admin token's secret to this file (mode "
+                  "0600) instead of stdout, which a container's log keeps")
+      ->envname("PINTAG_ADMIN_TOKEN_OUT");
   cmd->add_option("--max-body-mb", args->max_body_mb, "largest request body, MiB (413 above)")
       ->check(FiniteNumber())
       ->check(CLI::Range(0.001, 1024.0))
