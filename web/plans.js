@@ -254,11 +254,15 @@ export function setUpSortPlans({ token, needToken }) {
     // version it was read at.
     const condition = creating ? { 'If-None-Match': '*' } : { 'If-Match': `"${open.version}"` };
     // The fields are held while the plan is on its way: the stored plan is shown when it comes
-    // back, and what was typed meanwhile would be lost.
-    $('plan-fields').disabled = true;
-    saving = true;
-    $('plan-delete').disabled = true;
-    $('plan-close').disabled = true;
+    // back, and what was typed meanwhile would be lost; nor is the editor closed, deleted or
+    // replaced under it.
+    const hold = (held) => {
+      $('plan-fields').disabled = held;
+      saving = held;
+      $('plan-delete').disabled = held;
+      $('plan-close').disabled = held;
+    };
+    hold(true);
     try {
       const response = await api(planPath(name, `?description=${encodeURIComponent(description)}`), {
         method: 'PUT', token: token(), body: text, as: 'response',
@@ -266,6 +270,7 @@ export function setUpSortPlans({ token, needToken }) {
       });
       const stored = await response.json();
       showEditor(stateOf(stored, response.headers.get('ETag')));
+      hold(false);  // the list read below only marks the plan's row
       show($('plan-msg'), messageBox('ok', 'Saved ', el('strong', {}, el('bdi', {}, stored.name)), ': ',
         `${stored.rules.length} ${stored.rules.length === 1 ? 'rule' : 'rules'}, fallback bin `,
         el('strong', {}, el('bdi', {}, stored.fallback_bin)), '.'));
@@ -280,10 +285,7 @@ export function setUpSortPlans({ token, needToken }) {
         show($('plan-msg'), problemBox(error));
       }
     } finally {
-      $('plan-fields').disabled = false;
-      saving = false;
-      $('plan-delete').disabled = false;
-      $('plan-close').disabled = false;
+      hold(false);
     }
   }
 

@@ -163,45 +163,79 @@ function tagCard(tag, approximate) {
 }
 
 // A photo over the server's limits (a phone's 50 MP mode is over the default 40 MP; a large PNG
-// may be over the body limit) is drawn again here, upright and smaller, as a JPEG, from the
-// limits the server's 413 gives, and that is read instead: a smaller photo rather than none.
-// Null when the answer gives no limit or the browser cannot draw the file (a TIFF).
+// may be over the body limit) is drawn again here, upright and smaller, as a JPEG, to fit the
+// limits the server's 413 answers give, and that is read instead: a smaller photo rather than
+// none. Each 413 may give one limit (the body's is checked first, from the upload's length), so
+// the limits learnt are kept and a second refusal draws the photo again under both.
 const kShrinkQuality = 0.92;
 // Room for the multipart form around the photo, which counts toward the body limit.
 const kFormOverheadBytes = 4096;
+// A canvas larger than this fails on some browsers (iOS Safari's limit); tried when larger fails.
+const kSafeCanvasPixels = 16_777_216;
+const kShrinkRounds = 2;
 
-async function shrunkToFit(file, error) {
+// The limits a refusal gives, added to those already learnt; null when it gives none.
+function limitsFrom(error, known = {}) {
+  if (!error || error.status !== 413) return null;
   const { max_pixels: maxPixels, max_body_bytes: maxBodyBytes } = error.numbers || {};
-  if (error.status !== 413 || !(maxPixels > 0 || maxBodyBytes > kFormOverheadBytes)) return null;
+  if (!(maxPixels > 0) && !(maxBodyBytes > kFormOverheadBytes)) return null;
+  return {
+    maxPixels: maxPixels > 0 ? maxPixels : known.maxPixels,
+    maxBytes: maxBodyBytes > kFormOverheadBytes ? maxBodyBytes - kFormOverheadBytes : known.maxBytes,
+  };
+}
+
+// The photo as a JPEG under `limits` ({maxPixels, maxBytes}, either unknown), drawn upright by
+// its EXIF orientation on white (a transparent PNG would turn black); null when the browser
+// cannot draw the file (a TIFF) or the canvas fails.
+async function shrunkToFit(file, limits) {
   let bitmap;
   try {
     bitmap = await createImageBitmap(file, { imageOrientation: 'from-image' });
   } catch {
     return null;
   }
+  const canvas = document.createElement('canvas');
   try {
     const { width, height } = bitmap;
     // Just under the limit: a side rounded up must not carry it over.
-    let scale = maxPixels > 0 ? Math.min(1, Math.sqrt((maxPixels * 0.995) / (width * height))) : 1;
-    const maxBytes = maxBodyBytes > kFormOverheadBytes ? maxBodyBytes - kFormOverheadBytes : Infinity;
+    let scale = limits.maxPixels ? Math.min(1, Math.sqrt((limits.maxPixels * 0.995) / (width * height))) : 1;
+    let canvasFailed = false;
     // A JPEG's size falls about as its pixels do; a few tries find one under the body limit.
-    for (let attempt = 0; attempt < 5; ++attempt) {
-      const canvas = document.createElement('canvas');
+    for (let attempt = 0; attempt < 6; ++attempt) {
+      if (canvasFailed) scale = Math.min(scale, Math.sqrt(kSafeCanvasPixels / (width * height)));
       canvas.width = Math.max(1, Math.floor(width * scale));
       canvas.height = Math.max(1, Math.floor(height * scale));
       const context = canvas.getContext('2d');
-      context.imageSmoothingQuality = 'high';
-      context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
-      const blob = await new Promise((done) => canvas.toBlob(done, 'image/jpeg', kShrinkQuality));
-      if (!blob) return null;
-      if (blob.size <= maxBytes) {
-        return { blob, width: canvas.width, height: canvas.height, fromWidth: width, fromHeight: height };
+      let blob = null;
+      if (context) {
+        context.fillStyle = '#fff';
+        context.fillRect(0, 0, canvas.width, canvas.height);
+        context.imageSmoothingQuality = 'high';
+        context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
+        blob = await new Promise((done) => canvas.toBlob(done, 'image/jpeg', kShrinkQuality));
       }
-      scale *= Math.sqrt((maxBytes * 0.9) / blob.size);
+      if (!blob) {
+        if (canvasFailed || width * height * scale * scale <= kSafeCanvasPixels) return null;
+        canvasFailed = true;
+        continue;
+      }
+      if (!limits.maxBytes || blob.size <= limits.maxBytes) {
+        return {
+          blob, width: canvas.width, height: canvas.height, fromWidth: width, fromHeight: height,
+          pixelLimited: Boolean(limits.maxPixels) && canvas.width * canvas.height < width * height,
+        };
+      }
+      scale *= Math.sqrt((limits.maxBytes * 0.9) / blob.size);
     }
+    return null;
+  } catch {
     return null;
   } finally {
     bitmap.close();
+    // Its pixels are let go now, not when the collector comes.
+    canvas.width = 0;
+    canvas.height = 0;
   }
 }
 
@@ -240,22 +274,26 @@ async function scan() {
   let answer;
   let shrunk = null;
   try {
-    try {
-      answer = await api(detectPath(), { method: 'POST', token: token(), body: form(file) });
-    } catch (error) {
-      if (run !== scanCount) return;
-      shrunk = await shrunkToFit(file, error);
-      if (!shrunk) throw error;
-      if (run !== scanCount) return;
-      // What is read is what is shown: the outlines are in the smaller photo's pixels.
-      URL.revokeObjectURL(photoUrl);
-      photoUrl = URL.createObjectURL(shrunk.blob);
-      photoUnshowable = false;
-      showPhoto(photoUrl, 'Your photo, made smaller. Reading…', 'The photo being read, made smaller');
-      $('summary').textContent = `The photo is over the server's limit: reading it at ${shrunk.width} × ${shrunk.height}…`;
-      answer = await api(detectPath(), {
-        method: 'POST', token: token(), body: form(new File([shrunk.blob], 'photo-smaller.jpg', { type: 'image/jpeg' })),
-      });
+    let limits = {};
+    for (let round = 0; ; ++round) {
+      try {
+        const photo = shrunk ? new File([shrunk.blob], 'photo-smaller.jpg', { type: 'image/jpeg' }) : file;
+        answer = await api(detectPath(), { method: 'POST', token: token(), body: form(photo) });
+        break;
+      } catch (error) {
+        if (run !== scanCount) return;
+        limits = round < kShrinkRounds ? limitsFrom(error, limits) : null;
+        if (!limits) throw error;
+        shrunk = await shrunkToFit(file, limits);
+        if (!shrunk) throw error;
+        if (run !== scanCount) return;
+        // What is read is what is shown: the outlines are in the smaller photo's pixels.
+        URL.revokeObjectURL(photoUrl);
+        photoUrl = URL.createObjectURL(shrunk.blob);
+        photoUnshowable = false;
+        showPhoto(photoUrl, 'Your photo, made smaller. Reading…', 'The photo being read, made smaller');
+        $('summary').textContent = `The photo is over the server's limit: reading it at ${shrunk.width} × ${shrunk.height}…`;
+      }
     }
   } catch (error) {
     if (run !== scanCount) return;
@@ -276,9 +314,11 @@ async function scan() {
     photoUnshowable ? kUnshowable : null);
   if (shrunk) {
     // Smaller tags are harder to read, and the camera's details went with the file's metadata.
+    // What to change depends on the limit: the camera's resolution, or the file it saves.
     $('summary').append(el('span', { class: 'shrunk-note' },
       ` · made smaller to fit the server's limit (${shrunk.fromWidth} × ${shrunk.fromHeight}, `
-      + `${megapixels(shrunk.fromWidth * shrunk.fromHeight)}): set the camera to a lower resolution`));
+      + `${megapixels(shrunk.fromWidth * shrunk.fromHeight)}): `
+      + (shrunk.pixelLimited || file.type === 'image/jpeg' ? 'set the camera to a lower resolution' : 'send the photo as a JPEG')));
   }
   show($('tags'), answer.tags.map((tag) => tagCard(tag, approximate)));
   if (n === 0) {

@@ -271,9 +271,9 @@ test('while a save is on its way the plan cannot be closed, deleted or swapped f
   release();
   await page.locator('#plan-msg').filter({ hasText: 'Saved hub-slow: 2 rules' }).waitFor();
   assert.deepEqual((await apiJson('/api/v1/sortplans/hub-slow')).body.rules.map((r) => r.bin), ['north', 'south']);
-  // Given back once the save is done (the list is read again after "Saved" is shown).
-  await page.waitForFunction(() => !document.getElementById('plan-close').disabled
-    && !document.getElementById('plan-delete').disabled);
+  // Given back with the saved plan, before the list is read again.
+  assert.equal(await page.locator('#plan-close').isDisabled(), false);
+  assert.equal(await page.locator('#plan-delete').isDisabled(), false);
   // Once saved, the other plan opens as before.
   await page.getByRole('button', { name: 'Open plan hub-other' }).click();
   await page.locator('#plan-edit-h').filter({ hasText: 'Plan hub-other' }).waitFor();

@@ -435,7 +435,7 @@ test('a photo over the server\'s pixel or body limit is read made smaller, and t
       return [Number(width), Number(height)];
     };
 
-    // Over the pixel limit: the label at twice its size, 2.2 MP, as a JPEG turned by its EXIF
+    // Over the pixel limit: the label at twice its size, 2.1 MP, as a JPEG turned by its EXIF
     // orientation (6, a quarter turn), well under the body limit.
     const big = join(dir, 'label-2x-exif6.jpg');
     await promisify(execFile)('oiiotool', [labelPng, '--resize', '200%', '--attrib', 'Orientation', '6',
@@ -472,12 +472,43 @@ test('a photo over the server\'s pixel or body limit is read made smaller, and t
     await page.locator('.tag-card[data-pincode="110001"]').waitFor();
     summary = await page.locator('#summary').textContent();
     assert.match(summary, /^1 tag read/);
-    assert.match(summary, /made smaller to fit the server's limit \(800 × 1128, 0\.9 MP\)/);
+    assert.match(summary, /made smaller to fit the server's limit \(800 × 1128, 0\.9 MP\): send the photo as a JPEG/);
     [width, height] = await photoSize(page);
     assert.ok(width <= 800 && height <= 1128, `${width} × ${height}`);
     // The server read the second upload, so it was under the body limit it enforces.
     assert.equal(uploads.length, 2);
     assert.deepEqual(page.problems, []);
+
+    // Over both: the body's limit is refused first and gives no pixel limit, so the JPEG made
+    // for it is refused for its pixels, and drawn once more under both limits.
+    const noisyBig = join(dir, 'label-noisy-2x.png');
+    await promisify(execFile)('oiiotool', [labelPng, '--resize', '200%', '--noise:type=gaussian:stddev=0.04',
+      '-o', noisyBig]);
+    ({ page, uploads } = await read(noisyBig));
+    await page.locator('.tag-card[data-pincode="110001"]').waitFor();
+    summary = await page.locator('#summary').textContent();
+    assert.match(summary, /^1 tag read/);
+    assert.match(summary, /made smaller to fit the server's limit \(\d+ × \d+, 2\.\d MP\): set the camera to a lower resolution/);
+    [width, height] = await photoSize(page);
+    assert.ok(width * height <= 1_000_000, `${width} × ${height}`);
+    assert.equal(uploads.length, 3, 'refused for its length, then for its pixels, then read');
+    assert.deepEqual(page.problems, []);
+
+    // A transparent PNG is drawn on white, as the server reads one, not on black.
+    const clear = join(dir, 'label-transparent.png');
+    await promisify(execFile)('oiiotool', [labelPng, '--resize', '200%', '--ch', 'R,G,B,A=0.0', '-o', clear]);
+    ({ page } = await read(clear));
+    await page.locator('#scan-photo[data-outlined="1"]').waitFor();
+    const corner = await page.evaluate(() => {
+      const img = document.getElementById('scan-photo');
+      const canvas = document.createElement('canvas');
+      canvas.width = img.naturalWidth;
+      canvas.height = img.naturalHeight;
+      const context = canvas.getContext('2d');
+      context.drawImage(img, 0, 0);
+      return Array.from(context.getImageData(1, 1, 1, 1).data);
+    });
+    assert.ok(corner[0] > 240 && corner[1] > 240 && corner[2] > 240, `the corner is ${corner}`);
 
     // A TIFF over the pixel limit cannot be drawn here: the server's problem is shown as it was.
     const bigTiff = join(dir, 'label-2x.tif');

@@ -36,5 +36,22 @@ TEST(LogThrottle, WritesTheFirstThenOneAnIntervalWithHowManyWereLeftOut) {
   EXPECT_EQ(throttle.admit("cannot open database", start + seconds(600)), "cannot open database");
 }
 
+TEST(LogThrottle, SaysWhenTheTroublePassedWithWhatWasLeftOutAndWritesTheNextAtOnce) {
+  LogThrottle throttle(seconds(10));
+  const LogThrottle::Clock::time_point start{};
+  // Nothing was written: nothing to settle.
+  EXPECT_EQ(throttle.settle("database opens again", start), std::nullopt);
+  EXPECT_EQ(throttle.admit("cannot open database", start), "cannot open database");
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(1)), std::nullopt);
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(2)), std::nullopt);
+  EXPECT_EQ(throttle.settle("database opens again", start + seconds(3)),
+            "database opens again (2 more like the last warning were left out in the 3 s after "
+            "it)");
+  EXPECT_EQ(throttle.settle("database opens again", start + seconds(4)), std::nullopt);
+  // The next failure, within the interval of the last warning, is written at once.
+  EXPECT_EQ(throttle.admit("cannot open database", start + seconds(5)), "cannot open database");
+  EXPECT_EQ(throttle.settle("database opens again", start + seconds(6)), "database opens again");
+}
+
 }  // namespace
 }  // namespace pintag::server

@@ -164,7 +164,11 @@ ConnectionPool::Lease ConnectionPool::acquire() {
       options.create = false;
       options.read_only = read_only_;
       options.busy_timeout_ms = busy_timeout_ms_;
-      return Lease(this, std::make_unique<db::Connection>(path, options), generation);
+      auto connection = std::make_unique<db::Connection>(path, options);
+      if (auto line = open_failures_.settle("database " + path + " opens again")) {
+        server::LogEvent(*line);
+      }
+      return Lease(this, std::move(connection), generation);
     } catch (const std::exception& e) {
       {
         const std::lock_guard lock(mutex_);

@@ -213,10 +213,13 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
       server::Problem problem{
           413, "Image Too Large",
           loaded.error + ": set the camera to a lower resolution and take it again"};
-      problem.numbers = {{"max_pixels", context.max_pixels}};
-      if (loaded.claimed_width > 0 && loaded.claimed_height > 0) {
-        problem.numbers.emplace_back("width", loaded.claimed_width);
-        problem.numbers.emplace_back("height", loaded.claimed_height);
+      // Only for a photo over the pixel limit: a TIFF refused for its tiles' size would not be
+      // let in by shrinking it to these.
+      const std::int64_t claimed = std::int64_t{loaded.claimed_width} * loaded.claimed_height;
+      if (claimed > context.max_pixels) {
+        problem.numbers = {{"max_pixels", context.max_pixels},
+                           {"width", loaded.claimed_width},
+                           {"height", loaded.claimed_height}};
       }
       throw HttpError(std::move(problem));
     }

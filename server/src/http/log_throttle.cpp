@@ -20,4 +20,17 @@ std::optional<std::string> LogThrottle::admit(std::string message, Clock::time_p
   return message;
 }
 
+std::optional<std::string> LogThrottle::settle(std::string message, Clock::time_point now) {
+  const std::lock_guard lock(mutex_);
+  if (!last_written_) return std::nullopt;
+  if (left_out_ > 0) {
+    const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - *last_written_);
+    message += " (" + std::to_string(left_out_) + " more like the last warning were left out in " +
+               "the " + std::to_string(seconds.count()) + " s after it)";
+  }
+  last_written_.reset();
+  left_out_ = 0;
+  return message;
+}
+
 }  // namespace pintag::server

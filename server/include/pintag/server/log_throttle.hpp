@@ -1,7 +1,8 @@
 #pragma once
 // A warning that could be written once a request (a database that cannot be opened, under a
 // fleet of scanners) is written the first time, then at most once an interval, with how many
-// like it were left out. Each of those requests still has its own access line. Thread-safe.
+// like it were left out (any message counts as like it), and once more when the trouble has
+// passed. Each of those requests still has its own access line. Thread-safe.
 
 #include <chrono>
 #include <cstddef>
@@ -21,6 +22,11 @@ class LogThrottle {
   /// occurrence, and the first one an interval after the last written, are written, the latter
   /// saying how many were left out since.
   std::optional<std::string> admit(std::string message, Clock::time_point now = Clock::now());
+
+  /// The trouble has passed (the database opens again): the line to write when an occurrence was
+  /// written since the last settle, saying how many were left out after it; nothing otherwise.
+  /// The next occurrence is written at once.
+  std::optional<std::string> settle(std::string message, Clock::time_point now = Clock::now());
 
  private:
   const Clock::duration interval_;
