@@ -1205,6 +1205,40 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   EXPECT_EQ(StatusOf(replica.Get("/readyz")), 200);
 }
 
+// Rotating a replica token took a SIGHUP to every replica after the new token was written; one
+// missed went on with the old token, refused once it was revoked. The file is looked at each poll.
+TEST_F(ReplicaSetTest, AFollowerTakesATokenWrittenToItsFileWithoutASignal) {
+  ServerProcess& follower = startFollower(0);
+  ASSERT_TRUE(follower.ok());
+  httplib::Client replica = LoopbackClient(follower.port());
+  httplib::Client primary = LoopbackClient(primary_->port());
+  const auto follow = [&] { return Body(replica.Get("/api/v1/registry"))["follow"]; };
+  WaitUntil([&] { return !follow()["last_answer"].is_null(); });
+  const json tokens = Body(primary.Get("/api/v1/tokens", Auth(admin_token_)));
+  std::int64_t old_id = -1;
+  for (const json& t : tokens["tokens"]) {
+    if (t["role"] == "replica" && t["revoked_at"].is_null()) old_id = t["id"];
+  }
+  ASSERT_GT(old_id, 0);
+  // A new token written as `pintag token create --out` writes it (replaced whole), the old one
+  // revoked at once, and no signal.
+  const json made =
+      Body(primary.Post("/api/v1/tokens", Auth(admin_token_),
+                        R"({"role": "replica", "label": "rotated"})", "application/json"));
+  ASSERT_TRUE(made["secret"].is_string()) << made.dump();
+  WriteFile(dir_.file("replica.token.new"), made["secret"].get<std::string>() + "\n");
+  std::filesystem::rename(dir_.file("replica.token.new"), dir_.file("replica.token"));
+  ASSERT_EQ(StatusOf(primary.Post("/api/v1/tokens/" + std::to_string(old_id) + "/revoke",
+                                  Auth(admin_token_), "", "application/json")),
+            200);
+  // Served only through the new token: the old one is refused (401) from now on.
+  addPincode(primary, "999127");
+  EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999127", 200), 200) << stderrOf("replica-0");
+  EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
+  EXPECT_NE(stderrOf("replica-0").find("replica token was read again"), std::string::npos)
+      << stderrOf("replica-0");
+}
+
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {
   const std::string snapshot = publishTo("shared.db");
   ServerProcess& first = startReadOnly(0, snapshot);

@@ -10,6 +10,7 @@
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "pintag/server/log.hpp"
+#include "replica/token_file.hpp"
 
 namespace pintag::cli {
 namespace {
@@ -22,9 +23,10 @@ std::string Beside(const std::string& path, const std::string& suffix) {
 std::string ReadToken(const ReplicationArgs& args) {
   std::string token;
   if (!args.follow_token_file.empty()) {
-    std::ifstream in(args.follow_token_file);
-    if (!in) throw UsageError("cannot read --follow-token-file " + args.follow_token_file);
-    std::getline(in, token);
+    if (!std::ifstream(args.follow_token_file)) {
+      throw UsageError("cannot read --follow-token-file " + args.follow_token_file);
+    }
+    token = replica::ReadTokenFile(args.follow_token_file).value_or("");
   } else if (const char* env = std::getenv("PINTAG_FOLLOW_TOKEN")) {
     token = env;
   }
@@ -217,7 +219,10 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     // One follower from the first fetch on: it keeps the ETag of what it installed, so its first
     // poll is a 304, not the whole snapshot again.
     follower_ = std::make_unique<replica::SnapshotFollower>(
-        replica::FollowOptions{args_.follow, token_, db_path_},
+        replica::FollowOptions{.primary_url = args_.follow,
+                               .token = token_,
+                               .token_file = args_.follow_token_file,
+                               .path = db_path_},
         [this](const db::SnapshotInfo&) { watcher_->check(); });
     // A replica with no usable snapshot yet waits for its primary.
     if (!db::VerifySnapshot(db_path_)) {

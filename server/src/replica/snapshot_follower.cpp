@@ -10,6 +10,7 @@
 
 #include "pintag/server/log.hpp"
 #include "replica/snapshot_publisher.hpp"
+#include "replica/token_file.hpp"
 
 namespace pintag::replica {
 
@@ -54,7 +55,9 @@ std::string FailureText(httplib::Error error) {
 }  // namespace
 
 SnapshotFollower::SnapshotFollower(FollowOptions options, OnInstalled on_installed)
-    : options_(std::move(options)), on_installed_(std::move(on_installed)) {}
+    : options_(std::move(options)), on_installed_(std::move(on_installed)) {
+  if (!options_.token_file.empty()) token_file_seen_ = IdentifyFile(options_.token_file);
+}
 
 SnapshotFollower::~SnapshotFollower() {
   stopping_ = true;
@@ -95,12 +98,7 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
       follower->client_ = nullptr;
     }
   } unregister{this};
-  std::string token;
-  {
-    const std::lock_guard lock(client_mutex_);
-    token = options_.token;
-  }
-  httplib::Headers headers = {{"Authorization", "Bearer " + token}};
+  httplib::Headers headers = {{"Authorization", "Bearer " + pollToken()}};
   // The ETag is known for a snapshot fetched in this run; one found on disk at start is fetched
   // once more, since the primary may have been restored since it was written.
   const bool holds_installed = have && *have == installed_version_ && !installed_etag_.empty();
@@ -190,6 +188,24 @@ db::Error SnapshotFollower::downloadWasted(db::Error error) {
 void SnapshotFollower::setToken(std::string token) {
   const std::lock_guard lock(client_mutex_);
   options_.token = std::move(token);
+  if (!options_.token_file.empty()) token_file_seen_ = IdentifyFile(options_.token_file);
+}
+
+std::string SnapshotFollower::pollToken() {
+  const std::lock_guard lock(client_mutex_);
+  if (options_.token_file.empty()) return options_.token;
+  // One stat a poll. A file being rewritten may be read half-written (a write in place): read
+  // again at the next poll, since its identity changes once more when it is whole.
+  const std::optional<FileIdentity> now = IdentifyFile(options_.token_file);
+  if (!now || now == token_file_seen_) return options_.token;
+  token_file_seen_ = now;
+  if (std::optional<std::string> token = ReadTokenFile(options_.token_file);
+      token && *token != options_.token) {
+    options_.token = std::move(*token);
+    server::LogEvent("the replica token was read again from " + options_.token_file +
+                     ", which changed");
+  }
+  return options_.token;
 }
 
 void SnapshotFollower::start(Have have, std::chrono::milliseconds interval,

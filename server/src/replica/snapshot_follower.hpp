@@ -17,6 +17,7 @@
 
 #include "pintag/db/result.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "replica/file_identity.hpp"
 #include "replica/follow_status.hpp"
 #include "replica/periodic_thread.hpp"
 
@@ -27,8 +28,11 @@ class Client;
 namespace pintag::replica {
 
 struct FollowOptions {
-  std::string primary_url;           ///< e.g. http://127.0.0.1:8090
-  std::string token;                 ///< a replica (or admin) token's secret
+  std::string primary_url;  ///< e.g. http://127.0.0.1:8090
+  std::string token;        ///< a replica (or admin) token's secret
+  /// The file `token` was read from (--follow-token-file), or empty: read again before a poll
+  /// once the file at the path has changed, so a rotated token is taken without a signal.
+  std::string token_file;
   std::string path;                  ///< where the replica's snapshot lives
   std::chrono::seconds timeout{30};  ///< per request to the primary
   /// A larger answer is refused as it arrives (the body is held in memory until installed; the
@@ -62,11 +66,15 @@ class SnapshotFollower {
              std::shared_ptr<FollowStatus> status = nullptr);
   /// The token for the next poll (SIGHUP re-reads --follow-token-file).
   void setToken(std::string token);
+  /// The token for a poll: options_.token, read again from `token_file` when the file changed.
+  std::string pollToken();
 
  private:
   FollowOptions options_;
   OnInstalled on_installed_;
-  std::mutex client_mutex_;  // guards client_ and options_.token
+  std::mutex client_mutex_;  // guards client_, options_.token and token_file_seen_
+  /// The token file as last read (or looked at), to tell when it changed.
+  std::optional<FileIdentity> token_file_seen_;
   /// Set before the client is stopped, and read where the client makes its socket: a stop()
   /// before the request is in flight does nothing in cpp-httplib 0.11, so the socket is shut
   /// there instead (never under client_mutex_, which stop() may hold while it waits).
