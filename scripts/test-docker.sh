@@ -97,7 +97,9 @@ wait_ready "$PINTAG_PRIMARY_PORT" 120 || { "${compose[@]}" logs primary; exit 1;
 token() { "${compose[@]}" exec -T primary pintag token create --role "$1" --label test-docker \
   --db /var/lib/pintag/pintag.db "${@:2}" 2>/dev/null | tr -d '\r\n'; }
 # The first admin token, from the file the primary wrote it to; then the other roles' tokens.
-admin="$("${compose[@]}" exec -T primary cat /var/lib/pintag/first-admin.token | tr -d '\r\n')"
+# (The image holds pintag and bash only: the file is read by bash.)
+admin="$("${compose[@]}" exec -T primary bash -c 'echo "$(</var/lib/pintag/first-admin.token)"' |
+  tr -d '\r\n')"
 counter="$(token counter)" scanner="$(token scanner)"
 token replica --out /var/lib/pintag-follow/replica.token
 # The replicas, started before the token was there, start again until they find it.
