@@ -2,10 +2,12 @@
 
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <iostream>
 #include <string>
+#include <string_view>
 
 #include "commands/commands.hpp"
 #include "pintag/db/database.hpp"
@@ -33,6 +35,30 @@ void Report(const CLI::App& app, const char* what) {
     return;
   }
   std::cerr << "pintag: " << what << "\n";
+}
+
+/// CLI11 names the option a bad value was given to ("--threads: Value 0 not in range 1 to 256"),
+/// also when the value came from the option's environment variable, which is then named too: a
+/// container's PINTAG_THREADS is not on the command line the message points at.
+std::string NamingTheEnvironment(const CLI::App& app, std::string message, int argc, char** argv) {
+  const std::function<void(const CLI::App&)> visit = [&](const CLI::App& command) {
+    for (const CLI::Option* option : command.get_options()) {
+      const std::string& variable = option->get_envname();
+      if (variable.empty() || std::getenv(variable.c_str()) == nullptr) continue;
+      const std::string flag = option->get_name();
+      if (message.rfind(flag + ":", 0) != 0) continue;
+      bool given = false;  // a value on the command line wins over the environment's
+      for (int i = 1; i < argc; ++i) {
+        const std::string_view arg(argv[i]);
+        given = given || arg == flag || arg.rfind(flag + "=", 0) == 0;
+      }
+      if (!given) message += " (the value of the environment variable " + variable + ")";
+      return;
+    }
+    for (const CLI::App* sub : command.get_subcommands()) visit(*sub);
+  };
+  visit(app);
+  return message;
 }
 
 }  // namespace
@@ -65,6 +91,13 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() != 0) {
+      const std::string message = NamingTheEnvironment(app, e.what(), argc, argv);
+      if (message != e.what()) {
+        std::cerr << message << "\nRun with --help for more information.\n";
+        return 2;
+      }
+    }
     // CLI11 prints the message (or the help); its own codes (100 and up) mean a usage error too.
     return app.exit(e) == 0 ? StdoutStatus() : 2;
   } catch (const pintag::cli::UsageError& e) {

@@ -128,6 +128,29 @@ TEST(ServeStartRefusals, AnEmptyBindAddressIsAUsageErrorNotEveryInterface) {
   EXPECT_NE(refused.out.find("--bind needs an address"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
+// A bad value from an environment variable (a container's PINTAG_THREADS) was named by its flag
+// alone, which is on no command line: the variable is named too.
+TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
+  const TempDir dir;
+  const std::string serve =
+      "timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + dir.file("new.db");
+  CommandResult refused = RunShell("PINTAG_THREADS=0 " + serve + " 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--threads: Value 0 not in range 1 to 256 (the value of the "
+                             "environment variable PINTAG_THREADS)"),
+            std::string::npos)
+      << refused.out;
+  refused = RunShell("PINTAG_MAX_BATCH=abc " + serve + " 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("PINTAG_MAX_BATCH"), std::string::npos) << refused.out;
+  // Given on the command line too, the flag's value is the one refused: the variable is not named.
+  refused = RunShell("PINTAG_THREADS=4 " + serve + " --threads 0 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--threads: Value 0"), std::string::npos) << refused.out;
+  EXPECT_EQ(refused.out.find("PINTAG_THREADS"), std::string::npos) << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
+}
+
 // A replica's options on a primary (and a follower's on a replica that follows no one) did
 // nothing, without a word (no --scan-log file was made), and a --snapshot naming the database
 // itself was retried for ever: usage errors, before the database is created and seeded.
