@@ -73,8 +73,11 @@ TEST(ChunkedBodyCheck, WhatARelaxedReaderWouldTakeIsRefusedSayingWhy) {
   refused(std::string(17, '1') + "\r\n", "at most 16");
   refused("5;a\x01z\r\nhello\r\n0\r\n\r\n", "control character");
   // Sixteen digits is the most, and is not refused for its size here (the body limit is the
-  // server's to hold).
+  // server's to hold); leading zeros are not counted (RFC 9112 allows them).
   EXPECT_EQ(Verdict(std::string(16, 'f') + "\r\nabc"), std::nullopt);
+  EXPECT_EQ(Verdict(std::string(40, '0') + "5\r\nhello\r\n" + std::string(20, '0') + "\r\n\r\n"),
+            std::nullopt);
+  refused(std::string(20, '0') + std::string(17, '1') + "\r\n", "at most 16");
 }
 
 }  // namespace

@@ -118,6 +118,14 @@ TEST(ServeFirstStart, WritesTheFirstAdminTokenToTheFileAskedForAndNotToStdout) {
   EXPECT_EQ(refused.status, 2) << refused.out;
   EXPECT_NE(refused.out.find("--admin-token-out"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("other.db")));
+  // A directory no file can be made in (even by root): refused before anything is made too.
+  // Found only once the token was made, it was revoked, and a later start made none.
+  const CommandResult unwritable =
+      RunPintag("serve --port 0 --bind 127.0.0.1 --db " + dir.file("other.db") +
+                " --admin-token-out /proc/first-admin.token");
+  EXPECT_EQ(unwritable.status, 2) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("cannot write in /proc"), std::string::npos) << unwritable.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("other.db")));
 }
 
 // Starts refused before anything is opened or created, each saying what to do instead.

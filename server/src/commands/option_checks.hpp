@@ -4,10 +4,15 @@
 // ranges are each command's own: `pintag render` draws tags from 1 to 1000 mm at 50 to 4800 dpi,
 // where the HTTP tag routes take 5 to 500 mm at 72 to 1200 dpi (docs/API.md).
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -97,6 +102,22 @@ inline void CheckFileToWrite(const std::string& option, const std::string& path)
   if (!std::filesystem::is_directory(directory, error)) {
     throw UsageError(option + " " + path + ": " + directory.string() + " is not a directory");
   }
+}
+
+/// The directory `path` is in takes a new file: one is made there and removed (a permission
+/// check alone is no proof: root passes it on a read-only mount, and ACLs decide otherwise).
+inline void CheckDirectoryWritable(const std::string& option, const std::string& path) {
+  const std::filesystem::path file(path);
+  const std::filesystem::path directory = file.has_parent_path() ? file.parent_path() : ".";
+  const std::filesystem::path probe =
+      directory / (".pintag-write-check-" + std::to_string(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    throw UsageError(option + " " + path + ": cannot write in " + directory.string() + " (" +
+                     std::strerror(errno) + ")");
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
 }
 
 }  // namespace pintag::cli

@@ -115,8 +115,12 @@ void Run(const ServeArgs& args) {
   if (!args.web.empty() && !std::filesystem::is_directory(args.web)) {
     throw UsageError("--web " + args.web + " is not a directory");
   }
-  // A mistyped path is said now, before a token is made for it.
-  if (!args.admin_token_out.empty()) CheckFileToWrite("--admin-token-out", args.admin_token_out);
+  // A mistyped path, or a directory this user cannot write (a volume owned by root while the
+  // server runs as another user), is said now, before the database and the token are made.
+  if (!args.admin_token_out.empty()) {
+    CheckFileToWrite("--admin-token-out", args.admin_token_out);
+    CheckDirectoryWritable("--admin-token-out", args.admin_token_out);
+  }
   std::string proxy_error;
   const std::optional<server::TrustedProxies> trusted_proxies =
       server::TrustedProxies::Parse(args.trusted_proxies, &proxy_error);
@@ -210,7 +214,8 @@ void Run(const ServeArgs& args) {
     }
     std::cout << "First start: an admin token was created. Its secret is in "
               << args.admin_token_out
-              << " (mode 0600) and shown nowhere else: read it, keep it, delete the file.\n";
+              << " (mode 0600) and shown nowhere else; once you have made your own admin "
+                 "tokens, revoke it.\n";
   } else if (first_admin) {
     std::cout << "First start: an admin token was created. Its secret is shown only now (the "
                  "database keeps a hash):\n"
@@ -222,9 +227,10 @@ void Run(const ServeArgs& args) {
               << "\n";
   }
   std::cout << "Stop with Ctrl-C.\n" << std::flush;
-  if (first_admin) {
+  if (first_admin && args.admin_token_out.empty()) {
     // A secret nobody saw must not stay working, and a server nobody can administer must not
     // start as if all were well: revoked, and the start fails (stderr says how to make one).
+    // (A secret written to --admin-token-out is in its file, whatever became of stdout.)
     db::Connection connection(args.db, {.create = false});
     try {
       RevokeIfStdoutFailed(connection, first_admin->info.id);

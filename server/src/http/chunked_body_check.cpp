@@ -28,14 +28,15 @@ bool ChunkedBodyCheck::take(std::string_view bytes) {
       case Where::kSizeStart:
         if (HexValue(c) < 0) return refuse("a chunk size must start with a hexadecimal digit");
         size_ = static_cast<std::uint64_t>(HexValue(c));
-        digits_ = 1;
+        digits_ = size_ == 0 ? 0 : 1;
         where_ = Where::kSize;
         break;
       case Where::kSize:
         if (HexValue(c) >= 0) {
-          if (++digits_ > kMaxSizeDigits) {
+          // Leading zeros are allowed and not counted: the line's length is bounded elsewhere.
+          if ((size_ != 0 || HexValue(c) != 0) && ++digits_ > kMaxSizeDigits) {
             return refuse("a chunk size may have at most " + std::to_string(kMaxSizeDigits) +
-                          " hexadecimal digits");
+                          " hexadecimal digits after its leading zeros");
           }
           size_ = size_ * 16 + static_cast<std::uint64_t>(HexValue(c));
         } else if (c == ';' || c == ' ' || c == '\t') {

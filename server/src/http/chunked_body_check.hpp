@@ -5,7 +5,7 @@
 // there and reads what follows as the next request. A proxy that passes such a body on as it came
 // finds a body where this server finds a request (request smuggling). RFC 9112 (7.1) is held to,
 // and anything else is refused (400, the connection closed), each with its reason:
-//   - a chunk size that is not 1 to 16 hexadecimal digits;
+//   - a chunk size that is not hexadecimal digits, at most 16 after any leading zeros;
 //   - a chunk size line, a chunk's data or the last line not ended by CRLF (a bare LF included);
 //   - chunk data longer than its size says;
 //   - trailer fields after the last chunk (cpp-httplib does not read them either);
@@ -50,7 +50,7 @@ class ChunkedBodyCheck {
 
   Where where_ = Where::kSizeStart;
   std::uint64_t size_ = 0;
-  std::size_t digits_ = 0;
+  std::size_t digits_ = 0;  ///< the size's digits after its leading zeros
   std::uint64_t data_left_ = 0;
   std::optional<std::string> refusal_;
 };

@@ -425,6 +425,13 @@ struct HttpServer::Impl {
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
       t_state.admission.rejection = ProblemResponse(400, req.method + " requests take no body");
     }
+    if (!t_state.admission.rejection && req.method == "DELETE" &&
+        req.has_header("Transfer-Encoding")) {
+      // cpp-httplib reads a DELETE's body only by its Content-Length: a chunked one was left
+      // in the stream and read as the next request. No route takes a DELETE body.
+      t_state.admission.rejection =
+          ProblemResponse(400, "a DELETE request takes no chunked body; send it without one");
+    }
     if (!t_state.admission.rejection) {
       if (!HasNoBody(req)) return httplib::Server::HandlerResponse::Unhandled;
       // cpp-httplib 0.11.4 would read such a body until the client closes or the read timeout
@@ -512,9 +519,10 @@ struct HttpServer::Impl {
     }
     if (!ok && t_connection != nullptr) {
       if (const std::optional<std::string> refusal = t_connection->chunkedRefusal()) {
-        // What follows the broken framing cannot be told from a next request: close.
+        // What follows the broken framing cannot be told from a next request: close, drained
+        // first so that a client still sending reads the answer, not a reset.
         Apply(ProblemResponse(400, *refusal), res);
-        res.set_header("Connection", "close");
+        leaveBodyUnread(req, res);
         return;
       }
     }

@@ -6,6 +6,7 @@ namespace pintag::server {
 
 std::optional<std::string> LogThrottle::admit(std::string message, Clock::time_point now) {
   const std::lock_guard lock(mutex_);
+  last_occurred_ = now;
   if (last_written_ && now - *last_written_ < interval_) {
     ++left_out_;
     return std::nullopt;
@@ -22,7 +23,8 @@ std::optional<std::string> LogThrottle::admit(std::string message, Clock::time_p
 
 std::optional<std::string> LogThrottle::settle(std::string message, Clock::time_point now) {
   const std::lock_guard lock(mutex_);
-  if (!last_written_) return std::nullopt;
+  // Trouble that comes and goes (descriptors running out) is not over at its first success.
+  if (!last_written_ || now - *last_occurred_ < interval_) return std::nullopt;
   if (left_out_ > 0) {
     const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - *last_written_);
     message += " (" + std::to_string(left_out_) + " more like the last warning were left out in " +

@@ -55,9 +55,7 @@ std::string FailureText(httplib::Error error) {
 }  // namespace
 
 SnapshotFollower::SnapshotFollower(FollowOptions options, OnInstalled on_installed)
-    : options_(std::move(options)), on_installed_(std::move(on_installed)) {
-  if (!options_.token_file.empty()) token_file_seen_ = IdentifyFile(options_.token_file);
-}
+    : options_(std::move(options)), on_installed_(std::move(on_installed)) {}
 
 SnapshotFollower::~SnapshotFollower() {
   stopping_ = true;
@@ -188,7 +186,8 @@ db::Error SnapshotFollower::downloadWasted(db::Error error) {
 void SnapshotFollower::setToken(std::string token) {
   const std::lock_guard lock(client_mutex_);
   options_.token = std::move(token);
-  if (!options_.token_file.empty()) token_file_seen_ = IdentifyFile(options_.token_file);
+  // The file may have changed since it was read: the next poll looks at it (stat, then read).
+  token_file_seen_.reset();
 }
 
 std::string SnapshotFollower::pollToken() {
@@ -199,8 +198,13 @@ std::string SnapshotFollower::pollToken() {
   const std::optional<FileIdentity> now = IdentifyFile(options_.token_file);
   if (!now || now == token_file_seen_) return options_.token;
   token_file_seen_ = now;
-  if (std::optional<std::string> token = ReadTokenFile(options_.token_file);
-      token && *token != options_.token) {
+  std::optional<std::string> token = ReadTokenFile(options_.token_file);
+  if (!token) {
+    // Once for each state of the file (another user's 0600 file, an empty one).
+    server::LogEvent("cannot read a replica token from " + options_.token_file +
+                         ", which changed; the one in use is kept",
+                     /*warning=*/true);
+  } else if (*token != options_.token) {
     options_.token = std::move(*token);
     server::LogEvent("the replica token was read again from " + options_.token_file +
                      ", which changed");

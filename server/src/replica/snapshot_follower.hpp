@@ -73,7 +73,8 @@ class SnapshotFollower {
   FollowOptions options_;
   OnInstalled on_installed_;
   std::mutex client_mutex_;  // guards client_, options_.token and token_file_seen_
-  /// The token file as last read (or looked at), to tell when it changed.
+  /// The token file as last looked at before a read, to tell when it changed; nothing until the
+  /// first poll looks (the token given was read before it).
   std::optional<FileIdentity> token_file_seen_;
   /// Set before the client is stopped, and read where the client makes its socket: a stop()
   /// before the request is in flight does nothing in cpp-httplib 0.11, so the socket is shut

@@ -24,14 +24,15 @@ class LogThrottle {
   std::optional<std::string> admit(std::string message, Clock::time_point now = Clock::now());
 
   /// The trouble has passed (the database opens again): the line to write when an occurrence was
-  /// written since the last settle, saying how many were left out after it; nothing otherwise.
-  /// The next occurrence is written at once.
+  /// written since the last settle and none came in the last interval, saying how many were left
+  /// out after the one written; nothing otherwise. The next occurrence is then written at once.
   std::optional<std::string> settle(std::string message, Clock::time_point now = Clock::now());
 
  private:
   const Clock::duration interval_;
   std::mutex mutex_;
   std::optional<Clock::time_point> last_written_;
+  std::optional<Clock::time_point> last_occurred_;
   std::size_t left_out_ = 0;
 };
 
