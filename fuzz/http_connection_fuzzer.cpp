@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -51,14 +52,26 @@ pintag::server::HttpServer& Server() {
 /// Sends `request` (as much as the server takes before it closes), stops sending, and returns
 /// everything the server wrote until it closed.
 std::string Exchange(const std::string& request) {
-  const int sock = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (sock < 0) std::abort();
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_port = htons(static_cast<std::uint16_t>(Server().port()));
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(sock, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
-    std::abort();
+  // A long run makes hundreds of connections a second, and each leaves its local port in
+  // TIME_WAIT for a minute: at 384 a second one used up the ephemeral range and connect() failed
+  // (2026-12-07). A port is waited for, a while, rather than taken as a finding.
+  int sock = -1;
+  for (int attempt = 0; sock < 0; ++attempt) {
+    sock = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (sock < 0) std::abort();
+    if (::connect(sock, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0) break;
+    const int error = errno;
+    ::close(sock);
+    sock = -1;
+    if ((error != EADDRNOTAVAIL && error != EAGAIN && error != EINTR) || attempt == 200) {
+      std::fprintf(stderr, "cannot connect to the server: %s\n", std::strerror(error));
+      std::abort();
+    }
+    ::usleep(50'000);
   }
   // Loopback buffers hold far more than -max_len; a server that refuses early and closes makes
   // the rest of the write fail, which is its right.
