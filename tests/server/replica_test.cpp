@@ -1237,6 +1237,18 @@ TEST_F(ReplicaSetTest, AFollowerTakesATokenWrittenToItsFileWithoutASignal) {
   EXPECT_TRUE(follow()["error"].is_null()) << follow().dump();
   EXPECT_NE(stderrOf("replica-0").find("replica token was read again"), std::string::npos)
       << stderrOf("replica-0");
+
+  // Written over in place (the same file, another size or time), the next token is taken too.
+  const json third =
+      Body(primary.Post("/api/v1/tokens", Auth(admin_token_),
+                        R"({"role": "replica", "label": "rotated again"})", "application/json"));
+  ASSERT_TRUE(third["secret"].is_string()) << third.dump();
+  WriteFile(dir_.file("replica.token"), third["secret"].get<std::string>() + "\n");
+  ASSERT_EQ(StatusOf(primary.Post("/api/v1/tokens/" + made["id"].dump() + "/revoke",
+                                  Auth(admin_token_), "", "application/json")),
+            200);
+  addPincode(primary, "999128");
+  EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999128", 200), 200) << stderrOf("replica-0");
 }
 
 TEST_F(ReplicaSetTest, TwoReplicasServingOneFileLeaveEachOtherItsLinks) {
