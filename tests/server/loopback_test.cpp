@@ -493,6 +493,7 @@ TEST_F(LoopbackTest, EmptyLinesBeforeARequestAreIgnored) {
 TEST_F(LoopbackTest, AFloodOfEmptyLinesHoldsNoWorker) {
   std::atomic<bool> stop{false};
   std::vector<std::thread> flooders;
+  flooders.reserve(6);
   for (int i = 0; i < 6; ++i) {
     flooders.emplace_back([this, &stop] {
       const int fd = pintag::test::ConnectLoopback(server_->port());
