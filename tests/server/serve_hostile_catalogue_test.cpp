@@ -145,6 +145,16 @@ Answer Parse(const std::string& raw) {
   return answer;
 }
 
+/// How many answers `received` holds: the status lines in it.
+std::size_t AnswersIn(const std::string& received) {
+  std::size_t answers = 0;
+  for (std::size_t at = received.find("HTTP/1.1 "); at != std::string::npos;
+       at = received.find("HTTP/1.1 ", at + 1)) {
+    ++answers;
+  }
+  return answers;
+}
+
 /// The whole answer: the connection is asked to close, so it ends when the server closes it.
 Answer Send(int port, const std::string& request, int quiet_s = 10) {
   return Parse(test::SendRaw(port, request, quiet_s));
@@ -682,12 +692,7 @@ TEST_F(HostileCatalogue, ARequestHiddenAfterAChunkLongerThanItsSizeIsNotAnswered
   const std::string everything =
       test::SendRaw(server_->port(), head + "5\r\nhello" + smuggled, /*quiet_s=*/5);
   EXPECT_EQ(everything.rfind("HTTP/1.1 400", 0), 0U) << everything.substr(0, 300);
-  std::size_t answers = 0;
-  for (std::size_t at = everything.find("HTTP/1.1 "); at != std::string::npos;
-       at = everything.find("HTTP/1.1 ", at + 1)) {
-    ++answers;
-  }
-  EXPECT_EQ(answers, 1U) << everything;
+  EXPECT_EQ(AnswersIn(everything), 1U) << everything;
   expectHealthy();
 }
 TEST_F(HostileCatalogue, ADeleteWithAChunkedBodyIsRefusedNotReadAsTheNextRequest) {
@@ -702,12 +707,7 @@ TEST_F(HostileCatalogue, ADeleteWithAChunkedBodyIsRefusedNotReadAsTheNextRequest
   EXPECT_NE(everything.find("a DELETE request takes no chunked body"), std::string::npos)
       << everything;
   EXPECT_NE(everything.find("Connection: close"), std::string::npos) << everything;
-  std::size_t answers = 0;
-  for (std::size_t at = everything.find("HTTP/1.1 "); at != std::string::npos;
-       at = everything.find("HTTP/1.1 ", at + 1)) {
-    ++answers;
-  }
-  EXPECT_EQ(answers, 1U) << everything;
+  EXPECT_EQ(AnswersIn(everything), 1U) << everything;
   expectHealthy();
 }
 TEST_F(HostileCatalogue, RequestLineWithoutEndIsAnswered431) {
