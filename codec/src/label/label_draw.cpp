@@ -272,6 +272,15 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
   return !first_cut && !second_cut;
 }
 
+// A bin cut short can read as another bin of the plan ("Kolkata…Bay 12" for Inbound and
+// Outbound alike), and the bin is what a sorter acts on: no label rather than a wrong one.
+std::string UnprintableBinReason(const LabelContent& label) {
+  return "the sort bin '" + SanitizeUtf8(*label.bin) + "' of pincode " + label.pincode.str() +
+         " is too long to print whole on this label size, even on two lines at the smallest "
+         "print, and a bin cut short could read as another; print a larger label, or give the "
+         "bin a shorter name in its plan";
+}
+
 /// False when the bin could not be printed whole (DrawBinValue).
 bool DrawBin(LabelFont& font, const LabelContent& label, const Box& box) {
   const double caption_baseline = box.y + kPadMm + kCaptionMm * 0.75;
@@ -415,21 +424,15 @@ std::string DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout&
   cairo_restore(cr);
 
   if (with_tag) DrawTagVector(cr, label.key, layout.placement);
-  if (bin_whole) return {};
-  // A bin cut short can read as another bin of the plan ("Kolkata…Bay 12" for Inbound and
-  // Outbound alike), and the bin is what a sorter acts on: no label rather than a wrong one.
-  return "the sort bin '" + SanitizeUtf8(*label.bin) + "' of pincode " + label.pincode.str() +
-         " is too long to print whole on this label size, even on two lines at the smallest "
-         "print, and a bin cut short could read as another; print a larger label, or give the "
-         "bin a shorter name in its plan";
+  return bin_whole ? std::string() : UnprintableBinReason(label);
 }
 
-bool BinPrintsWhole(cairo_t* cr, const LabelContent& label, const LabelLayout& layout) {
+std::string BinRefusal(cairo_t* cr, const LabelContent& label, const LabelLayout& layout) {
   cairo_save(cr);
   LabelFont font(cr);
   const bool whole = DrawBin(font, label, layout.bin);
   cairo_restore(cr);
-  return whole;
+  return whole ? std::string() : UnprintableBinReason(label);
 }
 
 }  // namespace pintag::label

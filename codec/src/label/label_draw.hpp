@@ -20,8 +20,8 @@ void DrawTagVector(cairo_t* cr, TagKey key, const LabelTagPlacement& placement);
 std::string DrawLabel(cairo_t* cr, const LabelContent& label, const LabelLayout& layout,
                       bool with_tag);
 
-/// Whether `label`'s sort bin prints whole on `layout`, as DrawLabel would find: its bin box alone
-/// drawn on `cr`, a surface that is thrown away. What DrawLabel refuses, this says false for.
-bool BinPrintsWhole(cairo_t* cr, const LabelContent& label, const LabelLayout& layout);
+/// DrawLabel's refusal of `label` for its sort bin, found by drawing the bin box alone on `cr`, a
+/// surface that is thrown away: empty when the bin prints whole on `layout`.
+std::string BinRefusal(cairo_t* cr, const LabelContent& label, const LabelLayout& layout);
 
 }  // namespace pintag::label

@@ -50,11 +50,11 @@ RenderedLabel InternalFailure(std::string error) {
   return {{}, std::move(error), std::nullopt, true};
 }
 
-// The first label whose bin does not print whole and DrawLabel's reason, found before any page is
-// drawn: a batch refused at its last label drew every page before it for nothing. Each distinct
-// bin is tried once, at its first label, on a recording surface that is thrown away (a batch's
-// labels mostly share a plan's few bins). The label font's options are its own, so the bin is
-// laid out here as on the page.
+// The first label whose bin does not print whole and DrawLabel's reason for it, found before any
+// page is drawn: a batch refused at its last label drew every page before it for nothing. Each
+// distinct bin is tried once, at its first label, on a recording surface that is thrown away (a
+// batch's labels mostly share a plan's few bins). The label font's options are its own, so the bin
+// is laid out here as on the page.
 std::optional<std::pair<std::size_t, std::string>> FirstUnprintableBin(
     std::span<const LabelContent> labels, const label::LabelLayout& layout) {
   Surface scratch(cairo_recording_surface_create(CAIRO_CONTENT_COLOR, nullptr));
@@ -63,8 +63,7 @@ std::optional<std::pair<std::size_t, std::string>> FirstUnprintableBin(
   std::set<std::optional<std::string>> tried;
   for (std::size_t i = 0; i < labels.size(); ++i) {
     if (!tried.insert(labels[i].bin).second) continue;
-    if (label::BinPrintsWhole(cr.get(), labels[i], layout)) continue;
-    if (std::string why = label::DrawLabel(cr.get(), labels[i], layout, false); !why.empty()) {
+    if (std::string why = label::BinRefusal(cr.get(), labels[i], layout); !why.empty()) {
       return std::pair{i, std::move(why)};
     }
   }

@@ -23,10 +23,12 @@ std::string Beside(const std::string& path, const std::string& suffix) {
 std::string ReadToken(const ReplicationArgs& args) {
   std::string token;
   if (!args.follow_token_file.empty()) {
-    if (!std::ifstream(args.follow_token_file)) {
+    const std::optional<std::string> read = replica::ReadTokenFile(args.follow_token_file);
+    // Nothing read: a file that cannot be opened is said so; an empty one is "needs a token".
+    if (!read && !std::ifstream(args.follow_token_file)) {
       throw UsageError("cannot read --follow-token-file " + args.follow_token_file);
     }
-    token = replica::ReadTokenFile(args.follow_token_file).value_or("");
+    token = read.value_or("");
   } else if (const char* env = std::getenv("PINTAG_FOLLOW_TOKEN")) {
     token = env;
   }

@@ -3,6 +3,13 @@
 #include <utility>
 
 namespace pintag::server {
+namespace {
+
+std::string WholeSeconds(LogThrottle::Clock::duration elapsed) {
+  return std::to_string(std::chrono::duration_cast<std::chrono::seconds>(elapsed).count());
+}
+
+}  // namespace
 
 std::optional<std::string> LogThrottle::admit(std::string message, Clock::time_point now) {
   const std::lock_guard lock(mutex_);
@@ -12,9 +19,8 @@ std::optional<std::string> LogThrottle::admit(std::string message, Clock::time_p
     return std::nullopt;
   }
   if (left_out_ > 0) {
-    const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - *last_written_);
-    message += " (and " + std::to_string(left_out_) + " more" + " like it in the " +
-               std::to_string(seconds.count()) + " s before)";
+    message += " (and " + std::to_string(left_out_) + " more like it in the " +
+               WholeSeconds(now - *last_written_) + " s before)";
   }
   last_written_ = now;
   left_out_ = 0;
@@ -26,9 +32,8 @@ std::optional<std::string> LogThrottle::settle(std::string message, Clock::time_
   // Trouble that comes and goes (descriptors running out) is not over at its first success.
   if (!last_written_ || now - *last_occurred_ < interval_) return std::nullopt;
   if (left_out_ > 0) {
-    const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - *last_written_);
     message += " (" + std::to_string(left_out_) + " more like the last warning were left out in " +
-               "the " + std::to_string(seconds.count()) + " s after it)";
+               "the " + WholeSeconds(now - *last_written_) + " s after it)";
   }
   last_written_.reset();
   left_out_ = 0;
