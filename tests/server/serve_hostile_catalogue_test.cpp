@@ -2,6 +2,7 @@
 // `pintag serve`, each a named case sent as raw bytes on loopback, each answered with its 4xx
 // problem+json, and after each the server still answers a lookup and /readyz.
 
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -569,6 +570,62 @@ TEST_F(HostileCatalogue, SlowlorisHeadersAreCutOffByTheReadTimeout) {
     ::close(fd);
   }
   expectHealthy();
+}
+TEST_F(HostileCatalogue, ABodyTrickledUnderTheMinimumRateIsCutOffAndFreesItsWorker) {
+  startServer({"--read-timeout", "1", "--min-body-rate", "2000"});
+  const std::string photo = Encoded(".jpg", 96, 72);
+  ASSERT_GT(photo.size(), std::size_t{4000});
+  // Four uploads, as many as the server has workers, each sending 40 bytes every 200 ms: every
+  // read comes well within the read timeout, at 200 bytes a second. Before --min-body-rate each
+  // held its worker for as long as its body lasted, and nothing else was served meanwhile.
+  std::vector<int> slow;
+  std::vector<std::string> answers(4);
+  for (int i = 0; i < 4; ++i) {
+    const int fd = test::ConnectLoopback(server_->port());
+    ASSERT_GE(fd, 0);
+    const std::string request = detect(photo);
+    ASSERT_TRUE(test::SendAll(fd, request.substr(0, request.size() - photo.size() + 40)));
+    slow.push_back(fd);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t answered = 0;
+  while (answered < slow.size() &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(8)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    for (std::size_t i = 0; i < slow.size(); ++i) {
+      if (!answers[i].empty()) continue;
+      char buffer[4096];
+      const ssize_t got = ::recv(slow[i], buffer, sizeof buffer, MSG_DONTWAIT);
+      if (got > 0) {
+        answers[i] = test::ReceiveUntil(slow[i], 5, test::HasWholeResponse)
+                         .insert(0, buffer, static_cast<std::size_t>(got));
+        ++answered;
+      } else {
+        test::SendAll(slow[i], std::string(40, 'x'));
+      }
+    }
+  }
+  // The budget: the read timeout, then a second per 2000 bytes: about 1.1 s at 200 bytes a second.
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(4));
+  for (std::size_t i = 0; i < slow.size(); ++i) {
+    ::close(slow[i]);
+    EXPECT_EQ(answers[i].rfind("HTTP/1.1 408", 0), 0U) << answers[i].substr(0, 300);
+    EXPECT_NE(answers[i].find("the request body came too slowly"), std::string::npos) << answers[i];
+    EXPECT_NE(answers[i].find("2000 bytes a second"), std::string::npos) << answers[i];
+  }
+  expectHealthy();
+
+  // A body that comes slowly but above the minimum is read whole: 400 bytes every 100 ms.
+  const int fd = test::ConnectLoopback(server_->port());
+  ASSERT_GE(fd, 0);
+  const std::string request = detect(photo);
+  for (std::size_t at = 0; at < request.size(); at += 400) {
+    ASSERT_TRUE(test::SendAll(fd, request.substr(at, 400)));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const std::string answer = test::ReceiveUntil(fd, 10, test::HasWholeResponse);
+  ::close(fd);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0U) << answer.substr(0, 300);
 }
 TEST_F(HostileCatalogue, HeaderFloodOfManyHeaders) {
   std::vector<std::string> headers;

@@ -51,6 +51,7 @@ struct ServeArgs {
   int max_tag_px = 4096;
   int read_timeout_s = 5;
   int write_timeout_s = 5;
+  std::int64_t min_body_rate = 1024;
   int drain_timeout_s = 30;
   std::string log_format = "text";
   std::vector<std::string> trusted_proxies;
@@ -171,6 +172,7 @@ void Run(const ServeArgs& args) {
   options.threads = args.threads;
   options.read_timeout = std::chrono::seconds(args.read_timeout_s);
   options.write_timeout = std::chrono::seconds(args.write_timeout_s);
+  options.min_body_rate = static_cast<std::uint64_t>(args.min_body_rate);
   options.trusted_proxies = *trusted_proxies;
 
   // From here SIGINT and SIGTERM stop the server gracefully; blocked before any thread starts, so
@@ -362,6 +364,12 @@ void AddServeCommand(CLI::App& app) {
       ->check(CLI::Range(1, 3600))
       ->capture_default_str()
       ->envname("PINTAG_WRITE_TIMEOUT");
+  cmd->add_option("--min-body-rate", args->min_body_rate,
+                  "bytes a second a request body must average once --read-timeout has passed "
+                  "since its headers; slower is answered 408 (0: no minimum)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{1'000'000'000}))
+      ->capture_default_str()
+      ->envname("PINTAG_MIN_BODY_RATE");
   cmd->add_option("--drain-timeout", args->drain_timeout_s,
                   "seconds a stop waits for requests in flight before cutting them off")
       ->check(CLI::Range(1, 3600))

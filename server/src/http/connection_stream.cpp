@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 
 namespace pintag::server {
@@ -60,11 +61,37 @@ void NameAndPort(const sockaddr_storage& address, socklen_t length, std::string&
 }  // namespace
 
 ConnectionStream::ConnectionStream(int fd, std::chrono::microseconds read_timeout,
-                                   std::chrono::microseconds write_timeout, std::size_t head_budget)
+                                   std::chrono::microseconds write_timeout, std::size_t head_budget,
+                                   std::uint64_t min_body_rate)
     : fd_(fd),
       read_timeout_ms_(Milliseconds(read_timeout)),
       write_timeout_ms_(Milliseconds(write_timeout)),
-      head_budget_(head_budget) {}
+      head_budget_(head_budget),
+      min_body_rate_(min_body_rate) {}
+
+void ConnectionStream::headRead() {
+  if (head_read_) return;  // an Expect: 100-continue request's head is admitted twice
+  head_read_ = true;
+  body_began_ = std::chrono::steady_clock::now();
+}
+
+std::chrono::steady_clock::duration ConnectionStream::bodyTime() const {
+  return head_read_ ? std::chrono::steady_clock::now() - body_began_
+                    : std::chrono::steady_clock::duration::zero();
+}
+
+int ConnectionStream::bodyWaitMs() const {
+  if (min_body_rate_ == 0) return read_timeout_ms_;
+  // The body may take the read timeout, plus a second for each min_body_rate bytes that came.
+  const double allowed_ms = read_timeout_ms_ + 1000.0 * static_cast<double>(body_bytes_) /
+                                                   static_cast<double>(min_body_rate_);
+  const double taken_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - body_began_)
+          .count();
+  const double left_ms = std::ceil(allowed_ms - taken_ms);
+  if (left_ms <= 0) return -1;
+  return static_cast<int>(std::min<double>(left_ms, read_timeout_ms_));
+}
 
 bool ConnectionStream::is_readable() const {
   return buffered_begin_ < buffered_end_ || Wait(fd_, POLLIN, read_timeout_ms_) > 0;
@@ -93,8 +120,13 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
     std::memcpy(ptr, buffer_.data() + buffered_begin_, n);
     buffered_begin_ += n;
   } else {
-    if (Wait(fd_, POLLIN, read_timeout_ms_) <= 0) {
-      read_end_ = ReadEnd::kTimedOut;
+    // Bytes already waiting are taken even past the body's pace: a server slow to read them
+    // (under load) is not the client's fault.
+    // The end is named by the wait chosen here: a read timeout is one whatever the clock says
+    // after it.
+    const int wait_ms = head_read_ ? bodyWaitMs() : read_timeout_ms_;
+    if (Wait(fd_, POLLIN, std::max(wait_ms, 0)) <= 0) {
+      read_end_ = wait_ms < read_timeout_ms_ ? ReadEnd::kTooSlow : ReadEnd::kTimedOut;
       return -1;
     }
     ssize_t got = 0;
@@ -136,7 +168,10 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
   if (head_read_ && chunked_ && !chunked_->take(std::string_view(ptr, n))) return -1;
   if (!head_read_) {
     handed_out_ += n;
-  } else if (size == 1 && *ptr != '\n') {
+    return static_cast<ssize_t>(n);
+  }
+  body_bytes_ += n;
+  if (size == 1 && *ptr != '\n') {
     ++body_line_bytes_;  // a line being read byte by byte; a larger read is content, not a line
   } else {
     body_line_bytes_ = 0;

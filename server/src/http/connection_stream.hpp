@@ -16,6 +16,12 @@
 // body's framing is checked the same way (ChunkedBodyCheck, once `expectChunkedBody` is called),
 // and `chunkedRefusal` says why.
 //
+// And it bounds how slowly a body may come (`min_body_rate`): cpp-httplib's read timeout applies
+// to each read, so a client sending a byte every few seconds kept its worker for as long as its
+// declared length lasted. Once the read timeout has passed since the head, the body must have
+// averaged at least `min_body_rate` bytes a second; a read that would wait past that fails, and
+// `readEnd` is kTooSlow (as Apache's mod_reqtimeout MinRate; 0 bounds nothing).
+//
 // Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; the head is
 // read through a 4 KiB buffer (cpp-httplib reads it one byte at a time); a write first checks
 // that the peer can still read. The buffer lives as long as the stream, one request, so no read
@@ -28,6 +34,7 @@
 #include <array>
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -43,7 +50,8 @@ class ConnectionStream final : public httplib::Stream {
   static constexpr std::size_t kMaxBodyLineBytes = std::size_t{8} * 1024;
 
   ConnectionStream(int fd, std::chrono::microseconds read_timeout,
-                   std::chrono::microseconds write_timeout, std::size_t head_budget);
+                   std::chrono::microseconds write_timeout, std::size_t head_budget,
+                   std::uint64_t min_body_rate = 0);
 
   bool is_readable() const override;
   bool is_writable() const override;
@@ -53,8 +61,9 @@ class ConnectionStream final : public httplib::Stream {
   void get_local_ip_and_port(std::string& ip, int& port) const override;
   socket_t socket() const override { return fd_; }
 
-  /// The request line and headers are in: the body, if any, is not counted.
-  void headRead() { head_read_ = true; }
+  /// The request line and headers are in: the body, if any, is not counted against the head's
+  /// budget, and its pace is measured from here.
+  void headRead();
   /// True once a read was refused because the head ran past `head_budget`.
   bool overBudget() const { return over_budget_; }
   /// Set once a read was refused because the head broke a rule of its syntax.
@@ -71,9 +80,13 @@ class ConnectionStream final : public httplib::Stream {
   }
 
   /// Why the last read that failed on the socket failed: no byte within the read timeout, the
-  /// peer closed its sending side, or the socket failed (kNone: none did).
-  enum class ReadEnd { kNone, kTimedOut, kClosed, kFailed };
+  /// peer closed its sending side, the socket failed, or the body came slower than
+  /// `min_body_rate` (kNone: none did).
+  enum class ReadEnd { kNone, kTimedOut, kClosed, kFailed, kTooSlow };
   ReadEnd readEnd() const { return read_end_; }
+  /// Bytes of the body read so far, and for how long it has been read (since headRead()).
+  std::uint64_t bodyBytes() const { return body_bytes_; }
+  std::chrono::steady_clock::duration bodyTime() const;
 
   /// The answer leaves up to `bytes` of the body unread, which the client may still send: the
   /// connection is drained of that much before it is closed (IdleConnections::drain).
@@ -98,11 +111,15 @@ class ConnectionStream final : public httplib::Stream {
   /// How many of `peeked`, the bytes waiting in the socket, a read of the head takes, checking
   /// them: all, or through the blank line that ends the head, or the byte the check refused.
   std::size_t headBytesToTake(std::string_view peeked);
+  /// How long a read of the body may wait for its next byte: the read timeout, or less when the
+  /// body's pace would fall under `min_body_rate` sooner; negative once it has.
+  int bodyWaitMs() const;
 
   int fd_;
   int read_timeout_ms_;
   int write_timeout_ms_;
   std::size_t head_budget_;
+  std::uint64_t min_body_rate_;
   std::size_t handed_out_ = 0;  ///< bytes read() has returned while the head was being read
   bool head_read_ = false;
   bool over_budget_ = false;
@@ -110,6 +127,8 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t body_line_bytes_ = 0;  ///< bytes of the body's current line read one at a time
   bool body_line_too_long_ = false;
   std::optional<ChunkedBodyCheck> chunked_;  ///< fed a chunked body's bytes as they are read
+  std::chrono::steady_clock::time_point body_began_;  ///< headRead()
+  std::uint64_t body_bytes_ = 0;
   ReadEnd read_end_ = ReadEnd::kNone;
   std::size_t unread_ = 0;
   bool answered_ = false;

@@ -179,6 +179,8 @@ class Server : public httplib::Server {
 
   /// Set before the server listens: where a connection waits between requests.
   IdleConnections* idle = nullptr;
+  /// ServerOptions::min_body_rate, for each request's stream.
+  std::uint64_t min_body_rate = 0;
 
   /// As cpp-httplib 0.11.4's loop: up to `left` requests, each read through a new stream, then
   /// the socket is shut and closed. A request not there yet is waited for in `idle`, for at most
@@ -192,7 +194,7 @@ class Server : public httplib::Server {
       }
       ConnectionStream stream(sock, Microseconds(read_timeout_sec_, read_timeout_usec_),
                               Microseconds(write_timeout_sec_, write_timeout_usec_),
-                              kMaxRequestHeadBytes);
+                              kMaxRequestHeadBytes, min_body_rate);
       t_connection = &stream;
       t_state = RequestState{};  // nothing of the previous request carries over
       bool closed = false;
@@ -537,7 +539,12 @@ struct HttpServer::Impl {
     }
     if (!ok) {
       Apply(bodyNotRead(), res);
-      res.set_header("Connection", "close");
+      if (t_connection != nullptr &&
+          t_connection->readEnd() == ConnectionStream::ReadEnd::kTooSlow) {
+        leaveBodyUnread(req, res);  // it is still sending: drained without a worker, then closed
+      } else {
+        res.set_header("Connection", "close");
+      }
       return;
     }
     Apply(api->invoke(t_state.admission, std::move(request)), res);
@@ -571,6 +578,16 @@ struct HttpServer::Impl {
         return ProblemResponse(408, "the request body stopped arriving: no byte of it came for " +
                                         std::to_string(options.read_timeout.count()) +
                                         " s (the read timeout)");
+      case ConnectionStream::ReadEnd::kTooSlow: {
+        const auto seconds =
+            std::chrono::duration_cast<std::chrono::seconds>(t_connection->bodyTime()).count();
+        return ProblemResponse(
+            408, "the request body came too slowly: " + std::to_string(t_connection->bodyBytes()) +
+                     " bytes in " + std::to_string(seconds) +
+                     " s, where the server takes at least " +
+                     std::to_string(options.min_body_rate) + " bytes a second after the first " +
+                     std::to_string(options.read_timeout.count()) + " s (--min-body-rate)");
+      }
       case ConnectionStream::ReadEnd::kClosed:
         return ProblemResponse(400,
                                "the request body ended early: the client stopped sending before "
@@ -747,6 +764,7 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
       [impl](int fd, std::size_t requests_left) { impl->resume(fd, requests_left); },
       std::move(idle_limits));
   impl->server.idle = impl->idle.get();
+  impl->server.min_body_rate = impl->options.min_body_rate;
   const int threads = std::clamp(impl->options.threads, 1, 256);
   s.new_task_queue = [impl, threads] {
     auto* pool = new WorkerPool(static_cast<std::size_t>(threads), [impl] {
