@@ -18,13 +18,15 @@ sanitizer_env() {
 
 # The serve settings a user may have exported for scripts/start.sh (docs/API.md, "Running it"):
 # a scratch server takes none of them, so that PINTAG_BIND=0.0.0.0 or PINTAG_READ_ONLY=1 in the
-# shell neither exposes it nor changes what it answers.
+# shell neither exposes it nor changes what it answers. scripts/test.sh runs the suite without
+# them for the same reason (the test servers are started by the tests). Every variable
+# `pintag serve --help` names is here (ServeHelp.NamesTheEnvironmentVariableOfEveryOption).
 scratch_server_env=(-u PINTAG_BIND -u PINTAG_PORT -u PINTAG_DB -u PINTAG_READ_ONLY -u PINTAG_PRIMARY
   -u PINTAG_FOLLOW -u PINTAG_FOLLOW_INTERVAL_MS -u PINTAG_FOLLOW_TOKEN -u PINTAG_FOLLOW_TOKEN_FILE
   -u PINTAG_SCAN_LOG -u PINTAG_SNAPSHOT -u PINTAG_WEB -u PINTAG_TRUSTED_PROXY -u PINTAG_THREADS
   -u PINTAG_LOG_FORMAT -u PINTAG_MAX_BATCH -u PINTAG_MAX_BODY_MB -u PINTAG_MAX_PIXELS
   -u PINTAG_MAX_PIXELS_IN_FLIGHT -u PINTAG_MAX_TAG_PX -u PINTAG_READ_TIMEOUT -u PINTAG_WRITE_TIMEOUT
-  -u PINTAG_DRAIN_TIMEOUT)
+  -u PINTAG_DRAIN_TIMEOUT -u PINTAG_MIN_BODY_RATE -u PINTAG_ADMIN_TOKEN_OUT)
 
 server_pid=""
 server_port=""

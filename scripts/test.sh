@@ -8,14 +8,14 @@
 #                                (docs/RELIABILITY.md: slower, so not part of CI)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=scripts/lib.sh
+source "$root/scripts/lib.sh"
 case "${1:-}" in
   "") ;;
   --sanitize)
     export PINTAG_SANITIZE=ON
     # Always its own tree: an exported PINTAG_BUILD_DIR would turn the normal build into ASan.
     export PINTAG_BUILD_DIR="$root/build-sanitize"
-    # shellcheck source=scripts/lib.sh
-    source "$root/scripts/lib.sh"
     sanitizer_env strict_string_checks=1
     ;;
   *) echo "test.sh: unknown argument '$1' (none, or --sanitize)" >&2; exit 2 ;;
@@ -29,7 +29,10 @@ trap 'rm -f "$log"' EXIT
 status=0
 # 600 s for a test that sets no TIMEOUT of its own (every unit test takes seconds): a few hangs
 # must not use up CI's 90 minutes before ctest can say which tests hung.
-ctest --test-dir "$build" --output-on-failure --parallel "$(nproc)" --timeout 600 \
+# Without the serve settings a user may have exported for scripts/start.sh (scripts/lib.sh): the
+# test servers inherit the environment, and PINTAG_READ_ONLY=1 failed every test that writes.
+env "${scratch_server_env[@]}" \
+  ctest --test-dir "$build" --output-on-failure --parallel "$(nproc)" --timeout 600 \
   --no-tests=error | tee "$log" || status=$?
 if grep -q -- '\*\*\*Skipped' "$log"; then
   echo "test.sh: these tests were skipped, which means something they need is missing:" >&2

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -396,10 +398,14 @@ TEST(ServeHelp, NamesTheEnvironmentVariableOfEveryOption) {
                            "PINTAG_WEB",
                            "PINTAG_MAX_BODY_MB",
                            "PINTAG_MAX_PIXELS",
+                           "PINTAG_MAX_PIXELS_IN_FLIGHT",
                            "PINTAG_MAX_BATCH",
                            "PINTAG_MAX_TAG_PX",
                            "PINTAG_READ_TIMEOUT",
                            "PINTAG_WRITE_TIMEOUT",
+                           "PINTAG_MIN_BODY_RATE",
+                           "PINTAG_DRAIN_TIMEOUT",
+                           "PINTAG_ADMIN_TOKEN_OUT",
                            "PINTAG_LOG_FORMAT",
                            "PINTAG_READ_ONLY",
                            "PINTAG_FOLLOW",
@@ -411,6 +417,20 @@ TEST(ServeHelp, NamesTheEnvironmentVariableOfEveryOption) {
                            "PINTAG_TRUSTED_PROXY"}) {
     EXPECT_NE(help.out.find(std::string(name) + ")"), std::string::npos) << name;
   }
+  // scripts/test.sh and the scratch servers clear each of them (scripts/lib.sh), so that what a
+  // user exported for scripts/start.sh (PINTAG_READ_ONLY=1 failed every write test) does not
+  // reach a test's server.
+  std::ifstream lib_file(std::string(PINTAG_SOURCE_DIR) + "/scripts/lib.sh");
+  const std::string lib((std::istreambuf_iterator<char>(lib_file)), {});
+  ASSERT_FALSE(lib.empty());
+  const std::regex variable(R"(Env:(PINTAG_[A-Z_]+)\))");
+  int named = 0;
+  for (auto it = std::sregex_iterator(help.out.begin(), help.out.end(), variable);
+       it != std::sregex_iterator(); ++it, ++named) {
+    const std::regex cleared("-u " + (*it)[1].str() + "[ )\n]");
+    EXPECT_TRUE(std::regex_search(lib, cleared)) << (*it)[1].str() << " is not in scripts/lib.sh";
+  }
+  EXPECT_GE(named, 24);
   // Refused by the option's own check, before any database or port: the database's directory
   // does not exist, so a server that let the value through could not start and hang the test.
   TempDir dir;
