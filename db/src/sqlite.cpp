@@ -252,4 +252,16 @@ void Transaction::commit() {
   done_ = true;
 }
 
+ReadTransaction::ReadTransaction(Connection& connection) : connection_(connection) {
+  connection_.execute("BEGIN");
+}
+
+ReadTransaction::~ReadTransaction() {
+  try {
+    connection_.execute("COMMIT");
+  } catch (...) {
+    // A statement that failed may have ended the transaction already; it wrote nothing.
+  }
+}
+
 }  // namespace pintag::db

@@ -180,6 +180,8 @@ TEST_F(ReplicaSetTest, AReplicaLogsScansInItsOwnFileAndTheSnapshotStaysUntouched
     const json out = Body(r);
     ASSERT_EQ(out["tags"].size(), 1U) << r->body;
     EXPECT_EQ(out["tags"][0]["pincode"], "110001");
+    // The answer names the registry the replica resolved it in: the snapshot it serves.
+    EXPECT_EQ(out["registry_version"], Body(client.Get("/api/v1/registry"))["registry_version"]);
   }
   EXPECT_EQ(CountRows(replicaScanLog(0), "scan_log"), 3);
   EXPECT_EQ(CountRows(replicaDb(0), "scan_log"), 0);

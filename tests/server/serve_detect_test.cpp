@@ -111,6 +111,43 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_NE((*scans)[0].token_id, (*scans)[2].token_id);  // admin made the last call
 }
 
+// A sorter that finds a parcel in the wrong bin must be able to tell which registry routed it: the
+// answer (and its scan-log row) names the registry version its tags were resolved in, the one
+// GET /api/v1/registry gives, and a plan's change shows as a later version beside the new bin.
+TEST_F(ServeTest, TheAnswerNamesTheRegistryVersionItsBinsCameFrom) {
+  const Photo photo = PhotographLabel(client(), counter(), "110001", 20);
+  ASSERT_FALSE(photo.jpeg.empty());
+  const std::string query =
+      "/api/v1/detect?plan=hub&tag_size_mm=" + std::to_string(photo.square_mm);
+  auto put =
+      client().Put("/api/v1/sortplans/hub", admin(), "prefix,bin\n*,floor\n11,north\n", "text/csv");
+  ASSERT_TRUE(put);
+  ASSERT_EQ(put->status, 201) << put->body;
+  const json before = ExpectJson(client().Post(query, scanner(), photo.jpeg, "image/jpeg"));
+  ASSERT_EQ(before["tags"].size(), 1U) << before.dump(1);
+  EXPECT_EQ(before["tags"][0]["bin"], "north");
+  const std::int64_t first = ExpectJson(client().Get("/api/v1/registry"))["registry_version"];
+  EXPECT_EQ(before["registry_version"].get<std::int64_t>(), first);
+
+  put = client().Put("/api/v1/sortplans/hub", admin(), "prefix,bin\n*,floor\n110,parliament\n",
+                     "text/csv");
+  ASSERT_TRUE(put);
+  ASSERT_EQ(put->status, 200) << put->body;
+  const json after = ExpectJson(client().Post(query, scanner(), photo.jpeg, "image/jpeg"));
+  ASSERT_EQ(after["tags"].size(), 1U);
+  EXPECT_EQ(after["tags"][0]["bin"], "parliament");
+  const std::int64_t second = ExpectJson(client().Get("/api/v1/registry"))["registry_version"];
+  EXPECT_GT(second, first);
+  EXPECT_EQ(after["registry_version"].get<std::int64_t>(), second);
+
+  auto opened = db::OpenDatabase(db_path_, {.create = false});
+  ASSERT_TRUE(opened);
+  auto scans = db::RecentScans(opened.value().connection, 1);
+  ASSERT_TRUE(scans);
+  ASSERT_EQ(scans->size(), 1U);
+  EXPECT_EQ(json::parse((*scans)[0].result_json)["registry_version"].get<std::int64_t>(), second);
+}
+
 // A camera's black-and-white mode keeps the tag's shape and loses its bits: the answer says so,
 // where the same photo in colour is read with no warning.
 TEST_F(ServeTest, APhotoWithoutColourReadsNoTagAndTheAnswerSaysWhy) {

@@ -18,6 +18,7 @@
 #include "pintag/codec/label.hpp"
 #include "pintag/codec/mirror.hpp"
 #include "pintag/db/scan_log.hpp"
+#include "pintag/db/snapshot.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/db/text.hpp"
 #include "pintag/detector/detector.hpp"
@@ -245,8 +246,15 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
 
   std::vector<Resolved> resolved;
   json tags = json::array();
+  std::int64_t registry_version = 0;
   {
     auto connection = context.pool->acquire();
+    // Every tag of the photo is resolved in one state of the registry, the one the answer names:
+    // a sorter can tell an answer given before a plan's change (or by a replica behind it).
+    const db::ReadTransaction one_state(*connection);
+    db::Result<std::int64_t> version = db::RegistryVersion(*connection);
+    if (!version) ThrowDbError(version.error());
+    registry_version = *version;
     for (const Detection& d : result.detections) {
       Resolved r;
       if (d.key) {
@@ -291,6 +299,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
                        {"cy", result.intrinsics.cy}};
   out["tag_size_mm"] = tag_size_mm;
   out["plan"] = plan_name;
+  out["registry_version"] = registry_version;
   out["tag_count"] = tags.size();
   out["tags"] = std::move(tags);
   out["warnings"] = ToJson(result.warnings);

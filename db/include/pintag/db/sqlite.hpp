@@ -177,4 +177,17 @@ class Transaction {
   bool done_ = false;
 };
 
+/// BEGIN (deferred) in the constructor, COMMIT in the destructor: the reads between see one
+/// state of the database (in WAL mode, the one of their first read), whatever commits meanwhile.
+class ReadTransaction {
+ public:
+  explicit ReadTransaction(Connection& connection);
+  ReadTransaction(const ReadTransaction&) = delete;
+  ReadTransaction& operator=(const ReadTransaction&) = delete;
+  ~ReadTransaction();
+
+ private:
+  Connection& connection_;
+};
+
 }  // namespace pintag::db
