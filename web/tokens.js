@@ -13,6 +13,11 @@ function idOfSecret(secret) {
   return match ? Number(match[1]) : null;
 }
 
+// What a search in the list matches a token by: its id, role and label, in lower case.
+function matchText(t) {
+  return `${t.id} ${t.role} ${t.label || ''}`.toLowerCase();
+}
+
 // The text into the clipboard: the Clipboard API where the page may use it (https, localhost),
 // else the browser's copy command on the selected field (a hub's server on plain http).
 async function copyText(field, text) {
@@ -44,10 +49,13 @@ export function setUpTokens({ token, needToken }) {
       show($('tokens-body'));
       $('tokens-list').hidden = true;
       $('tokens-filter').hidden = true;
+      $('tokens-find-row').hidden = true;
       return;
     }
     const mine = idOfSecret(token());
-    const rows = [...tokens].reverse().filter((t) => showRevoked || !t.revoked_at);
+    const words = $('tokens-find').value.toLowerCase().split(/\s+/).filter(Boolean);
+    const listed = [...tokens].reverse().filter((t) => showRevoked || !t.revoked_at);
+    const rows = listed.filter((t) => words.every((w) => matchText(t).includes(w)));
     show($('tokens-body'), rows.map((t) => el('tr', { 'data-token': t.id, class: t.id === newest ? 'is-selected' : (t.revoked_at ? 'muted' : null) },
       el('td', { class: 'num mono' }, String(t.id)),
       el('td', {}, t.role),
@@ -56,12 +64,18 @@ export function setUpTokens({ token, needToken }) {
       el('td', {}, t.revoked_at ? el('span', { title: `revoked ${t.revoked_at}` }, 'revoked') : 'active'),
       el('td', {}, t.revoked_at || readOnlyServer ? null : el('button', { type: 'button', class: 'link', onclick: () => askToRevoke(t),
         'aria-label': `Revoke token ${t.id}` }, 'Revoke…')))));
+    if (words.length > 0 && rows.length === 0) {
+      show($('tokens-body'), el('tr', {}, el('td', { colspan: 6, class: 'muted' },
+        `No ${showRevoked ? '' : 'active '}token matches “${$('tokens-find').value.trim()}”.`)));
+    }
     const active = tokens.filter((t) => !t.revoked_at).length;
     const total = tokens.length === 1 ? '1 token' : `${tokens.length} tokens`;
+    const found = words.length > 0 ? `; ${rows.length} of ${listed.length} shown match the search` : '';
     $('tokens-caption').textContent = `${total}, ${active} active, newest first${showRevoked ? '' : '; revoked ones hidden'}` +
-      (readOnlyServer ? ' (as of this replica’s copy of the registry)' : '');
+      found + (readOnlyServer ? ' (as of this replica’s copy of the registry)' : '');
     $('tokens-list').hidden = false;
     $('tokens-filter').hidden = false;
+    $('tokens-find-row').hidden = false;
   }
 
   async function listTokens() {
@@ -91,6 +105,7 @@ export function setUpTokens({ token, needToken }) {
   function forget() {
     ++listRequest;
     tokens = null;
+    $('tokens-find').value = '';
     newest = null;
     hideSecret();
     clearConfirm();
@@ -193,6 +208,7 @@ export function setUpTokens({ token, needToken }) {
     if (needToken($('tokens-msg'))) return;
     busy($('tokens-show'), listTokens);
   });
+  $('tokens-find').addEventListener('input', draw);
   $('tokens-revoked').addEventListener('change', (event) => {
     showRevoked = event.currentTarget.checked;
     draw();

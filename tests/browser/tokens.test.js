@@ -79,6 +79,50 @@ test('Forget takes the token list and a new secret off the page', async () => {
   assert.deepEqual(page.problems, []);
 });
 
+test('the token list is searched by label, role and id, and says when nothing matches', async () => {
+  // A hub has a token per handheld: made through the API, as a script enrolling devices would.
+  const made = {};
+  for (const [role, label] of [['scanner', 'Handheld dock A'], ['scanner', 'handheld dock B'],
+    ['counter', 'Counter 4'], ['scanner', 'Belt camera']]) {
+    const response = await fetch(`${session.server.url}/api/v1/tokens`, {
+      method: 'POST',
+      headers: { Authorization: `Bearer ${session.server.adminToken}`, 'Content-Type': 'application/json' },
+      body: JSON.stringify({ role, label }),
+    });
+    assert.equal(response.status, 201);
+    made[label] = (await response.json()).id;
+  }
+  const page = await openRegistry();
+  await page.locator('#token').fill(session.server.adminToken);
+  await page.getByRole('button', { name: 'Show tokens' }).click();
+  await page.locator(`#tokens-body tr[data-token="${made['Belt camera']}"]`).waitFor();
+  const shownIds = async () => (await page.locator('#tokens-body tr[data-token]').evaluateAll(
+    (rows) => rows.map((row) => Number(row.dataset.token)))).sort((a, b) => a - b);
+  const search = page.getByLabel('Find a token');
+
+  await search.fill('HANDHELD');  // any case
+  assert.deepEqual(await shownIds(), [made['Handheld dock A'], made['handheld dock B']]);
+  assert.match(await page.locator('#tokens-caption').textContent(), /2 of \d+ shown match the search/);
+  await search.fill('scanner dock b');  // every word, in role or label
+  assert.deepEqual(await shownIds(), [made['handheld dock B']]);
+  await search.fill(`counter ${made['Counter 4']}`);  // the id too
+  assert.deepEqual(await shownIds(), [made['Counter 4']]);
+  await search.fill('forklift');
+  assert.deepEqual(await shownIds(), []);
+  assert.match(await page.locator('#tokens-body').textContent(), /No active token matches “forklift”/);
+  await screenshot(page, 'registry-tokens-search');
+  await search.fill('');
+  assert.ok((await shownIds()).length >= 5);
+  assert.doesNotMatch(await page.locator('#tokens-caption').textContent(), /match the search/);
+
+  // Forget takes the search with the list.
+  await search.fill('belt');
+  await page.getByRole('button', { name: 'Forget' }).click();
+  assert.ok(await page.locator('#tokens-find-row').isHidden());
+  assert.equal(await search.inputValue(), '');
+  assert.deepEqual(page.problems, []);
+});
+
 test('the last admin token is not revoked, and a second one made in the page can revoke the first', async () => {
   const page = await openRegistry();
   await page.locator('#token').fill(session.server.adminToken);
