@@ -262,6 +262,58 @@ TEST_F(HostileCatalogue, JpegDecompressionBombHeader) {
 TEST_F(HostileCatalogue, TiffDecompressionBombHeader) {
   expectRefused(detect(TiffClaiming(100000, 100000), "image/tiff"), 413, "Image Too Large");
 }
+TEST_F(HostileCatalogue, TiffOfASmallImageInHugeTilesIsRefusedWithoutShrinkingNumbers) {
+  // 64 x 48 pixels in tiles of 16384 x 16384: within the pixel limit, but each tile is decoded
+  // into a buffer of its own size (1.5 GB). Refused as too large; the problem gives no
+  // max_pixels, width and height, which a client (the scanner page) would shrink the photo to,
+  // since a smaller image in the same tiles would be refused again.
+  std::string tiff = "II*";
+  tiff += '\0';
+  const auto u16 = [&](std::uint16_t v) {
+    tiff += static_cast<char>(v & 0xFF);
+    tiff += static_cast<char>(v >> 8);
+  };
+  const auto u32 = [&](std::uint32_t v) {
+    for (int shift : {0, 8, 16, 24}) tiff += static_cast<char>((v >> shift) & 0xFF);
+  };
+  const auto entry = [&](std::uint16_t tag, std::uint16_t type, std::uint32_t value) {
+    u16(tag);
+    u16(type);
+    u32(1);
+    u32(value);
+  };
+  u32(8);
+  u16(9);
+  entry(256, 4, 64);     // ImageWidth
+  entry(257, 4, 48);     // ImageLength
+  entry(258, 3, 8);      // BitsPerSample
+  entry(259, 3, 1);      // Compression: none
+  entry(262, 3, 1);      // PhotometricInterpretation: grey
+  entry(322, 4, 16384);  // TileWidth
+  entry(323, 4, 16384);  // TileLength
+  entry(324, 4, 128);    // TileOffsets
+  entry(325, 4, 1024);   // TileByteCounts
+  u32(0);
+  tiff += std::string(128 + 1024 - tiff.size(), '\x80');
+  const Answer tiles = Send(server_->port(), detect(tiff, "image/tiff"));
+  EXPECT_EQ(tiles.status, 413) << tiles.body;
+  const json tiles_problem = json::parse(tiles.body, nullptr, false);
+  ASSERT_TRUE(tiles_problem.is_object()) << tiles.body;
+  EXPECT_EQ(tiles_problem.value("title", ""), "Image Too Large");
+  EXPECT_NE(tiles_problem.value("detail", "").find("tiles of 16384 x 16384"), std::string::npos)
+      << tiles.body;
+  EXPECT_FALSE(tiles_problem.contains("max_pixels")) << tiles.body;
+  EXPECT_FALSE(tiles_problem.contains("width")) << tiles.body;
+  // Beside it, a TIFF over the pixel limit does give the numbers.
+  const Answer pixels = Send(server_->port(), detect(TiffClaiming(100000, 100000), "image/tiff"));
+  EXPECT_EQ(pixels.status, 413) << pixels.body;
+  const json pixels_problem = json::parse(pixels.body, nullptr, false);
+  ASSERT_TRUE(pixels_problem.is_object()) << pixels.body;
+  EXPECT_EQ(pixels_problem.value("max_pixels", 0), 40'000'000);
+  EXPECT_EQ(pixels_problem.value("width", 0), 100000);
+  EXPECT_EQ(pixels_problem.value("height", 0), 100000);
+  expectHealthy();
+}
 TEST_F(HostileCatalogue, TiffHeaderClaimingAThousandChannels) {
   // Within the pixel limit, but decoding costs per channel (about 1.5 GB a megapixel here).
   const Answer answer = Send(server_->port(), detect(TiffClaiming(1000, 1000, 1024), "image/tiff"));
