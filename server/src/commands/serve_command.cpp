@@ -51,7 +51,7 @@ struct ServeArgs {
   int max_tag_px = 4096;
   int read_timeout_s = 5;
   int write_timeout_s = 5;
-  std::int64_t min_body_rate = 1024;
+  std::int64_t min_body_rate = 500;
   int drain_timeout_s = 30;
   std::string log_format = "text";
   std::vector<std::string> trusted_proxies;
@@ -365,8 +365,9 @@ void AddServeCommand(CLI::App& app) {
       ->capture_default_str()
       ->envname("PINTAG_WRITE_TIMEOUT");
   cmd->add_option("--min-body-rate", args->min_body_rate,
-                  "bytes a second a request body must average once --read-timeout has passed "
-                  "since its headers; slower is answered 408 (0: no minimum)")
+                  "the pace a request body must keep: the server waits for its bytes at most "
+                  "four --read-timeout plus a second for every this many bytes; slower is "
+                  "answered 408 (0: no minimum)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{1'000'000'000}))
       ->capture_default_str()
       ->envname("PINTAG_MIN_BODY_RATE");

@@ -69,26 +69,13 @@ ConnectionStream::ConnectionStream(int fd, std::chrono::microseconds read_timeou
       head_budget_(head_budget),
       min_body_rate_(min_body_rate) {}
 
-void ConnectionStream::headRead() {
-  if (head_read_) return;  // an Expect: 100-continue request's head is admitted twice
-  head_read_ = true;
-  body_began_ = std::chrono::steady_clock::now();
-}
-
-std::chrono::steady_clock::duration ConnectionStream::bodyTime() const {
-  return head_read_ ? std::chrono::steady_clock::now() - body_began_
-                    : std::chrono::steady_clock::duration::zero();
-}
-
 int ConnectionStream::bodyWaitMs() const {
   if (min_body_rate_ == 0) return read_timeout_ms_;
-  // The body may take the read timeout, plus a second for each min_body_rate bytes that came.
-  const double allowed_ms = read_timeout_ms_ + 1000.0 * static_cast<double>(body_bytes_) /
-                                                   static_cast<double>(min_body_rate_);
-  const double taken_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - body_began_)
-          .count();
-  const double left_ms = std::ceil(allowed_ms - taken_ms);
+  const double allowed_ms =
+      kBodyGraceReadTimeouts * static_cast<double>(read_timeout_ms_) +
+      1000.0 * static_cast<double>(body_bytes_) / static_cast<double>(min_body_rate_);
+  const double waited_ms = std::chrono::duration<double, std::milli>(body_waited_).count();
+  const double left_ms = std::ceil(allowed_ms - waited_ms);
   if (left_ms <= 0) return -1;
   return static_cast<int>(std::min<double>(left_ms, read_timeout_ms_));
 }
@@ -125,7 +112,16 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
     // The end is named by the wait chosen here: a read timeout is one whatever the clock says
     // after it.
     const int wait_ms = head_read_ ? bodyWaitMs() : read_timeout_ms_;
-    if (Wait(fd_, POLLIN, std::max(wait_ms, 0)) <= 0) {
+    const auto wait_began = std::chrono::steady_clock::now();
+    const int ready = Wait(fd_, POLLIN, std::max(wait_ms, 0));
+    if (head_read_) {
+      // At most the wait asked for: a server stopped while it waited (SIGSTOP, a paused VM) finds
+      // the poll ended long after, and that time is not the client's.
+      body_waited_ += std::min<std::chrono::steady_clock::duration>(
+          std::chrono::steady_clock::now() - wait_began,
+          std::chrono::milliseconds(std::max(wait_ms, 0)));
+    }
+    if (ready <= 0) {
       read_end_ = wait_ms < read_timeout_ms_ ? ReadEnd::kTooSlow : ReadEnd::kTimedOut;
       return -1;
     }

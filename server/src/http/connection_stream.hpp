@@ -18,9 +18,12 @@
 //
 // And it bounds how slowly a body may come (`min_body_rate`): cpp-httplib's read timeout applies
 // to each read, so a client sending a byte every few seconds kept its worker for as long as its
-// declared length lasted. Once the read timeout has passed since the head, the body must have
-// averaged at least `min_body_rate` bytes a second; a read that would wait past that fails, and
-// `readEnd` is kTooSlow (as Apache's mod_reqtimeout MinRate; 0 bounds nothing).
+// declared length lasted. The time this stream spends waiting for the body's bytes may be at
+// most kBodyGraceReadTimeouts read timeouts plus a second for each `min_body_rate` bytes that
+// came; a read that would wait past that fails, and `readEnd` is kTooSlow (as Apache's
+// mod_reqtimeout `body=20,MinRate=500`; 0 bounds nothing). Only waiting is counted, each wait
+// at most as long as it was asked to be: a server that stops reading (busy, or stopped and
+// continued) holds the client back by flow control, and that time is not the client's.
 //
 // Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; the head is
 // read through a 4 KiB buffer (cpp-httplib reads it one byte at a time); a write first checks
@@ -48,6 +51,8 @@ class ConnectionStream final : public httplib::Stream {
  public:
   /// Far above a chunk-size line with extensions; cpp-httplib reads such lines one byte a call.
   static constexpr std::size_t kMaxBodyLineBytes = std::size_t{8} * 1024;
+  /// The wait a body may take before its pace counts, in read timeouts (20 s by default).
+  static constexpr int kBodyGraceReadTimeouts = 4;
 
   ConnectionStream(int fd, std::chrono::microseconds read_timeout,
                    std::chrono::microseconds write_timeout, std::size_t head_budget,
@@ -62,8 +67,8 @@ class ConnectionStream final : public httplib::Stream {
   socket_t socket() const override { return fd_; }
 
   /// The request line and headers are in: the body, if any, is not counted against the head's
-  /// budget, and its pace is measured from here.
-  void headRead();
+  /// budget.
+  void headRead() { head_read_ = true; }
   /// True once a read was refused because the head ran past `head_budget`.
   bool overBudget() const { return over_budget_; }
   /// Set once a read was refused because the head broke a rule of its syntax.
@@ -84,9 +89,9 @@ class ConnectionStream final : public httplib::Stream {
   /// `min_body_rate` (kNone: none did).
   enum class ReadEnd { kNone, kTimedOut, kClosed, kFailed, kTooSlow };
   ReadEnd readEnd() const { return read_end_; }
-  /// Bytes of the body read so far, and for how long it has been read (since headRead()).
+  /// Bytes of the body read so far, and how long this stream waited for them.
   std::uint64_t bodyBytes() const { return body_bytes_; }
-  std::chrono::steady_clock::duration bodyTime() const;
+  std::chrono::steady_clock::duration bodyWaited() const { return body_waited_; }
 
   /// The answer leaves up to `bytes` of the body unread, which the client may still send: the
   /// connection is drained of that much before it is closed (IdleConnections::drain).
@@ -112,7 +117,7 @@ class ConnectionStream final : public httplib::Stream {
   /// them: all, or through the blank line that ends the head, or the byte the check refused.
   std::size_t headBytesToTake(std::string_view peeked);
   /// How long a read of the body may wait for its next byte: the read timeout, or less when the
-  /// body's pace would fall under `min_body_rate` sooner; negative once it has.
+  /// body's pace would fall under `min_body_rate` sooner; negative once it has (see above).
   int bodyWaitMs() const;
 
   int fd_;
@@ -127,7 +132,7 @@ class ConnectionStream final : public httplib::Stream {
   std::size_t body_line_bytes_ = 0;  ///< bytes of the body's current line read one at a time
   bool body_line_too_long_ = false;
   std::optional<ChunkedBodyCheck> chunked_;  ///< fed a chunked body's bytes as they are read
-  std::chrono::steady_clock::time_point body_began_;  ///< headRead()
+  std::chrono::steady_clock::duration body_waited_{};  ///< in poll() for the body's bytes
   std::uint64_t body_bytes_ = 0;
   ReadEnd read_end_ = ReadEnd::kNone;
   std::size_t unread_ = 0;

@@ -29,6 +29,7 @@
 #include <cctype>
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <optional>
@@ -579,14 +580,17 @@ struct HttpServer::Impl {
                                         std::to_string(options.read_timeout.count()) +
                                         " s (the read timeout)");
       case ConnectionStream::ReadEnd::kTooSlow: {
-        const auto seconds =
-            std::chrono::duration_cast<std::chrono::seconds>(t_connection->bodyTime()).count();
+        const double waited = std::chrono::duration<double>(t_connection->bodyWaited()).count();
+        char seconds[32];
+        std::snprintf(seconds, sizeof seconds, "%.1f", waited);
         return ProblemResponse(
             408, "the request body came too slowly: " + std::to_string(t_connection->bodyBytes()) +
-                     " bytes in " + std::to_string(seconds) +
-                     " s, where the server takes at least " +
-                     std::to_string(options.min_body_rate) + " bytes a second after the first " +
-                     std::to_string(options.read_timeout.count()) + " s (--min-body-rate)");
+                     " bytes (with any chunk framing) after " + seconds +
+                     " s of waiting for them, where the server waits at most " +
+                     std::to_string(ConnectionStream::kBodyGraceReadTimeouts *
+                                    options.read_timeout.count()) +
+                     " s plus a second for every " + std::to_string(options.min_body_rate) +
+                     " bytes (--min-body-rate)");
       }
       case ConnectionStream::ReadEnd::kClosed:
         return ProblemResponse(400,

@@ -21,10 +21,11 @@ struct ServerOptions {
   int threads = 4;                         ///< worker threads, 1 … 256
   std::chrono::seconds read_timeout{5};    ///< per read of a request (headers or body chunk)
   std::chrono::seconds write_timeout{5};   ///< per write of a response
-  /// Bytes a second a request body must average once read_timeout has passed since its head (a
-  /// body trickled a byte per read timeout held a worker for as long as its length lasted);
-  /// slower is answered 408 and the connection closed. 0: no minimum.
-  std::uint64_t min_body_rate = 1024;
+  /// The pace a request body must keep: the server waits for its bytes at most four read
+  /// timeouts plus a second for every min_body_rate bytes (a body trickled a byte per read
+  /// timeout held a worker for as long as its length lasted); slower is answered 408 and the
+  /// connection closed. 0: no minimum.
+  std::uint64_t min_body_rate = 500;
   std::chrono::seconds keep_alive_timeout{5};
   int keep_alive_max_requests = 100;  ///< requests per connection before it is closed
   /// Connections waiting for a request at once (each an open socket, no thread); past this the
