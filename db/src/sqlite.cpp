@@ -260,7 +260,13 @@ ReadTransaction::~ReadTransaction() {
   try {
     connection_.execute("COMMIT");
   } catch (...) {
-    // A statement that failed may have ended the transaction already; it wrote nothing.
+    // A statement that failed may have ended the transaction already; it wrote nothing, so a
+    // rollback loses nothing either.
+    try {
+      if (connection_.inTransaction()) connection_.execute("ROLLBACK");
+    } catch (...) {
+      // Left open: the connection's owner sees inTransaction() (ConnectionPool closes it).
+    }
   }
 }
 

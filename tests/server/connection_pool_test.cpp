@@ -157,6 +157,34 @@ TEST(ConnectionPool, AMovedFilesLogIsEmptiedOnceReadersAndLeasesLetIt) {
   EXPECT_EQ(Rows(dir.file("moved.db")), 2);
 }
 
+// A lease given back inside a transaction (a request that began one and whose COMMIT failed)
+// must not hand the next request a connection that refuses BEGIN or reads an old state.
+TEST(ConnectionPool, ALeaseGivenBackInsideATransactionIsRolledBack) {
+  const test::TempDir dir;
+  const std::string path = dir.file("registry.db");
+  {
+    db::Connection create(path);
+    create.execute(
+        "PRAGMA journal_mode=WAL; CREATE TABLE t (x INTEGER); INSERT INTO t VALUES (1);");
+  }
+  ConnectionPool pool(path, 5000, /*read_only=*/false);
+  {
+    const ConnectionPool::Lease lease = pool.acquire();
+    lease->execute("BEGIN");
+    EXPECT_EQ(lease->queryInt64("SELECT x FROM t"), 1);  // its reads now see this state
+    ASSERT_TRUE(lease->inTransaction());
+  }
+  {
+    db::Connection writer(path);
+    writer.execute("UPDATE t SET x = 2");
+  }
+  const ConnectionPool::Lease next = pool.acquire();
+  EXPECT_FALSE(next->inTransaction());
+  EXPECT_EQ(next->queryInt64("SELECT x FROM t"), 2);
+  const db::ReadTransaction read(*next);  // BEGIN, which an open transaction refuses
+  EXPECT_EQ(next->queryInt64("SELECT x FROM t"), 2);
+}
+
 TEST(ConnectionPool, AReadOnlyPoolServesWhateverFileIsAtItsPath) {
   // A replica's file is replaced by design (SnapshotWatcher renews the pool after).
   const test::TempDir dir;

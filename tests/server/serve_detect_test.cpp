@@ -139,6 +139,15 @@ TEST_F(ServeTest, TheAnswerNamesTheRegistryVersionItsBinsCameFrom) {
   const std::int64_t second = ExpectJson(client().Get("/api/v1/registry"))["registry_version"];
   EXPECT_GT(second, first);
   EXPECT_EQ(after["registry_version"].get<std::int64_t>(), second);
+  // A PNG answer (overlay=1) carries it as a header, as does the JSON one.
+  const auto png = client().Post(query + "&overlay=1", scanner(), photo.jpeg, "image/jpeg");
+  ASSERT_TRUE(png);
+  ASSERT_EQ(png->status, 200) << png->body.substr(0, 300);
+  EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(png->get_header_value("X-PinTag-Registry-Version"), std::to_string(second));
+  const auto plain = client().Post(query, scanner(), photo.jpeg, "image/jpeg");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->get_header_value("X-PinTag-Registry-Version"), std::to_string(second));
 
   auto opened = db::OpenDatabase(db_path_, {.create = false});
   ASSERT_TRUE(opened);

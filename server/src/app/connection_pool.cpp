@@ -120,6 +120,19 @@ void ConnectionPool::emptyLogOfMovedFile() {
 
 ConnectionPool::Lease::~Lease() {
   if (!connection_ || pool_ == nullptr) return;
+  // A transaction left open (its COMMIT and ROLLBACK failed) would refuse the next request's
+  // BEGIN, or hold its reads to an old state: such a connection is closed, not kept.
+  if (connection_->inTransaction()) {
+    try {
+      connection_->execute("ROLLBACK");
+    } catch (...) {
+      // Closed below when still in the transaction.
+    }
+    if (connection_->inTransaction()) {
+      connection_.reset();
+      return;
+    }
+  }
   bool moved = false;
   {
     const std::lock_guard lock(pool_->mutex_);

@@ -316,6 +316,7 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
       HttpResponse response =
           HttpResponse::Bytes("image/png", OverlayPng(image.clone(), result, resolved));
       response.headers.emplace_back("X-PinTag-Tags", std::to_string(out["tag_count"].get<int>()));
+      response.headers.emplace_back("X-PinTag-Registry-Version", std::to_string(registry_version));
       return response;
     }
     case Overlay::kInline:
@@ -324,7 +325,9 @@ HttpResponse Detect(const AppContext& context, const HttpRequest& request, std::
       body = out.dump();
       break;
   }
-  return HttpResponse::Json(std::move(body));
+  HttpResponse response = HttpResponse::Json(std::move(body));
+  response.headers.emplace_back("X-PinTag-Registry-Version", std::to_string(registry_version));
+  return response;
 }
 
 /// Why a multipart body has no photo, naming the parts it has. cpp-httplib 0.11.4 reads a part's
