@@ -500,5 +500,19 @@ TEST_F(ServeTest, BatchPdfOf50LabelsHas50PagesOfTheRightSize) {
       404);
 }
 
+// A server whose --max-tag-px is under the default tag size (256) renders its largest by
+// default; before, the default was 256 whatever the limit, and px=256 was refused.
+TEST_F(ServeTest, ATagLimitUnderTheDefaultSizeIsTheDefault) {
+  startServer({"--max-tag-px", "128"});
+  auto r = client().Get("/api/v1/tags/110001.png", counter());
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(PngSpec(r->body).width, 128 + 2 * 20);  // 128 px and its quiet zone
+  ExpectProblem(client().Get("/api/v1/tags/110001.png?px=256", counter()), 400);
+  r = client().Get("/api/v1/tags/110001.png?px=64", counter());
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -128,8 +128,10 @@ TagKey ActiveKey(const AppContext& context, const HttpRequest& request) {
 }  // namespace
 
 HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request) {
-  const long long px =
-      IntegerQuery(request, "px", kDefaultTagPx, kMinTagSquarePx, context.max_tag_px);
+  // A server whose --max-tag-px is under the default renders its largest by default: the default
+  // is not a size the server would refuse if it were asked for.
+  const long long px = IntegerQuery(request, "px", std::min(kDefaultTagPx, context.max_tag_px),
+                                    kMinTagSquarePx, context.max_tag_px);
   const double dpi = DpiQuery(request);
   const TagKey key = ActiveKey(context, request);
   const long long side = px + 2LL * QuietZonePx(static_cast<int>(px));  // the PNG's side

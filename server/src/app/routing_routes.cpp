@@ -225,6 +225,8 @@ HttpResponse DeleteSortPlan(const AppContext& context, const HttpRequest& reques
   if (!deleted && deleted.error().code == db::ErrorCode::kConflict) {
     throw HttpError(409, deleted.error().message, "Default Sort Plan");
   }
+  // The title every other route gives an unknown plan.
+  if (!deleted && deleted.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(name);
   if (!deleted) ThrowPlanError(deleted.error());
   // The plan as it was, so that a mistaken delete can be put back with PUT.
   return PlanResponse(PlanJson(*deleted).dump(), "application/json", db::PlanVersion(*deleted),
