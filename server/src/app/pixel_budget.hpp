@@ -3,7 +3,7 @@
 // and tag PNGs being rendered. An upload holds its pixels (the size its header claims) from just
 // before decoding until its answer is built, a PNG from just before rendering until it is
 // encoded; what does not fit waits its turn. Each costs about 7 to 8 bytes a pixel at peak (a
-// 33 MP photo: 230 MB more resident memory; a 1200 dpi label PNG, 33.5 MP: 263 MB), so without
+// 33 MP photo: 230 MB more resident memory; a 1200 dpi label PNG, 33.5 MP: 232 MB), so without
 // this bound --threads requests of the largest size each could take more memory than the
 // machine has.
 
