@@ -227,7 +227,7 @@ export function confirmBox({ label, message, yes, yesId, yesClass = 'danger', no
   // Described by its text, so that a screen reader says what is asked, not only the label.
   const box = el('div', { class: 'alert alert-info', role: 'alertdialog', 'aria-label': label,
     'aria-describedby': text.id, onkeydown }, text, el('div', { class: 'actions' }, yesButton, noButton));
-  return { box, yesButton };
+  return { box, yesButton, noButton };
 }
 
 /** Saves a blob under a file name, as a download. */

@@ -142,7 +142,7 @@ export function setUpSortPlans({ token, needToken }) {
       return;
     }
     const keep = () => { show($('plan-confirm')); fields.rules.focus(); };
-    const { box, yesButton } = confirmBox({
+    const { box, noButton } = confirmBox({
       label: 'Unsaved changes',
       message: ['The plan being edited (', open.name ? el('bdi', {}, open.name) : 'new', ') has unsaved changes.'],
       yes: 'Discard my changes', yesId: 'plan-discard', no: 'Keep editing',
@@ -150,7 +150,7 @@ export function setUpSortPlans({ token, needToken }) {
       onYes: async () => { show($('plan-confirm')); await then(); },
     });
     show($('plan-confirm'), box);
-    yesButton.focus();
+    noButton.focus();  // discarded edits cannot be had back: Enter keeps them
   }
 
   function newPlan() {

@@ -273,7 +273,7 @@ $('retire-form').addEventListener('submit', (event) => {
     // The box goes with the buttons: focus goes back to the pincode field, not to the page's top.
     const close = () => { show($('retire-confirm')); $('r-pin').focus(); };
     const where = record.office || record.district;
-    const { box, yesButton } = confirmBox({
+    const { box, noButton } = confirmBox({
       label: 'Confirm retiring',
       message: [`Retire ${pin} (`, where ? [el('bdi', {}, where), ', '] : null,
         `key ${record.key})? No new labels will be issued for it.`],
@@ -295,7 +295,9 @@ $('retire-form').addEventListener('submit', (event) => {
       },
     });
     show($('retire-confirm'), box);
-    yesButton.focus();
+    // Focus on Cancel: retiring cannot be undone, and the Enter that opened the box, pressed
+    // again, must not be what retires a mistyped pincode.
+    noButton.focus();
   });
 });
 

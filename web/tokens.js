@@ -120,7 +120,7 @@ export function setUpTokens({ token, needToken }) {
     const close = () => { clearConfirm(); (rowButton() || $('tokens-show')).focus(); };
     // Whose token the page uses is read now: the field may have changed since the list was drawn.
     const own = idOfSecret(token()) === t.id;
-    const { box, yesButton } = confirmBox({
+    const { box, noButton } = confirmBox({
       label: 'Confirm revoking',
       message: [`Revoke token ${t.id} (${t.role}`, t.label ? [', ', el('bdi', {}, t.label)] : null,
         ')? Whatever signs in with it is refused from now on. This cannot be undone.',
@@ -154,7 +154,7 @@ export function setUpTokens({ token, needToken }) {
     clearConfirm();
     if (row) row.after(el('tr', { class: 'confirm-row' }, el('td', { colspan: 6 }, box)));
     else show($('token-confirm'), box);
-    yesButton.focus();
+    noButton.focus();  // revoking cannot be undone: a second Enter must not be what revokes
   }
 
   async function create() {

@@ -315,3 +315,25 @@ test('office names written right to left sit in their sentences whole, and Escap
   assert.equal(record.status, 'active');
   assert.deepEqual(page.problems, []);
 });
+
+test('Enter twice at the retire field asks and then keeps the pincode: the question opens on Cancel', async () => {
+  await addPincode(server, '999041', []);
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.locator('#token').fill(server.adminToken);
+  await page.locator('#r-pin').fill('999041');
+  await page.locator('#r-pin').press('Enter');
+  const question = page.getByRole('alertdialog', { name: 'Confirm retiring' });
+  await question.waitFor();
+  // An impatient second Enter: before, focus sat on "Retire 999041" and this retired it for good.
+  await page.keyboard.press('Enter');
+  await question.waitFor({ state: 'detached' });
+  assert.equal(await page.evaluate(() => document.activeElement?.id), 'r-pin');
+  const record = await (await fetch(`${server.url}/api/v1/pincodes/999041`)).json();
+  assert.equal(record.status, 'active');
+  // Retiring takes the button itself.
+  await page.locator('#r-pin').press('Enter');
+  await question.getByRole('button', { name: 'Retire 999041' }).click();
+  await page.locator('#retire-msg').filter({ hasText: '999041 is retired.' }).waitFor();
+  assert.deepEqual(page.problems, []);
+});
