@@ -144,10 +144,13 @@ function tagCard(tag, approximate) {
   const distance = tag.pose && Number.isFinite(tag.pose.distance_m)
     ? `${tag.pose.distance_m.toFixed(2)} m${approximate ? ' (approx.)' : ''}` : '—';
   const rows = known
-    ? [['Office', tag.office || '—'], ['District', tag.district], ['State', tag.state],
-      ['Bin', el('span', { class: 'bin' }, tag.bin ?? '—')], ['Distance', distance], ['Key', tag.key]]
+    ? [['Office', tag.office || '—'], ['District', tag.district || '—'], ['State', tag.state || '—'],
+      ['Distance', distance], ['Key', tag.key]]
     : [['Key', tag.key], ['Distance', distance],
       ['Note', 'This key belongs to no pincode in the registry. Sort the parcel by hand.']];
+  if (tag.status === 'retired') {
+    rows.push(['Note', 'This pincode is retired: no new labels are made for it. Check the address on the parcel before it goes to the bin.']);
+  }
   // The format cannot tell a mirrored tag from another key's (docs/FORMAT.md, "Mirror images").
   if (tag.mirror_pincode) {
     rows.push(['Mirror', el('span', { class: 'mirror-note' },
@@ -156,9 +159,14 @@ function tagCard(tag, approximate) {
   }
   return el('li', { class: `tag-card ${tag.status}`, 'data-pincode': tag.pincode || '',
     'data-mirror-pincode': tag.mirror_pincode || '' },
+    // The bin is what the person holding the parcel acts on: as large as the pincode, beside it.
     el('header', {},
-      el('span', { class: 'big-pin' }, known ? tag.pincode : 'Unknown'),
-      badge(tag.status)),
+      el('div', { class: 'tag-card-id' },
+        el('span', { class: 'big-pin' }, known ? tag.pincode : 'Unknown'),
+        badge(tag.status)),
+      el('div', { class: 'bin-block' },
+        el('span', { class: 'bin-label' }, 'Bin'),
+        el('span', { class: 'bin big-bin' }, known ? (tag.bin ?? '—') : 'by hand'))),
     el('dl', { class: 'kv' }, rows.map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])));
 }
 
@@ -262,10 +270,12 @@ async function scan() {
   if (!token()) {
     show($('scan-msg'), el('div', { class: 'alert alert-error', role: 'alert' },
       el('strong', { class: 'problem-title' }, 'No scanner token'),
-      el('p', { class: 'problem-detail' }, 'Paste a scanner token above, then read the photo again.')));
+      el('p', { class: 'problem-detail' }, 'Paste a scanner token above: the photo is read as soon as it is there.')));
+    waitingForToken = true;
     $('token').focus();
     return;
   }
+  waitingForToken = false;
   if (photoUrl) URL.revokeObjectURL(photoUrl);
   photoUrl = URL.createObjectURL(file);
   photoUnshowable = false;
@@ -365,6 +375,15 @@ $('scan-photo').addEventListener('error', () => {
   $('photo-figure').hidden = true;
   if ($('scan-photo').dataset.outlined && !$('summary').textContent.includes('cannot show the photo')) {
     $('summary').append(kUnshowable);
+  }
+});
+
+// A photo refused for want of a token is read once a whole token is pasted: choosing the same
+// file again fires no change, and "Read tags" is below the fold on a phone.
+let waitingForToken = false;
+$('token').addEventListener('input', () => {
+  if (waitingForToken && $('photo').files.length && /^pt_\d+_[A-Za-z0-9_-]{40,}$/.test(token())) {
+    busy($('scan'), scan);
   }
 });
 

@@ -53,6 +53,12 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.match(text, /Central Delhi/);
   assert.match(text, /Bin11/);
   assert.match(text, /Distance\d+\.\d\d m/);
+  // The bin, which the person holding the parcel acts on, is as large as the pincode and beside
+  // it on a phone (it was a small chip in the fourth row).
+  const size = (selector) => card.locator(selector).evaluate((node) => getComputedStyle(node).fontSize);
+  assert.equal(await size('header .bin'), await size('.big-pin'));
+  const [pinBox, binBox] = [await card.locator('.big-pin').boundingBox(), await card.locator('header .bin').boundingBox()];
+  assert.ok(binBox.y < pinBox.y + pinBox.height && binBox.x > pinBox.x + pinBox.width, JSON.stringify({ pinBox, binBox }));
   assert.match(await page.locator('#summary').textContent(), /1 tag read/);
   // The chosen photo is named in the box that chose it (the file input itself is hidden).
   assert.equal(await page.locator('#photo-name').textContent(), `Chosen: ${basename(labelPng)}`);
@@ -85,6 +91,17 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   assert.equal(await page.locator('.tag-card').count(), 0);
   assert.doesNotMatch(await page.locator('#summary').textContent(), /tag/);
   assert.equal(await page.locator('#photo-figure').isHidden(), true);
+
+  // The photo refused for want of a token is read as soon as one is pasted: choosing the same
+  // file again fires no change, and the "Read tags" button is below the fold.
+  await page.locator('#photo').setInputFiles(labelPng);
+  await page.locator('#scan-msg [role="alert"]').filter({ hasText: 'No scanner token' }).waitFor();
+  await page.locator('#token').fill(scannerToken.slice(0, 10));  // part of one: not yet
+  await page.waitForTimeout(300);
+  assert.equal(await page.locator('.tag-card').count(), 0);
+  await page.locator('#token').fill(scannerToken);
+  await page.locator('.tag-card[data-pincode="110001"]').waitFor();
+  assert.equal(await page.locator('#scan-msg [role="alert"]').count(), 0);
   assert.deepEqual(page.problems, []);
 });
 
