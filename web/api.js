@@ -349,6 +349,41 @@ export function bindToken({ name, input, status, forget, toggle, onForget }) {
 }
 
 /** Fills a <select> with the server's sort plans; keeps `preferred` selected when it exists. */
+// A station's settings (the hub's sort plan, the label stock in the printer) kept from one visit
+// to the next in localStorage under `pintag.<key>`; null when none is kept or storage is off.
+export function remembered(key) {
+  try {
+    return window.localStorage.getItem(`pintag.${key}`);
+  } catch {
+    return null;
+  }
+}
+
+export function remember(key, value) {
+  try {
+    window.localStorage.setItem(`pintag.${key}`, value);
+  } catch {
+    // Storage off (a private window's quota): the setting lasts this visit only.
+  }
+}
+
+/**
+ * Keeps a <select>'s choice under `key` (remember above): the kept choice is restored now when the
+ * select has it, and every change is kept. For a plan list filled later, loadPlans restores it.
+ */
+export function rememberSelect(select, key) {
+  const kept = remembered(key);
+  if (kept !== null && [...select.options].some((o) => o.value === kept)) select.value = kept;
+  select.addEventListener('change', () => {
+    select.dataset.chosen = '1';
+    remember(key, select.value);
+  });
+}
+
+/**
+ * Fills a plan <select> from the server. It then shows the plan chosen on this page since it
+ * opened, else `preferred` (a kept choice), else what it showed.
+ */
 export async function loadPlans(select, preferred = 'default') {
   try {
     const { plans } = await api('/api/v1/sortplans');
@@ -368,7 +403,7 @@ export async function loadPlans(select, preferred = 'default') {
         select.append(el('option', { value: plan.name, title: plan.description || null }, text));
       }
     }
-    const want = current || preferred;
+    const want = select.dataset.chosen ? current : (preferred || current);
     if ([...select.options].some((o) => o.value === want)) select.value = want;
   } catch {
     // Plans are a convenience here; the default plan still works when the list fails.

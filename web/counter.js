@@ -1,6 +1,7 @@
 // Dispatch counter: pincodes in, office and district to confirm, label preview, PDF out.
 import {
   api, ApiError, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, loadPlans,
+  remember, remembered, rememberSelect,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -421,9 +422,22 @@ $('batch-pdf').addEventListener('click', (event) => printing(event.currentTarget
   }
 }));
 
-for (const input of document.querySelectorAll('input[name="size"]')) input.addEventListener('change', refreshPreview);
+// A counter keeps its label size (the stock in its printer) and plan from one visit to the next.
+const keptSize = document.querySelector(`input[name="size"][value="${CSS.escape(remembered('counter.size') || '')}"]`);
+if (keptSize) keptSize.checked = true;
+for (const input of document.querySelectorAll('input[name="size"]')) {
+  input.addEventListener('change', () => {
+    remember('counter.size', sizeValue());
+    refreshPreview();
+  });
+}
+rememberSelect($('plan'), 'counter.plan');
 $('plan').addEventListener('change', refreshPreview);
 $('token').addEventListener('change', refreshPreview);
 
-loadPlans($('plan'), 'default');
+// The kept plan is set once the list has come: anything shown with the plan before is redone.
+const planAtStart = $('plan').value;
+loadPlans($('plan'), remembered('counter.plan') || 'default').then(() => {
+  if ($('plan').value !== planAtStart) refreshPreview();
+});
 updateButtons();

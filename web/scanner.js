@@ -3,7 +3,9 @@
 // each scan is one detection, one scan-log row and one request in /metrics. (?overlay=inline
 // would bring the server's drawing in the same answer, but as the whole photo again in PNG,
 // megabytes per scan over a phone's connection, where the corners are a few hundred bytes.)
-import { api, query, el, show, problemBox, badge, busy, bindToken, loadPlans } from './api.js';
+import {
+  api, query, el, show, problemBox, badge, busy, bindToken, loadPlans, remembered, rememberSelect,
+} from './api.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -412,7 +414,15 @@ function settingsChanged() {
   clearResults();
   $('summary').textContent = 'The sort plan or label size changed: paste a scanner token above to read the photo again.';
 }
+// A hub's scanner keeps its plan and label size from one visit to the next (they reset to the
+// default plan on every reload, and the bins shown were another plan's).
+rememberSelect($('plan'), 'scanner.plan');
+rememberSelect($('label-size'), 'scanner.size');
 $('plan').addEventListener('change', settingsChanged);
 $('label-size').addEventListener('change', settingsChanged);
 
-loadPlans($('plan'), 'default');
+// The kept plan is set once the list has come: anything shown with the plan before is redone.
+const planAtStart = $('plan').value;
+loadPlans($('plan'), remembered('scanner.plan') || 'default').then(() => {
+  if ($('plan').value !== planAtStart) settingsChanged();
+});

@@ -69,6 +69,31 @@ test('counter looks up pincodes, previews a label and downloads single and batch
   assert.deepEqual(page.problems, []);
 });
 
+test('the counter keeps its label size and sort plan over a reload, and labels are made with them', async () => {
+  const put = await fetch(`${server.url}/api/v1/sortplans/counter-kept`, {
+    method: 'PUT',
+    headers: { Authorization: `Bearer ${server.adminToken}`, 'Content-Type': 'text/csv' },
+    body: 'prefix,bin\n*,manual\n110001,parliament\n',
+  });
+  assert.ok([200, 201].includes(put.status), `PUT counter-kept: ${put.status}`);
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#plan option[value="counter-kept"]').waitFor({ state: 'attached' });
+  await page.getByLabel('A6').check();
+  await page.locator('#plan').selectOption('counter-kept');
+  await page.reload();
+  await page.locator('#plan option[value="counter-kept"]').waitFor({ state: 'attached' });
+  await page.waitForFunction(() => document.getElementById('plan').value === 'counter-kept');
+  assert.equal(await page.getByLabel('A6').isChecked(), true);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  const caption = page.locator('#preview figcaption');
+  await caption.filter({ hasText: 'counter-kept' }).waitFor();
+  assert.match(await caption.textContent(), /A6/);
+  assert.deepEqual(page.problems, []);
+});
+
 test('a PDF still on its way when the clerk picks another row is saved under its own pincode', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);

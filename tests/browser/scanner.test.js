@@ -427,6 +427,13 @@ test('a change of sort plan or label size reads the photo again, and the summary
   assert.equal(await page.locator('.tag-card').count(), 0);
   assert.equal(await page.locator('#photo-figure').isHidden(), true);
   assert.equal(uploads.length, 3);
+
+  // The station keeps its plan and label size over a reload (both reset to the defaults before).
+  await page.locator('#plan').selectOption('hub');
+  await page.reload();
+  await page.locator('#plan option[value="hub"]').waitFor({ state: 'attached' });
+  await page.waitForFunction(() => document.getElementById('plan').value === 'hub');
+  assert.equal(await page.locator('#label-size').inputValue(), '58.889');
   assert.deepEqual(page.problems, []);
 });
 
