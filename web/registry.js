@@ -77,13 +77,17 @@ function claimDetail() {
   return () => request === detailRequest;
 }
 
+// Returns the error when the pincode could not be shown (and this was still the latest request).
 async function showPincode(pin) {
   const latest = claimDetail();
   try {
     const record = await api(`/api/v1/pincodes/${pin}`);
     if (latest()) showRecord(record);
+    return null;
   } catch (error) {
-    if (latest()) show($('detail'), problemBox(error));
+    if (!latest()) return null;
+    show($('detail'), problemBox(error));
+    return error;
   }
 }
 
@@ -136,7 +140,14 @@ $('search-form').addEventListener('submit', (event) => {
         return;
       }
       show($('search-msg'));
-      await showPincode(pin);
+      // The list of an earlier search goes (and one still loading is dropped): left on screen it
+      // read as this search's answer ("No office matches." under a pincode that exists).
+      ++searchRequest;
+      search = null;
+      $('search-results').hidden = true;
+      const error = await showPincode(pin);
+      // Said beside the Search button too: on a phone the details card is far below it.
+      if (error) show($('search-msg'), problemBox(error));
       revealDetail();
       return;
     }

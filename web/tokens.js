@@ -167,6 +167,9 @@ export function setUpTokens({ token, needToken }) {
       const made = await api('/api/v1/tokens', { method: 'POST', token: token(), json: label ? { role, label } : { role } });
       // A text area, so a phone shows the whole secret to check by eye; never inside a form, so
       // no browser offers to save it.
+      // Broken between any two characters (a break after one of the secret's own hyphens read as
+      // a hyphenation), and as tall as the secret needs: on a phone it wrapped to three lines of
+      // two.
       const secret = el('textarea', { id: 'token-secret', readonly: true, rows: 2, class: 'mono secret',
         'aria-label': `Secret of token ${made.id}`, spellcheck: 'false', autocomplete: 'off' });
       secret.value = made.secret;
@@ -180,6 +183,8 @@ export function setUpTokens({ token, needToken }) {
         el('p', {}, `Token ${made.id} (${made.role}`, made.label ? [', ', el('bdi', {}, made.label)] : null,
           ') is made. Its secret is shown only now: copy it to the device that will use it, then hide it.'),
         secret, el('div', { class: 'actions' }, copy, done)));
+      secret.style.height = 'auto';
+      secret.style.height = `${secret.scrollHeight + 2}px`;
       secret.focus();
       secret.select();
       $('t-label').value = '';

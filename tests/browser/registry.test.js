@@ -337,3 +337,21 @@ test('Enter twice at the retire field asks and then keeps the pincode: the quest
   await page.locator('#retire-msg').filter({ hasText: '999041 is retired.' }).waitFor();
   assert.deepEqual(page.problems, []);
 });
+
+test('a search by pincode replaces the list of the search before it, and an unknown one says so beside Search', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  await page.getByLabel('District').first().fill('Central Delhi');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  await page.locator('#results-caption').filter({ hasText: /Offices 1–\d+ of \d+/ }).waitFor();
+  await page.getByLabel('District').first().fill('');
+  await page.getByLabel('Pincode').first().fill('560001');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  await page.locator('#detail-pincode').filter({ hasText: '560001' }).waitFor();
+  // Before, "Offices 1–50 of 58" of Delhi stayed under Bengaluru's pincode.
+  assert.equal(await page.locator('#search-results').isHidden(), true);
+  await page.getByLabel('Pincode').first().fill('999998');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  await page.locator('#search-msg [role="alert"]').filter({ hasText: 'Unknown Pincode' }).waitFor();
+  assert.deepEqual(page.problems, []);
+});

@@ -123,6 +123,23 @@ test('the token list is searched by label, role and id, and says when nothing ma
   assert.deepEqual(page.problems, []);
 });
 
+test('on a phone a new token\'s secret is shown whole, broken between characters', async () => {
+  const page = await newPage(session.browser, { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+  await page.goto(`${session.server.url}/registry.html`);
+  await page.locator('#token').fill(session.server.adminToken);
+  await page.locator('#t-role').selectOption('scanner');
+  await page.getByRole('button', { name: 'Create token' }).click();
+  const secret = page.locator('#token-secret');
+  await secret.waitFor();
+  // Every line of it in the box: it wrapped to three lines in a box of two, the first half hidden.
+  const [scroll, client] = await secret.evaluate((box) => [box.scrollHeight, box.clientHeight]);
+  assert.ok(scroll <= client, `secret box ${client} px tall for ${scroll} px of text`);
+  assert.equal(await secret.evaluate((box) => getComputedStyle(box).wordBreak), 'break-all');
+  await screenshot(page, 'registry-token-secret-phone');
+  await page.getByRole('button', { name: 'Done: hide the secret' }).click();
+  assert.deepEqual(page.problems, []);
+});
+
 test('the last admin token is not revoked, and a second one made in the page can revoke the first', async () => {
   const page = await openRegistry();
   await page.locator('#token').fill(session.server.adminToken);
