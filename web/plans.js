@@ -355,8 +355,14 @@ export function setUpSortPlans({ token, needToken }) {
     try {
       const answer = await api(`/api/v1/route/${pin}?plan=${encodeURIComponent(open.name)}`);
       const why = answer.fallback ? ' (no rule matches: the fallback bin)' : ` (the rule for ${answer.matched_prefix})`;
-      show($('plan-route-msg'), messageBox('ok', `${pin} goes to bin `, el('strong', { id: 'plan-route-bin' }, el('bdi', {}, answer.bin)), why,
-        dirty() ? '. Your unsaved changes are not in this answer.' : '.'));
+      // A pincode the registry does not hold (a typo, say) is routed all the same: said, or the
+      // admin checking one reads a confident bin for a parcel no label can be made for.
+      const status = answer.status === 'unknown'
+        ? ` ${pin} is not in the registry: no label is made for it.`
+        : answer.status === 'retired' ? ` ${pin} is retired: no new labels are made for it.` : '';
+      show($('plan-route-msg'), messageBox(answer.status === 'unknown' ? 'info' : 'ok', `${pin} goes to bin `,
+        el('strong', { id: 'plan-route-bin' }, el('bdi', {}, answer.bin)), why,
+        dirty() ? '. Your unsaved changes are not in this answer.' : '.', status));
     } catch (error) {
       show($('plan-route-msg'), problemBox(error));
     }

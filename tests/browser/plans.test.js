@@ -73,6 +73,12 @@ test('a new plan is saved, refused with the line named when wrong, and routes pi
   await page.locator('#p-try').press('Enter');
   await page.locator('#plan-route-bin').filter({ hasText: 'floor' }).waitFor();
   assert.match(await page.locator('#plan-route-msg').textContent(), /fallback/);
+  assert.doesNotMatch(await page.locator('#plan-route-msg').textContent(), /not in the registry/);
+  // A pincode the registry does not hold is routed too, and the answer says it is not there.
+  await page.locator('#p-try').fill('999999');
+  await page.locator('#p-try').press('Enter');
+  await page.locator('#plan-route-msg').filter({ hasText: '999999 is not in the registry' }).waitFor();
+  assert.match(await page.locator('#plan-route-msg').textContent(), /999999 goes to bin floor/);
 
   // A prefix that starts with 0 can match no pincode: the server refuses it, naming the line,
   // and the saved plan is unchanged.

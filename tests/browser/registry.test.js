@@ -134,7 +134,7 @@ test('a pasted pincode is checked whole, never cut to six characters', async () 
   // A mistyped 7-digit pincode was cut to 560001, a real one, and offered for retiring.
   await page.locator('#r-pin').fill('5600012');
   await page.getByRole('button', { name: 'Retire…' }).click();
-  await page.locator('#retire-msg [role="alert"]').filter({ hasText: /Not a pincode.*“5600012”.*7 characters/ }).waitFor();
+  await page.locator('#retire-msg [role="alert"]').filter({ hasText: /Not a pincode.*“5600012”.*it has 7 digits/ }).waitFor();
   assert.equal(await page.locator('#retire-yes').count(), 0);
   assert.equal((await (await fetch(`${server.url}/api/v1/pincodes/560001`)).json()).status, 'active');
   // Copied from a spreadsheet with spaces around it: all six digits kept.
@@ -353,5 +353,21 @@ test('a search by pincode replaces the list of the search before it, and an unkn
   await page.getByLabel('Pincode').first().fill('999998');
   await page.getByRole('button', { name: 'Search', exact: true }).click();
   await page.locator('#search-msg [role="alert"]').filter({ hasText: 'Unknown Pincode' }).waitFor();
+  assert.deepEqual(page.problems, []);
+});
+
+test('what is wrong with a pincode is said, and an empty district search says how districts are matched', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  const search = page.getByRole('button', { name: 'Search', exact: true });
+  for (const [typed, why] of [['099010', 'it starts with 0'], ['11000', 'it has 5 digits'], ['11000x', 'not a digit']]) {
+    await page.getByLabel('Pincode').first().fill(typed);
+    await search.click();
+    await page.locator('#search-msg').filter({ hasText: why }).waitFor();
+  }
+  await page.getByLabel('Pincode').first().fill('');
+  await page.getByLabel('District').first().fill('Bengaluru');
+  await search.click();
+  await page.locator('#results-caption').filter({ hasText: 'No office matches. A district or state is matched whole' }).waitFor();
   assert.deepEqual(page.problems, []);
 });
