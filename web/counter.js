@@ -401,23 +401,47 @@ $('print-pdf').addEventListener('click', (event) => {
   });
 });
 
+// A batch over the server's limit (its 413 gives the limit as `max_batch`) is made as several
+// PDFs of at most that many labels, in the list's order: a clerk with 120 labels got a refusal and
+// had to untick 20 rows one by one. Each PDF is named by its first pincode and count (and its
+// part), so that one batch's files do not replace another's in the downloads folder.
 $('batch-pdf').addEventListener('click', (event) => printing(event.currentTarget, async () => {
   if (needToken()) return;
   const chosen = printable();
-  const pins = chosen.map((r) => r.text);
   show($('print-msg'));
+  const saved = [];
+  let perPdf = chosen.length;
+  let part = chosen;
   try {
-    const body = { pincodes: chosen.map((r) => (r.office ? { pincode: r.text, office: r.office } : r.text)), size: sizeValue() };
-    if (planValue()) body.plan = planValue();
-    const blob = await api('/api/v1/labels', { method: 'POST', token: token(), json: body, as: 'blob' });
-    const name = `labels-${pins.length}.pdf`;
-    downloadBlob(blob, name);
-    show($('print-msg'), messageBox('ok', `${pins.length} ${pins.length === 1 ? 'label' : 'labels'} in one PDF downloaded (${name}).`));
+    for (let start = 0; start < chosen.length;) {
+      part = chosen.slice(start, start + perPdf);
+      const body = { pincodes: part.map((r) => (r.office ? { pincode: r.text, office: r.office } : r.text)), size: sizeValue() };
+      if (planValue()) body.plan = planValue();
+      let blob;
+      try {
+        blob = await api('/api/v1/labels', { method: 'POST', token: token(), json: body, as: 'blob' });
+      } catch (error) {
+        const limit = error instanceof ApiError && error.status === 413 ? error.numbers.max_batch : undefined;
+        if (Number.isInteger(limit) && limit > 0 && limit < part.length) {
+          perPdf = limit;
+          continue;
+        }
+        throw error;
+      }
+      const parts = Math.ceil(chosen.length / perPdf);
+      const name = `labels-${part[0].text}-${part.length}${parts > 1 ? `-part${saved.length + 1}of${parts}` : ''}.pdf`;
+      downloadBlob(blob, name);
+      saved.push(name);
+      start += part.length;
+    }
+    show($('print-msg'), messageBox('ok', saved.length === 1
+      ? `${chosen.length} ${chosen.length === 1 ? 'label' : 'labels'} in one PDF downloaded (${saved[0]}).`
+      : `${chosen.length} labels downloaded in ${saved.length} PDFs of at most ${perPdf} (the server's limit a PDF): ${saved.join(', ')}.`));
   } catch (error) {
-    const tooMany = error instanceof ApiError && error.status === 413;
-    const refused = refusedItem(error, chosen);
-    show($('print-msg'), problemBox(refused ? new ApiError(error.status, error.title, refused.detail) : error, tooMany
-      ? { hint: 'Untick some labels and download this batch, then tick the rest for a second one.' } : {}));
+    const refused = refusedItem(error, part);
+    const already = saved.length ? ` Already downloaded: ${saved.join(', ')}.` : '';
+    show($('print-msg'), problemBox(refused ? new ApiError(error.status, error.title, refused.detail + already)
+      : already ? new ApiError(error.status, error.title, `${error.detail || error.message}${already}`) : error));
     if (refused && error.status === 410) markRetired(refused.row.text);
   }
 }));

@@ -586,10 +586,11 @@ TEST_F(ServeTest, BodyAndPixelLimitsAreFlags) {
   EXPECT_EQ(ExpectJson(client().Post("/api/v1/detect", scanner(), SmallJpeg(1000, 1000),
                                      "image/jpeg"))["image"]["width"],
             1000);
-  ExpectProblem(
+  p = ExpectProblem(
       client().Post("/api/v1/labels", counter(), R"({"pincodes": ["110001", "110001", "110001"]})",
                     "application/json"),
       413);
+  EXPECT_EQ(p["max_batch"], 2) << p.dump();  // the counter page splits a batch by it
 }
 
 TEST_F(ServeTest, PhotosBeyondThePixelBudgetWaitTheirTurnAndAllAreRead) {

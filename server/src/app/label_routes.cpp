@@ -197,8 +197,12 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
   const json& pins = body["pincodes"];
   if (pins.empty()) throw HttpError(400, "'pincodes' is empty");
   if (pins.size() > context.max_batch) {
-    throw HttpError(413, "at most " + std::to_string(context.max_batch) +
-                             " labels per request, got " + std::to_string(pins.size()));
+    // The limit as a number too, so that a client (the counter page) can split the batch by it.
+    server::Problem problem{413, "Content Too Large",
+                            "at most " + std::to_string(context.max_batch) +
+                                " labels per request, got " + std::to_string(pins.size())};
+    problem.numbers = {{"max_batch", static_cast<std::int64_t>(context.max_batch)}};
+    throw HttpError(std::move(problem));
   }
   // The body's size and plan, else the query's, else the defaults.
   const auto text = [&](const char* key) -> std::optional<std::string> {

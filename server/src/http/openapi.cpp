@@ -140,7 +140,11 @@ std::string OpenApiJson(const Router& router, const ApiInfo& info) {
                 {"description", "413 Image Too Large: the photo's height as stored"}}},
               {"max_body_bytes",
                {{"type", "integer"},
-                {"description", "413 for a body over the limit: the limit in bytes"}}}}}}}}}}},
+                {"description", "413 for a body over the limit: the limit in bytes"}}},
+              {"max_batch",
+               {{"type", "integer"},
+                {"description",
+                 "413 for a batch of labels over the limit: labels per request"}}}}}}}}}}},
   };
   if (any_secured) {
     doc["components"]["securitySchemes"] = {{"bearer", {{"type", "http"}, {"scheme", "bearer"}}}};
