@@ -210,8 +210,9 @@ let confirmCount = 0;
 /**
  * A confirmation asked in the page (an alertdialog, not window.confirm, which a screen reader and
  * a test harness handle worse): `message` and two buttons. Yes runs `onYes` with its button busy;
- * No, and Escape while yes is not running, run `onNo`. Returns the box and its yes button (to be
- * shown, then focused).
+ * No, and Escape while yes is not running, run `onNo`. Returns the box and its two buttons: the
+ * caller shows the box and focuses one (No, when yes cannot be undone: a second Enter of the one
+ * that opened the box must not confirm it).
  */
 export function confirmBox({ label, message, yes, yesId, yesClass = 'danger', no = 'Cancel', onYes, onNo }) {
   const yesButton = el('button', { type: 'button', class: yesClass, id: yesId }, yes);
@@ -348,7 +349,6 @@ export function bindToken({ name, input, status, forget, toggle, onForget }) {
   return () => cleanToken(input.value);
 }
 
-/** Fills a <select> with the server's sort plans; keeps `preferred` selected when it exists. */
 // A station's settings (the hub's sort plan, the label stock in the printer) kept from one visit
 // to the next in localStorage under `pintag.<key>`; null when none is kept or storage is off.
 export function remembered(key) {
@@ -361,7 +361,8 @@ export function remembered(key) {
 
 export function remember(key, value) {
   try {
-    window.localStorage.setItem(`pintag.${key}`, value);
+    if (value === null) window.localStorage.removeItem(`pintag.${key}`);
+    else window.localStorage.setItem(`pintag.${key}`, value);
   } catch {
     // Storage off (a private window's quota): the setting lasts this visit only.
   }
@@ -382,7 +383,8 @@ export function rememberSelect(select, key) {
 
 /**
  * Fills a plan <select> from the server. It then shows the plan chosen on this page since it
- * opened, else `preferred` (a kept choice), else what it showed.
+ * opened, else `preferred` (a kept choice) when the server has it, else the default plan (a kept
+ * plan since deleted must not leave the list on whichever plan came first).
  */
 export async function loadPlans(select, preferred = 'default') {
   try {
@@ -403,8 +405,10 @@ export async function loadPlans(select, preferred = 'default') {
         select.append(el('option', { value: plan.name, title: plan.description || null }, text));
       }
     }
-    const want = select.dataset.chosen ? current : (preferred || current);
-    if ([...select.options].some((o) => o.value === want)) select.value = want;
+    const has = (name) => [...select.options].some((o) => o.value === name);
+    const want = select.dataset.chosen ? current : preferred;
+    if (has(want)) select.value = want;
+    else if (!select.dataset.chosen && has('default')) select.value = 'default';
   } catch {
     // Plans are a convenience here; the default plan still works when the list fails.
   }

@@ -9,7 +9,10 @@ const $ = (id) => document.getElementById(id);
 const token = bindToken({
   name: 'counter', input: $('token'), status: $('token-status'), forget: $('token-forget'), toggle: $('token-toggle'),
   // The preview was fetched with the token: it goes with it.
-  onForget: () => clearPreview('Paste a counter token above to preview and print labels.'),
+  onForget: () => {
+    ++batchRun;
+    clearPreview('Paste a counter token above to preview and print labels.');
+  },
 });
 
 const kPreviewDpi = 120;
@@ -26,6 +29,10 @@ let previewRequest = 0;
 /** Only the latest lookup's answer is drawn; `lookupStop` stops the requests of the one running. */
 let lookupRequest = 0;
 let lookupStop = null;
+/** Settles once the plan list has come and the kept plan is chosen (at the end of this file). */
+let plansLoaded = Promise.resolve();
+/** A Forget or a new lookup ends a split batch between its parts (the batch's click numbers it). */
+let batchRun = 0;
 
 const sizeValue = () => document.querySelector('input[name="size"]:checked').value;
 const planValue = () => $('plan').value;
@@ -129,6 +136,7 @@ async function lookup() {
   // A list submitted while another is still being looked up (Ctrl+Enter submits whatever the
   // button's state) replaces it: the older lookup stops asking and its answers are dropped.
   const request = ++lookupRequest;
+  ++batchRun;  // a batch of the list before stops between its parts
   if (lookupStop) lookupStop.abort();
   const stop = new AbortController();
   lookupStop = stop;
@@ -271,6 +279,7 @@ async function refreshPreview() {
   const request = ++previewRequest;
   $('preview').setAttribute('aria-busy', 'true');
   try {
+    await plansLoaded;
     const blob = await api(`/api/v1/labels/${selected}.png${labelQuery({ dpi: kPreviewDpi, office: row.office })}`,
       { token: token(), as: 'blob' });
     if (request !== previewRequest) return;
@@ -298,6 +307,7 @@ async function refreshPreview() {
 
 // The pincode is taken when the request starts: the clerk may pick another row before it ends.
 async function labelPdf(pincode, office) {
+  await plansLoaded;
   return api(`/api/v1/labels/${pincode}.pdf${labelQuery({ office })}`, { token: token(), as: 'blob' });
 }
 
@@ -403,23 +413,30 @@ $('print-pdf').addEventListener('click', (event) => {
 
 // A batch over the server's limit (its 413 gives the limit as `max_batch`) is made as several
 // PDFs of at most that many labels, in the list's order: a clerk with 120 labels got a refusal and
-// had to untick 20 rows one by one. Each PDF is named by its first pincode and count (and its
-// part), so that one batch's files do not replace another's in the downloads folder.
+// had to untick 20 rows one by one. Every part is asked with the size, plan and token of the
+// click; when a later part fails, the rows of the parts saved are unticked, so that the next click
+// asks only for the rest. Each PDF is named by its first pincode and count (and its part), so that one
+// batch's files do not replace another's in the downloads folder.
 $('batch-pdf').addEventListener('click', (event) => printing(event.currentTarget, async () => {
   if (needToken()) return;
+  await plansLoaded;  // the kept plan, not the default it replaces
+  const run = ++batchRun;
   const chosen = printable();
+  const asked = { size: sizeValue(), plan: planValue(), token: token() };
   show($('print-msg'));
   const saved = [];
+  const savedRows = [];
   let perPdf = chosen.length;
   let part = chosen;
   try {
     for (let start = 0; start < chosen.length;) {
+      if (run !== batchRun) return;  // forgotten or replaced before this part was asked for
       part = chosen.slice(start, start + perPdf);
-      const body = { pincodes: part.map((r) => (r.office ? { pincode: r.text, office: r.office } : r.text)), size: sizeValue() };
-      if (planValue()) body.plan = planValue();
+      const body = { pincodes: part.map((r) => (r.office ? { pincode: r.text, office: r.office } : r.text)), size: asked.size };
+      if (asked.plan) body.plan = asked.plan;
       let blob;
       try {
-        blob = await api('/api/v1/labels', { method: 'POST', token: token(), json: body, as: 'blob' });
+        blob = await api('/api/v1/labels', { method: 'POST', token: asked.token, json: body, as: 'blob' });
       } catch (error) {
         const limit = error instanceof ApiError && error.status === 413 ? error.numbers.max_batch : undefined;
         if (Number.isInteger(limit) && limit > 0 && limit < part.length) {
@@ -428,20 +445,30 @@ $('batch-pdf').addEventListener('click', (event) => printing(event.currentTarget
         }
         throw error;
       }
+      if (run !== batchRun) return;  // forgotten or replaced meanwhile: nothing more is saved
       const parts = Math.ceil(chosen.length / perPdf);
       const name = `labels-${part[0].text}-${part.length}${parts > 1 ? `-part${saved.length + 1}of${parts}` : ''}.pdf`;
       downloadBlob(blob, name);
       saved.push(name);
+      savedRows.push(...part);
       start += part.length;
     }
     show($('print-msg'), messageBox('ok', saved.length === 1
       ? `${chosen.length} ${chosen.length === 1 ? 'label' : 'labels'} in one PDF downloaded (${saved[0]}).`
-      : `${chosen.length} labels downloaded in ${saved.length} PDFs of at most ${perPdf} (the server's limit a PDF): ${saved.join(', ')}.`));
+      : `${chosen.length} labels downloaded in ${saved.length} PDFs of at most ${perPdf} each, the most the server makes per PDF: ${saved.join(', ')}. If the browser asked whether this page may download several files, it needs your yes.`));
   } catch (error) {
+    if (run !== batchRun) return;
+    if (savedRows.length) {
+      // Part of the batch is saved: its rows are unticked, so that the next click asks for the rest.
+      for (const row of savedRows) row.include = false;
+      renderTable();
+    }
     const refused = refusedItem(error, part);
-    const already = saved.length ? ` Already downloaded: ${saved.join(', ')}.` : '';
+    const already = saved.length ? ` Already downloaded, and unticked: ${saved.join(', ')}.` : '';
+    const tooMany = error instanceof ApiError && error.status === 413;
     show($('print-msg'), problemBox(refused ? new ApiError(error.status, error.title, refused.detail + already)
-      : already ? new ApiError(error.status, error.title, `${error.detail || error.message}${already}`) : error));
+      : already ? new ApiError(error.status, error.title, `${error.detail || error.message}${already}`) : error,
+    tooMany ? { hint: 'Untick some labels and download this batch, then tick the rest for a second one.' } : {}));
     if (refused && error.status === 410) markRetired(refused.row.text);
   }
 }));
@@ -459,9 +486,7 @@ rememberSelect($('plan'), 'counter.plan');
 $('plan').addEventListener('change', refreshPreview);
 $('token').addEventListener('change', refreshPreview);
 
-// The kept plan is set once the list has come: anything shown with the plan before is redone.
-const planAtStart = $('plan').value;
-loadPlans($('plan'), remembered('counter.plan') || 'default').then(() => {
-  if ($('plan').value !== planAtStart) refreshPreview();
-});
+// The kept plan is set once the list has come; previews and prints wait for it (plansLoaded), so
+// that none is made with the default plan it replaces.
+plansLoaded = loadPlans($('plan'), remembered('counter.plan') || 'default');
 updateButtons();

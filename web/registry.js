@@ -51,6 +51,8 @@ function refreshSearch() {
 }
 
 function showRecord(record, note) {
+  // A search's refusal beside the Search button is old news once another record is shown.
+  show($('search-msg'));
   const offices = record.offices || [];
   show($('detail'),
     note ? messageBox('ok', note) : null,
@@ -125,7 +127,7 @@ async function runSearch() {
     const pages = Math.max(1, Math.ceil(page.total / page.limit));
     const current = Math.floor(page.offset / page.limit) + 1;
     const whole = asked.district || asked.state
-      ? ' A district or state is matched whole, as the registry spells it (its older names, some of them); an office name by its first letters.'
+      ? ' A district or state is matched whole and as the registry spells it, which may be an older name (Bangalore, not Bengaluru); an office name by its first letters.'
       : '';
     $('results-caption').textContent = page.total === 0
       ? `No office matches.${whole}` : `Offices ${first}–${last} of ${page.total}`;
@@ -156,8 +158,12 @@ $('search-form').addEventListener('submit', (event) => {
       search = null;
       $('search-results').hidden = true;
       const error = await showPincode(pin);
-      // Said beside the Search button too: on a phone the details card is far below it.
-      if (error) show($('search-msg'), problemBox(error));
+      // Said beside the Search button (on a phone the details card is far below it), and once:
+      // the card keeps a plain note, not a second alert for a screen reader to announce.
+      if (error) {
+        show($('search-msg'), problemBox(error));
+        show($('detail'), el('p', { class: 'muted' }, `${pin}: ${error.title || 'not found'} (see beside Search).`));
+      }
       revealDetail();
       return;
     }

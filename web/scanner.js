@@ -4,7 +4,7 @@
 // would bring the server's drawing in the same answer, but as the whole photo again in PNG,
 // megabytes per scan over a phone's connection, where the corners are a few hundred bytes.)
 import {
-  api, query, el, show, problemBox, badge, busy, bindToken, loadPlans, remembered, rememberSelect,
+  api, query, el, show, problemBox, badge, busy, bindToken, loadPlans, remember, remembered, rememberSelect,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -17,6 +17,8 @@ const SVG = 'http://www.w3.org/2000/svg';
 let photoUrl = null;
 let photoUnshowable = false;  // the browser cannot draw this file (a TIFF, say); the server can read it
 let scanCount = 0;
+/** Settles once the plan list has come and the kept plan is chosen (at the end of this file). */
+let plansLoaded = Promise.resolve();
 
 function detectPath(extra = {}) {
   return `/api/v1/detect${query({ plan: $('plan').value, tag_size_mm: $('label-size').value, ...extra })}`;
@@ -278,6 +280,8 @@ async function scan() {
     return;
   }
   waitingForToken = false;
+  await plansLoaded;
+  if (run !== scanCount) return;
   if (photoUrl) URL.revokeObjectURL(photoUrl);
   photoUrl = URL.createObjectURL(file);
   photoUnshowable = false;
@@ -384,7 +388,9 @@ $('scan-photo').addEventListener('error', () => {
 // file again fires no change, and "Read tags" is below the fold on a phone.
 let waitingForToken = false;
 $('token').addEventListener('input', () => {
-  if (waitingForToken && $('photo').files.length && /^pt_\d+_[A-Za-z0-9_-]{40,}$/.test(token())) {
+  // A whole secret: pt_<id>_ and 43 characters (32 random bytes, base64url), so that typing one
+  // does not send it unfinished.
+  if (waitingForToken && $('photo').files.length && /^pt_\d+_[A-Za-z0-9_-]{43}$/.test(token())) {
     busy($('scan'), scan);
   }
 });
@@ -421,8 +427,10 @@ rememberSelect($('label-size'), 'scanner.size');
 $('plan').addEventListener('change', settingsChanged);
 $('label-size').addEventListener('change', settingsChanged);
 
-// The kept plan is set once the list has come: anything shown with the plan before is redone.
-const planAtStart = $('plan').value;
-loadPlans($('plan'), remembered('scanner.plan') || 'default').then(() => {
-  if ($('plan').value !== planAtStart) settingsChanged();
+// The kept plan is set once the list has come, and a read waits for it (plansLoaded): a photo
+// chosen before would be read with the server's default plan. A kept plan the server no longer
+// has is forgotten (the list shows the default plan).
+const keptPlan = remembered('scanner.plan');
+plansLoaded = loadPlans($('plan'), keptPlan || 'default').then(() => {
+  if (keptPlan && $('plan').value !== keptPlan && !$('plan').dataset.chosen) remember('scanner.plan', null);
 });

@@ -203,7 +203,22 @@ test('a batch over the server\'s limit is made as several PDFs of at most that m
   assert.equal(pdfPageSize(second).pages, 1);
   assert.match(execFileSync('pdftotext', [second, '-'], { encoding: 'utf8' }), /560 001/);
   assert.equal(await page.locator('#print-msg [role="alert"]').count(), 0);
-  assert.deepEqual(page.problems, []);
+  // All made: the rows stay ticked (a jammed printer may want the batch again).
+  assert.equal(await page.getByRole('button', { name: /Batch PDF \(101 labels\)/ }).count(), 1);
+
+  // A later part that fails: the parts saved are unticked, so that the next click asks only for
+  // the rest instead of printing the first hundred twice.
+  let calls = 0;
+  await page.route('**/api/v1/labels', (route) => (++calls === 3 ? route.abort() : route.continue()));
+  await page.getByRole('button', { name: /Batch PDF \(101 labels\)/ }).click();
+  await page.locator('#print-msg [role="alert"]').filter({ hasText: 'Already downloaded, and unticked: labels-110001-100-part1of2.pdf' }).waitFor();
+  await page.getByRole('button', { name: /Batch PDF \(1 label\)/ }).waitFor();
+  await page.unroute('**/api/v1/labels');
+  const rest = page.waitForEvent('download');
+  await page.getByRole('button', { name: /Batch PDF \(1 label\)/ }).click();
+  assert.equal((await rest).suggestedFilename(), 'labels-560001-1.pdf');
+  const pageErrors = page.problems.filter((p) => !/net::ERR_FAILED/.test(p));
+  assert.deepEqual(pageErrors, []);
 });
 
 test('counter shows the problem detail for a wrong token', async () => {

@@ -96,9 +96,12 @@ test('scanner reads the tag on a label photo and shows the outlined photo', asyn
   // file again fires no change, and the "Read tags" button is below the fold.
   await page.locator('#photo').setInputFiles(labelPng);
   await page.locator('#scan-msg [role="alert"]').filter({ hasText: 'No scanner token' }).waitFor();
-  await page.locator('#token').fill(scannerToken.slice(0, 10));  // part of one: not yet
-  await page.waitForTimeout(300);
-  assert.equal(await page.locator('.tag-card').count(), 0);
+  for (const part of [scannerToken.slice(0, 10), scannerToken.slice(0, -3)]) {  // typed: not yet
+    await page.locator('#token').fill(part);
+    await page.waitForTimeout(300);
+    assert.equal(await page.locator('.tag-card').count(), 0);
+    assert.equal(await page.locator('#scan-msg [role="alert"]').filter({ hasText: 'No scanner token' }).count(), 1);
+  }
   await page.locator('#token').fill(scannerToken);
   await page.locator('.tag-card[data-pincode="110001"]').waitFor();
   assert.equal(await page.locator('#scan-msg [role="alert"]').count(), 0);
@@ -428,12 +431,35 @@ test('a change of sort plan or label size reads the photo again, and the summary
   assert.equal(await page.locator('#photo-figure').isHidden(), true);
   assert.equal(uploads.length, 3);
 
-  // The station keeps its plan and label size over a reload (both reset to the defaults before).
+  // The station keeps its plan and label size over a reload (both reset to the defaults before),
+  // and a photo chosen before the plan list has come is read once, with the kept plan.
   await page.locator('#plan').selectOption('hub');
+  await page.locator('#token').fill(scannerToken);
+  let releasePlans;
+  const plansHeld = new Promise((resolve) => { releasePlans = resolve; });
+  await page.route('**/api/v1/sortplans', async (route) => {
+    await plansHeld;
+    await route.continue();
+  });
+  await page.reload();
+  await page.locator('#photo').setInputFiles(labelPng);
+  await page.waitForTimeout(300);
+  assert.equal(uploads.length, 3, 'no read before the plan list has come');
+  releasePlans();
+  await page.locator('.tag-card[data-pincode="110001"] .bin').filter({ hasText: 'parliament' }).waitFor();
+  assert.equal(await page.locator('#plan').inputValue(), 'hub');
+  assert.equal(await page.locator('#label-size').inputValue(), '58.889');
+  await page.waitForTimeout(300);
+  assert.equal(uploads.length, 4);
+  assert.equal(uploads[3].get('plan'), 'hub');
+  await page.unroute('**/api/v1/sortplans');
+
+  // A kept plan the server no longer has: the default plan is shown, and the kept one forgotten.
+  await page.evaluate(() => localStorage.setItem('pintag.scanner.plan', 'gone'));
   await page.reload();
   await page.locator('#plan option[value="hub"]').waitFor({ state: 'attached' });
-  await page.waitForFunction(() => document.getElementById('plan').value === 'hub');
-  assert.equal(await page.locator('#label-size').inputValue(), '58.889');
+  await page.waitForFunction(() => document.getElementById('plan').value === 'default');
+  await page.waitForFunction(() => localStorage.getItem('pintag.scanner.plan') === null);
   assert.deepEqual(page.problems, []);
 });
 

@@ -48,9 +48,15 @@ test('a token made in the page works with its role, and a revoked one is refused
   assert.equal(await page.locator('#token-secret').count(), 0);
   await screenshot(page, 'registry-tokens');
 
-  // Escape keeps it; Revoke revokes it, and the server refuses it from then on.
+  // Escape keeps it, and so does Enter (the question opens on Cancel: a revoke cannot be
+  // undone); Revoke revokes it, and the server refuses it from then on.
   await page.getByRole('button', { name: `Revoke token ${id}`, exact: true }).click();
   await page.locator('#token-revoke-yes').press('Escape');
+  assert.equal(await statusWith(scanner), 403);
+  await page.getByRole('button', { name: `Revoke token ${id}`, exact: true }).click();
+  await page.getByRole('alertdialog').waitFor();
+  await page.keyboard.press('Enter');
+  await page.getByRole('alertdialog').waitFor({ state: 'detached' });
   assert.equal(await statusWith(scanner), 403);
   await page.getByRole('button', { name: `Revoke token ${id}`, exact: true }).click();
   await page.locator('#token-revoke-yes').click();
@@ -132,6 +138,8 @@ test('on a phone a new token\'s secret is shown whole, broken between characters
   const secret = page.locator('#token-secret');
   await secret.waitFor();
   // Every line of it in the box: it wrapped to three lines in a box of two, the first half hidden.
+  // (At this width breaking anywhere alone keeps it to two lines; the box's height is set from
+  // the text as well, for narrower screens and larger fonts.)
   const [scroll, client] = await secret.evaluate((box) => [box.scrollHeight, box.clientHeight]);
   assert.ok(scroll <= client, `secret box ${client} px tall for ${scroll} px of text`);
   assert.equal(await secret.evaluate((box) => getComputedStyle(box).wordBreak), 'break-all');
