@@ -72,8 +72,10 @@ std::string JpegClaiming(int width, int height) {
   }
   return jpeg;
 }
-/// A little-endian TIFF whose one IFD claims width x height, 8-bit grey in one strip.
-std::string TiffClaiming(std::uint32_t width, std::uint32_t height, std::uint16_t channels = 1) {
+/// A little-endian TIFF whose one IFD claims width x height, 8-bit grey: in one strip, or in
+/// square tiles of `tile_side` when that is given.
+std::string TiffClaiming(std::uint32_t width, std::uint32_t height, std::uint16_t channels = 1,
+                         std::uint32_t tile_side = 0) {
   std::string tiff = "II*";
   tiff += '\0';
   const auto u16 = [&](std::uint16_t v) {
@@ -84,24 +86,34 @@ std::string TiffClaiming(std::uint32_t width, std::uint32_t height, std::uint16_
     for (int shift : {0, 8, 16, 24}) tiff += static_cast<char>((v >> shift) & 0xFF);
   };
   u32(8);
-  u16(9);
+  u16(tile_side > 0 ? 10 : 9);
   const auto entry = [&](std::uint16_t tag, std::uint16_t type, std::uint32_t value) {
     u16(tag);
     u16(type);
     u32(1);
     u32(value);
   };
-  entry(256, 4, width);     // ImageWidth, LONG
-  entry(257, 4, height);    // ImageLength
-  entry(258, 3, 8);         // BitsPerSample
-  entry(259, 3, 1);         // Compression: none
-  entry(262, 3, 1);         // PhotometricInterpretation: grey
-  entry(273, 4, 128);       // StripOffsets
-  entry(277, 3, channels);  // SamplesPerPixel
-  entry(278, 4, height);    // RowsPerStrip
-  entry(279, 4, 64);        // StripByteCounts
+  entry(256, 4, width);   // ImageWidth, LONG
+  entry(257, 4, height);  // ImageLength
+  entry(258, 3, 8);       // BitsPerSample
+  entry(259, 3, 1);       // Compression: none
+  entry(262, 3, 1);       // PhotometricInterpretation: grey
+  if (tile_side > 0) {
+    entry(277, 3, channels);   // SamplesPerPixel
+    entry(322, 4, tile_side);  // TileWidth
+    entry(323, 4, tile_side);  // TileLength
+    entry(324, 4, 160);        // TileOffsets
+    entry(325, 4, 1024);       // TileByteCounts
+  } else {
+    entry(273, 4, 128);       // StripOffsets
+    entry(277, 3, channels);  // SamplesPerPixel
+    entry(278, 4, height);    // RowsPerStrip
+    entry(279, 4, 64);        // StripByteCounts
+  }
   u32(0);
-  tiff += std::string(128 + 64 - tiff.size(), '\0');
+  const std::size_t data_at = tile_side > 0 ? 160 : 128;
+  tiff += std::string(data_at - tiff.size(), '\0');
+  tiff += std::string(tile_side > 0 ? 1024 : 64, tile_side > 0 ? '\x80' : '\0');
   return tiff;
 }
 /// A WebP (VP8X) whose canvas claims width x height (each at most 2^24).
@@ -268,34 +280,7 @@ TEST_F(HostileCatalogue, TiffOfASmallImageInHugeTilesIsRefusedWithoutShrinkingNu
   // into a buffer of its own size (1.5 GB). Refused as too large; the problem gives no
   // max_pixels, width and height, which a client (the scanner page) would shrink the photo to,
   // since a smaller image in the same tiles would be refused again.
-  std::string tiff = "II*";
-  tiff += '\0';
-  const auto u16 = [&](std::uint16_t v) {
-    tiff += static_cast<char>(v & 0xFF);
-    tiff += static_cast<char>(v >> 8);
-  };
-  const auto u32 = [&](std::uint32_t v) {
-    for (int shift : {0, 8, 16, 24}) tiff += static_cast<char>((v >> shift) & 0xFF);
-  };
-  const auto entry = [&](std::uint16_t tag, std::uint16_t type, std::uint32_t value) {
-    u16(tag);
-    u16(type);
-    u32(1);
-    u32(value);
-  };
-  u32(8);
-  u16(9);
-  entry(256, 4, 64);     // ImageWidth
-  entry(257, 4, 48);     // ImageLength
-  entry(258, 3, 8);      // BitsPerSample
-  entry(259, 3, 1);      // Compression: none
-  entry(262, 3, 1);      // PhotometricInterpretation: grey
-  entry(322, 4, 16384);  // TileWidth
-  entry(323, 4, 16384);  // TileLength
-  entry(324, 4, 128);    // TileOffsets
-  entry(325, 4, 1024);   // TileByteCounts
-  u32(0);
-  tiff += std::string(128 + 1024 - tiff.size(), '\x80');
+  const std::string tiff = TiffClaiming(64, 48, 1, 16384);
   const Answer tiles = Send(server_->port(), detect(tiff, "image/tiff"));
   EXPECT_EQ(tiles.status, 413) << tiles.body;
   const json tiles_problem = json::parse(tiles.body, nullptr, false);
