@@ -370,7 +370,7 @@ export function remember(key, value) {
 
 /**
  * Keeps a <select>'s choice under `key` (remember above): the kept choice is restored now when the
- * select has it, and every change is kept. For a plan list filled later, loadPlans restores it.
+ * select has it, and every change is kept. For a plan list filled later, use keepPlan.
  */
 export function rememberSelect(select, key) {
   const kept = remembered(key);
@@ -386,7 +386,7 @@ export function rememberSelect(select, key) {
  * opened, else `preferred` (a kept choice) when the server has it, else the default plan (a kept
  * plan since deleted must not leave the list on whichever plan came first).
  */
-export async function loadPlans(select, preferred = 'default') {
+async function loadPlans(select, preferred = 'default') {
   try {
     const { plans } = await api('/api/v1/sortplans');
     const current = select.value;
@@ -412,4 +412,18 @@ export async function loadPlans(select, preferred = 'default') {
   } catch {
     // Plans are a convenience here; the default plan still works when the list fails.
   }
+}
+
+/**
+ * A plan <select> whose choice is kept under `key` (rememberSelect) and filled from the server
+ * (loadPlans) with the kept plan chosen; a kept plan the server no longer has is forgotten. The
+ * promise settles once the list has come: what a page makes with the plan waits for it, or it
+ * would be made with the default plan the kept one replaces.
+ */
+export function keepPlan(select, key) {
+  rememberSelect(select, key);
+  const kept = remembered(key);
+  return loadPlans(select, kept || 'default').then(() => {
+    if (kept && select.value !== kept && !select.dataset.chosen) remember(key, null);
+  });
 }

@@ -1,7 +1,7 @@
 // Dispatch counter: pincodes in, office and district to confirm, label preview, PDF out.
 import {
-  api, ApiError, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, loadPlans,
-  remember, remembered, rememberSelect,
+  api, ApiError, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, keepPlan,
+  remember, remembered,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -482,11 +482,9 @@ for (const input of document.querySelectorAll('input[name="size"]')) {
     refreshPreview();
   });
 }
-rememberSelect($('plan'), 'counter.plan');
 $('plan').addEventListener('change', refreshPreview);
 $('token').addEventListener('change', refreshPreview);
 
-// The kept plan is set once the list has come; previews and prints wait for it (plansLoaded), so
-// that none is made with the default plan it replaces.
-plansLoaded = loadPlans($('plan'), remembered('counter.plan') || 'default');
+// Previews and prints wait for the kept plan (plansLoaded).
+plansLoaded = keepPlan($('plan'), 'counter.plan');
 updateButtons();

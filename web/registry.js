@@ -85,17 +85,22 @@ function claimDetail() {
   return () => request === detailRequest;
 }
 
-// Returns the error when the pincode could not be shown (and this was still the latest request).
-async function showPincode(pin) {
+// `besideSearch`: a pincode searched for, whose refusal is said beside the Search button (on a
+// phone the details card is far below it) and once: the card keeps a plain note, not a second
+// alert for a screen reader to announce.
+async function showPincode(pin, { besideSearch = false } = {}) {
   const latest = claimDetail();
   try {
     const record = await api(`/api/v1/pincodes/${pin}`);
     if (latest()) showRecord(record);
-    return null;
   } catch (error) {
-    if (!latest()) return null;
-    show($('detail'), problemBox(error));
-    return error;
+    if (!latest()) return;
+    if (!besideSearch) {
+      show($('detail'), problemBox(error));
+      return;
+    }
+    show($('search-msg'), problemBox(error));
+    show($('detail'), el('p', { class: 'muted' }, `${pin}: ${error.title || 'not found'} (see beside Search).`));
   }
 }
 
@@ -157,13 +162,7 @@ $('search-form').addEventListener('submit', (event) => {
       ++searchRequest;
       search = null;
       $('search-results').hidden = true;
-      const error = await showPincode(pin);
-      // Said beside the Search button (on a phone the details card is far below it), and once:
-      // the card keeps a plain note, not a second alert for a screen reader to announce.
-      if (error) {
-        show($('search-msg'), problemBox(error));
-        show($('detail'), el('p', { class: 'muted' }, `${pin}: ${error.title || 'not found'} (see beside Search).`));
-      }
+      await showPincode(pin, { besideSearch: true });
       revealDetail();
       return;
     }

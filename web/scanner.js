@@ -4,7 +4,7 @@
 // would bring the server's drawing in the same answer, but as the whole photo again in PNG,
 // megabytes per scan over a phone's connection, where the corners are a few hundred bytes.)
 import {
-  api, query, el, show, problemBox, badge, busy, bindToken, loadPlans, remember, remembered, rememberSelect,
+  api, query, el, show, problemBox, badge, busy, bindToken, keepPlan, rememberSelect,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -422,15 +422,10 @@ function settingsChanged() {
 }
 // A hub's scanner keeps its plan and label size from one visit to the next (they reset to the
 // default plan on every reload, and the bins shown were another plan's).
-rememberSelect($('plan'), 'scanner.plan');
 rememberSelect($('label-size'), 'scanner.size');
 $('plan').addEventListener('change', settingsChanged);
 $('label-size').addEventListener('change', settingsChanged);
 
-// The kept plan is set once the list has come, and a read waits for it (plansLoaded): a photo
-// chosen before would be read with the server's default plan. A kept plan the server no longer
-// has is forgotten (the list shows the default plan).
-const keptPlan = remembered('scanner.plan');
-plansLoaded = loadPlans($('plan'), keptPlan || 'default').then(() => {
-  if (keptPlan && $('plan').value !== keptPlan && !$('plan').dataset.chosen) remember('scanner.plan', null);
-});
+// A read waits for the kept plan (plansLoaded): a photo chosen before the list came would be read
+// with the server's default plan.
+plansLoaded = keepPlan($('plan'), 'scanner.plan');
