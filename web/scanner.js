@@ -6,6 +6,7 @@
 import {
   api, query, el, show, problemBox, badge, busy, bindToken, keepPlan, rememberSelect,
 } from './api.js';
+import { exifFocalPixels } from './exif.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -294,7 +295,9 @@ async function scan() {
     for (let round = 0; ; ++round) {
       try {
         const photo = shrunk ? new File([shrunk.blob], 'photo-smaller.jpg', { type: 'image/jpeg' }) : file;
-        answer = await api(detectPath(), { method: 'POST', token: token(), body: form(photo) });
+        // The smaller photo lost the file's EXIF: its lens goes as the camera's focal length.
+        const lens = shrunk && shrunk.focalPx ? { fx: shrunk.focalPx.toFixed(3), fy: shrunk.focalPx.toFixed(3) } : {};
+        answer = await api(detectPath(lens), { method: 'POST', token: token(), body: form(photo) });
         break;
       } catch (error) {
         if (run !== scanCount) return;
@@ -302,6 +305,7 @@ async function scan() {
         if (!limits) throw error;
         shrunk = await shrunkToFit(file, limits);
         if (!shrunk) throw error;
+        shrunk.focalPx = await exifFocalPixels(file, shrunk.fromWidth, shrunk.fromHeight, shrunk.width, shrunk.height);
         if (run !== scanCount) return;
         // What is read is what is shown: the outlines are in the smaller photo's pixels.
         URL.revokeObjectURL(photoUrl);
@@ -329,8 +333,8 @@ async function scan() {
     approximate ? ' · distances approximate (camera field of view assumed)' : null,
     photoUnshowable ? kUnshowable : null);
   if (shrunk) {
-    // Smaller tags are harder to read, and the camera's details went with the file's metadata.
-    // What to change depends on the limit: the camera's resolution, or the file it saves.
+    // Smaller tags are harder to read. What to change depends on the limit: the camera's
+    // resolution, or the file it saves.
     $('summary').append(el('span', { class: 'shrunk-note' },
       ` · made smaller to fit the server's limit (${shrunk.fromWidth} × ${shrunk.fromHeight}, `
       + `${megapixels(shrunk.fromWidth * shrunk.fromHeight)}): `

@@ -245,10 +245,10 @@ test('the outline sits on the tag of a WebP whose EXIF orientation the browser d
   assert.deepEqual(page.problems, []);
 });
 
-// A WebP saved with an EXIF chunk holding only Orientation `o` (little-endian TIFF), from a plain
+// A WebP saved with an EXIF chunk holding `tiff` (a TIFF-structured EXIF block), from a plain
 // WebP (RIFF, WEBP, one image chunk) of `width` × `height`: the extended layout, VP8X with the
 // EXIF flag, the image chunk, then EXIF.
-function webpWithOrientation(plain, width, height, o) {
+function webpWithExif(plain, width, height, tiff) {
   const chunk = (tag, payload) => {
     const head = Buffer.alloc(8);
     head.write(tag, 0, 'latin1');
@@ -259,21 +259,48 @@ function webpWithOrientation(plain, width, height, o) {
   vp8x[0] = 0x08;
   vp8x.writeUIntLE(width - 1, 4, 3);
   vp8x.writeUIntLE(height - 1, 7, 3);
-  const tiff = Buffer.alloc(26);
-  tiff.write('II', 0, 'latin1');
-  tiff.writeUInt16LE(42, 2);
-  tiff.writeUInt32LE(8, 4);
-  tiff.writeUInt16LE(1, 8);  // one entry
-  tiff.writeUInt16LE(0x0112, 10);
-  tiff.writeUInt16LE(3, 12);  // SHORT
-  tiff.writeUInt32LE(1, 14);
-  tiff.writeUInt16LE(o, 18);
-  tiff.writeUInt32LE(0, 22);  // no next directory
   const body = Buffer.concat([Buffer.from('WEBP', 'latin1'), chunk('VP8X', vp8x), plain.subarray(12), chunk('EXIF', tiff)]);
   const riff = Buffer.alloc(8);
   riff.write('RIFF', 0, 'latin1');
   riff.writeUInt32LE(body.length, 4);
   return Buffer.concat([riff, body]);
+}
+
+// A TIFF-structured EXIF block of one directory, IFD0, holding SHORT entries `[[tag, value], …]`,
+// and, when `exifShorts` are given, a pointer to an EXIF directory holding those.
+function tiffBlock({ bigEndian = false, shorts = [], exifShorts = null }) {
+  const ifd0 = [...shorts];
+  const ifd0Bytes = 2 + 12 * (ifd0.length + (exifShorts ? 1 : 0)) + 4;
+  const exifAt = 8 + ifd0Bytes;
+  const tiff = Buffer.alloc(exifAt + (exifShorts ? 2 + 12 * exifShorts.length + 4 : 0));
+  const u16 = (value, at) => (bigEndian ? tiff.writeUInt16BE(value, at) : tiff.writeUInt16LE(value, at));
+  const u32 = (value, at) => (bigEndian ? tiff.writeUInt32BE(value, at) : tiff.writeUInt32LE(value, at));
+  tiff.write(bigEndian ? 'MM' : 'II', 0, 'latin1');
+  u16(42, 2);
+  u32(8, 4);
+  const directory = (at, entries, pointer) => {
+    u16(entries.length + (pointer ? 1 : 0), at);
+    entries.forEach(([tag, value], i) => {
+      u16(tag, at + 2 + 12 * i);
+      u16(3, at + 4 + 12 * i);  // SHORT
+      u32(1, at + 6 + 12 * i);
+      u16(value, at + 10 + 12 * i);
+    });
+    if (pointer) {
+      const entry = at + 2 + 12 * entries.length;
+      u16(0x8769, entry);
+      u16(4, entry + 2);  // LONG
+      u32(1, entry + 4);
+      u32(pointer, entry + 8);
+    }
+  };
+  directory(8, ifd0, exifShorts ? exifAt : 0);
+  if (exifShorts) directory(exifAt, exifShorts, 0);
+  return tiff;
+}
+
+function webpWithOrientation(plain, width, height, o) {
+  return webpWithExif(plain, width, height, tiffBlock({ shorts: [[0x0112, o]] }));
 }
 
 // The outline of 110001's tag lies on the black square shown: inside dark, outside light.
@@ -313,6 +340,100 @@ test('the outline sits on the tag whatever the orientation, when the size cannot
   await promisify(execFile)('oiiotool', [labelPng, '--attrib', 'Orientation', '3', '-o', jpeg]);
   page = await scannerReading(jpeg);
   await expectOutlineOnTheTag(page, 'JPEG, orientation 3');
+  assert.deepEqual(page.problems, []);
+});
+
+// The TIFF-structured EXIF block of a JPEG (its APP1 "Exif\0\0" segment).
+function jpegExif(jpeg) {
+  for (let at = 2; at + 4 <= jpeg.length;) {
+    const length = jpeg.readUInt16BE(at + 2);
+    if (jpeg[at + 1] === 0xe1 && jpeg.toString('latin1', at + 4, at + 10) === 'Exif\0\0') {
+      return jpeg.subarray(at + 10, at + 2 + length);
+    }
+    at += 2 + length;
+  }
+  throw new Error('no EXIF in the JPEG');
+}
+
+// A PNG with an eXIf chunk holding `tiff`, before its first IDAT.
+function pngWithExif(png, tiff) {
+  const crcTable = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; ++k) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc32 = (bytes) => {
+    let c = 0xffffffff;
+    for (const b of bytes) c = crcTable[(c ^ b) & 0xff] ^ (c >>> 8);
+    return (c ^ 0xffffffff) >>> 0;
+  };
+  const typeAndData = Buffer.concat([Buffer.from('eXIf', 'latin1'), tiff]);
+  const chunk = Buffer.alloc(12 + tiff.length);
+  chunk.writeUInt32BE(tiff.length, 0);
+  typeAndData.copy(chunk, 4);
+  chunk.writeUInt32BE(crc32(typeAndData), 8 + tiff.length);
+  const idat = png.indexOf(Buffer.from('IDAT', 'latin1')) - 4;
+  return Buffer.concat([png.subarray(0, idat), chunk, png.subarray(idat)]);
+}
+
+test('the page reads a photo\'s lens from its EXIF as the server does', async () => {
+  // The scanner sends the lens of a photo it makes smaller (web/exif.js). Each photo here is read
+  // whole by the server, which takes the lens from the file's EXIF, and by the page's reader at
+  // the photo's own size: both must find the same focal length, or both none.
+  const oiio = (args) => promisify(execFile)('oiiotool', args);
+  const path = (name) => join(dir, name);
+  await oiio([labelPng, '--attrib', 'Exif:FocalLengthIn35mmFilm', '52', '-o', path('lens-35mm.jpg')]);
+  // 4.25 mm over 2000 pixels a centimetre: 850 px, no 35 mm-equivalent given.
+  await oiio([labelPng, '--attrib:type=float', 'Exif:FocalLength', '4.25', '--attrib:type=float',
+    'Exif:FocalPlaneXResolution', '2000', '--attrib:type=int', 'Exif:FocalPlaneResolutionUnit', '3',
+    '-o', path('lens-plane.jpg')]);
+  // What some writers put for "unknown".
+  await oiio([labelPng, '--attrib', 'Exif:FocalLengthIn35mmFilm', '65535', '-o', path('lens-unknown.jpg')]);
+  await oiio([labelPng, '-o', path('label.webp')]);
+  const png = await readFile(labelPng);
+  const [width, height] = [png.readUInt32BE(16), png.readUInt32BE(20)];
+  const plainWebp = await readFile(path('label.webp'));
+  await writeFile(path('lens-plane.png'), pngWithExif(png, jpegExif(await readFile(path('lens-plane.jpg')))));
+  await writeFile(path('lens-35mm.webp'), webpWithExif(plainWebp, width, height,
+    jpegExif(await readFile(path('lens-35mm.jpg')))));
+  await writeFile(path('lens-35mm-big-endian.webp'), webpWithExif(plainWebp, width, height,
+    tiffBlock({ bigEndian: true, shorts: [[0x0112, 1]], exifShorts: [[0xa405, 35]] })));
+  // The lens in IFD0 rather than the EXIF directory, where the server's reader takes it too.
+  await writeFile(path('lens-in-ifd0.webp'), webpWithExif(plainWebp, width, height,
+    tiffBlock({ shorts: [[0xa405, 35]] })));
+  // A lens whose directory lies past the block's end: no lens.
+  const cut = tiffBlock({ exifShorts: [[0xa405, 35]] });
+  await writeFile(path('lens-cut-short.webp'), webpWithExif(plainWebp, width, height, cut.subarray(0, cut.length - 8)));
+
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/scanner.html`);
+  const expected = {
+    'lens-35mm.jpg': 'exif', 'lens-plane.jpg': 'exif', 'lens-unknown.jpg': 'assumed', 'lens-plane.png': 'exif',
+    'lens-35mm.webp': 'exif', 'lens-35mm-big-endian.webp': 'exif', 'lens-in-ifd0.webp': 'exif',
+    'lens-cut-short.webp': 'assumed',
+    'label.webp': 'assumed',
+  };
+  for (const [name, source] of Object.entries(expected)) {
+    const bytes = await readFile(path(name));
+    const upload = new FormData();
+    upload.append('image', new Blob([bytes]), name);
+    const answer = await (await fetch(`${server.url}/api/v1/detect`, {
+      method: 'POST', body: upload, headers: { Authorization: `Bearer ${scannerToken}` },
+    })).json();
+    assert.equal(answer.tag_count, 1, name);
+    assert.equal(answer.intrinsics.source, source, name);
+    const pageFocal = await page.evaluate(async ({ base64, w, h }) => {
+      const { exifFocalPixels } = await import('/exif.js');
+      const file = new File([Uint8Array.from(atob(base64), (c) => c.charCodeAt(0))], 'photo');
+      return exifFocalPixels(file, w, h, w, h);
+    }, { base64: bytes.toString('base64'), w: answer.image.width, h: answer.image.height });
+    if (source === 'exif') {
+      assert.ok(Math.abs(pageFocal - answer.intrinsics.fx) < 1e-6 * answer.intrinsics.fx,
+        `${name}: the page ${pageFocal}, the server ${answer.intrinsics.fx}`);
+    } else {
+      assert.equal(pageFocal, null, name);
+    }
+  }
   assert.deepEqual(page.problems, []);
 });
 
@@ -471,14 +592,20 @@ test('a photo over the server\'s pixel or body limit is read made smaller, and t
     const read = async (file) => {
       const page = await newPage(browser);
       const uploads = [];
+      const answers = [];
       page.on('request', (request) => {
         if (request.url().includes('/api/v1/detect')) uploads.push(request.method());
+      });
+      page.on('response', async (response) => {
+        if (response.url().includes('/api/v1/detect') && response.ok()) {
+          answers.push({ url: new URL(response.url()), json: await response.json() });
+        }
       });
       await page.goto(`${limited.url}/scanner.html`);
       await page.locator('#token').fill(token);
       await page.locator('#photo').setInputFiles(file);
       await page.locator('#summary').filter({ hasText: /read in/ }).waitFor();
-      return { page, uploads };
+      return { page, uploads, answers };
     };
     const photoSize = async (page) => {
       const [, width, height] = (await page.locator('#summary').textContent()).match(/photo (\d+) × (\d+)/);
@@ -486,18 +613,38 @@ test('a photo over the server\'s pixel or body limit is read made smaller, and t
     };
 
     // Over the pixel limit: the label at twice its size, 2.1 MP, as a JPEG turned by its EXIF
-    // orientation (6, a quarter turn), well under the body limit.
+    // orientation (6, a quarter turn), well under the body limit, with a phone's lens in its EXIF.
     const big = join(dir, 'label-2x-exif6.jpg');
     await promisify(execFile)('oiiotool', [labelPng, '--resize', '200%', '--attrib', 'Orientation', '6',
-      '--quality', '90', '-o', big]);
+      '--attrib', 'Exif:FocalLengthIn35mmFilm', '26', '--quality', '90', '-o', big]);
     const [storedWidth, storedHeight] = (await promisify(execFile)('oiiotool', ['--info', big]))
       .stdout.match(/(\d+) x\s+(\d+)/).slice(1).map(Number);
     assert.ok(storedWidth * storedHeight > 1_000_000, `${storedWidth} x ${storedHeight}`);
     assert.ok((await readFile(big)).length < 500_000);
-    let { page, uploads } = await read(big);
+    let { page, uploads, answers } = await read(big);
     await page.locator('.tag-card[data-pincode="110001"]').waitFor();
     let summary = await page.locator('#summary').textContent();
     assert.match(summary, /^1 tag read/);
+    // The smaller photo went without the file's EXIF, but with its lens: the tag is as far away
+    // as the server finds it in the photo as chosen (read by a server without the limits).
+    assert.doesNotMatch(summary, /approximate/);
+    assert.equal(answers.length, 1);
+    const [{ url: smallerUrl, json: smallerAnswer }] = answers;
+    assert.equal(smallerAnswer.intrinsics.source, 'given');
+    const wholeUrl = new URL(`${server.url}/api/v1/detect`);
+    for (const name of ['plan', 'tag_size_mm']) wholeUrl.searchParams.set(name, smallerUrl.searchParams.get(name));
+    const upload = new FormData();
+    upload.append('image', new Blob([await readFile(big)], { type: 'image/jpeg' }), 'whole.jpg');
+    const whole = await (await fetch(wholeUrl, {
+      method: 'POST', body: upload, headers: { Authorization: `Bearer ${scannerToken}` },
+    })).json();
+    assert.equal(whole.intrinsics.source, 'exif');
+    const [wholeDistance, smallerDistance] = [whole, smallerAnswer].map((a) => a.tags[0].pose.distance_m);
+    assert.ok(Math.abs(smallerDistance - wholeDistance) < 0.01 * wholeDistance,
+      `made smaller ${smallerDistance} m, as chosen ${wholeDistance} m`);
+    const diagonal = (a) => Math.hypot(a.image.width, a.image.height);
+    assert.ok(Math.abs(smallerAnswer.intrinsics.fx / whole.intrinsics.fx - diagonal(smallerAnswer) / diagonal(whole)) < 0.01,
+      'the focal length scaled with the photo');
     // Drawn upright: the photo's sides swapped by the orientation, as the server's answer has them.
     assert.match(summary, new RegExp(`made smaller to fit the server's limit \\(${storedHeight} × ${storedWidth}, 2\\.\\d MP\\)`));
     assert.match(summary, /set the camera to a lower resolution/);
@@ -518,10 +665,13 @@ test('a photo over the server\'s pixel or body limit is read made smaller, and t
     await promisify(execFile)('oiiotool', [labelPng, '--resize', '800x1128', '--noise:type=gaussian:stddev=0.04',
       '-o', noisy]);
     assert.ok((await readFile(noisy)).length > 0.5 * 1024 * 1024, 'the PNG is over the body limit');
-    ({ page, uploads } = await read(noisy));
+    ({ page, uploads, answers } = await read(noisy));
     await page.locator('.tag-card[data-pincode="110001"]').waitFor();
     summary = await page.locator('#summary').textContent();
     assert.match(summary, /^1 tag read/);
+    // No lens in the file, none sent: the server assumes one, and the page says so.
+    assert.match(summary, /distances approximate/);
+    assert.equal(answers[0].url.searchParams.get('fx'), null);
     assert.match(summary, /made smaller to fit the server's limit \(800 × 1128, 0\.9 MP\): send the photo as a JPEG/);
     [width, height] = await photoSize(page);
     assert.ok(width <= 800 && height <= 1128, `${width} × ${height}`);
