@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
 #include <cstdlib>
 #include <cstring>
 #include <random>
@@ -77,14 +78,7 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
     return failure == 0 ? std::string() : std::strerror(failure);
   };
   if ((exists && !S_ISREG(target.st_mode)) || dangling) return in_place();
-  // Through a link, the file it names is replaced and the link kept.
-  std::string destination = path;
-  if (exists) {
-    if (char* resolved = ::realpath(path.c_str(), nullptr)) {
-      destination = resolved;
-      std::free(resolved);
-    }
-  }
+  const std::string destination = FileReplacedBy(path).path;
   const std::string directory = DirectoryOf(destination);
   std::string temporary;
   const int fd = CreateIn(directory, temporary);
@@ -108,6 +102,40 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
   // The rename itself is durable only once the directory is synced.
   if (const int synced = SyncDirectory(directory); synced != 0) return std::strerror(synced);
   return {};
+}
+
+FileToReplace FileReplacedBy(const std::string& path) {
+  FileToReplace out{path, {}};
+  struct stat target {};
+  if (::stat(path.c_str(), &target) != 0) {
+    // Not there, or a link to a file not there yet: that file is made where the link points.
+    for (int hop = 0; hop < 40; ++hop) {
+      struct stat link {};
+      if (::lstat(out.path.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return out;
+      std::string to(PATH_MAX, '\0');
+      const ssize_t n = ::readlink(out.path.c_str(), to.data(), to.size());
+      if (n < 0) break;
+      to.resize(static_cast<std::size_t>(n));
+      out.path = to.starts_with('/') ? to : DirectoryOf(out.path) + "/" + to;
+    }
+    out.problem = path + " is a symbolic link that cannot be followed (a loop?)";
+    return out;
+  }
+  if (!S_ISREG(target.st_mode)) {
+    out.problem = path + " is " +
+                  (S_ISDIR(target.st_mode)    ? "a directory"
+                   : S_ISFIFO(target.st_mode) ? "a pipe"
+                   : S_ISSOCK(target.st_mode) ? "a socket"
+                                              : "a device") +
+                  ", not a file: the output is written beside it and renamed into place";
+    return out;
+  }
+  // Through a link, the file it names is replaced and the link kept.
+  if (char* resolved = ::realpath(path.c_str(), nullptr)) {
+    out.path = resolved;
+    std::free(resolved);
+  }
+  return out;
 }
 
 }  // namespace pintag

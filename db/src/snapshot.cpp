@@ -26,6 +26,7 @@
 
 #include "guard.hpp"
 #include "key_continuity.hpp"
+#include "pintag/codec/file_output.hpp"
 #include "pintag/db/database.hpp"
 
 namespace pintag::db {
@@ -327,7 +328,10 @@ Result<std::int64_t> RegistryVersion(Connection& connection) {
   });
 }
 
-Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path) {
+Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& given_path) {
+  const FileToReplace target = FileReplacedBy(given_path);
+  if (!target.problem.empty()) return Error{ErrorCode::kInvalid, target.problem};
+  const std::string& out_path = target.path;
   std::error_code error;
   if (std::filesystem::equivalent(out_path, source.path(), error)) {
     return Error{ErrorCode::kConflict, "the snapshot " + out_path +
@@ -347,7 +351,7 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
   try {
     TemporaryBeside temporary(out_path);
     SnapshotInfo info;
-    info.path = out_path;
+    info.path = given_path;
     {
       Connection copy(temporary.path(), {.create = false});
       source.backupInto(copy);

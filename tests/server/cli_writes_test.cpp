@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -196,6 +197,76 @@ TEST(CliWrites, ATokenWrittenToAFileIsItsOwnersAloneAndReplacedWhole) {
   EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM api_tokens WHERE revoked_at IS NULL AND "
                                   "id = (SELECT max(id) FROM api_tokens)"),
             0);
+}
+
+// The secret and the snapshot are written beside their file and renamed into place. Through a
+// symbolic link that replaced the link itself (a mounted secret's link, /dev/stdout), and over a
+// device or a pipe it put a file in its place and said it had written there.
+TEST(CliWrites, TokenAndSnapshotFilesAreWrittenThroughLinksAndNeverReplaceAPipe) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  db::Connection connection(db, {.create = false, .read_only = true});
+  const auto token_count = [&] { return connection.queryInt64("SELECT count(*) FROM api_tokens"); };
+
+  // A link to a file there, and one to a file not there yet: the file is written, the link kept.
+  const std::string kept = dir.file("kept.token");
+  WriteFile(kept, "old\n");
+  std::filesystem::create_symlink("kept.token", dir.file("to-kept"));
+  std::filesystem::create_symlink("new.token", dir.file("to-new"));
+  for (const std::string link : {"to-kept", "to-new"}) {
+    const CommandResult made =
+        RunPintag("token create --role replica --out " + dir.file(link) + " --db " + db);
+    ASSERT_EQ(made.status, 0) << made.out;
+    EXPECT_TRUE(std::filesystem::is_symlink(dir.file(link))) << link;
+    const std::string secret = ReadFile(dir.file(link));
+    EXPECT_TRUE(db::VerifyToken(connection, secret.substr(0, secret.size() - 1)).ok()) << link;
+  }
+  EXPECT_EQ(std::filesystem::status(dir.file("new.token")).permissions(),
+            std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+
+  std::filesystem::create_symlink("registry.snap", dir.file("to-snapshot"));
+  const CommandResult snapshot =
+      RunPintag("snapshot --db " + db + " --out " + dir.file("to-snapshot"));
+  ASSERT_EQ(snapshot.status, 0) << snapshot.out;
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.file("to-snapshot")));
+  const CommandResult verified = RunPintag("snapshot --verify " + dir.file("registry.snap"));
+  EXPECT_EQ(verified.status, 0) << verified.out;
+
+  // A pipe is refused before any work: no token made, the pipe left a pipe.
+  const std::string pipe = dir.file("pipe");
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  const std::int64_t before = token_count();
+  for (const std::string command : {"token create --role replica --out " + pipe + " --db " + db,
+                                    "snapshot --db " + db + " --out " + pipe}) {
+    const CommandResult refused = RunPintag(command);
+    EXPECT_EQ(refused.status, 2) << command << "\n" << refused.out;
+    EXPECT_NE(refused.out.find(pipe + " is a pipe, not a file"), std::string::npos) << refused.out;
+  }
+  EXPECT_EQ(token_count(), before);
+  EXPECT_TRUE(std::filesystem::is_fifo(pipe));
+}
+
+// An empty file name (an unset shell variable) or one SQLite reads as a database in memory
+// reported success for writes that were thrown away.
+TEST(CliWrites, AnEmptyOrInMemoryDatabaseNameIsRefused) {
+  const TempDir dir;
+  for (const std::string db : {"''", ":memory:", "'file:x?mode=memory'"}) {
+    for (const std::string command :
+         {"token create --role admin --db " + db, "keys lookup 110001 --db " + db,
+          "snapshot --out " + dir.file("s") + " --db " + db}) {
+      // Run in `dir`, so that a name taken as a file's would show there.
+      const CommandResult refused =
+          RunShell("cd " + dir.path().string() + " && " + PintagExe() + " " + command + " 2>&1");
+      EXPECT_EQ(refused.status, 2) << command << "\n" << refused.out;
+      EXPECT_NE(refused.out.find("--db: "), std::string::npos) << refused.out;
+    }
+  }
+  const CommandResult empty_out =
+      RunPintag("token create --role admin --out '' --db " + dir.file("t.db"));
+  EXPECT_EQ(empty_out.status, 2) << empty_out.out;
+  EXPECT_NE(empty_out.out.find("--out: needs a file name"), std::string::npos) << empty_out.out;
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
 }
 
 // Another process holding the write lock (an import) for longer than the busy timeout: the token

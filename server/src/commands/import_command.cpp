@@ -12,6 +12,7 @@
 
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
+#include "commands/option_checks.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/importer.hpp"
 
@@ -130,6 +131,7 @@ void AddImportCommand(CLI::App& app) {
       "import", "Import India Post's All India Pincode Directory CSV (either layout)");
   cmd->add_option("file", args->file, "CSV file")->required();
   cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->check(DatabaseFileName())
       ->capture_default_str();
   cmd->add_flag("--strict", args->strict, "refuse the whole file if any row is bad");
   cmd->callback([args] { Run(*args); });

@@ -69,6 +69,7 @@ void AddKeysCommand(CLI::App& app) {
   CLI::App* export_cmd =
       keys->add_subcommand("export", "Print the key table as CSV: pincode,key,status");
   export_cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->check(DatabaseFileName())
       ->capture_default_str();
   export_cmd->callback([args] { Export(*args); });
 
@@ -77,6 +78,7 @@ void AddKeysCommand(CLI::App& app) {
   lookup->add_option("pincode", args->pincode, "six-digit pincode");
   lookup->add_option("--key", args->key, "tag key, 0-32767")->transform(TagKeyText());
   lookup->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->check(DatabaseFileName())
       ->capture_default_str();
   lookup->callback([args] { Lookup(*args); });
 }

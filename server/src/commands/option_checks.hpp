@@ -19,6 +19,7 @@
 
 #include "app/params.hpp"
 #include "commands/commands.hpp"
+#include "pintag/codec/file_output.hpp"
 #include "pintag/codec/tag_key.hpp"
 
 namespace pintag::cli {
@@ -102,6 +103,38 @@ inline void CheckFileToWrite(const std::string& option, const std::string& path)
   if (!std::filesystem::is_directory(directory, error)) {
     throw UsageError(option + " " + path + ": " + directory.string() + " is not a directory");
   }
+}
+
+/// A file `option` replaces whole (a snapshot, a token's secret), checked before any work: not a
+/// device, pipe or directory, which the rename would replace with a file (FileReplacedBy).
+inline void CheckFileToReplace(const std::string& option, const std::string& path) {
+  if (const FileToReplace target = FileReplacedBy(path); !target.problem.empty()) {
+    throw UsageError(option + " " + target.problem);
+  }
+}
+
+/// A file name given as an option's value: empty text (an unset shell variable, `--out "$F"`) is
+/// refused, where it would mean the option's default or no file at all.
+inline CLI::Validator FileName() {
+  return {[](const std::string& text) -> std::string {
+            return text.empty() ? "needs a file name, got ''" : std::string();
+          },
+          "FILE"};
+}
+
+/// A database file's name: not empty, and not one SQLite reads as a database in memory or a URI
+/// (`:memory:`, `file:…`), where every write would be lost when the command ends.
+inline CLI::Validator DatabaseFileName() {
+  return {[](const std::string& text) -> std::string {
+            if (text.empty()) return "needs a file name, got ''";
+            if (text == ":memory:" || text.starts_with("file:")) {
+              return "must be a file's path, got '" + text +
+                     "', which SQLite reads as a database in memory or a URI (write ./" + text +
+                     " for a file so named)";
+            }
+            return {};
+          },
+          "FILE"};
 }
 
 /// The directory `path` is in takes a new file: one is made there and removed (a permission

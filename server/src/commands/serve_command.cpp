@@ -120,6 +120,7 @@ void Run(const ServeArgs& args) {
   // server runs as another user), is said now, before the database and the token are made.
   if (!args.admin_token_out.empty()) {
     CheckFileToWrite("--admin-token-out", args.admin_token_out);
+    CheckFileToReplace("--admin-token-out", args.admin_token_out);
     CheckDirectoryWritable("--admin-token-out", args.admin_token_out);
   }
   std::string proxy_error;
@@ -313,6 +314,7 @@ void AddServeCommand(CLI::App& app) {
                                      "Serve the HTTP API (labels, detection, registry, "
                                      "routing, tokens)");
   cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
+      ->check(DatabaseFileName())
       ->capture_default_str()
       ->envname("PINTAG_DB");
   cmd->add_option("--port", args->port, "TCP port; 0 picks a free one (printed)")
@@ -331,6 +333,7 @@ void AddServeCommand(CLI::App& app) {
   cmd->add_option("--admin-token-out", args->admin_token_out,
                   "on a first start, write the first admin token's secret to this file (mode "
                   "0600) instead of stdout, which a container's log keeps")
+      ->check(FileName())
       ->envname("PINTAG_ADMIN_TOKEN_OUT");
   cmd->add_option("--max-body-mb", args->max_body_mb, "largest request body, MiB (413 above)")
       ->check(FiniteNumber())

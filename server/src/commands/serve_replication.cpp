@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "commands/commands.hpp"
+#include "commands/option_checks.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/snapshot.hpp"
 #include "pintag/server/log.hpp"
@@ -152,6 +153,7 @@ void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
   serve
       ->add_option("--follow-token-file", args.follow_token_file,
                    "file holding the replica token for --follow")
+      ->check(FileName())
       ->envname("PINTAG_FOLLOW_TOKEN_FILE");
   serve
       ->add_option("--follow-interval-ms", args.follow_interval_ms,
@@ -165,11 +167,13 @@ void AddReplicationOptions(CLI::App* serve, ReplicationArgs& args) {
   serve
       ->add_option("--scan-log", args.scan_log,
                    "a replica's own scan log file (default: <db name>-scans.db beside --db)")
+      ->check(DatabaseFileName())
       ->envname("PINTAG_SCAN_LOG");
   serve
       ->add_option("--snapshot", args.snapshot,
                    "publish registry snapshots for replicas to this file, after every change "
                    "(GET /api/v1/registry/snapshot)")
+      ->check(FileName())
       ->envname("PINTAG_SNAPSHOT");
 }
 

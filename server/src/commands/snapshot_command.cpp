@@ -10,6 +10,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "commands/option_checks.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/snapshot.hpp"
 
@@ -64,7 +65,12 @@ void Print(const db::SnapshotInfo& info) {
 }
 
 void Run(const SnapshotArgs& args) {
-  if (args.out.empty() == args.verify.empty()) throw UsageError("give --out FILE or --verify FILE");
+  if (args.out.empty() && args.verify.empty()) throw UsageError("give --out FILE or --verify FILE");
+  if (!args.out.empty() && !args.verify.empty()) {
+    throw UsageError("give --out FILE or --verify FILE, not both");
+  }
+  // Before the snapshot is made: a device or a pipe would be replaced by the file.
+  if (!args.out.empty()) CheckFileToReplace("--out", args.out);
   if (!args.verify.empty()) {
     auto info = db::VerifySnapshot(args.verify);
     if (!info) throw std::runtime_error(info.error().message);
@@ -90,9 +96,13 @@ void AddSnapshotCommand(CLI::App& app) {
   auto args = std::make_shared<SnapshotArgs>();
   CLI::App* cmd = app.add_subcommand(
       "snapshot", "Copy a live database into a snapshot for read-only replicas, atomically");
-  cmd->add_option("--db", args->db, "the live database (must exist)")->capture_default_str();
-  cmd->add_option("--out", args->out, "snapshot file to write (replaced atomically)");
-  cmd->add_option("--verify", args->verify, "check this snapshot and print its registry version");
+  cmd->add_option("--db", args->db, "the live database (must exist)")
+      ->check(DatabaseFileName())
+      ->capture_default_str();
+  cmd->add_option("--out", args->out, "snapshot file to write (replaced atomically)")
+      ->check(FileName());
+  cmd->add_option("--verify", args->verify, "check this snapshot and print its registry version")
+      ->check(FileName());
   cmd->callback([args] { Run(*args); });
 }
 

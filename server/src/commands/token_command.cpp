@@ -34,7 +34,10 @@ void Create(const TokenArgs& args) {
     throw UsageError("--" + error->message);
   }
   // A mistyped path: no token is made for it.
-  if (!args.out.empty()) CheckFileToWrite("--out", args.out);
+  if (!args.out.empty()) {
+    CheckFileToWrite("--out", args.out);
+    CheckFileToReplace("--out", args.out);
+  }
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token && token.error().code == db::ErrorCode::kBusy) {
@@ -87,15 +90,19 @@ void AddTokenCommand(CLI::App& app) {
   CLI::App* token = app.add_subcommand("token", "API tokens for the HTTP server");
   token->require_subcommand(1);
   const auto add_db = [&](CLI::App* cmd, const char* description) {
-    cmd->add_option("--db", args->db, description)->capture_default_str();
+    cmd->add_option("--db", args->db, description)
+        ->check(DatabaseFileName())
+        ->capture_default_str();
   };
 
   CLI::App* create = token->add_subcommand("create", "Create a token and print its secret once");
   create->add_option("--role", args->role, "admin, counter, scanner or replica")->required();
   create->add_option("--label", args->label, "a note on who or what uses it");
-  create->add_option("--out", args->out,
-                     "write the secret to this file (mode 0600, replaced whole) instead of "
-                     "stdout, e.g. a replica's --follow-token-file");
+  create
+      ->add_option("--out", args->out,
+                   "write the secret to this file (mode 0600, replaced whole) instead of "
+                   "stdout, e.g. a replica's --follow-token-file")
+      ->check(FileName());
   add_db(create, "database file (created and seeded when missing)");
   create->callback([args] { Create(*args); });
 

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "pintag/codec/file_output.hpp"
 #include "pintag/db/tokens.hpp"
 
 namespace pintag::cli {
@@ -49,7 +50,10 @@ void RevokeIfStdoutFailed(db::Connection& connection, std::int64_t id) {
   RevokeIfUnwritten(connection, id, "standard output", "the write failed");
 }
 
-std::string WriteSecretFile(const std::filesystem::path& path, std::string_view secret) {
+std::string WriteSecretFile(const std::filesystem::path& given, std::string_view secret) {
+  const FileToReplace target = FileReplacedBy(given.string());
+  if (!target.problem.empty()) return target.problem;
+  const std::filesystem::path path(target.path);
   const std::filesystem::path directory =
       path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   std::string temporary = (directory / ("." + path.filename().string() + ".XXXXXX")).string();

@@ -18,7 +18,8 @@ void RevokeIfStdoutFailed(db::Connection& connection, std::int64_t id);
 
 /// Writes `secret` and a newline to `path`, readable and writable by its owner only (0600),
 /// atomically: a temporary file beside it, synced, then renamed over it, so a reader (a replica
-/// re-reading its token file on SIGHUP) never sees half of one. Empty on success, else why not.
+/// re-reading its token file on SIGHUP) never sees half of one; through a symbolic link, the file
+/// it names (FileReplacedBy: a device or a pipe is refused). Empty on success, else why not.
 std::string WriteSecretFile(const std::filesystem::path& path, std::string_view secret);
 
 /// When `failure` is not empty, revokes token `id` and throws std::runtime_error saying the

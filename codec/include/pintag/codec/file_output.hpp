@@ -17,4 +17,16 @@ namespace pintag {
 /// device), and a file in a directory this process may not create files in, is written in place.
 std::string WriteWholeFile(const std::string& path, std::string_view bytes);
 
+/// The file a writer that renames a new file into place replaces for `path`, and why it cannot.
+struct FileToReplace {
+  std::string path;     ///< through a symbolic link, the file it names (the link is kept)
+  std::string problem;  ///< empty, or why `path` cannot be replaced by a rename (said whole)
+};
+
+/// For writers that must replace a file whole (a snapshot, a token's secret): a regular file or a
+/// path not there yet is fine; a device, a pipe or a directory is not (a rename would put a file
+/// in its place: `--out /dev/stdout` turned /dev/stdout into a file), nor a loop of links. A link
+/// to a file not there yet gives that file's path.
+FileToReplace FileReplacedBy(const std::string& path);
+
 }  // namespace pintag
