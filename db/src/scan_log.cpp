@@ -68,7 +68,22 @@ std::string ScanTime(std::chrono::system_clock::time_point when) {
 
 Result<Connection> OpenScanLogFile(const std::string& path) {
   return detail::Guard([&]() -> Result<Connection> {
-    Connection connection(path);
+    // Not switched to WAL before it is known to be a scan log: a registry snapshot given by
+    // mistake (a replica's own --db, another replica's file) would be written over in place.
+    Connection connection(path, {.wal = false});
+    std::string others;
+    Statement tables = connection.prepare(
+        "SELECT name FROM sqlite_schema WHERE type = 'table' AND name <> 'scan_log' ORDER BY name");
+    for (int shown = 0; shown < 3 && tables.step(); ++shown) {
+      others += (others.empty() ? "" : ", ") + tables.getText(0);
+    }
+    if (!others.empty()) {
+      return Error{ErrorCode::kConflict,
+                   "the file holds other tables (" + others +
+                       "), so it is not a scan log (a registry snapshot or database?); give the "
+                       "scan log a file of its own, which is created when missing"};
+    }
+    connection.execute("PRAGMA journal_mode=WAL");
     // The columns of the registry's scan_log (migration 2), so AppendScan and RecentScans work
     // on either.
     connection.execute(R"sql(

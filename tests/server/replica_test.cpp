@@ -584,6 +584,30 @@ TEST_F(ReplicaSetTest, AReplicaWhoseServedFileWasWrittenOverInPlaceTakesTheNextG
   EXPECT_FALSE(std::filesystem::exists(snapshot + ".refused"));
 }
 
+// Damage past the pages /readyz's query reads (the offices, here) left it answering 200 while
+// searches answered 500: the replica's log said "Not ready", its load balancer kept sending.
+TEST_F(ReplicaSetTest, AReplicaWhoseServedFileIsDamagedPastItsFirstPagesIsNotReady) {
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess& replica = startReadOnly(0, snapshot);
+  ASSERT_TRUE(replica.ok());
+  httplib::Client client = LoopbackClient(replica.port());
+  ASSERT_EQ(StatusOf(client.Get("/readyz")), 200);
+  const auto size = std::filesystem::file_size(snapshot);
+  ASSERT_GT(size, 8U << 20) << "a seeded registry";
+  {
+    std::fstream in_place(snapshot, std::ios::binary | std::ios::in | std::ios::out);
+    in_place.seekp(static_cast<std::streamoff>(size / 10));
+    in_place << std::string(800 << 10, '\0');  // 200 pages a tenth of the way in
+  }
+  ASSERT_TRUE(WaitUntil([&] {
+    return stderrOf("replica-0").find("was written over in place") != std::string::npos;
+  })) << stderrOf("replica-0");
+  const auto ready = client.Get("/readyz");
+  ASSERT_TRUE(ready);
+  EXPECT_EQ(ready->status, 503) << ready->body;
+  EXPECT_NE(ready->body.find("written over in place"), std::string::npos) << ready->body;
+}
+
 // The same for a --follow replica, with no change at the primary: the follower still named the
 // version it had installed, the primary answered 304, and the replica stayed unready until the
 // registry next changed.
@@ -897,6 +921,37 @@ TEST_F(ReplicaSetTest, AReplicaNeverReplacesALiveRegistry) {
   EXPECT_NE(refused.out.find("in WAL mode"), std::string::npos) << refused.out;
   EXPECT_EQ(inode(primary_db_), before);
   EXPECT_EQ(CountRows(primary_db_, "pincodes WHERE pincode = 999124"), 1);
+}
+
+// A --scan-log naming a registry snapshot (the replica's own --db, another replica's file) was
+// switched to WAL and given a scan_log table: the snapshot was then refused by every install and
+// could not be served again.
+TEST_F(ReplicaSetTest, AScanLogNamingARegistrySnapshotIsRefusedAndTheSnapshotLeftAsItWas) {
+  const std::string mine = dir_.file("mine.db");
+  const std::string theirs = dir_.file("theirs.db");
+  for (const std::string& file : {mine, theirs}) {
+    const CommandResult made = RunPintag("snapshot --db " + primary_db_ + " --out " + file);
+    ASSERT_EQ(made.status, 0) << made.out;
+  }
+  const std::string bytes_before = ReadFile(theirs);
+  for (const std::string& scan_log : {mine, theirs}) {
+    // Under a timeout: a replica that took the file would serve on and never exit.
+    const CommandResult refused = RunShell("timeout 30 " + PintagExe() +
+                                           " serve --port 0 --bind 127.0.0.1 --read-only --db " +
+                                           mine + " --scan-log " + scan_log + " 2>&1");
+    EXPECT_EQ(refused.status, 1) << refused.out;
+    EXPECT_NE(refused.out.find("scan log " + scan_log + ": the file holds other tables"),
+              std::string::npos)
+        << refused.out;
+    const CommandResult verified = RunPintag("snapshot --verify " + scan_log);
+    EXPECT_EQ(verified.status, 0) << verified.out;
+  }
+  EXPECT_EQ(ReadFile(theirs), bytes_before);
+  EXPECT_FALSE(std::filesystem::exists(theirs + "-wal"));
+  // A scan log of its own beside them is made, and the replica serves.
+  ServerProcess replica({"--db", mine, "--read-only", "--scan-log", dir_.file("mine-scans.db")},
+                        dir_.file("mine.log"));
+  ASSERT_TRUE(replica.ok());
 }
 
 // The URL the primary's banner prints ends in a slash; a follower given it fetched from "//api/…"

@@ -162,8 +162,12 @@ server::HealthCheck DatabaseHealthCheck(const std::string& path,
   };
 }
 
-server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool) {
-  return [pool]() -> std::optional<std::string> {
+server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool,
+                                        server::HealthCheck served_file) {
+  return [pool, served_file = std::move(served_file)]() -> std::optional<std::string> {
+    if (served_file) {
+      if (std::optional<std::string> problem = served_file()) return problem;
+    }
     try {
       auto connection = pool->acquire();
       const db::Result<std::int64_t> version = db::RegistryVersion(*connection);
@@ -213,7 +217,7 @@ App BuildApp(const AppConfig& config) {
       "registry snapshot, for read-only replicas); lookups are open.";
   // A replica's file is replaced by design; its readiness is the snapshot it serves now.
   server::HealthCheck health = config.read_only
-                                   ? SnapshotHealthCheck(context->pool)
+                                   ? SnapshotHealthCheck(context->pool, config.served_file_health)
                                    : DatabaseHealthCheck(config.db_path, context->pool);
   return {
       std::make_shared<const server::Api>(std::move(router), RegistryTokenVerifier(context->pool),

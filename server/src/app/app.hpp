@@ -38,6 +38,9 @@ struct AppConfig {
   std::shared_ptr<replica::SnapshotPublisher> publisher;
   /// A following replica's polls, shown by GET /api/v1/registry (null: not following).
   std::shared_ptr<const replica::FollowStatus> follow_status;
+  /// A read-only replica's word on the file it serves (written over in place?), asked by /readyz
+  /// beside a query: damage can spare the pages one query reads. Empty: not asked.
+  server::HealthCheck served_file_health;
 };
 
 /// The application, and what its server ends once serving is over.
@@ -59,7 +62,9 @@ std::shared_ptr<const server::Api> BuildApi(const AppConfig& config);
 server::HealthCheck DatabaseHealthCheck(const std::string& path,
                                         std::shared_ptr<ConnectionPool> pool);
 
-/// Readiness of a read-only replica: the snapshot its pool opens now answers a query.
-server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool);
+/// Readiness of a read-only replica: `served_file` finds nothing wrong (when given), and the
+/// snapshot its pool opens now answers a query.
+server::HealthCheck SnapshotHealthCheck(const std::shared_ptr<ConnectionPool>& pool,
+                                        server::HealthCheck served_file = {});
 
 }  // namespace pintag::app

@@ -265,6 +265,8 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
   config.read_only = true;
   config.pool = pool_;
   config.scan_log_path = scan_log;
+  // The watcher outlives the server: this Replication is made before it and ends after it.
+  config.served_file_health = [watcher = watcher_.get()] { return watcher->servedDamage(); };
   config.primary_url = !args_.primary.empty() ? args_.primary : args_.follow;  // or unknown
 }
 

@@ -190,6 +190,7 @@ bool SnapshotWatcher::check() {
     // Nothing to refuse or put back: the served registry is this file, changed under it.
     if (!link.empty()) ::unlink(link.c_str());
     served_damaged_ = true;
+    damage_ = path_ + " was written over in place: " + verified.error().message;
     server::LogEvent(path_ +
                          " was written over in place, and the registry served (the same file) "
                          "changed with it: " +
@@ -262,6 +263,12 @@ void SnapshotWatcher::start(std::chrono::milliseconds interval) {
 db::SnapshotInfo SnapshotWatcher::loaded() const {
   const std::lock_guard lock(mutex_);
   return *loaded_;
+}
+
+std::optional<std::string> SnapshotWatcher::servedDamage() const {
+  const std::lock_guard lock(mutex_);
+  if (!served_damaged_) return std::nullopt;
+  return damage_;
 }
 
 std::optional<std::int64_t> SnapshotWatcher::servedVersion() const {

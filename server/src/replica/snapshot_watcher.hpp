@@ -51,6 +51,9 @@ class SnapshotWatcher {
   /// was written over in place and no longer reads as a snapshot, so that the follower asks for
   /// the whole snapshot again instead of being told it is current.
   std::optional<std::int64_t> servedVersion() const;
+  /// Why the registry served is not to be trusted now (its file was written over in place and no
+  /// longer reads as a snapshot: some queries fail while others still answer), or nothing.
+  std::optional<std::string> servedDamage() const;
 
  private:
   /// `<path>.serving-<tag><suffix>`: every name of a tag's files (links "-N", ".lock").
@@ -84,6 +87,7 @@ class SnapshotWatcher {
   /// The file served was written over in place and did not read as a snapshot: the next one is
   /// taken without comparing keys (there are none left to compare with).
   bool served_damaged_ = false;
+  std::string damage_;     // why, while served_damaged_
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 

@@ -27,7 +27,8 @@ struct ScanRecord {
 
 /// A scan log of its own in the file `path`, created when missing. A read-only replica appends
 /// here: its registry is a snapshot that is replaced whole and opened read-only. `token_id` then
-/// names a token of the snapshot the request was verified against, without a foreign key.
+/// names a token of the snapshot the request was verified against, without a foreign key. A file
+/// holding other tables (a registry snapshot, given by mistake) is kConflict and left unchanged.
 Result<Connection> OpenScanLogFile(const std::string& path);
 
 /// `when` as the scan log writes it: "2026-12-06T16:20:01.123Z".
