@@ -47,6 +47,21 @@ TEST(CliNewDb, ABadTokenLabelIsAUsageErrorBeforeTheDatabaseIsCreated) {
   EXPECT_TRUE(std::filesystem::exists(db));
 }
 
+// A primary's --snapshot in a directory that is not there was refused only once its database
+// had been created and seeded.
+TEST(CliNewDb, ASnapshotDirectoryThatIsNotThereIsRefusedBeforeTheDatabaseIsCreated) {
+  const TempDir dir;
+  const std::string db = dir.file("new.db");
+  const std::string snapshot = dir.file("no-such-dir") + "/snap.db";
+  // Under a timeout: a server that started would serve on.
+  const CommandResult run = RunShell("timeout 60 " + PintagExe() + " serve --port 0 --db " + db +
+                                     " --snapshot " + snapshot + " 2>&1");
+  EXPECT_EQ(run.status, 2) << run.out;
+  EXPECT_NE(run.out.find("--snapshot " + snapshot + ": its directory"), std::string::npos)
+      << run.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
 // Listing or revoking the tokens of a database that is not there is a mistyped path: it was
 // created and seeded, then said "no token -3".
 TEST(CliNewDb, TokenListAndRevokeNeedAnExistingDatabase) {

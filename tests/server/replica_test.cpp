@@ -1092,10 +1092,15 @@ TEST_F(ReplicaSetTest, AFollowerTakesARestoredRegistryOnlyWhenItKeepsTheKeysServ
     return count;
   };
   const std::size_t sent_before = snapshot_answers("200");
+  const json answered_before = follow()["last_answer"];
   std::this_thread::sleep_for(std::chrono::seconds(2));
   EXPECT_EQ(snapshot_answers("200"), sent_before);
   EXPECT_GE(snapshot_answers("304"), 3U);
   EXPECT_NE(follow_error().find("keep the keys"), std::string::npos) << follow_error();
+  // The primary answers every poll: its last answer moves on while the refusal stands (it stood
+  // at the last answer before the restore, as if the primary were gone).
+  ASSERT_TRUE(answered_before.is_string()) << answered_before.dump();
+  EXPECT_GT(follow()["last_answer"].get<std::string>(), answered_before.get<std::string>());
 
   // The way back SCALING.md gives: the primary restored from the replica's own file.
   restore_primary(replicaDb(0), "primary-from-replica", [](db::Connection&) {});

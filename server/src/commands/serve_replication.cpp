@@ -128,6 +128,15 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
   }
   if (!args.snapshot.empty()) {
     std::error_code error;
+    // Before the database is created and seeded: a mistyped directory leaves nothing behind.
+    const std::filesystem::path snapshot_dir =
+        std::filesystem::absolute(args.snapshot).parent_path();
+    if (!std::filesystem::is_directory(snapshot_dir, error)) {
+      throw UsageError("--snapshot " + args.snapshot + ": its directory " + snapshot_dir.string() +
+                       (error && error != std::errc::no_such_file_or_directory
+                            ? " cannot be looked at: " + error.message()
+                            : " does not exist"));
+    }
     const std::filesystem::path snapshot = std::filesystem::weakly_canonical(args.snapshot, error);
     const std::filesystem::path db = std::filesystem::weakly_canonical(db_path, error);
     const bool same = snapshot == db || std::filesystem::equivalent(args.snapshot, db_path, error);
@@ -190,18 +199,10 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
   }
   if (!args_.read_only) {
     if (args_.snapshot.empty()) return;
-    // A directory that is not there is a mistake in the command; a failed write (a full disk, a
-    // file another process holds) is not a reason to keep the only writer down: it is logged,
-    // tried again with backoff, and shown by GET /api/v1/registry and the metrics until it works.
-    const std::filesystem::path snapshot_dir =
-        std::filesystem::absolute(args_.snapshot).parent_path();
-    std::error_code error;
-    if (!std::filesystem::is_directory(snapshot_dir, error)) {
-      throw UsageError("--snapshot " + args_.snapshot + ": its directory " + snapshot_dir.string() +
-                       (error && error != std::errc::no_such_file_or_directory
-                            ? " cannot be looked at: " + error.message()
-                            : " does not exist"));
-    }
+    // A failed write (a full disk, a file another process holds) is not a reason to keep the
+    // only writer down: it is logged, tried again with backoff, and shown by GET
+    // /api/v1/registry and the metrics until it works. (A directory that is not there is a
+    // mistake in the command: CheckReplicationArgs refused it before the database was made.)
     publisher_ = std::make_shared<replica::SnapshotPublisher>(db_path_, args_.snapshot);
     if (!publisher_->publish()) {
       server::LogEvent(

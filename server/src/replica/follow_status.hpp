@@ -26,8 +26,12 @@ class FollowStatus {
     view_.error.clear();
     view_.failing_since.reset();
   }
-  void failed(std::string error) {
+  /// A poll that failed; `answered` when the primary did answer it (200 or 304), and what it
+  /// sent was refused (a registry that gives a served key to another pincode, a snapshot cut
+  /// short): the primary is up, so its last answer is now.
+  void failed(std::string error, bool answered = false) {
     const std::lock_guard lock(mutex_);
+    if (answered) view_.last_answer = Clock::now();
     view_.error = std::move(error);
     if (!view_.failing_since) view_.failing_since = Clock::now();
   }

@@ -72,6 +72,7 @@ SnapshotFollower::~SnapshotFollower() {
 db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     std::optional<std::int64_t> have) {
   deferred_ = false;
+  primary_answered_ = false;
   if (download_failures_ > 0 && std::chrono::steady_clock::now() < next_download_) {
     return download_error_;
   }
@@ -132,6 +133,7 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
     return db::Error{db::ErrorCode::kBusy, "primary " + options_.primary_url +
                                                " did not answer: " + FailureText(answer.error())};
   }
+  primary_answered_ = answer->status == 200 || answer->status == 304;
   if (answer->status == 304) {
     if (!refused_etag_.empty() && answer->get_header_value("ETag") == refused_etag_) {
       return refused_error_;
@@ -224,7 +226,13 @@ void SnapshotFollower::start(Have have, std::chrono::milliseconds interval,
       fetched = db::Error{db::ErrorCode::kStorage, std::string("following failed: ") + e.what()};
     }
     if (stopping_ || deferred_) return;  // a cancelled download, or a primary that said "later"
-    if (status) fetched ? status->succeeded() : status->failed(fetched.error().message);
+    if (status) {
+      if (fetched) {
+        status->succeeded();
+      } else {
+        status->failed(fetched.error().message, primary_answered_);
+      }
+    }
     if (!fetched) {
       if (fetched.error().message != last_error) {
         server::LogEvent("following " + options_.primary_url + ": " + fetched.error().message,

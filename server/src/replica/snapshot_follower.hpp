@@ -57,6 +57,9 @@ class SnapshotFollower {
   /// sending as many snapshots as it will at once gives nothing, and deferred() is then true.
   db::Result<std::optional<db::SnapshotInfo>> fetch(std::optional<std::int64_t> have);
   bool deferred() const { return deferred_; }
+  /// The primary answered the last fetch with 200 or 304, whatever was then made of it (a
+  /// snapshot refused for its keys or cut short is still an answer).
+  bool primaryAnswered() const { return primary_answered_; }
 
   /// The registry version the replica serves now (nothing before its first snapshot).
   using Have = std::function<std::optional<std::int64_t>()>;
@@ -83,6 +86,7 @@ class SnapshotFollower {
   /// The last fetch was told to come back later (SnapshotPublisher::kBusyProblemType): the
   /// polling thread's own, so the follow status keeps its last real answer or failure.
   bool deferred_ = false;
+  bool primary_answered_ = false;  ///< primaryAnswered(); the polling thread's own
   httplib::Client* client_ = nullptr;  ///< the download in progress, to cancel
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
   std::string installed_etag_;
