@@ -6,10 +6,12 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
 #include "pintag/codec/label.hpp"
+#include "pintag/codec/mirror.hpp"
 #include "pintag/scene/scene.hpp"
 #include "pintag/test/files.hpp"
 #include "serve_fixture.hpp"
@@ -155,8 +157,37 @@ TEST(CliDetect, AWrongCommandLineIsExitTwoEvenWhenThePhotoIsMissing) {
     EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
     EXPECT_EQ(refused.out.find("cannot open"), std::string::npos) << options << ": " << refused.out;
   }
+  // An extension OpenCV knows but does not write: Debian's OpenCV switches OpenEXR off unless
+  // OPENCV_IO_ENABLE_OPENEXR is set, and the overlay failed after the whole detection.
+  const CommandResult exr = RunShell("env -u OPENCV_IO_ENABLE_OPENEXR " + PintagExe() + " detect " +
+                                     missing + " --overlay " + dir.file("overlay.exr") + " 2>&1");
+  EXPECT_EQ(exr.status, 2) << exr.out;
+  EXPECT_NE(exr.out.find("no image format"), std::string::npos) << exr.out;
   // Right options and a missing photo: the job fails (1).
   EXPECT_EQ(RunPintag("detect " + missing + " --fx 1000 --fy 1000 --distortion 0 0 0 0").status, 1);
+}
+
+// A candidate that did not decode is listed with --rejected, but it is not a tag: the headline
+// counted it as one ("1 tag(s)" above "rejected candidate: parity check failed").
+TEST(CliDetect, RejectedCandidatesAreCountedApartFromTags) {
+  const test::TempDir dir;
+  int key = 1234;  // a key whose mirror image is no codeword, so a mirrored tag is refused
+  while (MirrorImageKey(TagKey(static_cast<std::uint16_t>(key)))) ++key;
+  const std::string tag = dir.file("tag.png");
+  ASSERT_EQ(RunPintag("render --key " + std::to_string(key) + " --size-px 256 -o " + tag).status,
+            0);
+  cv::Mat mirrored;
+  cv::flip(cv::imread(tag), mirrored, 1);
+  const std::string photo = dir.file("mirrored.png");
+  ASSERT_TRUE(cv::imwrite(photo, mirrored));
+  const CommandResult refused = RunPintag("detect " + photo + " --rejected");
+  EXPECT_EQ(refused.status, 0) << refused.out;
+  EXPECT_EQ(refused.out.rfind("0 tag(s), 1 rejected candidate(s) in " + photo, 0), 0U)
+      << refused.out;
+  EXPECT_NE(refused.out.find("rejected candidate  corners ("), std::string::npos) << refused.out;
+  const CommandResult read = RunPintag("detect " + tag + " --rejected");
+  EXPECT_EQ(read.out.rfind("1 tag(s), 0 rejected candidate(s) in " + tag, 0), 0U) << read.out;
+  EXPECT_EQ(RunPintag("detect " + photo).out.rfind("0 tag(s) in " + photo, 0), 0U);
 }
 
 // The API's ranges: beyond them the pose was NaN ("distance nan m") with exit 0. A number is read

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cmath>
@@ -120,6 +121,19 @@ LoadResult LoadStandardInput(std::int64_t max_pixels) {
 /// What the command line alone can tell is wrong, checked before the photo is read: a usage error
 /// exits 2 whatever the photo (a missing one included). The intrinsics rules are the detect
 /// route's (server/src/app/detect_route.cpp).
+/// Whether OpenCV writes an image named `path`: cv::haveImageWriter said yes for .exr, whose
+/// encoder this build has switched off, so the overlay failed after the whole detection.
+bool CanEncode(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext.empty() || !cv::haveImageWriter(path)) return false;
+  std::vector<std::uint8_t> bytes;
+  try {
+    return cv::imencode(ext, cv::Mat(2, 2, CV_8UC3, cv::Scalar(0, 0, 0)), bytes) && !bytes.empty();
+  } catch (const cv::Exception&) {
+    return false;
+  }
+}
+
 void CheckOptions(const DetectArgs& args) {
   const int given = args.fx.has_value() + args.fy.has_value();
   if (given == 1) throw UsageError("give both --fx and --fy, or neither");
@@ -147,7 +161,7 @@ void CheckOptions(const DetectArgs& args) {
   if (!args.overlay.empty()) {
     // Where the overlay cannot go is known now, not after the photo is read and searched.
     CheckFileToWrite("--overlay", args.overlay);
-    if (!cv::haveImageWriter(args.overlay)) {
+    if (!CanEncode(args.overlay)) {
       throw UsageError("--overlay " + args.overlay +
                        ": no image format for its extension; name a .png or .jpg file");
     }
@@ -194,13 +208,21 @@ void Run(const DetectArgs& args) {
   if (args.json) {
     std::cout << ToJson(result).dump(2) << "\n";
   } else {
-    std::cout << result.detections.size() << " tag(s) in " << args.photo << " ("
-              << loaded.image->bgr.cols << "x" << loaded.image->bgr.rows << ", intrinsics "
-              << ToString(result.intrinsics_source) << ", " << result.timings.total_ms << " ms)\n";
+    const auto decoded = std::count_if(result.detections.begin(), result.detections.end(),
+                                       [](const Detection& d) { return d.key.has_value(); });
+    const auto rejected = static_cast<std::ptrdiff_t>(result.detections.size()) - decoded;
+    std::cout << decoded << " tag(s)"
+              << (args.rejected ? ", " + std::to_string(rejected) + " rejected candidate(s)" : "")
+              << " in " << args.photo << " (" << loaded.image->bgr.cols << "x"
+              << loaded.image->bgr.rows << ", intrinsics " << ToString(result.intrinsics_source)
+              << ", " << result.timings.total_ms << " ms)\n";
     for (const PhotoWarning& w : result.warnings) std::cout << "  note: " << w.message << "\n";
     for (const Detection& d : result.detections) {
       if (!d.key) {
-        std::cout << "  rejected candidate: " << d.reject_reason << "\n";
+        std::printf(
+            "  rejected candidate  corners (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f): %s\n",
+            d.corners[0].x, d.corners[0].y, d.corners[1].x, d.corners[1].y, d.corners[2].x,
+            d.corners[2].y, d.corners[3].x, d.corners[3].y, d.reject_reason.c_str());
         continue;
       }
       std::printf("  key %5d  corners (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f)\n",

@@ -49,6 +49,8 @@ void Run(const RenderArgs& args) {
   if (args.size_px.has_value() == args.size_mm.has_value()) {
     throw UsageError("give exactly one of --size-px and --size-mm");
   }
+  // Before the tag is drawn (seconds, and gigabytes, for the largest): a mistyped directory.
+  CheckFileToWrite("-o", args.output);
   const TagKey key(static_cast<std::uint16_t>(args.key));
 
   if (ext == ".svg") {
