@@ -95,6 +95,29 @@ struct Mapping {
   std::size_t width;
 };
 
+/// What a file that cannot be the directory's CSV is, told from its first bytes, or nothing: a
+/// UTF-16 export, a compressed file or a workbook otherwise failed as "missing the columns…"
+/// or "stray double quote", which did not say what to do.
+std::optional<std::string> NotCsvText(std::string_view bytes) {
+  const auto starts = [&](std::string_view prefix) { return bytes.starts_with(prefix); };
+  if (starts("\xFF\xFE") || starts("\xFE\xFF")) {
+    return "the file is UTF-16 text (as Excel's \"Unicode Text\" saves it); save it as \"CSV "
+           "UTF-8\" "
+           "and import that";
+  }
+  if (starts("\x1F\x8B")) return "the file is compressed (gzip); gunzip it and import the CSV";
+  if (starts("PK\x03\x04")) {
+    return "the file is a ZIP archive (an .xlsx workbook?); save the sheet as \"CSV UTF-8\" or "
+           "unzip it, and import the CSV";
+  }
+  // UTF-16 without a byte order mark, or an image: text has no NUL byte.
+  if (bytes.substr(0, 4096).find('\0') != std::string_view::npos) {
+    return "the file is not text (it holds NUL bytes: UTF-16 without a byte order mark, or a "
+           "binary file); give the CSV as UTF-8 text";
+  }
+  return std::nullopt;
+}
+
 /// The layout a header is, or why it is neither: the columns missing from the nearer layout, or
 /// one of its columns given twice (which of the two holds the value cannot be told).
 Result<Mapping> Detect(const std::vector<std::string>& header) {
@@ -112,6 +135,16 @@ Result<Mapping> Detect(const std::vector<std::string>& header) {
     if (nearest == nullptr || lacking.size() < missing.size()) {
       nearest = &spec;
       missing = std::move(lacking);
+    }
+  }
+  // One field holding the names with another separator between them: say so, not what is missing.
+  if (!missing.empty() && header.size() == 1) {
+    for (const auto& [separator, name] : {std::pair{';', "semicolons"}, std::pair{'\t', "tabs"}}) {
+      if (header[0].find(separator) != std::string::npos) {
+        return Error{ErrorCode::kInvalid,
+                     std::string("line 1: the fields are separated by ") + name +
+                         ", not commas; save the file as CSV with commas (\"CSV UTF-8\")"};
+      }
     }
   }
   if (!missing.empty()) {
@@ -372,6 +405,9 @@ Result<ParsedImport> ParseDirectoryCsv(std::string_view csv, const ImportOptions
   const auto progress = [&](std::string_view phase, std::uint64_t done, std::uint64_t total) {
     if (options.progress) options.progress(phase, done, total);
   };
+  if (const std::optional<std::string> not_csv = NotCsvText(csv)) {
+    return Error{ErrorCode::kInvalid, *not_csv};
+  }
   CsvReader reader(csv);
   std::string error;
   const auto header = reader.next(&error);

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -118,6 +119,14 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
   const std::string good_row = "Delhi,Delhi,New Delhi,Somewhere,110001,BO,Delivery,X,Y,NA,NA\n";
   std::string lacking_district = header;
   lacking_district.erase(lacking_district.find("district,"), 9);
+  // The same good file as Excel's "Unicode Text" saves it (UTF-16 LE with a byte order mark),
+  // and with semicolons or tabs between the fields.
+  std::string utf16 = "\xFF\xFE";
+  for (const char c : header + good_row) utf16.append({c, '\0'});
+  std::string semicolons = header + good_row;
+  std::replace(semicolons.begin(), semicolons.end(), ',', ';');
+  std::string tabs = header + good_row;
+  std::replace(tabs.begin(), tabs.end(), ',', '\t');
   struct Case {
     const char* name;
     std::string content;
@@ -139,6 +148,10 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
        "the header has the column pincode 2 times (fields 1 and 6)"},
       {"lacking_district.csv", lacking_district + good_row, "",
        "missing the newer layout's district ("},
+      {"utf16.csv", utf16, "", "the file is UTF-16 text"},
+      {"utf16_no_bom.csv", utf16.substr(2), "", "the file is not text (it holds NUL bytes"},
+      {"semicolons.csv", semicolons, "", "line 1: the fields are separated by semicolons"},
+      {"tabs.csv", tabs, "", "line 1: the fields are separated by tabs"},
   };
   for (const Case& c : cases) {
     const std::string file = WriteFile(dir.path() / c.name, c.content);
@@ -151,6 +164,13 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
     EXPECT_EQ(run.out.find("created"), std::string::npos) << c.name << ": " << run.out;
     EXPECT_FALSE(std::filesystem::exists(db)) << c.name;
   }
+  // The good file compressed, as a download may come.
+  const std::string good = WriteFile(dir.path() / "good.csv", header + good_row);
+  ASSERT_EQ(RunShell("gzip -k " + good).status, 0);
+  const CommandResult gzipped = RunPintag("import " + good + ".gz --db " + dir.file("gz.db"));
+  EXPECT_EQ(gzipped.status, 1) << gzipped.out;
+  EXPECT_NE(gzipped.out.find("the file is compressed (gzip)"), std::string::npos) << gzipped.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("gz.db")));
   // A file with no end is refused at the size limit, not read until memory runs out.
   const std::string db = dir.file("zero.db");
   const CommandResult endless =
