@@ -134,6 +134,13 @@ TEST(CliKeys, NumbersThatAreNotFiniteAreRefusedLikeAnyOutOfRange) {
     EXPECT_NE(refused.out.find("must be a finite number"), std::string::npos)
         << command << ": " << refused.out;
   }
+  // Text that is not a decimal number is refused as such, not as a number that is not finite.
+  const CommandResult hex =
+      RunPintag("render --key 5 --size-px 200 --dpi 0x12C -o " + dir.file("tag.png"));
+  EXPECT_EQ(hex.status, 2) << hex.out;
+  EXPECT_NE(hex.out.find("must be a decimal number (such as 300 or 0.5), got '0x12C'"),
+            std::string::npos)
+      << hex.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.svg")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("never.db")));

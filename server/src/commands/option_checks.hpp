@@ -29,9 +29,8 @@ namespace pintag::cli {
 inline CLI::Validator FiniteNumber() {
   return {[](std::string& text) -> std::string {
             const std::optional<double> value = app::ParseDecimal(text);
-            if (!value || !std::isfinite(*value)) {
-              return "must be a finite number, got '" + text + "'";
-            }
+            if (!value) return "must be a decimal number (such as 300 or 0.5), got '" + text + "'";
+            if (!std::isfinite(*value)) return "must be a finite number, got '" + text + "'";
             return {};
           },
           "NUMBER"};
