@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pintag/db/database.hpp"
 #include "pintag/db/sqlite.hpp"
 #include "serve_fixture.hpp"
 
@@ -216,6 +217,24 @@ TEST(CliNewDb, AnotherApplicationsDatabaseIsRefusedAndLeftAsItWas) {
   EXPECT_EQ(ReadFile(other), bytes);
   EXPECT_FALSE(std::filesystem::exists(other + "-wal"));
   EXPECT_FALSE(std::filesystem::exists(dir.file("snapshot.db")));
+
+  // One whose user_version happens to be PinTag's schema version: the commands that only read
+  // took it for a registry and failed on SQLite's "no such table: pincodes".
+  const std::string numbered = dir.file("numbered.db");
+  {
+    db::Connection connection(numbered);
+    connection.execute("PRAGMA journal_mode=DELETE; CREATE TABLE x (a); PRAGMA user_version=" +
+                       std::to_string(db::kSchemaVersion));
+  }
+  for (const std::string& command :
+       {"keys lookup 110001 --db " + numbered, "keys export --db " + numbered,
+        "token list --db " + numbered}) {
+    const CommandResult run = RunPintag(command);
+    EXPECT_EQ(run.status, 1) << command << ": " << run.out;
+    EXPECT_NE(run.out.find(numbered + " is not a PinTag database: it already holds tables (x)"),
+              std::string::npos)
+        << command << ": " << run.out;
+  }
 }
 
 }  // namespace

@@ -56,7 +56,12 @@ db::Connection OpenForReading(const std::string& path, bool must_exist) {
     // another application's database, no database) goes through OpenDb, which says what it is.
     try {
       db::Connection connection(path, {.create = false, .read_only = true});
-      if (db::SchemaVersion(connection) == db::kSchemaVersion) return connection;
+      // The version alone is a number any program may set: the registry's tables must be there.
+      if (db::SchemaVersion(connection) == db::kSchemaVersion &&
+          connection.queryInt64("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND "
+                                "name IN ('pincodes', 'tag_keys')") == 2) {
+        return connection;
+      }
     } catch (const std::exception&) {
     }
   }
