@@ -330,7 +330,7 @@ Result<std::int64_t> RegistryVersion(Connection& connection) {
 
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& given_path) {
   const FileToReplace target = FileReplacedBy(given_path);
-  if (!target.problem.empty()) return Error{ErrorCode::kInvalid, target.problem};
+  if (!target.problem.empty()) return Error{ErrorCode::kStorage, target.problem};
   const std::string& out_path = target.path;
   std::error_code error;
   if (std::filesystem::equivalent(out_path, source.path(), error)) {

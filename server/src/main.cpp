@@ -91,6 +91,19 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // CLI11 checks required options before unknown ones, so `render --kye 5` said "--key is
+    // required" and hid the typo. An unknown option is then the message.
+    if (dynamic_cast<const CLI::RequiredError*>(&e) != nullptr) {
+      std::string unknown;
+      for (const std::string& arg : app.remaining(true)) {
+        if (arg.size() > 1 && arg.front() == '-') unknown += (unknown.empty() ? "" : ", ") + arg;
+      }
+      if (!unknown.empty()) {
+        std::cerr << "pintag: unknown option " << unknown << " (" << e.what()
+                  << ")\nRun with --help for more information.\n";
+        return 2;
+      }
+    }
     if (e.get_exit_code() != 0) {
       const std::string message = NamingTheEnvironment(app, e.what(), argc, argv);
       if (message != e.what()) {

@@ -198,7 +198,7 @@ TEST(Snapshot, AnUnwritableTargetIsAnErrorAndLeavesNothingBehind) {
   EXPECT_NE(missing_dir.error().message.find("no/such/dir"), std::string::npos)
       << missing_dir.error().message;
 
-  // The target is a directory: the rename fails and the temporary copy is removed.
+  // The target is a directory: refused before a copy is made, and nothing is left beside it.
   std::filesystem::create_directory(dir.file("taken"));
   const auto taken = WriteSnapshot(live, dir.file("taken"));
   ASSERT_FALSE(taken.ok());

@@ -171,5 +171,22 @@ TEST(CliKeys, AMistypedSubcommandIsNamedAndTheVersionIsShown) {
   EXPECT_NE(version.out.find("(registry schema "), std::string::npos) << version.out;
 }
 
+TEST(CliKeys, AMistypedRequiredOptionIsNamedNotTakenForAMissingOne) {
+  // CLI11 checks required options first: "--kye 5" was answered "--key is required".
+  const TempDir dir;
+  const CommandResult render = RunPintag("render --kye 5 --size-px 100 -o " + dir.file("t.png"));
+  EXPECT_EQ(render.status, 2) << render.out;
+  EXPECT_NE(render.out.find("unknown option --kye (--key is required)"), std::string::npos)
+      << render.out;
+  const CommandResult token = RunPintag("token create --rol admin --db " + dir.file("t.db"));
+  EXPECT_EQ(token.status, 2) << token.out;
+  EXPECT_NE(token.out.find("unknown option --rol"), std::string::npos) << token.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("t.db")));
+  // Only missing: said as before.
+  const CommandResult missing = RunPintag("render --size-px 100 -o " + dir.file("t.png"));
+  EXPECT_EQ(missing.status, 2) << missing.out;
+  EXPECT_EQ(missing.out.rfind("--key is required", 0), 0U) << missing.out;
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -45,7 +45,7 @@ std::string DatabaseOwningFile(const std::string& path, const std::string& sourc
 /// Temporary files beside `out_path` that no process is writing (left by one killed with SIGKILL)
 /// are removed: a temporary file holds a flock while it is written. The same holds for
 /// InstallSnapshot. Through a symbolic link, the file it names is replaced and the link kept; a
-/// device, a pipe or a directory at `out_path` is kInvalid (FileReplacedBy), nothing written.
+/// device, a pipe or a directory at `out_path` is kStorage (FileReplacedBy), nothing written.
 Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path);
 
 /// Puts a snapshot received as bytes (from a primary) at `path`: written to a temporary file
