@@ -23,13 +23,16 @@ function ascii(bytes, at, length) {
 function exifBlock(bytes) {
   const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   if (bytes[0] === 0xff && bytes[1] === 0xd8) {
+    // The segments before the first scan, as the server walks them: 0xFF fill bytes skipped, and
+    // a segment that runs past the file's end is the end (its EXIF, cut short, is not read).
     for (let at = 2; at + 4 <= bytes.length && bytes[at] === 0xff;) {
       const marker = bytes[at + 1];
-      if (marker === 0xd8 || (marker >= 0xd0 && marker <= 0xd7) || marker === 0x01) { at += 2; continue; }
+      if (marker === 0xff) { at += 1; continue; }
       if (marker === 0xda || marker === 0xd9) return null;  // the scan starts: no EXIF before it
       const length = view.getUint16(at + 2);
-      if (marker === 0xe1 && startsWith(bytes, at + 4, kExifHeader)) {
-        return bytes.subarray(at + 4 + kExifHeader.length, Math.min(bytes.length, at + 2 + length));
+      if (length < 2 || at + 2 + length > bytes.length) return null;
+      if (marker === 0xe1 && length >= 2 + kExifHeader.length && startsWith(bytes, at + 4, kExifHeader)) {
+        return bytes.subarray(at + 4 + kExifHeader.length, at + 2 + length);
       }
       at += 2 + length;
     }
@@ -94,7 +97,8 @@ function lensFields(tiff) {
     for (const entry of list) {
       const name = names[u16(entry)];
       const number = name ? value(entry) : undefined;
-      if (number > 0 && Number.isFinite(number)) fields[name] = number;
+      // A 0 ("unknown") still replaces what IFD0 said, as in the server's reader.
+      if (Number.isFinite(number)) fields[name] = number;
     }
   };
   // The lens belongs in the EXIF directory; the server's EXIF reader (OpenImageIO's) also takes
@@ -127,8 +131,8 @@ export async function exifFocalPixels(file, fromWidth, fromHeight, width, height
     return null;  // a file that cannot be read again, or a block cut short: no lens
   }
   const fromDiagonal = Math.hypot(fromWidth, fromHeight);
-  let equivalentMm = fields.equivalentMm;
-  if (!equivalentMm && fields.focalMm && fields.planeXResolution) {
+  let equivalentMm = fields.equivalentMm > 0 ? fields.equivalentMm : undefined;
+  if (!equivalentMm && fields.focalMm > 0 && fields.planeXResolution > 0) {
     const perMm = pixelsPerMm(fields.planeXResolution, fields.planeUnit ?? 2);
     if (perMm) equivalentMm = (fields.focalMm * perMm * kFullFrameDiagonalMm) / fromDiagonal;
   }

@@ -50,6 +50,18 @@ int SyncDirectory(const std::string& directory) {
   return failure;
 }
 
+/// Whether this process may follow the link at `link` (`st` its lstat): the kernel's
+/// fs.protected_symlinks rule, applied here because a link read with readlink() is not checked
+/// by the kernel. In a sticky directory writable by all (/tmp), a link is followed only when this
+/// user or the directory's owner owns it: another user's link there could aim a secret or a
+/// snapshot at any file this process may write.
+bool MayFollow(const std::string& link, const struct stat& st) {
+  struct stat directory {};
+  if (::stat(DirectoryOf(link).c_str(), &directory) != 0) return false;
+  const bool shared = (directory.st_mode & S_ISVTX) != 0 && (directory.st_mode & S_IWOTH) != 0;
+  return !shared || st.st_uid == ::geteuid() || st.st_uid == directory.st_uid;
+}
+
 /// Creates a new file in `directory` as open() creates one (0666 less the umask), and names it in
 /// `name`: its descriptor, or -1 with errno set. The name is short whatever the destination's:
 /// the destination's own name with a suffix overran NAME_MAX for a legal name of 246 bytes.
@@ -78,7 +90,9 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
     return failure == 0 ? std::string() : std::strerror(failure);
   };
   if ((exists && !S_ISREG(target.st_mode)) || dangling) return in_place();
-  const std::string destination = FileReplacedBy(path).path;
+  const FileToReplace replaced = FileReplacedBy(path);
+  if (!replaced.problem.empty()) return replaced.problem;
+  const std::string& destination = replaced.path;
   const std::string directory = DirectoryOf(destination);
   std::string temporary;
   const int fd = CreateIn(directory, temporary);
@@ -106,36 +120,41 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
 
 FileToReplace FileReplacedBy(const std::string& path) {
   FileToReplace out{path, {}};
-  struct stat target {};
-  if (::stat(path.c_str(), &target) != 0) {
-    // Not there, or a link to a file not there yet: that file is made where the link points.
-    for (int hop = 0; hop < 40; ++hop) {
-      struct stat link {};
-      if (::lstat(out.path.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return out;
-      std::string to(PATH_MAX, '\0');
-      const ssize_t n = ::readlink(out.path.c_str(), to.data(), to.size());
-      if (n < 0) break;
-      to.resize(static_cast<std::size_t>(n));
-      out.path = to.starts_with('/') ? to : DirectoryOf(out.path) + "/" + to;
+  // Each link is followed here, hop by hop, so that the file renamed over is the one it names
+  // (a rename replaces a link itself), and one not there yet is made where the link points.
+  for (int hop = 0;; ++hop) {
+    struct stat st {};
+    if (::lstat(out.path.c_str(), &st) != 0) return out;  // not there: made at this path
+    if (S_ISREG(st.st_mode)) return out;
+    if (!S_ISLNK(st.st_mode)) {
+      out.problem = path + " is " +
+                    (S_ISDIR(st.st_mode)    ? "a directory"
+                     : S_ISFIFO(st.st_mode) ? "a pipe"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "a device") +
+                    ", not a file: the output is written beside it and renamed into place";
+      return out;
     }
-    out.problem = path + " is a symbolic link that cannot be followed (a loop?)";
-    return out;
+    if (hop == 40) {
+      out.problem = path + " is a symbolic link that cannot be followed (a loop?)";
+      return out;
+    }
+    if (!MayFollow(out.path, st)) {
+      out.problem = path +
+                    " is a symbolic link another user made in a shared directory (sticky and "
+                    "writable by all, as /tmp); name the file itself";
+      return out;
+    }
+    std::string to(PATH_MAX, '\0');
+    const ssize_t n = ::readlink(out.path.c_str(), to.data(), to.size());
+    if (n < 0) {
+      out.problem =
+          path + ": cannot read the symbolic link " + out.path + " (" + std::strerror(errno) + ")";
+      return out;
+    }
+    to.resize(static_cast<std::size_t>(n));
+    out.path = to.starts_with('/') ? to : DirectoryOf(out.path) + "/" + to;
   }
-  if (!S_ISREG(target.st_mode)) {
-    out.problem = path + " is " +
-                  (S_ISDIR(target.st_mode)    ? "a directory"
-                   : S_ISFIFO(target.st_mode) ? "a pipe"
-                   : S_ISSOCK(target.st_mode) ? "a socket"
-                                              : "a device") +
-                  ", not a file: the output is written beside it and renamed into place";
-    return out;
-  }
-  // Through a link, the file it names is replaced and the link kept.
-  if (char* resolved = ::realpath(path.c_str(), nullptr)) {
-    out.path = resolved;
-    std::free(resolved);
-  }
-  return out;
 }
 
 }  // namespace pintag

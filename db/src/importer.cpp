@@ -110,8 +110,11 @@ std::optional<std::string> NotCsvText(std::string_view bytes) {
     return "the file is a ZIP archive (an .xlsx workbook?); save the sheet as \"CSV UTF-8\" or "
            "unzip it, and import the CSV";
   }
-  // UTF-16 without a byte order mark, or an image: text has no NUL byte.
-  if (bytes.substr(0, 4096).find('\0') != std::string_view::npos) {
+  // UTF-16 without a byte order mark (a NUL in its first line), or an image (a NUL among the
+  // first bytes). A NUL in a data row is that row's problem, refused with it (CheckText).
+  const std::string_view first_line = bytes.substr(0, bytes.find('\n'));
+  if (first_line.find('\0') != std::string_view::npos ||
+      bytes.substr(0, 16).find('\0') != std::string_view::npos) {
     return "the file is not text (it holds NUL bytes: UTF-16 without a byte order mark, or a "
            "binary file); give the CSV as UTF-8 text";
   }

@@ -73,7 +73,8 @@ Result<Connection> OpenScanLogFile(const std::string& path) {
     Connection connection(path, {.wal = false});
     std::string others;
     Statement tables = connection.prepare(
-        "SELECT name FROM sqlite_schema WHERE type = 'table' AND name <> 'scan_log' ORDER BY name");
+        "SELECT name FROM sqlite_schema WHERE type = 'table' AND name <> 'scan_log' AND name NOT "
+        "LIKE 'sqlite\\_%' ESCAPE '\\' ORDER BY name");
     for (int shown = 0; shown < 3 && tables.step(); ++shown) {
       others += (others.empty() ? "" : ", ") + tables.getText(0);
     }

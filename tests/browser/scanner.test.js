@@ -401,6 +401,11 @@ test('the page reads a photo\'s lens from its EXIF as the server does', async ()
   // The lens in IFD0 rather than the EXIF directory, where the server's reader takes it too.
   await writeFile(path('lens-in-ifd0.webp'), webpWithExif(plainWebp, width, height,
     tiffBlock({ shorts: [[0xa405, 35]] })));
+  // Fill bytes (0xFF) before the EXIF segment, which JPEG allows between segments.
+  const lens35 = await readFile(path('lens-35mm.jpg'));
+  const app1 = lens35.indexOf(Buffer.from('\xff\xe1', 'latin1'));
+  await writeFile(path('lens-fill-bytes.jpg'),
+    Buffer.concat([lens35.subarray(0, app1), Buffer.from([0xff, 0xff, 0xff]), lens35.subarray(app1)]));
   // A lens whose directory lies past the block's end: no lens.
   const cut = tiffBlock({ exifShorts: [[0xa405, 35]] });
   await writeFile(path('lens-cut-short.webp'), webpWithExif(plainWebp, width, height, cut.subarray(0, cut.length - 8)));
@@ -410,7 +415,7 @@ test('the page reads a photo\'s lens from its EXIF as the server does', async ()
   const expected = {
     'lens-35mm.jpg': 'exif', 'lens-plane.jpg': 'exif', 'lens-unknown.jpg': 'assumed', 'lens-plane.png': 'exif',
     'lens-35mm.webp': 'exif', 'lens-35mm-big-endian.webp': 'exif', 'lens-in-ifd0.webp': 'exif',
-    'lens-cut-short.webp': 'assumed',
+    'lens-cut-short.webp': 'assumed', 'lens-fill-bytes.jpg': 'exif',
     'label.webp': 'assumed',
   };
   for (const [name, source] of Object.entries(expected)) {

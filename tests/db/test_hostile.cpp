@@ -321,5 +321,20 @@ TEST_F(Hostile, ImportedCsvFields) {
   EXPECT_EQ(LookupPincode(db_, Pincode(996000)).error().code, ErrorCode::kNotFound);
 }
 
+// A NUL in a data row is that row's problem: a check for binary and UTF-16 files once refused the
+// whole file for a NUL anywhere in its first 4 KiB.
+TEST_F(Hostile, ANulInADataRowRefusesThatRowNotTheFile) {
+  const std::string header =
+      "officename,pincode,officeType,Deliverystatus,divisionname,regionname,circlename,Taluk,"
+      "Districtname,statename\n";
+  const std::string csv = header + std::string("Nul\0Office,995001,BO,Delivery,D,R,C,T,X,S\n", 42) +
+                          "Good Office,995002,BO,Delivery,D,R,C,T,X,S\n";
+  const auto report = ImportDirectoryCsv(db_, csv);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->problems.size(), 1U);
+  EXPECT_EQ(LookupPincode(db_, Pincode(995001)).error().code, ErrorCode::kNotFound);
+  EXPECT_TRUE(LookupPincode(db_, Pincode(995002)).ok());
+}
+
 }  // namespace
 }  // namespace pintag::db

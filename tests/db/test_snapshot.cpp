@@ -687,6 +687,20 @@ TEST(ScanLogFile, AReplicaAppendsToItsOwnFile) {
   auto again = OpenScanLogFile(dir.file("scans.db"));
   ASSERT_TRUE(again.ok());
   EXPECT_EQ(RecentScans(again.value(), 10).value().size(), 1u);
+  // SQLite's own tables (ANALYZE's statistics) are not another program's: still a scan log.
+  again.value().execute("ANALYZE");
+  ASSERT_EQ(
+      again.value().queryInt64("SELECT count(*) FROM sqlite_schema WHERE name = 'sqlite_stat1'"),
+      1);
+  auto analyzed = OpenScanLogFile(dir.file("scans.db"));
+  ASSERT_TRUE(analyzed.ok()) << analyzed.error().message;
+  // A table of anything else is: the file is left as it was.
+  again.value().execute("CREATE TABLE pincodes (pincode INTEGER)");
+  const auto refused = OpenScanLogFile(dir.file("scans.db"));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+  EXPECT_NE(refused.error().message.find("holds other tables (pincodes)"), std::string::npos)
+      << refused.error().message;
 }
 
 }  // namespace

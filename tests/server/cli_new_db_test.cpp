@@ -62,6 +62,11 @@ TEST(CliNewDb, ASnapshotDirectoryThatIsNotThereIsRefusedBeforeTheDatabaseIsCreat
   EXPECT_NE(run.out.find("--snapshot " + snapshot + ": its directory"), std::string::npos)
       << run.out;
   EXPECT_FALSE(std::filesystem::exists(db));
+  // A replica given one (a PINTAG_SNAPSHOT shared with the primary) is told it has none to give.
+  const CommandResult replica = RunShell("timeout 60 " + PintagExe() + " serve --port 0 --db " +
+                                         db + " --read-only --snapshot " + snapshot + " 2>&1");
+  EXPECT_EQ(replica.status, 2) << replica.out;
+  EXPECT_NE(replica.out.find("a --read-only replica has none"), std::string::npos) << replica.out;
 }
 
 // Listing or revoking the tokens of a database that is not there is a mistyped path: it was

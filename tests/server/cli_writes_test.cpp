@@ -44,8 +44,6 @@ TEST(CliWrites, RenderToAFullDiskFailsForPngAsForSvg) {
   EXPECT_EQ(ReadFile(png).substr(0, 8), "\x89PNG\r\n\x1a\n");
 }
 
-// A write that failed partway left the output cut short where a good file had been. It is
-// written beside and renamed over, so the file before stays whole, and nothing is left beside it.
 // A directory that is not there is a mistyped path, said before the work (for the largest tag,
 // seconds and 1.7 GB of drawing that ended in exit 1), as `detect --overlay` says it.
 TEST(CliWrites, AnOutputInADirectoryThatIsNotThereIsAUsageErrorBeforeTheWork) {
@@ -62,6 +60,8 @@ TEST(CliWrites, AnOutputInADirectoryThatIsNotThereIsAUsageErrorBeforeTheWork) {
   EXPECT_NE(snapshot.out.find(missing + " is not a directory"), std::string::npos) << snapshot.out;
 }
 
+// A write that failed partway left the output cut short where a good file had been. It is
+// written beside and renamed over, so the file before stays whole, and nothing is left beside it.
 TEST(CliWrites, AWriteThatFailsLeavesTheFileThereBeforeWhole) {
   const TempDir dir;
   const std::string png = dir.file("tag.png");
@@ -248,6 +248,16 @@ TEST(CliWrites, TokenAndSnapshotFilesAreWrittenThroughLinksAndNeverReplaceAPipe)
   EXPECT_TRUE(std::filesystem::is_symlink(dir.file("to-snapshot")));
   const CommandResult verified = RunPintag("snapshot --verify " + dir.file("registry.snap"));
   EXPECT_EQ(verified.status, 0) << verified.out;
+
+  // A link into a directory that is not there: said before any work, naming both paths.
+  std::filesystem::create_symlink("no-such-dir/x.token", dir.file("to-nowhere"));
+  const std::int64_t tokens_before = token_count();
+  const CommandResult nowhere =
+      RunPintag("token create --role replica --out " + dir.file("to-nowhere") + " --db " + db);
+  EXPECT_EQ(nowhere.status, 2) << nowhere.out;
+  EXPECT_NE(nowhere.out.find("--out " + dir.file("to-nowhere") + ", a link to"), std::string::npos)
+      << nowhere.out;
+  EXPECT_EQ(token_count(), tokens_before);
 
   // A pipe is refused before any work: no token made, the pipe left a pipe.
   const std::string pipe = dir.file("pipe");

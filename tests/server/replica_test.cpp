@@ -854,6 +854,10 @@ TEST_F(ReplicaSetTest, ThePrimaryRepublishesASnapshotOthersChangedAndBacksOffWhi
     EXPECT_NE(r->body.find("is a directory, not a file"), std::string::npos) << r->body;
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
   }
+  // Each refused poll has its access line, not an error line too (the publisher's tries are
+  // logged, with their backoff).
+  EXPECT_EQ(stderrOf("primary").find("/api/v1/registry/snapshot: 503"), std::string::npos)
+      << stderrOf("primary");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   // Without the delay, 2 tries a second from the thread and one per request: over 15 here.
@@ -946,6 +950,13 @@ TEST_F(ReplicaSetTest, AScanLogNamingARegistrySnapshotIsRefusedAndTheSnapshotLef
     const CommandResult verified = RunPintag("snapshot --verify " + scan_log);
     EXPECT_EQ(verified.status, 0) << verified.out;
   }
+  // A follower says so at once, not once its primary (here none) has sent a first snapshot.
+  const CommandResult follower =
+      RunShell("PINTAG_FOLLOW_TOKEN=pt_1_x timeout 30 " + PintagExe() +
+               " serve --port 0 --bind 127.0.0.1 --follow http://127.0.0.1:9 --db " +
+               dir_.file("new.db") + " --scan-log " + theirs + " 2>&1");
+  EXPECT_EQ(follower.status, 1) << follower.out;
+  EXPECT_NE(follower.out.find("the file holds other tables"), std::string::npos) << follower.out;
   EXPECT_EQ(ReadFile(theirs), bytes_before);
   EXPECT_FALSE(std::filesystem::exists(theirs + "-wal"));
   // A scan log of its own beside them is made, and the replica serves.

@@ -103,7 +103,10 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   }
   db::Result<replica::PublishedSnapshot> published = context.publisher->read();
   if (!published) {
-    throw HttpError(503, "no snapshot could be published: " + published.error().message);
+    // Answered, not thrown: a thrown 5xx is logged as a server error, one line a replica poll
+    // (two a second with two replicas), where the publisher logs each failed try already.
+    return server::ProblemResponse(503,
+                                   "no snapshot could be published: " + published.error().message);
   }
   const std::int64_t version = published->info.registry_version;
   HttpResponse response =

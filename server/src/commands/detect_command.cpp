@@ -277,8 +277,10 @@ void AddDetectCommand(CLI::App& app) {
       // Real lenses, fisheyes included, stay within units; 1e300 made every pose NaN.
       ->check(NumberFromTo(-1000, 1000));
   cmd->add_flag("--json", args->json, "print JSON");
-  cmd->add_option("--overlay", args->overlay, "write the photo with outlines, keys and axes");
-  cmd->add_option("--debug-dir", args->debug_dir, "write each pipeline stage's image here");
+  cmd->add_option("--overlay", args->overlay, "write the photo with outlines, keys and axes")
+      ->check(FileName());
+  cmd->add_option("--debug-dir", args->debug_dir, "write each pipeline stage's image here")
+      ->check(FileName());
   cmd->add_flag("--rejected", args->rejected, "also list candidates that did not decode");
   cmd->add_option("--threads", args->threads, "worker threads")
       ->check(CLI::Range(1, 64))

@@ -105,11 +105,13 @@ inline void CheckFileToWrite(const std::string& option, const std::string& path)
 }
 
 /// A file `option` replaces whole (a snapshot, a token's secret), checked before any work: not a
-/// device, pipe or directory, which the rename would replace with a file (FileReplacedBy).
-inline void CheckFileToReplace(const std::string& option, const std::string& path) {
-  if (const FileToReplace target = FileReplacedBy(path); !target.problem.empty()) {
-    throw UsageError(option + " " + target.problem);
-  }
+/// device, pipe or directory, which the rename would replace with a file (FileReplacedBy), and
+/// in a directory that is there, the one the file a link names is in. The path written.
+inline std::string CheckFileToReplace(const std::string& option, const std::string& path) {
+  const FileToReplace target = FileReplacedBy(path);
+  if (!target.problem.empty()) throw UsageError(option + " " + target.problem);
+  CheckFileToWrite(target.path == path ? option : option + " " + path + ", a link to", target.path);
+  return target.path;
 }
 
 /// A file name given as an option's value: empty text (an unset shell variable, `--out "$F"`) is

@@ -126,6 +126,9 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
           "--follow-interval-ms is how often --follow asks; this replica follows no one");
     }
   }
+  if (replica && !args.snapshot.empty()) {
+    throw UsageError("--snapshot publishes a primary's registry; a --read-only replica has none");
+  }
   if (!args.snapshot.empty()) {
     std::error_code error;
     // Before the database is created and seeded: a mistyped directory leaves nothing behind.
@@ -219,6 +222,19 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     throw std::runtime_error(live + ": a read-only replica serves a snapshot of its own; give it " +
                              "another --db (a --follow replica fetches one there)");
   }
+  if (args_.follow.empty() && !std::filesystem::exists(db_path_)) {
+    throw std::runtime_error("--read-only serves a registry snapshot, and " + db_path_ +
+                             " does not exist: make one on the primary with `pintag snapshot "
+                             "--db FILE --out " +
+                             db_path_ + "`, or give --follow URL to fetch one");
+  }
+  // Before a follower waits for its first snapshot: a --scan-log given by mistake (another
+  // replica's snapshot) is refused at once, not once the primary is up.
+  const std::string scan_log =
+      args_.scan_log.empty() ? Beside(db_path_, "-scans.db") : args_.scan_log;
+  if (auto opened = db::OpenScanLogFile(scan_log); !opened) {
+    throw std::runtime_error("scan log " + scan_log + ": " + opened.error().message);
+  }
   if (!args_.follow.empty()) {
     token_ = ReadToken(args_);
     follow_status_ = std::make_shared<replica::FollowStatus>();
@@ -247,20 +263,9 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
       }
     }
   }
-  if (args_.follow.empty() && !std::filesystem::exists(db_path_)) {
-    throw std::runtime_error("--read-only serves a registry snapshot, and " + db_path_ +
-                             " does not exist: make one on the primary with `pintag snapshot "
-                             "--db FILE --out " +
-                             db_path_ + "`, or give --follow URL to fetch one");
-  }
   watcher_ = std::make_unique<replica::SnapshotWatcher>(
       db_path_, [this](const db::SnapshotInfo& loaded) { pool_->renew(loaded.path); });
 
-  const std::string scan_log =
-      args_.scan_log.empty() ? Beside(db_path_, "-scans.db") : args_.scan_log;
-  if (auto opened = db::OpenScanLogFile(scan_log); !opened) {
-    throw std::runtime_error("scan log " + scan_log + ": " + opened.error().message);
-  }
   pool_ =
       std::make_shared<app::ConnectionPool>(watcher_->loaded().path, config.busy_timeout_ms, true);
   config.read_only = true;

@@ -70,10 +70,7 @@ void Run(const SnapshotArgs& args) {
     throw UsageError("give --out FILE or --verify FILE, not both");
   }
   // Before the snapshot is made: a device or a pipe would be replaced by the file.
-  if (!args.out.empty()) {
-    CheckFileToWrite("--out", args.out);
-    CheckFileToReplace("--out", args.out);
-  }
+  if (!args.out.empty()) CheckFileToReplace("--out", args.out);
   if (!args.verify.empty()) {
     auto info = db::VerifySnapshot(args.verify);
     if (!info) throw std::runtime_error(info.error().message);

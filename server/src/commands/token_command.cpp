@@ -34,10 +34,7 @@ void Create(const TokenArgs& args) {
     throw UsageError("--" + error->message);
   }
   // A mistyped path: no token is made for it.
-  if (!args.out.empty()) {
-    CheckFileToWrite("--out", args.out);
-    CheckFileToReplace("--out", args.out);
-  }
+  if (!args.out.empty()) CheckFileToReplace("--out", args.out);
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token && token.error().code == db::ErrorCode::kBusy) {

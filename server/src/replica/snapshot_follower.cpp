@@ -111,6 +111,8 @@ db::Result<std::optional<db::SnapshotInfo>> SnapshotFollower::fetch(
   const httplib::Result answer = client.Get(
       "/api/v1/registry/snapshot", headers,
       [&](const httplib::Response& response) {
+        // An answer, whatever is made of it (a body refused below for its size included).
+        primary_answered_ = response.status == 200 || response.status == 304;
         const std::string length = response.get_header_value("Content-Length");
         std::uint64_t declared = 0;
         const auto [end, error] =

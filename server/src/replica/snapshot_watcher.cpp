@@ -190,7 +190,10 @@ bool SnapshotWatcher::check() {
     // Nothing to refuse or put back: the served registry is this file, changed under it.
     if (!link.empty()) ::unlink(link.c_str());
     served_damaged_ = true;
-    damage_ = path_ + " was written over in place: " + verified.error().message;
+    {
+      const std::lock_guard damage_lock(damage_mutex_);
+      damage_ = path_ + " was written over in place: " + verified.error().message;
+    }
     server::LogEvent(path_ +
                          " was written over in place, and the registry served (the same file) "
                          "changed with it: " +
@@ -223,6 +226,10 @@ bool SnapshotWatcher::check() {
   const std::string previous = loaded_->path;
   loaded_ = *verified;
   served_damaged_ = false;
+  {
+    const std::lock_guard damage_lock(damage_mutex_);
+    damage_.reset();
+  }
   on_loaded_(*loaded_);
   ::unlink(previous.c_str());  // connections still reading it keep it until they close
   server::LogEvent("loaded snapshot " + path_ + " (registry version " +
@@ -266,8 +273,7 @@ db::SnapshotInfo SnapshotWatcher::loaded() const {
 }
 
 std::optional<std::string> SnapshotWatcher::servedDamage() const {
-  const std::lock_guard lock(mutex_);
-  if (!served_damaged_) return std::nullopt;
+  const std::lock_guard lock(damage_mutex_);
   return damage_;
 }
 

@@ -87,7 +87,10 @@ class SnapshotWatcher {
   /// The file served was written over in place and did not read as a snapshot: the next one is
   /// taken without comparing keys (there are none left to compare with).
   bool served_damaged_ = false;
-  std::string damage_;     // why, while served_damaged_
+  /// Why, while served_damaged_: a copy under a lock of its own, so that /readyz never waits for
+  /// a check (a quick_check of the whole file) in progress under mutex_.
+  mutable std::mutex damage_mutex_;
+  std::optional<std::string> damage_;
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 

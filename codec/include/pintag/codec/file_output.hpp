@@ -13,7 +13,8 @@ namespace pintag {
 /// to a new file in its directory, synced to the disk, and renamed over it, the directory synced
 /// after: a write that fails, or a crash, leaves what was there before, never a file cut short
 /// or empty (a process killed while writing leaves `.pintag-N.tmp` in the directory); through a
-/// symbolic link, the file it names is the one replaced. Anything else (/dev/stdout, a pipe, a
+/// symbolic link, the file it names is the one replaced (FileReplacedBy; its refusals are the
+/// error). Anything else (/dev/stdout, a pipe, a
 /// device), and a file in a directory this process may not create files in, is written in place.
 std::string WriteWholeFile(const std::string& path, std::string_view bytes);
 
@@ -25,8 +26,10 @@ struct FileToReplace {
 
 /// For writers that must replace a file whole (a snapshot, a token's secret): a regular file or a
 /// path not there yet is fine; a device, a pipe or a directory is not (a rename would put a file
-/// in its place: `--out /dev/stdout` turned /dev/stdout into a file), nor a loop of links. A link
-/// to a file not there yet gives that file's path.
+/// in its place: `--out /dev/stdout` turned /dev/stdout into a file), nor a loop of links, nor a
+/// link another user made in a sticky directory writable by all (the kernel's
+/// fs.protected_symlinks rule, which a link read by hand escapes). A link to a file not there
+/// yet gives that file's path.
 FileToReplace FileReplacedBy(const std::string& path);
 
 }  // namespace pintag
