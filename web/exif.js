@@ -97,16 +97,16 @@ function lensFields(tiff) {
     for (const entry of list) {
       const name = names[u16(entry)];
       const number = name ? value(entry) : undefined;
-      // A 0 ("unknown") still replaces what IFD0 said, as in the server's reader.
-      if (Number.isFinite(number)) fields[name] = number;
+      // A 0 ("unknown") is no value, as the server's reader has it.
+      if (number > 0 && Number.isFinite(number)) fields[name] = number;
     }
   };
-  // The lens belongs in the EXIF directory; the server's EXIF reader (OpenImageIO's) also takes
-  // it from IFD0, and so does this one, the EXIF directory's winning.
+  // The lens belongs in the EXIF directory. The server's EXIF reader (OpenImageIO's) also takes
+  // it from IFD0, and IFD0's word wins there: so here, the EXIF directory first, then IFD0.
   const ifd0 = entries(u32(4));
-  take(ifd0);
   const exifIfd = ifd0.find((entry) => u16(entry) === 0x8769);
   if (exifIfd !== undefined) take(entries(u32(exifIfd + 8)));
+  take(ifd0);
   return fields;
 }
 
@@ -133,7 +133,8 @@ export async function exifFocalPixels(file, fromWidth, fromHeight, width, height
   const fromDiagonal = Math.hypot(fromWidth, fromHeight);
   let equivalentMm = fields.equivalentMm > 0 ? fields.equivalentMm : undefined;
   if (!equivalentMm && fields.focalMm > 0 && fields.planeXResolution > 0) {
-    const perMm = pixelsPerMm(fields.planeXResolution, fields.planeUnit ?? 2);
+    // As the server: a unit missing or 0 is inches.
+    const perMm = pixelsPerMm(fields.planeXResolution, fields.planeUnit > 0 ? fields.planeUnit : 2);
     if (perMm) equivalentMm = (fields.focalMm * perMm * kFullFrameDiagonalMm) / fromDiagonal;
   }
   if (!(equivalentMm >= kMinEquivalentMm && equivalentMm <= kMaxEquivalentMm)) return null;

@@ -62,6 +62,46 @@ bool MayFollow(const std::string& link, const struct stat& st) {
   return !shared || st.st_uid == ::geteuid() || st.st_uid == directory.st_uid;
 }
 
+/// Where a path leads once its links are followed, or why they may not be.
+struct FollowedLinks {
+  std::string path;     ///< the first path on the way that is not a link (there or not)
+  std::string problem;  ///< a loop, another user's link in a shared directory, an unreadable one
+};
+
+/// Follows the links at `path` hop by hop, as open() would, with the kernel's rule for links in
+/// shared directories (MayFollow) applied to each: a rename replaces a link itself, so writers
+/// that rename resolve the link first, and that escapes the kernel's own check.
+FollowedLinks FollowLinks(const std::string& path) {
+  FollowedLinks out{path, {}};
+  for (int hop = 0;; ++hop) {
+    struct stat st {};
+    if (::lstat(out.path.c_str(), &st) != 0) {
+      if (errno != ENOENT) out.problem = path + ": " + std::strerror(errno);
+      return out;  // not there: made at this path
+    }
+    if (!S_ISLNK(st.st_mode)) return out;
+    const std::string named = out.path == path ? path : path + " leads to " + out.path + ", which";
+    if (hop == 40) {
+      out.problem = named + " is a symbolic link that cannot be followed (a loop?)";
+      return out;
+    }
+    if (!MayFollow(out.path, st)) {
+      out.problem = named +
+                    " is a symbolic link another user made in a shared directory (sticky and "
+                    "writable by all, as /tmp); name the file itself";
+      return out;
+    }
+    std::string to(PATH_MAX, '\0');
+    const ssize_t n = ::readlink(out.path.c_str(), to.data(), to.size());
+    if (n < 0) {
+      out.problem = named + " cannot be read as a symbolic link (" + std::strerror(errno) + ")";
+      return out;
+    }
+    to.resize(static_cast<std::size_t>(n));
+    out.path = to.starts_with('/') ? to : DirectoryOf(out.path) + "/" + to;
+  }
+}
+
 /// Creates a new file in `directory` as open() creates one (0666 less the umask), and names it in
 /// `name`: its descriptor, or -1 with errno set. The name is short whatever the destination's:
 /// the destination's own name with a suffix overran NAME_MAX for a legal name of 246 bytes.
@@ -79,20 +119,21 @@ int CreateIn(const std::string& directory, std::string& name) {
 }  // namespace
 
 std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
+  // Links are followed by hand, the kernel's rule for shared directories with them, before a
+  // file is opened in place or renamed over: a link another user left in /tmp could otherwise
+  // aim a write at a file, or a device, this process may write.
+  const FollowedLinks followed = FollowLinks(path);
+  if (!followed.problem.empty()) return followed.problem;
+  const std::string& destination = followed.path;
   struct stat target {};
-  const bool exists = ::stat(path.c_str(), &target) == 0;
-  struct stat link {};
-  const bool dangling = !exists && ::lstat(path.c_str(), &link) == 0;
+  const bool exists = ::stat(destination.c_str(), &target) == 0;
   const auto in_place = [&]() -> std::string {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    const int fd = ::open(destination.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd < 0) return std::strerror(errno);
     const int failure = WriteAndClose(fd, bytes, false);  // fsync fails on a pipe or a tty
     return failure == 0 ? std::string() : std::strerror(failure);
   };
-  if ((exists && !S_ISREG(target.st_mode)) || dangling) return in_place();
-  const FileToReplace replaced = FileReplacedBy(path);
-  if (!replaced.problem.empty()) return replaced.problem;
-  const std::string& destination = replaced.path;
+  if (exists && !S_ISREG(target.st_mode)) return in_place();  // /dev/stdout, a pipe, a device
   const std::string directory = DirectoryOf(destination);
   std::string temporary;
   const int fd = CreateIn(directory, temporary);
@@ -119,42 +160,19 @@ std::string WriteWholeFile(const std::string& path, std::string_view bytes) {
 }
 
 FileToReplace FileReplacedBy(const std::string& path) {
-  FileToReplace out{path, {}};
-  // Each link is followed here, hop by hop, so that the file renamed over is the one it names
-  // (a rename replaces a link itself), and one not there yet is made where the link points.
-  for (int hop = 0;; ++hop) {
-    struct stat st {};
-    if (::lstat(out.path.c_str(), &st) != 0) return out;  // not there: made at this path
-    if (S_ISREG(st.st_mode)) return out;
-    if (!S_ISLNK(st.st_mode)) {
-      out.problem = path + " is " +
-                    (S_ISDIR(st.st_mode)    ? "a directory"
-                     : S_ISFIFO(st.st_mode) ? "a pipe"
-                     : S_ISSOCK(st.st_mode) ? "a socket"
-                                            : "a device") +
-                    ", not a file: the output is written beside it and renamed into place";
-      return out;
-    }
-    if (hop == 40) {
-      out.problem = path + " is a symbolic link that cannot be followed (a loop?)";
-      return out;
-    }
-    if (!MayFollow(out.path, st)) {
-      out.problem = path +
-                    " is a symbolic link another user made in a shared directory (sticky and "
-                    "writable by all, as /tmp); name the file itself";
-      return out;
-    }
-    std::string to(PATH_MAX, '\0');
-    const ssize_t n = ::readlink(out.path.c_str(), to.data(), to.size());
-    if (n < 0) {
-      out.problem =
-          path + ": cannot read the symbolic link " + out.path + " (" + std::strerror(errno) + ")";
-      return out;
-    }
-    to.resize(static_cast<std::size_t>(n));
-    out.path = to.starts_with('/') ? to : DirectoryOf(out.path) + "/" + to;
+  const FollowedLinks followed = FollowLinks(path);
+  FileToReplace out{followed.path, followed.problem};
+  struct stat st {};
+  if (!out.problem.empty() || ::stat(out.path.c_str(), &st) != 0 || S_ISREG(st.st_mode)) {
+    return out;
   }
+  out.problem = path + " is " +
+                (S_ISDIR(st.st_mode)    ? "a directory"
+                 : S_ISFIFO(st.st_mode) ? "a pipe"
+                 : S_ISSOCK(st.st_mode) ? "a socket"
+                                        : "a device") +
+                ", not a file: the output is written beside it and renamed into place";
+  return out;
 }
 
 }  // namespace pintag

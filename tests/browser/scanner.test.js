@@ -387,6 +387,10 @@ test('the page reads a photo\'s lens from its EXIF as the server does', async ()
   await oiio([labelPng, '--attrib:type=float', 'Exif:FocalLength', '4.25', '--attrib:type=float',
     'Exif:FocalPlaneXResolution', '2000', '--attrib:type=int', 'Exif:FocalPlaneResolutionUnit', '3',
     '-o', path('lens-plane.jpg')]);
+  // A resolution unit of 0, which the server reads as inches, as when it is missing.
+  await oiio([labelPng, '--attrib:type=float', 'Exif:FocalLength', '4.25', '--attrib:type=float',
+    'Exif:FocalPlaneXResolution', '2000', '--attrib:type=int', 'Exif:FocalPlaneResolutionUnit', '0',
+    '-o', path('lens-unit-0.jpg')]);
   // What some writers put for "unknown".
   await oiio([labelPng, '--attrib', 'Exif:FocalLengthIn35mmFilm', '65535', '-o', path('lens-unknown.jpg')]);
   await oiio([labelPng, '-o', path('label.webp')]);
@@ -406,6 +410,11 @@ test('the page reads a photo\'s lens from its EXIF as the server does', async ()
   const app1 = lens35.indexOf(Buffer.from('\xff\xe1', 'latin1'));
   await writeFile(path('lens-fill-bytes.jpg'),
     Buffer.concat([lens35.subarray(0, app1), Buffer.from([0xff, 0xff, 0xff]), lens35.subarray(app1)]));
+  // IFD0 says 35 mm and the EXIF directory 0 ("unknown"), or 52 mm: which the server takes.
+  await writeFile(path('lens-zero-over-ifd0.webp'), webpWithExif(plainWebp, width, height,
+    tiffBlock({ shorts: [[0xa405, 35]], exifShorts: [[0xa405, 0]] })));
+  await writeFile(path('lens-both-directories.webp'), webpWithExif(plainWebp, width, height,
+    tiffBlock({ shorts: [[0xa405, 35]], exifShorts: [[0xa405, 52]] })));
   // A lens whose directory lies past the block's end: no lens.
   const cut = tiffBlock({ exifShorts: [[0xa405, 35]] });
   await writeFile(path('lens-cut-short.webp'), webpWithExif(plainWebp, width, height, cut.subarray(0, cut.length - 8)));
@@ -415,7 +424,8 @@ test('the page reads a photo\'s lens from its EXIF as the server does', async ()
   const expected = {
     'lens-35mm.jpg': 'exif', 'lens-plane.jpg': 'exif', 'lens-unknown.jpg': 'assumed', 'lens-plane.png': 'exif',
     'lens-35mm.webp': 'exif', 'lens-35mm-big-endian.webp': 'exif', 'lens-in-ifd0.webp': 'exif',
-    'lens-cut-short.webp': 'assumed', 'lens-fill-bytes.jpg': 'exif',
+    'lens-cut-short.webp': 'assumed', 'lens-fill-bytes.jpg': 'exif', 'lens-unit-0.jpg': 'exif',
+    'lens-zero-over-ifd0.webp': 'exif', 'lens-both-directories.webp': 'exif',
     'label.webp': 'assumed',
   };
   for (const [name, source] of Object.entries(expected)) {

@@ -62,14 +62,25 @@ TEST(FileReplacedBy, FollowsLinksButNotAnotherUsersLinkInASharedDirectory) {
   EXPECT_EQ(followed.problem, "");
   EXPECT_TRUE(std::filesystem::equivalent(followed.path, target)) << followed.path;
 
-  // Another user's link there (only root can make one here; as another user the case cannot be
-  // set up, and the lines below check the rule root meets): refused, and never written through.
-  if (::geteuid() == 0) {
-    ASSERT_EQ(::lchown(link.c_str(), 65534, 65534), 0);  // nobody's link
+  // Another user's link there (only root can make one here, and only where uid 65534 exists: as
+  // another user the case cannot be set up): refused, and never written through, whether the
+  // file it names is there or not.
+  const std::filesystem::path dangling = shared / "to-new";
+  std::filesystem::create_symlink(dir.path() / "made-through-the-link", dangling);
+  if (::geteuid() == 0 && ::lchown(link.c_str(), 65534, 65534) == 0 &&
+      ::lchown(dangling.c_str(), 65534, 65534) == 0) {
+    EXPECT_NE(WriteWholeFile(dangling.string(), "x\n"), "");
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "made-through-the-link"));
     const FileToReplace refused = FileReplacedBy(link.string());
     EXPECT_NE(refused.problem.find("a symbolic link another user made in a shared directory"),
               std::string::npos)
         << refused.problem;
+    // Reached through a link of this user's own: the message names the link refused.
+    std::filesystem::create_symlink(link, dir.path() / "mine");
+    const FileToReplace through = FileReplacedBy((dir.path() / "mine").string());
+    EXPECT_NE(through.problem.find("leads to " + link.string() + ", which is a symbolic link"),
+              std::string::npos)
+        << through.problem;
     EXPECT_NE(WriteWholeFile(link.string(), "secret\n"), "");
     EXPECT_EQ(test::ReadFile(target), "kept\n");
     // The same link in a directory that is not shared is followed.

@@ -108,6 +108,7 @@ inline void CheckFileToWrite(const std::string& option, const std::string& path)
 /// device, pipe or directory, which the rename would replace with a file (FileReplacedBy), and
 /// in a directory that is there, the one the file a link names is in. The path written.
 inline std::string CheckFileToReplace(const std::string& option, const std::string& path) {
+  CheckFileToWrite(option, path);  // a directory, or one not there, said in its own words
   const FileToReplace target = FileReplacedBy(path);
   if (!target.problem.empty()) throw UsageError(option + " " + target.problem);
   CheckFileToWrite(target.path == path ? option : option + " " + path + ", a link to", target.path);

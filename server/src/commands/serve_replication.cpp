@@ -129,6 +129,20 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
   if (replica && !args.snapshot.empty()) {
     throw UsageError("--snapshot publishes a primary's registry; a --read-only replica has none");
   }
+  if (replica && !args.scan_log.empty()) {
+    // A follower's --db may not be there yet, so the scan log's own check (other tables) cannot
+    // see it: made as a scan log, it would refuse every snapshot after.
+    std::error_code log_error;
+    std::error_code db_error;
+    std::error_code same_error;
+    const std::filesystem::path log = std::filesystem::weakly_canonical(args.scan_log, log_error);
+    const std::filesystem::path db = std::filesystem::weakly_canonical(db_path, db_error);
+    if ((!log_error && !db_error && log == db) ||
+        std::filesystem::equivalent(args.scan_log, db_path, same_error)) {
+      throw UsageError("--scan-log " + args.scan_log + " is the replica's --db " + db_path +
+                       ", which every snapshot replaces; give the scan log a file of its own");
+    }
+  }
   if (!args.snapshot.empty()) {
     std::error_code error;
     // Before the database is created and seeded: a mistyped directory leaves nothing behind.
