@@ -328,30 +328,30 @@ Result<std::int64_t> RegistryVersion(Connection& connection) {
   });
 }
 
-Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& given_path) {
-  const FileToReplace target = FileReplacedBy(given_path);
+Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_path) {
+  const FileToReplace target = FileReplacedBy(out_path);
   if (!target.problem.empty()) return Error{ErrorCode::kStorage, target.problem};
-  const std::string& out_path = target.path;
+  const std::string& written_path = target.path;
   std::error_code error;
-  if (std::filesystem::equivalent(out_path, source.path(), error)) {
-    return Error{ErrorCode::kConflict, "the snapshot " + out_path +
+  if (std::filesystem::equivalent(written_path, source.path(), error)) {
+    return Error{ErrorCode::kConflict, "the snapshot " + written_path +
                                            " would replace the database it is taken from; write "
                                            "it to another path"};
   }
-  if (const std::string live = LiveDatabaseAt(out_path); !live.empty()) {
+  if (const std::string live = LiveDatabaseAt(written_path); !live.empty()) {
     return Error{ErrorCode::kConflict,
                  live + ": a snapshot must not replace it; write it to another path"};
   }
-  if (const std::string owner = DatabaseOwningFile(out_path, source.path()); !owner.empty()) {
+  if (const std::string owner = DatabaseOwningFile(written_path, source.path()); !owner.empty()) {
     return Error{ErrorCode::kConflict,
-                 "the snapshot " + out_path + " would replace a file of the database " + owner +
+                 "the snapshot " + written_path + " would replace a file of the database " + owner +
                      " (its write-ahead log, shared memory or journal), corrupting it; write it "
                      "to another path"};
   }
   try {
-    TemporaryBeside temporary(out_path);
+    TemporaryBeside temporary(written_path);
     SnapshotInfo info;
-    info.path = given_path;
+    info.path = out_path;
     {
       Connection copy(temporary.path(), {.create = false});
       source.backupInto(copy);
@@ -368,11 +368,12 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& given_
     }
     Sync(temporary.path(), false);
     info.bytes = std::filesystem::file_size(temporary.path());
-    if (::rename(temporary.path().c_str(), out_path.c_str()) != 0) {
-      return Error{ErrorCode::kStorage, SystemError("cannot rename the snapshot to " + out_path)};
+    if (::rename(temporary.path().c_str(), written_path.c_str()) != 0) {
+      return Error{ErrorCode::kStorage,
+                   SystemError("cannot rename the snapshot to " + written_path)};
     }
     temporary.keep();
-    Sync(Directory(out_path), true);
+    Sync(Directory(written_path), true);
     return info;
   } catch (const SqliteError& e) {
     return detail::ToError(e);

@@ -50,13 +50,13 @@ void RevokeIfStdoutFailed(db::Connection& connection, std::int64_t id) {
   RevokeIfUnwritten(connection, id, "standard output", "the write failed");
 }
 
-std::string WriteSecretFile(const std::filesystem::path& given, std::string_view secret) {
-  const FileToReplace target = FileReplacedBy(given.string());
+std::string WriteSecretFile(const std::filesystem::path& path, std::string_view secret) {
+  const FileToReplace target = FileReplacedBy(path.string());
   if (!target.problem.empty()) return target.problem;
-  const std::filesystem::path path(target.path);
+  const std::filesystem::path written(target.path);
   const std::filesystem::path directory =
-      path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  std::string temporary = (directory / ("." + path.filename().string() + ".XXXXXX")).string();
+      written.has_parent_path() ? written.parent_path() : std::filesystem::path(".");
+  std::string temporary = (directory / ("." + written.filename().string() + ".XXXXXX")).string();
   // mkstemp creates the file 0600 whatever the umask: no moment when others could read it.
   const int fd = ::mkstemp(temporary.data());
   if (fd < 0) return ErrnoText("cannot create a file in " + directory.string());
@@ -68,8 +68,8 @@ std::string WriteSecretFile(const std::filesystem::path& given, std::string_view
     failure = ErrnoText("cannot sync " + temporary);
   }
   if (::close(fd) != 0 && failure.empty()) failure = ErrnoText("cannot close " + temporary);
-  if (failure.empty() && ::rename(temporary.c_str(), path.c_str()) != 0) {
-    failure = ErrnoText("cannot rename " + temporary + " to " + path.string());
+  if (failure.empty() && ::rename(temporary.c_str(), written.c_str()) != 0) {
+    failure = ErrnoText("cannot rename " + temporary + " to " + written.string());
   }
   if (!failure.empty()) {
     ::unlink(temporary.c_str());
