@@ -86,7 +86,7 @@ class SnapshotFollower {
   /// The last fetch was told to come back later (SnapshotPublisher::kBusyProblemType): the
   /// polling thread's own, so the follow status keeps its last real answer or failure.
   bool deferred_ = false;
-  bool primary_answered_ = false;  ///< primaryAnswered(); the polling thread's own
+  bool primary_answered_ = false;      ///< primaryAnswered(); the polling thread's own
   httplib::Client* client_ = nullptr;  ///< the download in progress, to cancel
   /// The ETag and version of the last snapshot installed (the fetching thread's own).
   std::string installed_etag_;
