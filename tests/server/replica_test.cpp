@@ -628,6 +628,25 @@ TEST_F(ReplicaSetTest, AFollowerWhoseServedFileWasWrittenOverInPlaceFetchesItAga
   EXPECT_EQ(RegistryVersionAt(replica.port()), RegistryVersionAt(primary_->port()));
 }
 
+// A follower's FILE removed (a cleanup, a mistaken rm) was not written again until the registry
+// next changed: the replica served on from its link, and a restart in that window found nothing
+// and had to wait for the primary.
+TEST_F(ReplicaSetTest, AFollowerWhoseFileWasRemovedFetchesItAgain) {
+  ServerProcess& replica = startFollower(0);
+  ASSERT_TRUE(replica.ok());
+  const std::int64_t version = RegistryVersionAt(replica.port());
+  ASSERT_TRUE(std::filesystem::remove(replicaDb(0)));
+  ASSERT_TRUE(WaitUntil([&] { return std::filesystem::exists(replicaDb(0)); }))
+      << stderrOf("replica-0");
+  const CommandResult verified = RunPintag("snapshot --verify " + replicaDb(0));
+  EXPECT_EQ(verified.status, 0) << verified.out;
+  EXPECT_NE(verified.out.find("registry version " + std::to_string(version)), std::string::npos)
+      << verified.out;
+  httplib::Client client = LoopbackClient(replica.port());
+  EXPECT_EQ(StatusOf(client.Get("/readyz")), 200);
+  EXPECT_EQ(StatusOf(client.Get("/api/v1/pincodes/110001")), 200);
+}
+
 // The manual way to update a --read-only replica is `pintag snapshot` and a rename. A file from
 // a registry that gave a served key to another pincode (an older backup run as a primary) was
 // taken: every label printed with that key then read as the other pincode.

@@ -280,6 +280,9 @@ std::optional<std::string> SnapshotWatcher::servedDamage() const {
 std::optional<std::int64_t> SnapshotWatcher::servedVersion() const {
   const std::lock_guard lock(mutex_);
   if (served_damaged_) return std::nullopt;
+  // The file removed (a cleanup, a mistaken rm): the registry served is still open through its
+  // link, but a restart would find nothing there. Asked for whole, the follower puts it back.
+  if (!IdentifyFile(path_)) return std::nullopt;
   return loaded_->registry_version;
 }
 

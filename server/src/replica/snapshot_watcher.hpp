@@ -48,8 +48,9 @@ class SnapshotWatcher {
   /// The snapshot being served (its path is the serving link).
   db::SnapshotInfo loaded() const;
   /// The registry version served, for a follower's If-None-Match; nothing while the file served
-  /// was written over in place and no longer reads as a snapshot, so that the follower asks for
-  /// the whole snapshot again instead of being told it is current.
+  /// was written over in place and no longer reads as a snapshot, or while no file is at the
+  /// path (removed), so that the follower asks for the whole snapshot again instead of being
+  /// told it is current.
   std::optional<std::int64_t> servedVersion() const;
   /// Why the registry served is not to be trusted now (its file was written over in place and no
   /// longer reads as a snapshot: some queries fail while others still answer), or nothing.
