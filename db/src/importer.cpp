@@ -101,9 +101,8 @@ struct Mapping {
 std::optional<std::string> NotCsvText(std::string_view bytes) {
   const auto starts = [&](std::string_view prefix) { return bytes.starts_with(prefix); };
   if (starts("\xFF\xFE") || starts("\xFE\xFF")) {
-    return "the file is UTF-16 text (as Excel's \"Unicode Text\" saves it); save it as \"CSV "
-           "UTF-8\" "
-           "and import that";
+    return "the file is UTF-16 text (as Excel's \"Unicode Text\" saves it); save it as "
+           "\"CSV UTF-8\" and import that";
   }
   if (starts("\x1F\x8B")) return "the file is compressed (gzip); gunzip it and import the CSV";
   if (starts("PK\x03\x04")) {

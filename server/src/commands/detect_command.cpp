@@ -121,6 +121,15 @@ LoadResult LoadStandardInput(std::int64_t max_pixels) {
 /// What the command line alone can tell is wrong, checked before the photo is read: a usage error
 /// exits 2 whatever the photo (a missing one included). The intrinsics rules are the detect
 /// route's (server/src/app/detect_route.cpp).
+/// A detection's four corners as the text output prints them: "(x,y) (x,y) (x,y) (x,y)".
+std::string CornersText(const Detection& d) {
+  std::array<char, 160> text{};
+  std::snprintf(text.data(), text.size(), "(%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f)",
+                d.corners[0].x, d.corners[0].y, d.corners[1].x, d.corners[1].y, d.corners[2].x,
+                d.corners[2].y, d.corners[3].x, d.corners[3].y);
+  return text.data();
+}
+
 /// Whether OpenCV writes an image named `path`: cv::haveImageWriter said yes for .exr, whose
 /// encoder this build has switched off, so the overlay failed after the whole detection.
 bool CanEncode(const std::string& path) {
@@ -219,15 +228,11 @@ void Run(const DetectArgs& args) {
     for (const PhotoWarning& w : result.warnings) std::cout << "  note: " << w.message << "\n";
     for (const Detection& d : result.detections) {
       if (!d.key) {
-        std::printf(
-            "  rejected candidate  corners (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f): %s\n",
-            d.corners[0].x, d.corners[0].y, d.corners[1].x, d.corners[1].y, d.corners[2].x,
-            d.corners[2].y, d.corners[3].x, d.corners[3].y, d.reject_reason.c_str());
+        std::printf("  rejected candidate  corners %s: %s\n", CornersText(d).c_str(),
+                    d.reject_reason.c_str());
         continue;
       }
-      std::printf("  key %5d  corners (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f) (%.1f,%.1f)\n",
-                  d.key->value(), d.corners[0].x, d.corners[0].y, d.corners[1].x, d.corners[1].y,
-                  d.corners[2].x, d.corners[2].y, d.corners[3].x, d.corners[3].y);
+      std::printf("  key %5d  corners %s\n", d.key->value(), CornersText(d).c_str());
       std::printf(
           "             distance %.3f m  t = (%.3f, %.3f, %.3f) m  rvec = (%.3f, %.3f, "
           "%.3f)%s\n",
