@@ -369,8 +369,11 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
     Sync(temporary.path(), false);
     info.bytes = std::filesystem::file_size(temporary.path());
     if (::rename(temporary.path().c_str(), written_path.c_str()) != 0) {
-      return Error{ErrorCode::kStorage,
-                   SystemError("cannot rename the snapshot to " + written_path)};
+      const std::string renaming = SystemError("cannot rename the snapshot to " + written_path);
+      // A directory made there since the check above fails the rename: said in the check's
+      // words, so that a publisher's error reads the same at every try (replicas log it once).
+      const std::string problem = FileReplacedBy(out_path).problem;
+      return Error{ErrorCode::kStorage, problem.empty() ? renaming : problem};
     }
     temporary.keep();
     Sync(Directory(written_path), true);
