@@ -263,8 +263,8 @@ TEST(CliWrites, TokenAndSnapshotFilesAreWrittenThroughLinksAndNeverReplaceAPipe)
   const std::string pipe = dir.file("pipe");
   ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
   const std::int64_t before = token_count();
-  for (const std::string command : {"token create --role replica --out " + pipe + " --db " + db,
-                                    "snapshot --db " + db + " --out " + pipe}) {
+  for (const std::string& command : {"token create --role replica --out " + pipe + " --db " + db,
+                                     "snapshot --db " + db + " --out " + pipe}) {
     const CommandResult refused = RunPintag(command);
     EXPECT_EQ(refused.status, 2) << command << "\n" << refused.out;
     EXPECT_NE(refused.out.find(pipe + " is a pipe, not a file"), std::string::npos) << refused.out;
@@ -278,7 +278,7 @@ TEST(CliWrites, TokenAndSnapshotFilesAreWrittenThroughLinksAndNeverReplaceAPipe)
 TEST(CliWrites, AnEmptyOrInMemoryDatabaseNameIsRefused) {
   const TempDir dir;
   for (const std::string db : {"''", ":memory:", "'file:x?mode=memory'"}) {
-    for (const std::string command :
+    for (const std::string& command :
          {"token create --role admin --db " + db, "keys lookup 110001 --db " + db,
           "snapshot --out " + dir.file("s") + " --db " + db}) {
       // Run in `dir`, so that a name taken as a file's would show there.

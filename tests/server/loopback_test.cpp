@@ -782,9 +782,11 @@ TEST(Loopback, WaitingConnectionsAreClosedAtTheirTimeoutAndPastTheLimit) {
   // The keep-alive timeout bounds the wait for a request's first byte, not its head: one begun
   // just before it ends has the read timeout (5 s) from its first byte.
   const int late = pintag::test::ConnectLoopback(server.port());
-  std::this_thread::sleep_for(std::chrono::milliseconds(1700));
-  ASSERT_TRUE(pintag::test::SendAll(late, "GET /livez HTTP/1.1\r\n"));
+  // The head's first line a second before the keep-alive timeout, its end a second and a half
+  // after (each a second from its limit, so a late wake-up here does not decide the test).
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  ASSERT_TRUE(pintag::test::SendAll(late, "GET /livez HTTP/1.1\r\n"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ASSERT_TRUE(pintag::test::SendAll(late, "Host: x\r\n\r\n"));
   const std::string late_answer =
       pintag::test::ReceiveUntil(late, 10, pintag::test::HasWholeResponse);

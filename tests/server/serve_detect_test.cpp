@@ -98,6 +98,7 @@ TEST_F(ServeTest, LabelPhotographedInASceneReadsBackPincodeKeyBinAndPose) {
   EXPECT_EQ(overlay.rows, 1080);
 
   // Each call is in the scan log, with the token that made it.
+  ScanRowsOnceThereAre(db_path_, 3);
   auto opened = db::OpenDatabase(db_path_, {.create = false});
   ASSERT_TRUE(opened);
   auto scans = db::RecentScans(opened.value().connection, 10);
@@ -149,6 +150,7 @@ TEST_F(ServeTest, TheAnswerNamesTheRegistryVersionItsBinsCameFrom) {
   ASSERT_TRUE(plain);
   EXPECT_EQ(plain->get_header_value("X-PinTag-Registry-Version"), std::to_string(second));
 
+  ScanRowsOnceThereAre(db_path_, 4);
   auto opened = db::OpenDatabase(db_path_, {.create = false});
   ASSERT_TRUE(opened);
   auto scans = db::RecentScans(opened.value().connection, 1);
@@ -511,6 +513,7 @@ TEST_F(ServeTest, DetectRefusesBadUploadsWithProblems) {
   ExpectProblem(client().Get("/api/v1/detect", scanner()), 405);
 
   // Refused photos are in the scan log too (with the problem); refused tokens are not.
+  ScanRowsOnceThereAre(db_path_, 13);
   auto opened = db::OpenDatabase(db_path_, {.create = false});
   ASSERT_TRUE(opened);
   auto scans = db::RecentScans(opened.value().connection, 100);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "pintag/db/database.hpp"
+#include "pintag/db/sqlite.hpp"
 #include "pintag/db/tokens.hpp"
 #include "pintag/test/seeded_db.hpp"
 
@@ -51,6 +52,21 @@ double Metric(const std::string& text, const std::string& series) {
     if (line.rfind(series + " ", 0) == 0) return std::stod(line.substr(series.size() + 1));
   }
   return 0;
+}
+
+std::int64_t ScanRowsOnceThereAre(const std::string& path, std::int64_t expected) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (true) {
+    std::int64_t rows = -1;
+    try {
+      db::Connection connection(path, {.create = false, .read_only = true});
+      rows = connection.queryInt64("SELECT count(*) FROM scan_log");
+    } catch (const std::exception&) {
+      // Not there yet, or locked for a moment: asked again.
+    }
+    if (rows >= expected || std::chrono::steady_clock::now() > deadline) return rows;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
 }
 
 CommandResult RunShell(const std::string& line) {

@@ -83,6 +83,11 @@ int CallsRightFromConcurrentClients(int port, int clients, int calls_each,
 /// page has no such line.
 double Metric(const std::string& text, const std::string& series);
 
+/// The rows in the scan log at `path` once there are `expected` of them, or what there are after
+/// 30 s. An answered scan's row is written by the log's own thread: the answer waits for it up to
+/// a second, then no longer (a slow disk, a busy machine), so a test reads the log by waiting.
+std::int64_t ScanRowsOnceThereAre(const std::string& path, std::int64_t expected);
+
 /// A fixture with a seeded database copy, one token per role and a running server.
 class ServeTest : public ::testing::Test {
  protected:

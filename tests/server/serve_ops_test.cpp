@@ -253,6 +253,7 @@ TEST_F(ServeTest, ConcurrentClientsGetConsistentAnswers) {
   }
   for (std::thread& thread : threads) thread.join();
   EXPECT_EQ(good, 96);
+  ScanRowsOnceThereAre(db_path_, 32);
   auto opened = db::OpenDatabase(db_path_, {.create = false});
   ASSERT_TRUE(opened);
   auto scans = db::RecentScans(opened.value().connection, 1000);

@@ -92,6 +92,13 @@ TEST_F(ServeTest, ScansWhileAnotherProcessHoldsTheLockAreAnsweredAndLoggedOnceIt
     EXPECT_EQ(scan.image_width, 64);
     EXPECT_TRUE(json::parse(scan.result_json)["tags"].empty());
   }
+  // The rows are seen at their commit; the backlog drops a moment later, when the log's thread
+  // takes its lock back.
+  const auto drained_by = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (ScrapedMetric(client(), "pintag_scan_log_backlog") != 0 &&
+         std::chrono::steady_clock::now() < drained_by) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_backlog"), 0);
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_failures_total"), 0);
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scans_total"), kScans);

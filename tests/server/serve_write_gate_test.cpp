@@ -58,6 +58,12 @@ TEST_F(ServeTest, WritersWaitingOnAnotherProcessesLockLeaveHalfTheWorkersToEvery
   const auto live = other.Get("/livez");
   const auto lookup = other.Get("/api/v1/pincodes/110001");
   const int finished_before_release = finished;
+  // The lock is held until the two refusals are in: a writer that reached its worker late (a
+  // busy machine) must still meet the gate, not a free lock.
+  const auto refusals_due = std::chrono::steady_clock::now() + std::chrono::seconds(4);
+  while (finished < 2 && std::chrono::steady_clock::now() < refusals_due) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   lock.release();
   for (std::thread& t : writers) t.join();
 
