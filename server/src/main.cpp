@@ -37,6 +37,17 @@ void Report(const CLI::App& app, const char* what) {
   std::cerr << "pintag: " << what << "\n";
 }
 
+/// Whether `flag` is on the command line (`--db x` or `--db=x`).
+bool OnCommandLine(std::string_view flag, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg(argv[i]);
+    if (arg == flag || (arg.starts_with(flag) && arg.substr(flag.size()).starts_with("="))) {
+      return true;
+    }
+  }
+  return false;
+}
+
 /// CLI11 names the option a bad value was given to ("--threads: Value 0 not in range 1 to 256"),
 /// also when the value came from the option's environment variable, which is then named too: a
 /// container's PINTAG_THREADS is not on the command line the message points at.
@@ -47,18 +58,39 @@ std::string NamingTheEnvironment(const CLI::App& app, std::string message, int a
       if (variable.empty() || std::getenv(variable.c_str()) == nullptr) continue;
       const std::string flag = option->get_name();
       if (message.rfind(flag + ":", 0) != 0) continue;
-      bool given = false;  // a value on the command line wins over the environment's
-      for (int i = 1; i < argc; ++i) {
-        const std::string_view arg(argv[i]);
-        given = given || arg == flag || arg.rfind(flag + "=", 0) == 0;
-      }
-      if (!given) message += " (the value of the environment variable " + variable + ")";
+      // A value on the command line wins over the environment's.
+      if (!OnCommandLine(flag, argc, argv))
+        message += " (the value of the environment variable " + variable + ")";
       return;
     }
     for (const CLI::App* sub : command.get_subcommands()) visit(*sub);
   };
   visit(app);
   return message;
+}
+
+/// CLI11 takes an environment variable set to "" as not set, so `PINTAG_ADMIN_TOKEN_OUT=` (a shell
+/// variable that was empty) printed the first admin secret to the log instead of writing a file.
+/// Such a variable, for an option of `command` not on the command line, is a usage error: what it
+/// says, or "".
+std::string EmptyEnvironmentVariable(const CLI::App& command, int argc, char** argv) {
+  for (const CLI::Option* option : command.get_options()) {
+    const std::string& variable = option->get_envname();
+    if (variable.empty()) continue;
+    const char* value = std::getenv(variable.c_str());
+    if (value == nullptr || *value != '\0') continue;
+    const std::string flag = option->get_name();
+    if (OnCommandLine(flag, argc, argv)) continue;  // the command line's value wins
+    return "the environment variable " + variable + " (" + flag +
+           ") is set but empty: give it a value or unset it";
+  }
+  const std::function<bool(const CLI::App*)> every = [](const CLI::App*) { return true; };
+  for (const CLI::App* sub : command.get_subcommands(every)) {
+    if (std::string problem = EmptyEnvironmentVariable(*sub, argc, argv); !problem.empty()) {
+      return problem;
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -85,6 +117,15 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
     if (!known) {
       std::cerr << "pintag: '" << argv[1] << "' is not a subcommand; the subcommands are " << names
                 << " (pintag --help)\n";
+      return 2;
+    }
+  }
+  if (argc > 1 && argv[1][0] != '-' && !OnCommandLine("--help", argc, argv) &&
+      !OnCommandLine("-h", argc, argv)) {
+    const CLI::App* command = app.get_subcommand(argv[1]);
+    if (const std::string problem = EmptyEnvironmentVariable(*command, argc, argv);
+        !problem.empty()) {
+      std::cerr << "pintag: " << problem << "\n";
       return 2;
     }
   }

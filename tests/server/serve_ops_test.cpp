@@ -159,6 +159,38 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 
+// CLI11 takes a variable set to "" as unset: `PINTAG_ADMIN_TOKEN_OUT=$UNSET_PATH` printed the first
+// admin secret to the log rather than writing it to a file. An empty variable is refused, before a
+// database is made; a value on the command line still wins over it, and --help still answers.
+TEST(ServeStartRefusals, AnEmptyEnvironmentVariableIsRefusedBeforeAnythingIsMade) {
+  const TempDir dir;
+  const std::string serve =
+      "timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + dir.file("new.db");
+  CommandResult refused = RunShell("PINTAG_ADMIN_TOKEN_OUT= " + serve + " 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("PINTAG_ADMIN_TOKEN_OUT (--admin-token-out) is set but empty"),
+            std::string::npos)
+      << refused.out;
+  EXPECT_EQ(refused.out.find("secret"), std::string::npos) << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
+  refused = RunShell("PINTAG_FOLLOW= " + serve + " 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("PINTAG_FOLLOW (--follow) is set but empty"), std::string::npos)
+      << refused.out;
+  // --threads 0 on the command line is the error named, not the empty variable behind it.
+  refused = RunShell("PINTAG_THREADS= " + serve + " --threads 0 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--threads: Value 0"), std::string::npos) << refused.out;
+  const CommandResult help = RunShell("PINTAG_THREADS= " + serve + " --help");
+  EXPECT_EQ(help.status, 0) << help.out;
+  EXPECT_NE(help.out.find("--threads"), std::string::npos) << help.out;
+  // Another command is not held up by serve's variables.
+  const CommandResult lookup = RunShell("PINTAG_DB= " + PintagExe() + " keys lookup 110001 --db " +
+                                        dir.file("keys.db") + " 2>&1");
+  EXPECT_EQ(lookup.status, 0) << lookup.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
+}
+
 // A replica's options on a primary (and a follower's on a replica that follows no one) did
 // nothing, without a word (no --scan-log file was made), and a --snapshot naming the database
 // itself was retried for ever: usage errors, before the database is created and seeded.
