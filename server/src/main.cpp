@@ -81,8 +81,9 @@ std::string EmptyEnvironmentVariable(const CLI::App& command, int argc, char** a
     if (value == nullptr || *value != '\0') continue;
     const std::string flag = option->get_name();
     if (OnCommandLine(flag, argc, argv)) continue;  // the command line's value wins
-    return "the environment variable " + variable + " (" + flag +
-           ") is set but empty: give it a value or unset it";
+    std::string problem = "the environment variable " + variable;
+    problem += " (" + flag + ") is set but empty: give it a value or unset it";
+    return problem;
   }
   const std::function<bool(const CLI::App*)> every = [](const CLI::App*) { return true; };
   for (const CLI::App* sub : command.get_subcommands(every)) {
