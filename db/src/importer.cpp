@@ -18,6 +18,7 @@
 #include "guard.hpp"
 #include "pintag/codec/utf8.hpp"
 #include "pintag/db/csv.hpp"
+#include "pintag/db/office_fields.hpp"
 #include "pintag/db/text.hpp"
 #include "registry_internal.hpp"
 
@@ -181,12 +182,6 @@ Result<Mapping> Detect(const std::vector<std::string>& header) {
   return mapping;
 }
 
-/// "NA", "" and similar mean unknown.
-bool IsUnknown(std::string_view text) {
-  const std::string lower = Lower(text);
-  return lower.empty() || lower == "na" || lower == "n/a" || lower == "null";
-}
-
 /// A decimal number. from_chars refuses a leading '+', which a spreadsheet may write: it is taken
 /// before a digit or a point (so "+-5" and "++5" stay bad).
 std::optional<double> ParseNumber(std::string_view text) {
@@ -200,20 +195,6 @@ std::optional<double> ParseNumber(std::string_view text) {
     return std::nullopt;
   }
   return value;
-}
-
-/// "B.O", "b.o." and "BO" all become "BO" (likewise S.O, H.O, P.O); other types stay as given.
-std::optional<std::string> NormalizeType(std::optional<std::string> type) {
-  if (!type) return type;
-  std::string letters;
-  for (const char c : *type) {
-    if (c != '.') letters += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  }
-  if (letters.size() == 2 && letters[1] == 'O' &&
-      std::isalpha(static_cast<unsigned char>(letters[0]))) {
-    return letters;
-  }
-  return type;
 }
 
 /// The letters a name's type suffix may have for an office of type "<letter>O": its own, and for
@@ -349,14 +330,14 @@ Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   const auto optional = [&](Column c) -> std::optional<std::string> {
     if (mapping.index[c] < 0) return std::nullopt;
     std::string value = field(c);
-    if (IsUnknown(value)) return std::nullopt;
+    if (MeansUnknown(value)) return std::nullopt;
     return value;
   };
   const ParsedPincode pincode = ParsePincode(field(kPincode));
   if (!pincode) return Error{ErrorCode::kInvalid, "pincode: " + pincode.error};
   ImportRow row{record.line, *pincode.pincode, {}};
   PostOffice& office = row.office;
-  office.branch_type = NormalizeType(optional(kType));
+  office.branch_type = NormalizedOfficeType(optional(kType));
   office.name = StripTypeSuffix(field(kOffice), office.branch_type);
   office.delivery = optional(kDelivery);
   office.division = field(kDivision);
@@ -365,17 +346,6 @@ Result<ImportRow> ParseRow(const Mapping& mapping, const CsvRecord& record) {
   office.district = field(kDistrict);
   office.state = field(kState);
   office.taluk = optional(kTaluk);
-  // India Post writes NA for what it does not know. An optional field is then left unknown; a
-  // required one would be stored as the place "NA" and printed on labels ("NA, NA").
-  const std::pair<const char*, const std::string*> required[] = {
-      {"office name", &office.name}, {"division", &office.division}, {"region", &office.region},
-      {"circle", &office.circle},    {"district", &office.district}, {"state", &office.state}};
-  for (const auto& [name, value] : required) {
-    if (!value->empty() && IsUnknown(*value)) {
-      return Error{ErrorCode::kInvalid,
-                   std::string(name) + " is '" + *value + "', which means unknown; it is required"};
-    }
-  }
   for (const auto& [column, target, name] :
        {std::tuple{kLatitude, &office.latitude, "latitude"},
         std::tuple{kLongitude, &office.longitude, "longitude"}}) {

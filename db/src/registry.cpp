@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "guard.hpp"
+#include "pintag/db/office_fields.hpp"
 #include "pintag/db/text.hpp"
 #include "registry_internal.hpp"
 
@@ -187,8 +188,11 @@ Result<RegistryCounts> CountRegistry(Connection& connection) {
 
 Result<PincodeRecord> AddPincode(Connection& connection, Pincode pincode,
                                  const std::vector<PostOffice>& offices) {
-  for (const PostOffice& office : offices) {
-    if (auto error = detail::CheckOffice(office)) return *error;
+  for (std::size_t i = 0; i < offices.size(); ++i) {
+    if (auto error = detail::CheckOffice(offices[i])) {
+      error->message = "office " + std::to_string(i + 1) + ": " + error->message;
+      return *error;
+    }
   }
   // A name is one office of a pincode (compared without the spaces at either end, as stored
   // offices are matched): two entries under it would be merged into one mixing both.
@@ -284,6 +288,11 @@ std::optional<Error> CheckOffice(const PostOffice& office) {
       {"circle", &office.circle},    {"district", &office.district}, {"state", &office.state}};
   for (const auto& [field, value] : required) {
     if (auto error = CheckText(field, *value, kMaxNameBytes)) return error;
+    // Stored, India Post's "unknown" would print on labels as a place ("NA, NA").
+    if (MeansUnknown(TrimUnicodeSpaces(*value))) {
+      return Error{ErrorCode::kInvalid, std::string(field) + " is '" + *value +
+                                            "', which means unknown; it is required"};
+    }
   }
   const std::pair<const char*, const std::optional<std::string>*> optional[] = {
       {"branch type", &office.branch_type},

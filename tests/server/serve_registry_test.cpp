@@ -143,6 +143,23 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
   EXPECT_EQ(kept["taluk"], "Testpur");
   EXPECT_EQ(kept["branch_type"], "SO");
 
+  // Types and unknowns as an import reads them (docs/REGISTRY.md): "H.O" is a head office, the one
+  // a label prints; "NA" in an optional field is no value.
+  const json typed = ExpectJson(client().Post("/api/v1/pincodes", admin(),
+                                              R"({"pincode": "999014", "offices": [
+                      {"name": "Branch", "branch_type": "B.O", "district": "D", "state": "S",
+                       "circle": "C", "region": "R", "division": "V", "taluk": "NA"},
+                      {"name": "Head", "branch_type": "h.o.", "district": "D", "state": "S",
+                       "circle": "C", "region": "R", "division": "V", "delivery": "N/A"}]})",
+                                              "application/json"),
+                                201);
+  EXPECT_EQ(typed["office"], "Head") << typed.dump();
+  for (const json& stored : typed["offices"]) {
+    EXPECT_EQ(stored["branch_type"], stored["name"] == "Head" ? "HO" : "BO") << stored.dump();
+    EXPECT_TRUE(stored["taluk"].is_null()) << stored.dump();
+    EXPECT_TRUE(stored["delivery"].is_null()) << stored.dump();
+  }
+
   // An office read back can be posted again as it is (country and its own pincode included).
   json again = json::parse(R"({"pincode": "999011"})");
   again["offices"] = read["offices"];
@@ -182,6 +199,25 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
           "'latitude' must be a number");
   refused(R"({"pincode": "999012", "offices": [)" + office_with({{"latitude", 91}}) + "]}",
           "latitude must be -90 to 90");
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"longitude", 500}}) + "]}",
+          "office 1: longitude must be -180 to 180");
+  // India Post's "unknown" in a required field would print on labels as a place, as an import
+  // refuses it; the office is named.
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", "Other"}}) + "," +
+              office_with({{"district", " n/a"}}) + "]}",
+          "office 2: district is ' n/a', which means unknown; it is required");
+  // Every unknown field and every missing one in one answer.
+  const json everything_wrong = ExpectProblem(
+      client().Post("/api/v1/pincodes", admin(),
+                    R"({"pincode": "999012", "offices": [{"name": "", "state": "S", "foo": 1,
+                        "bar": 2}]})",
+                    "application/json"),
+      400);
+  EXPECT_NE(everything_wrong.value("detail", "")
+                .find("office 1: unknown fields 'bar', 'foo'; office 1 needs a non-empty name, "
+                      "district, circle, region, division"),
+            std::string::npos)
+      << everything_wrong.dump();
   refused(R"({"pincode": "999012", "key": 5})", "unknown field 'key'");
   refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "pincode": "999013"}]})",
           "is not the pincode being added");

@@ -7,6 +7,7 @@
 #include "app/params.hpp"
 #include "app/registry_json.hpp"
 #include "app/routes.hpp"
+#include "pintag/db/office_fields.hpp"
 #include "pintag/db/text.hpp"
 
 namespace pintag::app {
@@ -36,16 +37,20 @@ std::optional<double> Degrees(const json& o, const char* name, const std::string
 db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode) {
   const std::string office = "office " + std::to_string(index + 1);
   if (!o.is_object()) throw HttpError(400, office + " must be an object");
+  // Every unknown field and every missing or blank required one at once, so that a form can be
+  // put right in one go.
+  std::string unknown;
+  std::size_t unknown_count = 0;
   for (const auto& [field, value] : o.items()) {
-    if (!Known(field))
-      throw HttpError(400, office + std::string(": unknown field '").append(field) + "'");
+    if (Known(field)) continue;
+    unknown += (unknown.empty() ? "'" : ", '") + field + "'";
+    ++unknown_count;
   }
   const auto text = [&](const char* name) -> std::optional<std::string> {
     if (!o.contains(name) || o[name].is_null()) return std::nullopt;
     if (!o[name].is_string()) throw HttpError(400, office + ": '" + name + "' must be a string");
     return o[name].get<std::string>();
   };
-  // Every missing or blank required field at once, so that a form can be put right in one go.
   std::string missing;
   for (const char* name : kRequiredFields) {
     const std::optional<std::string> value = text(name);
@@ -53,11 +58,22 @@ db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode)
       missing += (missing.empty() ? "" : ", ") + std::string(name);
     }
   }
-  if (!missing.empty()) {
-    throw HttpError(400, office + " needs a non-empty " + missing +
-                             " (every office has name, district, state, circle, region and "
-                             "division)");
+  std::string problems;
+  if (unknown_count > 0) {
+    problems = office + (unknown_count == 1 ? ": unknown field " : ": unknown fields ") + unknown;
   }
+  if (!missing.empty()) {
+    problems += (problems.empty() ? "" : "; ") + office + " needs a non-empty " + missing +
+                " (every office has name, district, state, circle, region and division)";
+  }
+  if (!problems.empty()) throw HttpError(400, problems);
+  // As an import reads them: India Post's "NA" leaves an optional field unknown, and "B.O" is the
+  // type BO (a head office typed "H.O" would not be the office a label prints).
+  const auto optional_text = [&](const char* name) -> std::optional<std::string> {
+    std::optional<std::string> value = text(name);
+    if (value && db::MeansUnknown(db::TrimUnicodeSpaces(*value))) return std::nullopt;
+    return value;
+  };
   if (const auto country = text("country"); country && *country != "India") {
     throw HttpError(400, office + ": 'country' can only be India");
   }
@@ -71,9 +87,9 @@ db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode)
   result.circle = *text("circle");
   result.region = *text("region");
   result.division = *text("division");
-  result.branch_type = text("branch_type");
-  result.delivery = text("delivery");
-  result.taluk = text("taluk");
+  result.branch_type = db::NormalizedOfficeType(optional_text("branch_type"));
+  result.delivery = optional_text("delivery");
+  result.taluk = optional_text("taluk");
   result.latitude = Degrees(o, "latitude", office);
   result.longitude = Degrees(o, "longitude", office);
   return result;
