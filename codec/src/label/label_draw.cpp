@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -204,6 +205,63 @@ std::pair<LineBreak, double> ShortestBreak(LabelFont& font, const std::string& b
   return {cut, longer};
 }
 
+// A bin of many words too long for two lines at the 2.2 mm floor (64 bytes of capitals such as
+// "MUMBAI WAREHOUSE WEST MEZZANINE WING DOCK …" on 100 x 150 mm), on three lines of one size,
+// broken at spaces or punctuation where the longest line is shortest. Whether the lines were drawn
+// whole; nothing, with nothing drawn, when no such breaks let three lines fit at the floor in
+// `box`.
+std::optional<bool> DrawBinOnThreeLines(LabelFont& font, const std::string& bin, const Box& box,
+                                        double x, double width, double baseline, double size,
+                                        double height) {
+  std::vector<LineBreak> breaks;
+  for (const LineBreak& at : BinBreaks(font, bin)) {
+    if (at.penalty > 1.0 || bin[at.first_end] == ' ' ||
+        std::string_view("-_/.:").find(bin[at.first_end - 1]) != std::string_view::npos) {
+      breaks.push_back(at);  // a space or punctuation, not a break between any two characters
+    }
+  }
+  const auto advance = [&](std::size_t begin, std::size_t end) {
+    return font.advancePerSize(bin.substr(begin, end - begin), true);
+  };
+  std::optional<std::pair<LineBreak, LineBreak>> best;
+  double best_score = std::numeric_limits<double>::infinity();
+  double longest = 0;
+  for (std::size_t i = 0; i < breaks.size(); ++i) {
+    for (std::size_t j = i + 1; j < breaks.size(); ++j) {
+      const LineBreak& a = breaks[i];
+      const LineBreak& b = breaks[j];
+      if (b.first_end <= a.second_begin) continue;
+      const double line = std::max({advance(0, a.first_end), advance(a.second_begin, b.first_end),
+                                    advance(b.second_begin, bin.size())});
+      const double score = line * std::max(a.penalty, b.penalty);
+      if (score < best_score) {
+        best_score = score;
+        longest = line;
+        best = {a, b};
+      }
+    }
+  }
+  if (!best) return std::nullopt;
+  const std::string lines[] = {
+      bin.substr(0, best->first.first_end),
+      bin.substr(best->first.second_begin, best->second.first_end - best->first.second_begin),
+      bin.substr(best->second.second_begin)};
+  // The top line's ink top, in sizes above the lowest baseline (1.12 sizes between the lines).
+  constexpr double kMeasureMm = 16;
+  const double above = 2.24 - font.measure(lines[0], true, kMeasureMm).ink_y / kMeasureMm;
+  const double fitted = std::min(
+      {size * 0.45, height / 3.4, width / std::max(longest, 1e-9), (baseline - box.y) / above});
+  if (fitted < kMinNameMm) return std::nullopt;
+  const LineStyle style{.bold = true, .size = fitted, .min_size = kMinNameMm, .within = &box};
+  bool whole = true;
+  for (int k = 0; k < 3; ++k) {
+    whole =
+        !DrawLine(font, lines[k], x, width, baseline - style.size * 1.12 * (2 - k), style).cut &&
+        whole;
+  }
+  return whole;
+}
+
 // The bin on one line when it fits at 3 mm or more, else on two of one size, broken where the
 // longer line is shortest: the end of a bin name ("… chute 12") is as much the answer as its
 // start, so it is not cut off while a break can show it. When the preferred breaks (a space,
@@ -236,7 +294,11 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
       cut = at;
     }
   }
+  // Three lines broken between words before two broken inside one ("…-MEZ / ZANINE-…").
   if (longer * kMinNameMm > width) {
+    if (const auto drawn = DrawBinOnThreeLines(font, bin, box, x, width, baseline, size, height)) {
+      return *drawn;
+    }
     const auto [shortest, advance] = ShortestBreak(font, bin);
     if (advance < longer) {
       cut = shortest;
