@@ -448,8 +448,8 @@ TEST(LabelText, ABinIsPrintedWholeOrTheLabelIsRefused) {
       "MUMBAI WAREHOUSE WEST MEZZANINE WING DOCK MWMW NUMBER TWELVE MMM",
       "BHUBANESWAR-NORTH-WAREHOUSE-MEZZANINE-DOCK-WWMM-OVERFLOW-BAY-12"};
   for (const LabelSize& size : {kLabel100x150, kLabelA6, kLabel4x6In}) {
-    for (const std::string& bin : {bins[0], bins[2], bins[3], bins[4], bins[5], capitals[0],
-                                   capitals[1]}) {
+    for (const std::string& bin :
+         {bins[0], bins[2], bins[3], bins[4], bins[5], capitals[0], capitals[1]}) {
       LabelContent label = test::SampleLabel();
       label.bin = bin;
       const RenderedLabel pdf = RenderLabelPdf(label, {size, 300});
