@@ -147,6 +147,25 @@ TEST_F(ServeTest, SortPlanWritesAreConditionalOnTheVersionRead) {
   ASSERT_TRUE(got_csv);
   const std::string csv_etag = got_csv->get_header_value("ETag");
   EXPECT_EQ(csv_etag, etag.substr(0, 33) + "-csv\"");
+  // A GET whose If-None-Match names the representation's version (weakly) is 304 with its tag and
+  // no body; the other representation's tag, or an older one, is not its version.
+  for (const auto& [path, tag] :
+       {std::pair{plan_path, etag}, std::pair{plan_path, "W/" + etag},
+        std::pair{plan_path + "?format=csv", csv_etag}, std::pair{plan_path, std::string("*")}}) {
+    const auto held = client().Get(path, {{"If-None-Match", tag}});
+    ASSERT_TRUE(held);
+    EXPECT_EQ(held->status, 304) << path << " " << tag;
+    EXPECT_TRUE(held->body.empty());
+    EXPECT_EQ(held->get_header_value("ETag"), path == plan_path ? etag : csv_etag);
+  }
+  for (const auto& [path, tag] :
+       {std::pair{plan_path, csv_etag}, std::pair{plan_path + "?format=csv", etag},
+        std::pair{plan_path, std::string("\"older\", \"other\"")}}) {
+    const auto sent = client().Get(path, {{"If-None-Match", tag}});
+    ASSERT_TRUE(sent);
+    EXPECT_EQ(sent->status, 200) << path << " " << tag;
+    EXPECT_FALSE(sent->body.empty());
+  }
 
   // A tag that is not the plan's, or a plan that is not there: 412, nothing written.
   const json stale = ExpectProblem(put("prefix,bin\n*,other\n", {{"If-Match", "\"nope\""}}), 412);

@@ -1,5 +1,7 @@
 #include "app/entity_tags.hpp"
 
+#include <algorithm>
+
 #include "pintag/server/problem.hpp"
 
 namespace pintag::app {
@@ -65,6 +67,13 @@ std::optional<EntityTagList> EntityTagsHeader(const server::HttpRequest& request
     throw server::HttpError(400, std::string(name) + ": * cannot be listed with entity tags");
   }
   return list;
+}
+
+bool NoneMatchNames(const EntityTagList& none_match, std::string_view etag) {
+  if (none_match.any) return true;
+  return std::any_of(none_match.tags.begin(), none_match.tags.end(), [&](const EntityTag& tag) {
+    return etag.size() == tag.opaque.size() + 2 && etag.substr(1, tag.opaque.size()) == tag.opaque;
+  });
 }
 
 }  // namespace pintag::app

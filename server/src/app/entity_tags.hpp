@@ -27,4 +27,8 @@ struct EntityTagList {
 std::optional<EntityTagList> EntityTagsHeader(const server::HttpRequest& request,
                                               std::string_view name);
 
+/// If-None-Match's weak comparison (RFC 9110 §13.1.2): `*`, or a tag whose opaque part is that
+/// of `etag` (as an ETag header writes it, quoted), weak or not. A GET it names is answered 304.
+bool NoneMatchNames(const EntityTagList& none_match, std::string_view etag);
+
 }  // namespace pintag::app

@@ -27,15 +27,6 @@ std::string UtcTimestamp(std::chrono::system_clock::time_point t) {
   return text;
 }
 
-/// If-None-Match's weak comparison (RFC 9110 section 13.1.2): `*`, or a tag whose opaque part is
-/// that of `etag` (quoted), weak or not.
-bool NoneMatchNames(const EntityTagList& none_match, std::string_view etag) {
-  if (none_match.any) return true;
-  return std::any_of(none_match.tags.begin(), none_match.tags.end(), [&](const EntityTag& tag) {
-    return etag.size() == tag.opaque.size() + 2 && etag.substr(1, tag.opaque.size()) == tag.opaque;
-  });
-}
-
 }  // namespace
 
 HttpResponse GetRegistryStatus(const AppContext& context, const HttpRequest& /*request*/) {

@@ -178,7 +178,15 @@ HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request) 
   auto connection = context.pool->acquire();
   const db::SortPlan plan = LoadPlan(*connection, PlanNameParam(request));
   const std::string version = db::PlanVersion(plan);
-  if (WantsCsv(request)) {
+  const bool csv = WantsCsv(request);
+  // A client that holds this version (the counter page polling, a script syncing plans) is told
+  // so, without the plan again.
+  if (const auto none_match = EntityTagsHeader(request, "If-None-Match");
+      none_match && NoneMatchNames(*none_match, PlanETag(version, csv))) {
+    return PlanResponse("", csv ? "text/csv; charset=utf-8" : "application/json", version, csv,
+                        304);
+  }
+  if (csv) {
     return PlanResponse(db::PlanToCsv(plan), "text/csv; charset=utf-8", version, true);
   }
   return PlanResponse(PlanJson(plan).dump(), "application/json", version, false);
