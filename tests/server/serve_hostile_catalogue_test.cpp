@@ -1081,6 +1081,12 @@ TEST_F(HostileCatalogue, MadeUpMethodIsNotImplementedAndNamed) {
   EXPECT_NE(problem.value("detail", "").find("method 'BREW' is not one this server answers"),
             std::string::npos)
       << answer.body;
+  // It named OPTIONS among the methods answered, which every route refuses (405), and said
+  // Connection: close twice.
+  EXPECT_EQ(problem.value("detail", "").find("OPTIONS"), std::string::npos) << answer.body;
+  const std::size_t close_at = answer.head.find("Connection: close");
+  EXPECT_NE(close_at, std::string::npos) << answer.head;
+  EXPECT_EQ(answer.head.find("Connection: close", close_at + 1), std::string::npos) << answer.head;
   // Quoted printable and cut short: the detail never carries the request's bytes back whole.
   const Answer long_one = send(Request(std::string(300, 'Q'), "/livez", {}));
   EXPECT_EQ(long_one.status, 501);

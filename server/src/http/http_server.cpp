@@ -339,6 +339,38 @@ std::string QuotedMethod(const std::string& method) {
   return "'" + out + (method.size() > 40 ? "…'" : "'");
 }
 
+/// A request line of an HTTP version this server does not speak ("GET / HTTP/2.0"): cpp-httplib
+/// refuses it with a bare 400; RFC 9110 (section 15.6.6) makes that 505, which says why.
+bool UnsupportedVersion(const httplib::Request& req) {
+  return req.version.rfind("HTTP/", 0) == 0 && req.version != "HTTP/1.1" &&
+         req.version != "HTTP/1.0";
+}
+
+/// What a problem cpp-httplib answered before any route was chosen says: the limit or the rule
+/// the request broke, not the status's title again.
+std::string PreRoutingDetail(int status) {
+  switch (status) {
+    case 400:
+      return "the request line could not be read: it must be METHOD TARGET HTTP/1.1 (such as GET "
+             "/livez HTTP/1.1), in printable ASCII, ended by CRLF";
+    case 414:
+      return "the request target (path and query) is longer than " +
+             std::to_string(CPPHTTPLIB_REQUEST_URI_MAX_LENGTH) +
+             " bytes, the most this server reads";
+    case 416:
+      return "the Range header could not be read, or asks for bytes this answer does not have "
+             "(send bytes=FIRST-LAST, or no Range for the whole answer)";
+    default:
+      return std::string(StatusTitle(status));
+  }
+}
+
+/// Sets Connection: close once (a second header line besides the one already set contradicts
+/// nothing but reads as a fault).
+void CloseAfterAnswer(httplib::Response& res) {
+  if (res.get_header_value("Connection") != "close") res.set_header("Connection", "close");
+}
+
 }  // namespace
 
 struct HttpServer::Impl {
@@ -419,10 +451,18 @@ struct HttpServer::Impl {
                           "with another Content-Length or with Transfer-Encoding)");
     }
     if (!t_state.admission.rejection && UnknownTransferCoding(req)) {
+      // Every Transfer-Encoding line, in order: "chunked" twice is two codings, not chunked.
+      const std::size_t lines = req.get_header_value_count("Transfer-Encoding");
+      std::string codings;
+      for (std::size_t i = 0; i < lines; ++i) {
+        codings += (i == 0 ? "" : ", ") + req.get_header_value("Transfer-Encoding", i);
+      }
       t_state.admission.rejection = ProblemResponse(
-          501, "the request's body is sent in a transfer coding this server does not read (" +
-                   req.get_header_value("Transfer-Encoding").substr(0, 100) +
-                   "); send it with Content-Length or chunked");
+          501, "the request's body is sent in " +
+                   std::string(lines > 1 ? "transfer codings (" : "a transfer coding (") +
+                   codings.substr(0, 100) +
+                   ") this server does not read; send it with Content-Length, or with one "
+                   "Transfer-Encoding: chunked");
     }
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
@@ -632,17 +672,27 @@ struct HttpServer::Impl {
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     if (res.status == 400 && UnknownMethod(req)) {
       res.status = 501;
+      // OPTIONS is parsed, and answered 405 by every route (Allow names the methods it takes).
       Apply(ProblemResponse(501, "method " + QuotedMethod(req.method) +
-                                     " is not one this server answers (it answers GET, HEAD, "
-                                     "POST, PUT, PATCH, DELETE and OPTIONS)"),
+                                     " is not one this server answers (its routes answer GET, "
+                                     "HEAD, POST, PUT, PATCH and DELETE)"),
             res);
       // What followed the request line is unread: the connection cannot be reused.
-      res.set_header("Connection", "close");
+      CloseAfterAnswer(res);
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    if (res.status == 400 && UnsupportedVersion(req)) {
+      res.status = 505;
+      Apply(ProblemResponse(505,
+                            "this server speaks HTTP/1.1 and HTTP/1.0; the request line "
+                            "named " +
+                                QuotedMethod(req.version)),
+            res);
+      CloseAfterAnswer(res);
       return httplib::Server::HandlerResponse::Handled;
     }
     const HttpResponse problem =
-        res.status == 413 ? tooLarge()
-                          : ProblemResponse(res.status, std::string(StatusTitle(res.status)));
+        res.status == 413 ? tooLarge() : ProblemResponse(res.status, PreRoutingDetail(res.status));
     res.set_content(problem.body, problem.content_type);
     return httplib::Server::HandlerResponse::Handled;
   }
