@@ -425,8 +425,18 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
         h.problem = "the PNG does not start with IHDR";
         return h;
       }
-      h.width = static_cast<int>(std::min<std::uint32_t>(Be32(&b[pos + 8]), 0x7FFFFFFF));
-      h.height = static_cast<int>(std::min<std::uint32_t>(Be32(&b[pos + 12]), 0x7FFFFFFF));
+      const std::uint32_t width = Be32(&b[pos + 8]);
+      const std::uint32_t height = Be32(&b[pos + 12]);
+      // The PNG format allows 1 to 2^31 - 1 pixels a side: a size outside is damage, not a
+      // large photo (it was clamped and reported as 2147483647 pixels, "too large").
+      if (width == 0 || height == 0 || width > 0x7FFFFFFFu || height > 0x7FFFFFFFu) {
+        h.problem = "the PNG's header gives a size of " + std::to_string(width) + " x " +
+                    std::to_string(height) + " pixels, outside what a PNG can hold (1 to " +
+                    "2147483647 a side)";
+        return h;
+      }
+      h.width = static_cast<int>(width);
+      h.height = static_cast<int>(height);
       first = false;
     }
     if (std::memcmp(&b[pos + 4], "IEND", 4) == 0) return h;

@@ -833,6 +833,30 @@ TEST(ImageIo, ReportsTheDecodersChromaUpsampling) {
   EXPECT_EQ(scaled.image->chroma_upsampling, ChromaUpsampling::kNone);
 }
 
+// A PNG's sides are 1 to 2^31 - 1 pixels. A header giving 0 or more was taken for a photo of
+// 2147483647 x 2147483647 pixels, "too large": it is damage, and said so.
+TEST(ImageIo, APngHeaderSizeNoPngCanHoldIsCorrupt) {
+  const std::vector<std::uint8_t> whole = ReadAll(Write("size.png", 40, 30));
+  for (const auto& [width, height] :
+       {std::pair{0xFFFFFFFFU, 0xFFFFFFFFU}, std::pair{0x80000000U, 30U}, std::pair{40U, 0U}}) {
+    std::vector<std::uint8_t> png = whole;
+    // IHDR's data starts after the 8-byte signature, its length and its type; its CRC is mended.
+    for (int i = 0; i < 4; ++i) {
+      png[16 + i] = static_cast<std::uint8_t>(width >> (24 - 8 * i));
+      png[20 + i] = static_cast<std::uint8_t>(height >> (24 - 8 * i));
+    }
+    const std::uint32_t crc = PngCrc(png.data() + 12, 17);
+    for (int i = 0; i < 4; ++i) png[29 + i] = static_cast<std::uint8_t>(crc >> (24 - 8 * i));
+    const LoadResult r = LoadImageBytes(png);
+    EXPECT_FALSE(r.image);
+    EXPECT_EQ(r.kind, ImageError::kCorrupt) << width << " x " << height << ": " << r.error;
+    EXPECT_NE(r.error.find(std::to_string(width) + " x " + std::to_string(height) +
+                           " pixels, outside what a PNG can hold"),
+              std::string::npos)
+        << r.error;
+  }
+}
+
 TEST(ImageIo, DegenerateSizes) {
   for (auto [w, h] : {std::pair{1, 1}, {100000, 1}, {1, 100000}}) {
     const std::string path =
