@@ -116,6 +116,16 @@ TEST_F(ServeTest, AddAndRetireNeedAdmin) {
                 400);
 
   ExpectProblem(client().Post("/api/v1/pincodes/999001/retire", counter(), "", "text/plain"), 403);
+  // A body here was dropped unread and the pincode retired (200): it is refused, and nothing done.
+  for (const auto& [sent, type] :
+       {std::pair{"junk", "text/plain"}, std::pair{R"({"reason": "moved"})", "application/json"}}) {
+    EXPECT_NE(ExpectProblem(client().Post("/api/v1/pincodes/999001/retire", admin(), sent, type),
+                            400)["detail"]
+                  .get<std::string>()
+                  .find("takes no body"),
+              std::string::npos);
+  }
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/pincodes/999001"))["status"], "active");
   const json retired =
       ExpectJson(client().Post("/api/v1/pincodes/999001/retire", admin(), "", "text/plain"));
   EXPECT_EQ(retired["status"], "retired");

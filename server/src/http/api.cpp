@@ -220,6 +220,13 @@ Admission Api::admit(std::string_view method, std::string_view path, const Heade
   }
   const bool has_body = FirstHeader(headers, "Transfer-Encoding").has_value() ||
                         (FirstHeader(headers, "Content-Length").value_or("0") != "0");
+  if (route->consumes.empty() && has_body && !route->answers_before_body) {
+    // Dropped unread before: a body sent to retire a pincode or revoke a token ({"reason": …},
+    // a form) was answered 200 as if read, where every other route refuses what it cannot use.
+    admission.rejection = ProblemResponse(
+        400, route->method + " " + route->pattern + " takes no body; send the request without one");
+    return admission;
+  }
   if (!route->consumes.empty() && has_body) {
     const std::string type = MediaType(FirstHeader(headers, "Content-Type").value_or(""));
     if (std::find(route->consumes.begin(), route->consumes.end(), type) == route->consumes.end()) {
