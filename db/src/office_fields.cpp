@@ -14,8 +14,9 @@ bool MeansUnknown(std::string_view field) {
 std::optional<std::string> NormalizedOfficeType(std::optional<std::string> type) {
   if (!type) return type;
   std::string letters;
-  for (const char c : *type) {
-    if (c != '.') letters += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  for (const char c : *type) {  // " H.O " too: an API client's value is not trimmed first
+    if (c != '.' && c != ' ')
+      letters += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   }
   if (letters.size() == 2 && letters[1] == 'O' &&
       std::isalpha(static_cast<unsigned char>(letters[0])) != 0) {

@@ -85,8 +85,12 @@ std::string EmptyEnvironmentVariable(const CLI::App& command, int argc, char** a
     problem += " (" + flag + ") is set but empty: give it a value or unset it";
     return problem;
   }
+  // Into the subcommand named on the command line (`token create`), not its siblings.
   const std::function<bool(const CLI::App*)> every = [](const CLI::App*) { return true; };
   for (const CLI::App* sub : command.get_subcommands(every)) {
+    const bool named =
+        std::any_of(argv + 1, argv + argc, [&](const char* arg) { return sub->check_name(arg); });
+    if (!named) continue;
     if (std::string problem = EmptyEnvironmentVariable(*sub, argc, argv); !problem.empty()) {
       return problem;
     }

@@ -250,6 +250,7 @@ TEST_F(ServeTest, DetectOverlayInlineGivesTheJsonAndTheOutlinedPhotoFromOneUploa
   EXPECT_EQ(changed({1900, 1060}), 0);
 
   // One scan-log row per upload, and the log keeps what was read, not the picture.
+  ScanRowsOnceThereAre(db_path_, 3);
   auto opened = db::OpenDatabase(db_path_, {.create = false});
   ASSERT_TRUE(opened);
   auto scans = db::RecentScans(opened.value().connection, 10);

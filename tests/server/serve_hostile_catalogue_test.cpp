@@ -133,7 +133,6 @@ std::string WebpClaiming(std::uint32_t width, std::uint32_t height) {
 /// The longest line of a chunked body the server reads (docs/HTTP.md).
 constexpr std::size_t kChunkLineLimit = std::size_t{8} * 1024;
 
-/// The process's resident memory in MiB, from /proc; -1 when it cannot be read.
 /// Caps what the kernel holds of `fd`'s unsent bytes at 64 KiB: a client flooding the server then
 /// meets its refusal within 40 MiB even on a host whose socket buffers are tuned larger.
 void SendThroughASmallBuffer(int fd) {
@@ -141,6 +140,7 @@ void SendThroughASmallBuffer(int fd) {
   ::setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &small_buffer, sizeof small_buffer);
 }
 
+/// The process's resident memory in MiB, from /proc; -1 when it cannot be read.
 long ResidentMegabytes(pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   for (std::string line; std::getline(status, line);) {
@@ -1085,6 +1085,7 @@ TEST_F(HostileCatalogue, MadeUpMethodIsNotImplementedAndNamed) {
   // It named OPTIONS among the methods answered, which every route refuses (405), and said
   // Connection: close twice.
   EXPECT_EQ(problem.value("detail", "").find("OPTIONS"), std::string::npos) << answer.body;
+  EXPECT_EQ(problem.value("detail", "").find("PATCH"), std::string::npos) << answer.body;
   const std::size_t close_at = answer.head.find("Connection: close");
   EXPECT_NE(close_at, std::string::npos) << answer.head;
   EXPECT_EQ(answer.head.find("Connection: close", close_at + 1), std::string::npos) << answer.head;

@@ -136,12 +136,18 @@ TEST(ServeStartRefusals, AnEmptyBindAddressIsAUsageErrorNotEveryInterface) {
   EXPECT_NE(refused.out.find("--bind needs an address"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
+/// `pintag serve` on loopback with a database `dir` does not hold yet (new.db), as a shell command
+/// line to prefix with variables; a refusal must leave no new.db behind.
+std::string ServeOnANewDatabase(const TempDir& dir) {
+  return "timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " +
+         dir.file("new.db");
+}
+
 // A bad value from an environment variable (a container's PINTAG_THREADS) was named by its flag
 // alone, which is on no command line: the variable is named too.
 TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
   const TempDir dir;
-  const std::string serve =
-      "timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + dir.file("new.db");
+  const std::string serve = ServeOnANewDatabase(dir);
   CommandResult refused = RunShell("PINTAG_THREADS=0 " + serve + " 2>&1");
   EXPECT_EQ(refused.status, 2) << refused.out;
   EXPECT_NE(refused.out.find("--threads: Value 0 not in range 1 to 256 (the value of the "
@@ -164,8 +170,7 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
 // database is made; a value on the command line still wins over it, and --help still answers.
 TEST(ServeStartRefusals, AnEmptyEnvironmentVariableIsRefusedBeforeAnythingIsMade) {
   const TempDir dir;
-  const std::string serve =
-      "timeout 30 " + PintagExe() + " serve --port 0 --bind 127.0.0.1 --db " + dir.file("new.db");
+  const std::string serve = ServeOnANewDatabase(dir);
   CommandResult refused = RunShell("PINTAG_ADMIN_TOKEN_OUT= " + serve + " 2>&1");
   EXPECT_EQ(refused.status, 2) << refused.out;
   EXPECT_NE(refused.out.find("PINTAG_ADMIN_TOKEN_OUT (--admin-token-out) is set but empty"),

@@ -159,7 +159,7 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
                                               R"({"pincode": "999014", "offices": [
                       {"name": "Branch", "branch_type": "B.O", "district": "D", "state": "S",
                        "circle": "C", "region": "R", "division": "V", "taluk": "NA"},
-                      {"name": "Head", "branch_type": "h.o.", "district": "D", "state": "S",
+                      {"name": "Head", "branch_type": " h.o. ", "district": "D", "state": "S",
                        "circle": "C", "region": "R", "division": "V", "delivery": "N/A"}]})",
                                               "application/json"),
                                 201);
@@ -228,6 +228,15 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
                       "district, circle, region, division"),
             std::string::npos)
       << everything_wrong.dump();
+  // Named ten at most, each cut short: a body of junk keys is not echoed back whole.
+  json many = json::parse("{" + office + "}");
+  for (int i = 0; i < 500; ++i) many["junk" + std::string(100, 'x') + std::to_string(i)] = 1;
+  const json capped = ExpectProblem(
+      client().Post("/api/v1/pincodes", admin(),
+                    json{{"pincode", "999012"}, {"offices", {many}}}.dump(), "application/json"),
+      400);
+  EXPECT_NE(capped.value("detail", "").find(" and 490 more"), std::string::npos) << capped.dump();
+  EXPECT_LT(capped.value("detail", "").size(), 1000U);
   refused(R"({"pincode": "999012", "key": 5})", "unknown field 'key'");
   refused(R"({"pincode": "999012", "offices": [{)" + office + R"(, "pincode": "999013"}]})",
           "is not the pincode being added");

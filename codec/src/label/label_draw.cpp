@@ -223,6 +223,14 @@ std::optional<bool> DrawBinOnThreeLines(LabelFont& font, const std::string& bin,
   const auto advance = [&](std::size_t begin, std::size_t end) {
     return font.advancePerSize(bin.substr(begin, end - begin), true);
   };
+  // The first and last lines measured once a break; the middle only for pairs that could still
+  // win (a bin of many short words has hundreds of pairs, each measure a Pango layout).
+  std::vector<double> first_line;
+  std::vector<double> last_line;
+  for (const LineBreak& at : breaks) {
+    first_line.push_back(advance(0, at.first_end));
+    last_line.push_back(advance(at.second_begin, bin.size()));
+  }
   std::optional<std::pair<LineBreak, LineBreak>> best;
   double best_score = std::numeric_limits<double>::infinity();
   double longest = 0;
@@ -231,9 +239,11 @@ std::optional<bool> DrawBinOnThreeLines(LabelFont& font, const std::string& bin,
       const LineBreak& a = breaks[i];
       const LineBreak& b = breaks[j];
       if (b.first_end <= a.second_begin) continue;
-      const double line = std::max({advance(0, a.first_end), advance(a.second_begin, b.first_end),
-                                    advance(b.second_begin, bin.size())});
-      const double score = line * std::max(a.penalty, b.penalty);
+      const double penalty = std::max(a.penalty, b.penalty);
+      const double outer = std::max(first_line[i], last_line[j]);
+      if (outer * penalty >= best_score) continue;
+      const double line = std::max(outer, advance(a.second_begin, b.first_end));
+      const double score = line * penalty;
       if (score < best_score) {
         best_score = score;
         longest = line;
@@ -265,12 +275,13 @@ std::optional<bool> DrawBinOnThreeLines(LabelFont& font, const std::string& bin,
 // The bin on one line when it fits at 3 mm or more, else on two of one size, broken where the
 // longer line is shortest: the end of a bin name ("… chute 12") is as much the answer as its
 // start, so it is not cut off while a break can show it. When the preferred breaks (a space,
-// punctuation) leave a line too long at the 2.2 mm floor, any break between two characters that
-// fits is taken. When none fits, the second line keeps the longest end that fits and the first
-// is ellipsized, and the caller refuses the label. The ink is clipped to `box`; marks stacked
-// above the letters ("ǺỖ") make the size smaller, down to the 2.2 mm floor, so that they stay in
-// it whole rather than clipped.
-/// Draws `bin` on one line or two; false when it was not drawn whole (a line was ellipsized).
+// punctuation) leave a line too long at the 2.2 mm floor, three lines broken at them are taken if
+// they fit (DrawBinOnThreeLines), else any break between two characters that fits. When none fits,
+// the second line keeps the longest end that fits and the first is ellipsized, and the caller
+// refuses the label. The ink is clipped to `box`; marks stacked above the letters ("ǺỖ") make the
+// size smaller, down to the 2.2 mm floor, so that they stay in it whole rather than clipped.
+/// Draws `bin` on one, two or three lines; false when it was not drawn whole (a line was
+/// ellipsized).
 bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, double x, double width,
                   double baseline, double size, double height) {
   constexpr double kOneLineMinMm = 3.0;
@@ -338,7 +349,8 @@ bool DrawBinValue(LabelFont& font, const std::string& bin, const Box& box, doubl
 // Outbound alike), and the bin is what a sorter acts on: no label rather than a wrong one.
 std::string UnprintableBinReason(const LabelContent& label) {
   return "the sort bin '" + SanitizeUtf8(*label.bin) + "' of pincode " + label.pincode.str() +
-         " is too long to print whole on this label size, even on two lines at the smallest "
+         " is too long to print whole on this label size, even on two or three lines at the "
+         "smallest "
          "print, and a bin cut short could read as another; print a larger label, or give the "
          "bin a shorter name in its plan";
 }

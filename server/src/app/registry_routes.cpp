@@ -39,12 +39,18 @@ db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode)
   if (!o.is_object()) throw HttpError(400, office + " must be an object");
   // Every unknown field and every missing or blank required one at once, so that a form can be
   // put right in one go.
+  // At most 10 named, each cut to 40 bytes: the answer must not echo a body of junk keys whole.
+  constexpr std::size_t kUnknownNamed = 10;
   std::string unknown;
   std::size_t unknown_count = 0;
   for (const auto& [field, value] : o.items()) {
     if (Known(field)) continue;
-    unknown += (unknown.empty() ? "'" : ", '") + field + "'";
-    ++unknown_count;
+    if (++unknown_count <= kUnknownNamed) {
+      unknown += (unknown.empty() ? "'" : ", '") + field.substr(0, 40) + "'";
+    }
+  }
+  if (unknown_count > kUnknownNamed) {
+    unknown += " and " + std::to_string(unknown_count - kUnknownNamed) + " more";
   }
   const auto text = [&](const char* name) -> std::optional<std::string> {
     if (!o.contains(name) || o[name].is_null()) return std::nullopt;

@@ -179,10 +179,16 @@ HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request) 
   const db::SortPlan plan = LoadPlan(*connection, PlanNameParam(request));
   const std::string version = db::PlanVersion(plan);
   const bool csv = WantsCsv(request);
-  // A client that holds this version (the counter page polling, a script syncing plans) is told
-  // so, without the plan again.
-  if (const auto none_match = EntityTagsHeader(request, "If-None-Match");
-      none_match && NoneMatchNames(*none_match, PlanETag(version, csv))) {
+  // A client that holds this version (a script keeping plans in step) is told so, without the
+  // plan again. A malformed If-None-Match on a GET is ignored (RFC 9110 lets a server), as it was
+  // before the route read it: the whole plan is sent.
+  std::optional<EntityTagList> none_match;
+  try {
+    none_match = EntityTagsHeader(request, "If-None-Match");
+  } catch (const HttpError&) {
+    none_match.reset();
+  }
+  if (none_match && NoneMatchNames(*none_match, PlanETag(version, csv))) {
     return PlanResponse("", csv ? "text/csv; charset=utf-8" : "application/json", version, csv,
                         304);
   }

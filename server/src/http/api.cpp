@@ -204,8 +204,9 @@ Admission Api::admit(std::string_view method, std::string_view path, const Heade
   }
 
   // The declared body: its length against the limit, its media type against the route's.
+  std::size_t declared_bytes = 0;
   if (const auto length = FirstHeader(headers, "Content-Length")) {
-    std::size_t bytes = 0;
+    std::size_t& bytes = declared_bytes;
     const std::string_view text = Trim(*length);
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), bytes);
     if (ec == std::errc::result_out_of_range ||
@@ -218,9 +219,9 @@ Admission Api::admit(std::string_view method, std::string_view path, const Heade
       return admission;
     }
   }
-  const bool has_body = FirstHeader(headers, "Transfer-Encoding").has_value() ||
-                        (FirstHeader(headers, "Content-Length").value_or("0") != "0");
-  if (route->consumes.empty() && has_body && !route->answers_before_body) {
+  // "Content-Length: 00" is no body either.
+  const bool has_body = FirstHeader(headers, "Transfer-Encoding").has_value() || declared_bytes > 0;
+  if (route->consumes.empty() && has_body) {
     // Dropped unread before: a body sent to retire a pincode or revoke a token ({"reason": …},
     // a form) was answered 200 as if read, where every other route refuses what it cannot use.
     admission.rejection = ProblemResponse(

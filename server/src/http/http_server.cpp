@@ -332,8 +332,9 @@ std::optional<std::string> MultipartContentType(std::string_view value) {
   return out + boundary;
 }
 
-/// The method as the problem quotes it: printable ASCII, at most 40 characters.
-std::string QuotedMethod(const std::string& method) {
+/// A request-line word (a method, a version) as a problem quotes it: printable ASCII, at most 40
+/// characters.
+std::string Quoted(const std::string& method) {
   std::string out;
   for (const char c : method.substr(0, 40)) out += (c > ' ' && c < 127) ? c : '?';
   return "'" + out + (method.size() > 40 ? "…'" : "'");
@@ -351,15 +352,17 @@ bool UnsupportedVersion(const httplib::Request& req) {
 std::string PreRoutingDetail(int status) {
   switch (status) {
     case 400:
-      return "the request line could not be read: it must be METHOD TARGET HTTP/1.1 (such as GET "
-             "/livez HTTP/1.1), in printable ASCII, ended by CRLF";
+      // Its request line, or a header line, or the blank line that ends the head: cpp-httplib
+      // does not say which it could not read.
+      return "the request's head could not be read: a request line such as GET /livez HTTP/1.1, "
+             "then header lines, each ended by CRLF, then an empty line";
     case 414:
       return "the request target (path and query) is longer than " +
              std::to_string(CPPHTTPLIB_REQUEST_URI_MAX_LENGTH) +
              " bytes, the most this server reads";
     case 416:
-      return "the Range header could not be read, or asks for bytes this answer does not have "
-             "(send bytes=FIRST-LAST, or no Range for the whole answer)";
+      return "the Range header could not be read; this server sends every answer whole, so send "
+             "the request without Range";
     default:
       return std::string(StatusTitle(status));
   }
@@ -673,9 +676,9 @@ struct HttpServer::Impl {
     if (res.status == 400 && UnknownMethod(req)) {
       res.status = 501;
       // OPTIONS is parsed, and answered 405 by every route (Allow names the methods it takes).
-      Apply(ProblemResponse(501, "method " + QuotedMethod(req.method) +
+      Apply(ProblemResponse(501, "method " + Quoted(req.method) +
                                      " is not one this server answers (its routes answer GET, "
-                                     "HEAD, POST, PUT, PATCH and DELETE)"),
+                                     "HEAD, POST, PUT and DELETE)"),
             res);
       // What followed the request line is unread: the connection cannot be reused.
       CloseAfterAnswer(res);
@@ -686,7 +689,7 @@ struct HttpServer::Impl {
       Apply(ProblemResponse(505,
                             "this server speaks HTTP/1.1 and HTTP/1.0; the request line "
                             "named " +
-                                QuotedMethod(req.version)),
+                                Quoted(req.version)),
             res);
       CloseAfterAnswer(res);
       return httplib::Server::HandlerResponse::Handled;

@@ -14,7 +14,7 @@ namespace pintag::db {
 /// print on labels as a place ("NA, NA").
 bool MeansUnknown(std::string_view field);
 
-/// "B.O", "b.o." and "BO" are "BO" (likewise SO, HO, PO); any other type is kept as given.
+/// "B.O", "b.o.", " BO" and "BO" are "BO" (likewise SO, HO, PO); any other type is kept as given.
 std::optional<std::string> NormalizedOfficeType(std::optional<std::string> type);
 
 }  // namespace pintag::db
