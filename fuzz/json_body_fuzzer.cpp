@@ -1,7 +1,8 @@
 // JSON request bodies into every route that takes one, through Api::handle (auth, limits, the
 // problem+json wrapper, the real handlers) with an admin token, and into retire, which takes none
-// (refused at admission unless empty). The first byte picks the route; the rest is the body. Any answer is fine except a 500 (an unexpected exception) or an error
-// that is not problem+json. Each input starts from the same registry (ResetRegistry).
+// (refused at admission unless empty). The first byte picks the route; the rest is the body.
+// Any answer is fine except a 500 (an unexpected exception) or an error that is not
+// problem+json. Each input starts from the same registry (ResetRegistry).
 
 #include <array>
 #include <cstddef>
