@@ -102,6 +102,14 @@ TEST_F(ServeTest, ScansWhileAnotherProcessHoldsTheLockAreAnsweredAndLoggedOnceIt
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_backlog"), 0);
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_failures_total"), 0);
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scans_total"), kScans);
+  // The operator is told when answers stopped waiting for their rows, once, and when they wait
+  // again (a kill in between loses what was held; serve_crash_test reads the first line).
+  const std::string log = ReadFile(dir_.file("stderr.log"));
+  const std::string behind = "scans are answered before they are written";
+  ASSERT_NE(log.find(behind), std::string::npos) << log;
+  EXPECT_EQ(log.find(behind, log.find(behind) + 1), std::string::npos) << log;
+  EXPECT_NE(log.find("scan log: caught up; answers wait for their rows again"), std::string::npos)
+      << log;
 }
 
 TEST_F(ServeTest, AServerStoppedWhileTheLockIsHeldWritesTheScansItHeldBackBeforeItExits) {

@@ -90,8 +90,16 @@ void ScanLogWriter::append(db::ScanRecord scan, const std::string& request_id) {
   held_.store(queue_.size(), std::memory_order_relaxed);
   queued_.notify_one();
   if (behind_) return;
-  if (!written_.wait_for(lock, kWaitForWrite, [&] { return done_through_ >= sequence; })) {
+  // Scans waiting side by side time out together: the first says so.
+  if (!written_.wait_for(lock, kWaitForWrite, [&] { return done_through_ >= sequence; }) &&
+      !behind_) {
     behind_ = true;
+    // Said once a spell: from now on an answered scan may not be in the log yet, and a forced
+    // stop loses what is held (an operator, or a test killing the server, must know which).
+    server::LogEvent("scan log: a scan waited " + std::to_string(kWaitForWrite.count()) +
+                         " ms for its row; scans are answered before they are written, held in "
+                         "memory, until the log catches up",
+                     /*warning=*/true);
   }
 }
 
@@ -198,6 +206,10 @@ void ScanLogWriter::dequeue(std::size_t count) {
   }
   held_.store(queue_.size(), std::memory_order_relaxed);
   if (queue_.empty()) {
+    // After a failure writeBatch says it caught up; after a slow write, this does.
+    if (behind_ && last_error_.empty()) {
+      server::LogEvent("scan log: caught up; answers wait for their rows again");
+    }
     last_error_.clear();
     behind_ = false;
   }
