@@ -30,20 +30,18 @@ std::string TaglessPng() {
   return {png.begin(), png.end()};
 }
 
-/// The scans in the log at `path`, oldest first; waits up to `timeout` for `expected` of them.
+/// The scans in the log at `path`, oldest first: as they are now, or once there are `expected` of
+/// them (ScanRowsOnceThereAre's wait).
 std::vector<db::ScanRecord> ScansOnceThereAre(const std::string& path, std::size_t expected,
-                                              std::chrono::seconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+                                              bool wait) {
+  if (wait) ScanRowsOnceThereAre(path, static_cast<std::int64_t>(expected));
   std::vector<db::ScanRecord> scans;
-  while (true) {
-    auto opened = db::OpenDatabase(path, {.create = false});
-    if (opened) {
-      auto recent = db::RecentScans(opened.value().connection, 1000);
-      if (recent) scans.assign(recent->rbegin(), recent->rend());
-    }
-    if (scans.size() >= expected || std::chrono::steady_clock::now() > deadline) return scans;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  auto opened = db::OpenDatabase(path, {.create = false});
+  if (opened) {
+    auto recent = db::RecentScans(opened.value().connection, 1000);
+    if (recent) scans.assign(recent->rbegin(), recent->rend());
   }
+  return scans;
 }
 
 double ScrapedMetric(httplib::Client& client, const std::string& series) {
@@ -78,11 +76,10 @@ TEST_F(ServeTest, ScansWhileAnotherProcessHoldsTheLockAreAnsweredAndLoggedOnceIt
   for (const int status : statuses) EXPECT_EQ(status, 200);
   EXPECT_EQ(ScrapedMetric(client(), "pintag_scan_log_backlog"), kScans);
   const std::string answered = db::ScanTime(std::chrono::system_clock::now());
-  EXPECT_TRUE(ScansOnceThereAre(db_path_, 1, std::chrono::seconds(0)).empty());
+  EXPECT_TRUE(ScansOnceThereAre(db_path_, 1, false).empty());
 
   lock.release();
-  const std::vector<db::ScanRecord> scans =
-      ScansOnceThereAre(db_path_, kScans, std::chrono::seconds(30));
+  const std::vector<db::ScanRecord> scans = ScansOnceThereAre(db_path_, kScans, true);
   ASSERT_EQ(scans.size(), static_cast<std::size_t>(kScans));
   for (const db::ScanRecord& scan : scans) {
     // Timed when scanned, not when written.
@@ -128,8 +125,7 @@ TEST_F(ServeTest, AServerStoppedWhileTheLockIsHeldWritesTheScansItHeldBackBefore
   const int status = server_->wait(30);
   releaser.join();
   EXPECT_EQ(status, 0);
-  EXPECT_EQ(ScansOnceThereAre(db_path_, kScans, std::chrono::seconds(0)).size(),
-            static_cast<std::size_t>(kScans));
+  EXPECT_EQ(ScansOnceThereAre(db_path_, kScans, false).size(), static_cast<std::size_t>(kScans));
   EXPECT_EQ(ReadFile(dir_.file("stderr.log")).find("lost"), std::string::npos);
 }
 
@@ -154,7 +150,7 @@ TEST_F(ServeTest, ASecondSignalStopsAServerWritingItsBacklogAndSaysWhatItLeft) {
             std::string::npos)
       << log;
   lock.release();
-  EXPECT_TRUE(ScansOnceThereAre(db_path_, 1, std::chrono::seconds(0)).empty());
+  EXPECT_TRUE(ScansOnceThereAre(db_path_, 1, false).empty());
 }
 
 // An answer over the log's 1 MiB a row (about 330 tags with their poses) was answered and then
@@ -180,8 +176,7 @@ TEST_F(ServeTest, AnAnswerTooLargeForTheScanLogIsLoggedAbridgedNotLost) {
   ASSERT_EQ(read["tag_count"], kSide * kSide);
   ASSERT_GT(answer->body.size(), db::kMaxJsonBytes) << "the answer must outgrow a log row";
 
-  const std::vector<db::ScanRecord> scans =
-      ScansOnceThereAre(db_path_, 1, std::chrono::seconds(30));
+  const std::vector<db::ScanRecord> scans = ScansOnceThereAre(db_path_, 1, true);
   ASSERT_EQ(scans.size(), 1U);
   EXPECT_LE(scans[0].result_json.size(), db::kMaxJsonBytes);
   const json logged = json::parse(scans[0].result_json);

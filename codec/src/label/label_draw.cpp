@@ -213,12 +213,11 @@ std::pair<LineBreak, double> ShortestBreak(LabelFont& font, const std::string& b
 std::optional<bool> DrawBinOnThreeLines(LabelFont& font, const std::string& bin, const Box& box,
                                         double x, double width, double baseline, double size,
                                         double height) {
+  // A space (dropped) or punctuation (a penalty): not BinBreaks' fallback between any two
+  // characters, which it gives only for a bin with neither.
   std::vector<LineBreak> breaks;
   for (const LineBreak& at : BinBreaks(font, bin)) {
-    if (at.penalty > 1.0 || bin[at.first_end] == ' ' ||
-        std::string_view("-_/.:").find(bin[at.first_end - 1]) != std::string_view::npos) {
-      breaks.push_back(at);  // a space or punctuation, not a break between any two characters
-    }
+    if (at.penalty > 1.0 || bin[at.first_end] == ' ') breaks.push_back(at);
   }
   const auto advance = [&](std::size_t begin, std::size_t end) {
     return font.advancePerSize(bin.substr(begin, end - begin), true);

@@ -206,11 +206,10 @@ Admission Api::admit(std::string_view method, std::string_view path, const Heade
   // The declared body: its length against the limit, its media type against the route's.
   std::size_t declared_bytes = 0;
   if (const auto length = FirstHeader(headers, "Content-Length")) {
-    std::size_t& bytes = declared_bytes;
     const std::string_view text = Trim(*length);
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), bytes);
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), declared_bytes);
     if (ec == std::errc::result_out_of_range ||
-        (ec == std::errc() && bytes > options_.max_body_bytes)) {
+        (ec == std::errc() && declared_bytes > options_.max_body_bytes)) {
       admission.rejection = BodyTooLargeResponse(options_.max_body_bytes);
       return admission;
     }

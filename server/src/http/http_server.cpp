@@ -474,7 +474,8 @@ struct HttpServer::Impl {
     if (!t_state.admission.rejection && req.method == "DELETE" &&
         req.has_header("Transfer-Encoding")) {
       // cpp-httplib reads a DELETE's body only by its Content-Length: a chunked one was left
-      // in the stream and read as the next request. No route takes a DELETE body.
+      // in the stream and read as the next request. No DELETE route takes a body (Api::admit
+      // refuses one first); this holds for one that would.
       t_state.admission.rejection =
           ProblemResponse(400, "a DELETE request takes no chunked body; send it without one");
     }
