@@ -9,6 +9,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/tiffutils.h>
 #include <turbojpeg.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <array>
@@ -403,8 +404,33 @@ struct HeaderSize {
   std::string problem;
 };
 
+#ifdef PINTAG_FUZZ_SKIPS_PNG_CHECKSUMS
+constexpr bool kCheckPngChecksums = false;
+#else
+constexpr bool kCheckPngChecksums = true;
+#endif
+
+/// The name of a PNG chunk's type for a message: its four letters, or their bytes in hex when
+/// damage has made them something else.
+std::string PngChunkName(const std::uint8_t* type) {
+  const bool letters = std::all_of(type, type + 4, [](std::uint8_t c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+  });
+  if (letters) return {reinterpret_cast<const char*>(type), 4};
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string hex = "0x";
+  for (int i = 0; i < 4; ++i) {
+    hex += kHex[type[i] >> 4];
+    hex += kHex[type[i] & 0xF];
+  }
+  return hex;
+}
+
 /// Walks the chunks from IHDR to IEND: libpng decodes a truncated file's missing rows as zeros,
-/// so a cut upload is caught here.
+/// so a cut upload is caught here. A critical chunk (IHDR, PLTE, IDAT, IEND: an upper-case
+/// first letter) whose checksum fails is damage too. libpng refuses it as well, but prints
+/// "libpng error: ..." to stderr on its way, a plain line among the server's JSON log lines.
+/// Ancillary chunks are left to libpng, which drops a damaged one and reads the image.
 HeaderSize InspectPng(std::span<const std::uint8_t> b) {
   HeaderSize h;
   std::size_t pos = 8;
@@ -417,6 +443,12 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
     const std::uint32_t length = Be32(&b[pos]);
     if (length > 0x7FFFFFFFu || pos + 12 + length > b.size()) {
       h.problem = "the PNG is truncated inside a chunk";
+      return h;
+    }
+    const bool critical = (b[pos + 4] & 0x20U) == 0;
+    if (kCheckPngChecksums && critical && crc32(0, &b[pos + 4], length + 4) != Be32(&b[pos + 8 + length])) {
+      h.problem = "the PNG is damaged: its " + PngChunkName(&b[pos + 4]) +
+                  " chunk fails its checksum (CRC)";
       return h;
     }
     const bool ihdr = std::memcmp(&b[pos + 4], "IHDR", 4) == 0;

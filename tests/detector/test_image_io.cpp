@@ -7,6 +7,7 @@
 #include <turbojpeg.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -855,6 +856,52 @@ TEST(ImageIo, APngHeaderSizeNoPngCanHoldIsCorrupt) {
               std::string::npos)
         << r.error;
   }
+}
+
+// Where a PNG's chunk of `type` starts (its length field), or 0 when it has none.
+std::size_t FindPngChunk(const std::vector<std::uint8_t>& png, const char* type) {
+  for (std::size_t pos = 8; pos + 12 <= png.size();) {
+    const std::size_t length = (std::size_t{png[pos]} << 24) | (std::size_t{png[pos + 1]} << 16) |
+                               (std::size_t{png[pos + 2]} << 8) | png[pos + 3];
+    if (std::memcmp(&png[pos + 4], type, 4) == 0) return pos;
+    pos += 12 + length;
+  }
+  return 0;
+}
+
+// A bit flipped in a critical chunk was refused by libpng, which printed "libpng error: ..." to
+// stderr first: a plain line among the server's JSON log lines. The checksum is checked before
+// libpng runs, and said so; a damaged ancillary chunk is dropped, as libpng does, and the image
+// read.
+TEST(ImageIo, APngChunkFailingItsChecksumIsCorruptAndNamed) {
+  const std::vector<std::uint8_t> whole = Encode(".png", PhoneLikeFrame(64, 48));
+  const std::size_t idat = FindPngChunk(whole, "IDAT");
+  ASSERT_GT(idat, 0U);
+  std::vector<std::uint8_t> flipped = whole;
+  flipped[idat + 8 + 5] ^= 0x10U;
+  testing::internal::CaptureStderr();
+  const LoadResult damaged = LoadImageBytes(flipped);
+  const std::string printed = testing::internal::GetCapturedStderr();
+  EXPECT_FALSE(damaged.image);
+  EXPECT_EQ(damaged.kind, ImageError::kCorrupt) << damaged.error;
+  EXPECT_NE(damaged.error.find("IDAT chunk fails its checksum"), std::string::npos)
+      << damaged.error;
+  EXPECT_EQ(printed, "");
+
+  // A tEXt chunk after IHDR (8 + 25 bytes in), its checksum wrong by one.
+  const std::string text = "Comment";
+  std::vector<std::uint8_t> chunk = {0, 0, 0, static_cast<std::uint8_t>(text.size()),
+                                     't', 'E', 'X', 't'};
+  chunk.insert(chunk.end(), text.begin(), text.end());
+  const std::uint32_t wrong = PngCrc(chunk.data() + 4, 4 + text.size()) ^ 1U;
+  for (int i = 0; i < 4; ++i) chunk.push_back(static_cast<std::uint8_t>(wrong >> (24 - 8 * i)));
+  std::vector<std::uint8_t> with_text = whole;
+  with_text.insert(with_text.begin() + 33, chunk.begin(), chunk.end());
+  const LoadResult read = LoadImageBytes(with_text);
+  const LoadResult want = LoadImageBytes(whole);
+  ASSERT_TRUE(read.image) << read.error;
+  ASSERT_TRUE(want.image) << want.error;
+  EXPECT_EQ(cv::norm(read.image->bgr, want.image->bgr, cv::NORM_INF), 0);
 }
 
 TEST(ImageIo, DegenerateSizes) {
