@@ -446,7 +446,8 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
       return h;
     }
     const bool critical = (b[pos + 4] & 0x20U) == 0;
-    if (kCheckPngChecksums && critical && crc32(0, &b[pos + 4], length + 4) != Be32(&b[pos + 8 + length])) {
+    if (kCheckPngChecksums && critical &&
+        crc32(0, &b[pos + 4], length + 4) != Be32(&b[pos + 8 + length])) {
       h.problem = "the PNG is damaged: its " + PngChunkName(&b[pos + 4]) +
                   " chunk fails its checksum (CRC)";
       return h;

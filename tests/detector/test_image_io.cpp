@@ -890,7 +890,7 @@ TEST(ImageIo, APngChunkFailingItsChecksumIsCorruptAndNamed) {
 
   // A tEXt chunk after IHDR (8 + 25 bytes in), its checksum wrong by one.
   const std::string text = "Comment";
-  std::vector<std::uint8_t> chunk = {0, 0, 0, static_cast<std::uint8_t>(text.size()),
+  std::vector<std::uint8_t> chunk = {0,   0,   0,   static_cast<std::uint8_t>(text.size()),
                                      't', 'E', 'X', 't'};
   chunk.insert(chunk.end(), text.begin(), text.end());
   const std::uint32_t wrong = PngCrc(chunk.data() + 4, 4 + text.size()) ^ 1U;
