@@ -10,16 +10,20 @@
 #include <string_view>
 
 #include "commands/commands.hpp"
+#include "commands/standard_output.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/server/log.hpp"
 
 namespace {
 
 /// 0, or 1 after saying so when what was printed on stdout could not all be written: a full disk
-/// or a closed pipe must not end in exit 0 with the output lost (`pintag token list > /dev/full`).
+/// must not end in exit 0 with the output lost (`pintag token list > /dev/full`). A reader that
+/// stopped reading (`pintag keys export | head -1`) is not an error to report: the status is the
+/// one SIGPIPE would have given, and nothing is said.
 int StdoutStatus() {
   std::cout.flush();
   if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    if (pintag::cli::StandardOutputReaderHasGone()) return pintag::cli::kReaderGoneStatus;
     std::cerr << "pintag: cannot write to standard output\n";
     return 1;
   }

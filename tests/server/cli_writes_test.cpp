@@ -338,14 +338,17 @@ TEST(CliWrites, AServerWhoseFirstAdminTokenCannotBePrintedRevokesItAndDoesNotSta
   ExpectOneAdminTokenRevoked(dir, db);
 }
 
-// The same through a pipe whose reader has gone (`pintag token create | head -c0`): SIGPIPE
-// killed the command before it could revoke the token it had made.
-TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {
-  const TempDir dir;
-  const std::string db = dir.file("copy.db");
-  std::filesystem::copy_file(SeededTemplate(), db);
+/// How a command ended whose stdout was a pipe with no reader left, and what it wrote to stderr.
+struct PipeRun {
+  int status = 0;  // the exit status, or -1 when a signal ended the command
+  std::string err;
+};
+
+/// Runs `pintag` with `words` and its stdout a pipe whose reader has gone (`... | head -c0`), with
+/// SIGPIPE at its default in the command, whatever this process does with it.
+PipeRun RunPintagIntoAClosedPipe(const TempDir& dir, std::vector<std::string> words) {
   int pipe_fds[2];
-  ASSERT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
+  EXPECT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
   ::close(pipe_fds[0]);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -353,7 +356,6 @@ TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {
   const std::string err = dir.file("err.txt");
   posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  // SIGPIPE at its default in the command, whatever this process does with it.
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
   sigset_t pipe_signal;
@@ -362,7 +364,7 @@ TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {
   posix_spawnattr_setsigdefault(&attributes, &pipe_signal);
   posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
   const std::string exe = PintagExe();
-  std::vector<std::string> words = {exe, "token", "create", "--role", "admin", "--db", db};
+  words.insert(words.begin(), exe);
   std::vector<char*> argv;
   for (std::string& word : words) argv.push_back(word.data());
   argv.push_back(nullptr);
@@ -371,13 +373,43 @@ TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attributes);
   ::close(pipe_fds[1]);
-  ASSERT_EQ(spawned, 0);
+  EXPECT_EQ(spawned, 0);
+  if (spawned != 0) return {};
   int status = 0;
-  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 1) << ReadFile(err);
-  EXPECT_NE(ReadFile(err).find("the token is revoked"), std::string::npos) << ReadFile(err);
+  EXPECT_EQ(::waitpid(pid, &status, 0), pid);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(err)};
+}
+
+// The same through a pipe whose reader has gone (`pintag token create | head -c0`): SIGPIPE
+// killed the command before it could revoke the token it had made.
+TEST(CliWrites, ATokenWrittenToAClosedPipeIsRevoked) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const PipeRun run =
+      RunPintagIntoAClosedPipe(dir, {"token", "create", "--role", "admin", "--db", db});
+  EXPECT_EQ(run.status, 1) << run.err;
+  EXPECT_NE(run.err.find("the token is revoked"), std::string::npos) << run.err;
   ExpectOneAdminTokenRevoked(dir, db);
+}
+
+// A reader that stops early (`pintag keys export | head -1`) made the command say "cannot write
+// ... to standard output" and exit 1, which `set -o pipefail` scripts took for a failure. Like
+// `seq 100000 | head -1`, it now ends quietly with the status SIGPIPE gives (141); a full disk is
+// still an error (below).
+TEST(CliWrites, AReaderThatStopsReadingIsNotAnError) {
+  const TempDir dir;
+  const std::string db = dir.file("copy.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  for (const std::vector<std::string>& words :
+       {std::vector<std::string>{"keys", "export", "--db", db},
+        std::vector<std::string>{"keys", "lookup", "110001", "--db", db},
+        std::vector<std::string>{"token", "list", "--db", db},
+        std::vector<std::string>{"--help"}}) {
+    const PipeRun run = RunPintagIntoAClosedPipe(dir, words);
+    EXPECT_EQ(run.status, 141) << words[0] << " " << words[1] << ": " << run.err;
+    EXPECT_EQ(run.err, "") << words[0] << " " << words[1];
+  }
 }
 
 TEST(CliWrites, DetectImagesToAFullDiskFail) {

@@ -8,6 +8,7 @@
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
 #include "commands/option_checks.hpp"
+#include "commands/standard_output.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/registry.hpp"
 
@@ -30,7 +31,10 @@ void Export(const KeysArgs& args) {
            db::ToString(row.status) + "\n";
   }
   std::cout << out << std::flush;
-  if (!std::cout) throw std::runtime_error("cannot write the key table to standard output");
+  // A reader that stopped early (`| head -1`) is left to main, which exits as SIGPIPE would.
+  if (!std::cout && !StandardOutputReaderHasGone()) {
+    throw std::runtime_error("cannot write the key table to standard output");
+  }
 }
 
 void Lookup(const KeysArgs& args) {
