@@ -178,7 +178,7 @@ TEST_F(ServeTest, BatchProblemsNameTheBadInput) {
   expect(R"({"pincodes": [110001.5]})", 400, "pincodes[0]");
   expect(R"({"pincodes": [true]})", 400, "pincodes[0] must be six digits, as a string");
   expect(R"({"pincodes": ["110001", "abc"]})", 400, "pincodes[1]");
-  expect(R"({"pincodes": ["110001"], "size": 5})", 400, "'size' must be a string");
+  expect(R"({"pincodes": ["110001"], "size": 5})", 400, "'size' must be a string or null");
   expect(R"({"pincodes": ["110001"], "plan": "nope"})", 404, "Unknown Sort Plan");
   // A misspelt field printed the default plan's bins or size unnoticed (a reviewer's "Plan").
   expect(R"({"pincodes": ["110001"], "Plan": "default"})", 400, "unknown field 'Plan'");

@@ -332,5 +332,67 @@ TEST_F(ServeTest, JsonBodyWithAKeyTwiceIsRefusedNamingIt) {
              201);
 }
 
+// Every JSON body reads its optional fields alike: null is leaving the field out (an item's
+// "office" was read so, while a batch's "size" and "plan", a token's "label" and a plan's
+// "description" were refused); and a pincode is six digits as a string or a number, in an office
+// as at the top (an office's own "pincode" had to be a string).
+TEST_F(ServeTest, EveryBodyTakesNullForAnOptionalFieldLeftOut) {
+  const auto labels =
+      client().Post("/api/v1/labels?size=100x150mm", counter(),
+                    R"({"pincodes": ["110001"], "size": null, "plan": null})", "application/json");
+  ASSERT_TRUE(labels);
+  EXPECT_EQ(labels->status, 200) << labels->body.substr(0, 300);
+  EXPECT_EQ(labels->get_header_value("Content-Type"), "application/pdf");
+  const json size_refused =
+      ExpectProblem(client().Post("/api/v1/labels", counter(),
+                                  R"({"pincodes": ["110001"], "plan": 7})", "application/json"),
+                    400);
+  EXPECT_NE(size_refused["detail"].get<std::string>().find("'plan' must be a string or null"),
+            std::string::npos)
+      << size_refused;
+
+  const json token =
+      ExpectJson(client().Post("/api/v1/tokens", admin(), R"({"role": "scanner", "label": null})",
+                               "application/json"),
+                 201);
+  EXPECT_EQ(token["label"], "");
+
+  ExpectJson(client().Put("/api/v1/sortplans/nulls", admin(),
+                          R"({"name": null, "fallback_bin": "m", "description": null,
+                              "rules": [{"prefix": "11", "bin": "north"}]})",
+                          "application/json"),
+             201);
+  const json plan = ExpectJson(client().Get("/api/v1/sortplans/nulls"));
+  EXPECT_EQ(plan["description"], "");
+  EXPECT_EQ(plan["rules"].size(), 1U);
+  // A required field given null is missing, and said so.
+  const json no_fallback =
+      ExpectProblem(client().Put("/api/v1/sortplans/nulls", admin(),
+                                 R"({"fallback_bin": null, "rules": []})", "application/json"),
+                    400);
+  EXPECT_NE(no_fallback["detail"].get<std::string>().find("'fallback_bin' is required"),
+            std::string::npos)
+      << no_fallback;
+
+  const std::string office = R"("name": "Alpha", "district": "North", "state": "S",
+      "circle": "C", "region": "R", "division": "D")";
+  const json other = ExpectProblem(
+      client().Post("/api/v1/pincodes", admin(),
+                    R"({"pincode": "999021", "offices": [{)" + office + R"(, "pincode": 999022}]})",
+                    "application/json"),
+      400);
+  EXPECT_NE(other["detail"].get<std::string>().find("office 1: 'pincode' 999022 is not the "
+                                                    "pincode being added"),
+            std::string::npos)
+      << other;
+  ExpectProblem(client().Get("/api/v1/pincodes/999021"), 404);
+  ExpectJson(client().Post("/api/v1/pincodes", admin(),
+                           R"({"pincode": 999021, "offices": [{)" + office +
+                               R"(, "pincode": 999021, "taluk": null}]})",
+                           "application/json"),
+             201);
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/pincodes/999021"))["offices"][0]["name"], "Alpha");
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -204,10 +204,13 @@ HttpResponse PostLabels(const AppContext& context, const HttpRequest& request) {
     problem.numbers = {{"max_batch", static_cast<std::int64_t>(context.max_batch)}};
     throw HttpError(std::move(problem));
   }
-  // The body's size and plan, else the query's, else the defaults.
+  // The body's size and plan, else the query's, else the defaults. null is leaving it out, as for
+  // an item's "office" and every optional field of every body.
   const auto text = [&](const char* key) -> std::optional<std::string> {
-    if (!body.contains(key)) return std::nullopt;
-    if (!body[key].is_string()) throw HttpError(400, std::string("'") + key + "' must be a string");
+    if (!body.contains(key) || body[key].is_null()) return std::nullopt;
+    if (!body[key].is_string()) {
+      throw HttpError(400, std::string("'") + key + "' must be a string or null");
+    }
     return body[key].get<std::string>();
   };
   // Given in both places, they must agree: which one printed would be a guess the clerk never

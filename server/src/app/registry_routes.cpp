@@ -83,8 +83,11 @@ db::PostOffice OfficeFromJson(const json& o, std::size_t index, Pincode pincode)
   if (const auto country = text("country"); country && *country != "India") {
     throw HttpError(400, office + ": 'country' can only be India");
   }
-  if (const auto own = text("pincode"); own && *own != pincode.str()) {
-    throw HttpError(400, office + ": 'pincode' " + *own + " is not the pincode being added");
+  // Read as the body's own "pincode" is: six digits, as a string or a number.
+  if (o.contains("pincode") && !o["pincode"].is_null()) {
+    if (const Pincode own = PincodeValue(o["pincode"], office + ": 'pincode'"); own != pincode) {
+      throw HttpError(400, office + ": 'pincode' " + own.str() + " is not the pincode being added");
+    }
   }
   db::PostOffice result;
   result.name = *text("name");

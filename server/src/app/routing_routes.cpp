@@ -57,7 +57,7 @@ db::SortPlan PlanFromJson(const std::string& name, const json& body) {
   }
   const auto text = [&](const json& object, const char* field, bool required,
                         const std::string& where = {}) -> std::string {
-    if (!object.contains(field)) {
+    if (!object.contains(field) || object[field].is_null()) {  // null is leaving it out
       if (required) throw BadPlan(where + "'" + field + "' is required");
       return {};
     }
@@ -67,7 +67,7 @@ db::SortPlan PlanFromJson(const std::string& name, const json& body) {
   RefuseUnknownFields(body, {"name", "fallback_bin", "description", "rules"}, "");
   db::SortPlan plan;
   plan.name = name;
-  if (body.contains("name") && body["name"] != name) {
+  if (body.contains("name") && !body["name"].is_null() && body["name"] != name) {
     throw BadPlan("the body's name differs from the one in the path");
   }
   plan.fallback_bin = text(body, "fallback_bin", true);

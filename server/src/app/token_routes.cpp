@@ -31,8 +31,8 @@ HttpResponse PostToken(const AppContext& context, const HttpRequest& request) {
   const auto role = db::ParseRole(body["role"].get<std::string>());
   if (!role) throw HttpError(400, "role must be admin, counter, scanner or replica");
   std::string label;
-  if (body.contains("label")) {
-    if (!body["label"].is_string()) throw HttpError(400, "'label' must be a string");
+  if (body.contains("label") && !body["label"].is_null()) {  // null: no label, as left out
+    if (!body["label"].is_string()) throw HttpError(400, "'label' must be a string or null");
     label = body["label"].get<std::string>();
   }
   auto connection = context.pool->acquire();
