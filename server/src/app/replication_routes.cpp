@@ -79,6 +79,8 @@ HttpResponse GetRegistrySnapshot(const AppContext& context, const HttpRequest& r
   version_only += '"';
   if (none_match && (NoneMatchNames(*none_match, replica::RegistryETag(*live, epoch)) ||
                      NoneMatchNames(*none_match, version_only))) {
+    // "Content-Length: 0" (cpp-httplib's) stays: a replica's cpp-httplib client reads the 200's
+    // length, which RFC 9110 (8.6) would rather see here, as a body to wait for (GetSortPlan).
     HttpResponse not_modified = HttpResponse::Bytes("application/vnd.sqlite3", "", 304);
     not_modified.headers.emplace_back("ETag", replica::RegistryETag(*live, epoch));
     return not_modified;

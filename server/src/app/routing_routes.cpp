@@ -189,6 +189,9 @@ HttpResponse GetSortPlan(const AppContext& context, const HttpRequest& request) 
     none_match.reset();
   }
   if (none_match && NoneMatchNames(*none_match, PlanETag(version, csv))) {
+    // cpp-httplib sends it with "Content-Length: 0", where RFC 9110 (8.6) wants none or the 200's
+    // length. The 200's was tried: cpp-httplib's own client (0.11.4) then waits for that many bytes
+    // of body after a 304, and so would other clients that do not know a 304 has none.
     return PlanResponse("", csv ? "text/csv; charset=utf-8" : "application/json", version, csv,
                         304);
   }
