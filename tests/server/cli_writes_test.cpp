@@ -153,8 +153,8 @@ TEST(CliWrites, ATokenWhoseSecretCannotBeWrittenIsRevoked) {
 }
 
 // `token create --out FILE` (a replica's --follow-token-file): the secret in a file only its owner
-// may read, replaced whole, nothing on stdout; a directory that is not there is a usage error
-// before any token is made, and a file that cannot be written revokes the token made for it.
+// may read, replaced whole, nothing on stdout; a directory that is not there, or that cannot be
+// written, is a usage error before any token is made.
 TEST(CliWrites, ATokenWrittenToAFileIsItsOwnersAloneAndReplacedWhole) {
   const TempDir dir;
   const std::string db = dir.file("copy.db");
@@ -205,14 +205,19 @@ TEST(CliWrites, ATokenWrittenToAFileIsItsOwnersAloneAndReplacedWhole) {
   EXPECT_EQ(create(secrets.string()).status, 2);
   EXPECT_EQ(token_count(), before);
 
-  // /proc takes no new files, not even from root: the token made is revoked.
+  // /proc takes no new files, not even from root: said before a token is made (one was made, and
+  // then revoked), as serve --admin-token-out says it.
   const CommandResult unwritable = create("/proc/pintag-secret");
-  EXPECT_EQ(unwritable.status, 1) << unwritable.out;
-  EXPECT_NE(unwritable.out.find("the token is revoked"), std::string::npos) << unwritable.out;
-  EXPECT_EQ(token_count(), before + 1);
-  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM api_tokens WHERE revoked_at IS NULL AND "
-                                  "id = (SELECT max(id) FROM api_tokens)"),
-            0);
+  EXPECT_EQ(unwritable.status, 2) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("--out /proc/pintag-secret: cannot write in /proc"),
+            std::string::npos)
+      << unwritable.out;
+  EXPECT_EQ(token_count(), before);
+  // Nor is a database made and seeded for it.
+  const CommandResult no_db =
+      RunPintag("token create --role admin --out /proc/pintag-secret --db " + dir.file("new.db"));
+  EXPECT_EQ(no_db.status, 2) << no_db.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 
 // The secret and the snapshot are written beside their file and renamed into place. Through a
@@ -271,6 +276,48 @@ TEST(CliWrites, TokenAndSnapshotFilesAreWrittenThroughLinksAndNeverReplaceAPipe)
   }
   EXPECT_EQ(token_count(), before);
   EXPECT_TRUE(std::filesystem::is_fifo(pipe));
+}
+
+// `token create --out pintag.db` (the default --db) wrote the secret over the registry and said
+// it had done well; `serve --admin-token-out` named as the database did the same on a first start.
+// The database, by any name, its -wal file, and any other SQLite file are refused before any
+// work, and left as they were.
+TEST(CliWrites, ASecretFileIsNeverADatabase) {
+  const TempDir dir;
+  const std::string db = dir.file("registry.db");
+  std::filesystem::copy_file(SeededTemplate(), db);
+  const std::string other = dir.file("other.db");
+  std::filesystem::copy_file(SeededTemplate(), other);
+  std::filesystem::create_symlink("registry.db", dir.file("to-registry"));
+  std::filesystem::create_hard_link(db, dir.file("second-name.db"));
+  const std::string before = ReadFile(db);
+  const std::string other_before = ReadFile(other);
+  for (const auto& [out, says] : std::vector<std::pair<std::string, std::string>>{
+           {db, "is the database (--db " + db + ")"},
+           {dir.file("to-registry"), "is the database"},
+           {dir.file("second-name.db"), "is the database"},
+           {dir.path().string() + "/./registry.db", "is the database"},
+           {db + "-wal", "is the database's wal file"},
+           {other, "holds an SQLite database"}}) {
+    const CommandResult refused =
+        RunPintag("token create --role replica --out " + out + " --db " + db);
+    EXPECT_EQ(refused.status, 2) << out << "\n" << refused.out;
+    EXPECT_NE(refused.out.find("--out " + out + " " + says), std::string::npos) << refused.out;
+  }
+  EXPECT_EQ(ReadFile(db), before);
+  EXPECT_EQ(ReadFile(other), other_before);
+  EXPECT_FALSE(std::filesystem::exists(db + "-wal"));
+  db::Connection connection(db, {.create = false, .read_only = true});
+  EXPECT_EQ(connection.queryInt64("SELECT count(*) FROM api_tokens"), 0);
+
+  // A first start whose token file is its new database: refused before the database is made.
+  const std::string fresh = dir.file("fresh.db");
+  const CommandResult serve =
+      RunPintag("serve --port 0 --bind 127.0.0.1 --db " + fresh + " --admin-token-out " + fresh);
+  EXPECT_EQ(serve.status, 2) << serve.out;
+  EXPECT_NE(serve.out.find("--admin-token-out " + fresh + " is the database"), std::string::npos)
+      << serve.out;
+  EXPECT_FALSE(std::filesystem::exists(fresh));
 }
 
 // An empty file name (an unset shell variable) or one SQLite reads as a database in memory

@@ -155,4 +155,46 @@ inline void CheckDirectoryWritable(const std::string& option, const std::string&
   ::unlink(probe.c_str());
 }
 
+/// A file a token's secret is written to (`token create --out`, `serve --admin-token-out`),
+/// checked before the database is opened: as CheckFileToReplace, in a directory this user can
+/// write (CheckDirectoryWritable), and never a database. Not `db` itself (through a link or a
+/// second name too), nor its -wal, -shm or -journal file, nor any file that holds an SQLite
+/// database (another registry, a snapshot, a scan log): the secret replaced the registry whole
+/// when `--out` named it, and the command said it had done well.
+inline void CheckSecretFile(const std::string& option, const std::string& path,
+                            const std::string& db) {
+  const std::string target = CheckFileToReplace(option, path);
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path written = fs::weakly_canonical(fs::absolute(target, error), error);
+  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) {
+    const std::string name = db + suffix;
+    std::error_code same_error;
+    const bool same =
+        fs::equivalent(target, name, same_error) ||
+        (!error && written == fs::weakly_canonical(fs::absolute(name, same_error), same_error));
+    if (same) {
+      throw UsageError(option + " " + path + " is " +
+                       (*suffix == '\0' ? "the database"
+                                        : std::string("the database's ") + (suffix + 1) + " file") +
+                       " (--db " + db +
+                       "), which the secret would replace; name a file of its own");
+    }
+  }
+  // The first 16 bytes of every SQLite database file.
+  constexpr char kSqliteHeader[] = "SQLite format 3";
+  char head[sizeof kSqliteHeader] = {};
+  if (const int fd = ::open(target.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK); fd >= 0) {
+    const ssize_t got = ::read(fd, head, sizeof head);
+    ::close(fd);
+    if (got == static_cast<ssize_t>(sizeof head) &&
+        std::memcmp(head, kSqliteHeader, sizeof head) == 0) {
+      throw UsageError(option + " " + path +
+                       " holds an SQLite database, which the secret would replace; name a file "
+                       "of its own");
+    }
+  }
+  CheckDirectoryWritable(option, target);
+}
+
 }  // namespace pintag::cli

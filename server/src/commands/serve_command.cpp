@@ -119,9 +119,7 @@ void Run(const ServeArgs& args) {
   // A mistyped path, or a directory this user cannot write (a volume owned by root while the
   // server runs as another user), is said now, before the database and the token are made.
   if (!args.admin_token_out.empty()) {
-    // The directory written in is the one the file a link names is in.
-    CheckDirectoryWritable("--admin-token-out",
-                           CheckFileToReplace("--admin-token-out", args.admin_token_out));
+    CheckSecretFile("--admin-token-out", args.admin_token_out, args.db);
   }
   std::string proxy_error;
   const std::optional<server::TrustedProxies> trusted_proxies =

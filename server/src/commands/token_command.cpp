@@ -33,8 +33,9 @@ void Create(const TokenArgs& args) {
   if (auto error = db::CheckTokenLabel(args.label)) {
     throw UsageError("--" + error->message);
   }
-  // A mistyped path: no token is made for it.
-  if (!args.out.empty()) CheckFileToReplace("--out", args.out);
+  // A mistyped path, one that cannot be written, or a database: no token is made for it, and no
+  // database made or seeded.
+  if (!args.out.empty()) CheckSecretFile("--out", args.out, args.db);
   db::Connection connection = OpenDb(args.db);
   auto token = db::CreateToken(connection, *role, args.label);
   if (!token && token.error().code == db::ErrorCode::kBusy) {
