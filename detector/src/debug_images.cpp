@@ -46,7 +46,7 @@ std::string DebugImages::failure() const {
 }
 
 void DebugImages::redness(const cv::Mat& mask) const {
-  if (enabled()) write("1_redness.png", mask);
+  if (enabled()) write(kDebugImageNames[0], mask);
 }
 
 void DebugImages::blobs(const cv::Mat& bgr, const std::vector<RedBlob>& blobs,
@@ -55,7 +55,7 @@ void DebugImages::blobs(const cv::Mat& bgr, const std::vector<RedBlob>& blobs,
   cv::Mat out = bgr / 2;
   for (const RedBlob& b : blobs) cv::rectangle(out, b.box, {0, 255, 255}, 1);
   for (const BlobCluster& c : clusters) cv::rectangle(out, c.roi, {255, 128, 0}, 2);
-  write("2_blobs.png", out);
+  write(kDebugImageNames[1], out);
 }
 
 void DebugImages::quads(const cv::Mat& bgr, const std::vector<Quad>& quads) const {
@@ -64,7 +64,7 @@ void DebugImages::quads(const cv::Mat& bgr, const std::vector<Quad>& quads) cons
   for (const Quad& q : quads) {
     for (int i = 0; i < 4; ++i) cv::line(out, q[i], q[(i + 1) % 4], {0, 255, 0}, 1, cv::LINE_AA);
   }
-  write("3_quads.png", out);
+  write(kDebugImageNames[2], out);
 }
 
 void DebugImages::detections(const cv::Mat& bgr, const std::vector<Detection>& detections) const {
@@ -74,7 +74,7 @@ void DebugImages::detections(const cv::Mat& bgr, const std::vector<Detection>& d
     const cv::Scalar colour = d.key ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255);
     DrawTagOutline(out, d, colour, d.key ? std::to_string(d.key->value()) : d.reject_reason);
   }
-  write("4_detections.png", out);
+  write(kDebugImageNames[3], out);
 }
 
 }  // namespace pintag::stage

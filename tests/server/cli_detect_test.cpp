@@ -296,5 +296,44 @@ TEST(CliDetect, AnOverlayPathThatIsThePhotoIsRefusedAndThePhotoKept) {
   EXPECT_EQ(cv::imread(seen).size(), cv::imread(photo.path).size());
 }
 
+// The stage images replace files of their names: `detect dd/4_detections.png --debug-dir dd`
+// wrote the last stage over the photo, and an overlay named as a stage was overwritten by it.
+TEST(CliDetect, StageImagesNeverReplaceThePhotoOrTheOverlay) {
+  const test::TempDir dir;
+  const RenderedPhoto rendered = RenderPhoto(dir);
+  const std::filesystem::path stages = dir.path() / "stages";
+  std::filesystem::create_directory(stages);
+  const std::string photo = (stages / "4_detections.png").string();
+  std::filesystem::copy_file(rendered.path, photo);
+  const std::string before = ReadFile(photo);
+  for (const std::string& debug : {stages.string(), (dir.path() / "." / "stages").string()}) {
+    const CommandResult refused = RunPintag("detect " + photo + " --debug-dir " + debug);
+    EXPECT_EQ(refused.status, 2) << refused.out;
+    EXPECT_NE(refused.out.find("would write 4_detections.png over the photo"), std::string::npos)
+        << refused.out;
+    const CommandResult piped =
+        RunShell(PintagExe() + " detect - --debug-dir " + debug + " < " + photo + " 2>&1");
+    EXPECT_EQ(piped.status, 2) << piped.out;
+    EXPECT_NE(piped.out.find("over the photo"), std::string::npos) << piped.out;
+  }
+  EXPECT_TRUE(ReadFile(photo) == before);  // not EXPECT_EQ: a PNG's bytes are no message
+  EXPECT_FALSE(std::filesystem::exists(stages / "1_redness.png"));
+
+  const std::string overlay = (stages / "3_quads.png").string();
+  const CommandResult over_overlay = RunPintag("detect " + rendered.path + " --debug-dir " +
+                                               stages.string() + " --overlay " + overlay);
+  EXPECT_EQ(over_overlay.status, 2) << over_overlay.out;
+  EXPECT_NE(over_overlay.out.find("would write 3_quads.png over the overlay"), std::string::npos)
+      << over_overlay.out;
+  EXPECT_FALSE(std::filesystem::exists(overlay));
+  // Beside the stages, under a name of its own, the overlay is written with them.
+  const std::string beside = (stages / "seen.png").string();
+  const CommandResult both = RunPintag("detect " + rendered.path + " --debug-dir " +
+                                       stages.string() + " --overlay " + beside);
+  EXPECT_EQ(both.status, 0) << both.out;
+  EXPECT_TRUE(std::filesystem::is_regular_file(beside));
+  EXPECT_TRUE(std::filesystem::is_regular_file(stages / "1_redness.png"));
+}
+
 }  // namespace
 }  // namespace pintag::serve_test

@@ -143,6 +143,25 @@ bool CanEncode(const std::string& path) {
   }
 }
 
+/// Whether `path` names the file `given` names (`-`: the file on standard input): the same file
+/// under another name or link, or, for a file not there yet, the same place.
+bool SameFile(const std::string& given, const std::string& path) {
+  namespace fs = std::filesystem;
+  if (given == "-") {
+    struct stat input {};
+    struct stat other {};
+    return ::fstat(STDIN_FILENO, &input) == 0 && ::stat(path.c_str(), &other) == 0 &&
+           input.st_dev == other.st_dev && input.st_ino == other.st_ino;
+  }
+  std::error_code ec;
+  if (fs::equivalent(given, path, ec)) return true;
+  std::error_code a_error;
+  std::error_code b_error;
+  const fs::path a = fs::weakly_canonical(fs::absolute(given, a_error), a_error);
+  const fs::path b = fs::weakly_canonical(fs::absolute(path, b_error), b_error);
+  return !a_error && !b_error && a == b;
+}
+
 void CheckOptions(const DetectArgs& args) {
   const int given = args.fx.has_value() + args.fy.has_value();
   if (given == 1) throw UsageError("give both --fx and --fy, or neither");
@@ -178,6 +197,21 @@ void CheckOptions(const DetectArgs& args) {
   if (!args.debug_dir.empty() && std::filesystem::exists(args.debug_dir, ec) &&
       !std::filesystem::is_directory(args.debug_dir, ec)) {
     throw UsageError("--debug-dir " + args.debug_dir + " is not a directory");
+  }
+  // The stage images replace files of their names: the photo (`detect dd/4_detections.png
+  // --debug-dir dd` overwrote it) and the overlay must not be among them.
+  if (!args.debug_dir.empty()) {
+    for (const char* name : kDebugImageNames) {
+      const std::string stage = (std::filesystem::path(args.debug_dir) / name).string();
+      if (SameFile(args.photo, stage)) {
+        throw UsageError("--debug-dir " + args.debug_dir + " would write " + name +
+                         " over the photo; give another directory");
+      }
+      if (!args.overlay.empty() && SameFile(args.overlay, stage)) {
+        throw UsageError("--debug-dir " + args.debug_dir + " would write " + name +
+                         " over the overlay " + args.overlay + "; give another directory");
+      }
+    }
   }
 }
 

@@ -86,8 +86,15 @@ struct DetectorOptions {
 
   // --- execution and diagnostics ---
   int threads = 1;        ///< worker threads for candidate tags; 1 = run in the caller's thread
-  std::string debug_dir;  ///< when set, each stage writes an image here (debug only; slow)
+  std::string debug_dir;  ///< when set, each stage writes an image here (debug only; slow),
+                          ///< named as kDebugImageNames
+
   bool return_rejected = false;  ///< also report candidates that did not decode (key unset)
 };
+
+/// The files DetectorOptions::debug_dir receives, one per stage in pipeline order, replaced when
+/// there: a caller keeps its photo and overlay out of their way.
+inline constexpr std::array<const char*, 4> kDebugImageNames = {"1_redness.png", "2_blobs.png",
+                                                                "3_quads.png", "4_detections.png"};
 
 }  // namespace pintag
