@@ -36,6 +36,13 @@ TEST_F(StaticFilesTest, ServesFilesAndIndex) {
   EXPECT_EQ(r.content_type, "text/css; charset=utf-8");
   EXPECT_EQ(files.serve("/css").status, 404);  // a directory without index.html
   EXPECT_EQ(files.serve("/missing.js").status, 404);
+  // A page named without its ".html", as people say it: that page. Nothing else is guessed.
+  r = files.serve("/index");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, "<h1>PinTag</h1>");
+  EXPECT_EQ(r.content_type, "text/html; charset=utf-8");
+  EXPECT_EQ(files.serve("/css/site").status, 404);
+  EXPECT_EQ(files.serve("/missing").status, 404);
 }
 
 TEST_F(StaticFilesTest, RefusesEveryWayOut) {
@@ -44,7 +51,8 @@ TEST_F(StaticFilesTest, RefusesEveryWayOut) {
            std::string("/index.html\0x", 13), std::string("/../secret.txt"),
            "/css/../../secret.txt", "/..", "/./index.html", "/%2e%2e/secret.txt",
            "/%252e%252e/secret.txt", "/..%2fsecret.txt", "/..\\secret.txt", "/.env", "/escape.txt",
-           "/up/secret.txt", "//etc/passwd", "/\xc0\xae\xc0\xae/secret.txt", "relative", ""}) {
+           "/up/secret.txt", "/up/secret", "/escape", "//etc/passwd",
+           "/\xc0\xae\xc0\xae/secret.txt", "relative", ""}) {
     const HttpResponse r = files.serve(path);
     EXPECT_EQ(r.status, 404) << path;
     EXPECT_EQ(r.content_type, "application/problem+json") << path;

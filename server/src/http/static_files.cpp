@@ -71,7 +71,13 @@ HttpResponse StaticFiles::serve(std::string_view url_path) const {
   if (!IsSafeUrlPath(url_path)) return NotFound();
   std::filesystem::path candidate = root_ / std::filesystem::path(url_path.substr(1));
   std::error_code ec;
-  if (std::filesystem::is_directory(candidate, ec)) candidate /= "index.html";
+  if (std::filesystem::is_directory(candidate, ec)) {
+    candidate /= "index.html";
+  } else if (candidate.extension().empty() && !std::filesystem::exists(candidate, ec)) {
+    // A page named without ".html" (/counter, as people say it) is that page: it was a 404 of
+    // problem JSON in the browser. The checks below apply to the file found.
+    candidate += ".html";
+  }
   const auto real = RealPath(candidate);
   // Symlinks may point anywhere; only what resolves inside the web directory is served.
   if (!real || !IsInside(root_, *real) || !std::filesystem::is_regular_file(*real, ec)) {
