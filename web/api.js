@@ -276,6 +276,21 @@ export function parsePincodes(text) {
   return joined.split(/[\s,;]+/u).filter(Boolean).map((item) => ({ text: item, valid: isPincode(item) }));
 }
 
+/**
+ * A pincode typed or pasted into a field of its own, read as parsePincodes reads one: "110 001",
+ * as a label prints it, is 110001. The text as typed (trimmed, its digits as 0–9) when it holds
+ * more or less than one, so that a refusal quotes it.
+ */
+export function pincodeFieldValue(text) {
+  const items = parsePincodes(text);
+  return items.length === 1 ? items[0].text : asciiDigits(text.trim());
+}
+
+/** A server time (ISO 8601 in UTC, "2026-12-07T19:56:50.862Z") as pages show one: "2026-12-07 19:56 UTC". */
+export function utcMinute(iso) {
+  return `${iso.slice(0, 16).replace('T', ' ')} UTC`;
+}
+
 // ---------- tokens ----------
 
 const kStorePrefix = 'pintag.token.';
@@ -290,6 +305,15 @@ const kTokenText = /^[\x21-\x7e]+$/;
  */
 export function cleanToken(text) {
   return text.replace(/[\s\u00ad\u061c\u180e\u200b-\u200f\u202a-\u202e\u2060-\u2069\ufeff]/gu, '');
+}
+
+/**
+ * Whether `token` (cleaned) is a whole secret: pt_<id>_ and 43 characters (32 random bytes,
+ * base64url). A page acts on a token as it is pasted only then, so that typing one does not send it
+ * unfinished.
+ */
+export function isWholeToken(token) {
+  return /^pt_\d+_[A-Za-z0-9_-]{43}$/.test(token);
 }
 
 function store() {

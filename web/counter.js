@@ -1,7 +1,7 @@
 // Dispatch counter: pincodes in, office and district to confirm, label preview, PDF out.
 import {
   api, ApiError, query, el, show, problemBox, messageBox, badge, busy, downloadBlob, parsePincodes, bindToken, keepPlan,
-  remember, remembered,
+  remember, remembered, isWholeToken,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -42,7 +42,9 @@ function labelQuery(extra = {}) {
   return query({ size: sizeValue(), plan: planValue(), ...extra });
 }
 
-async function lookupAll(pins, signal) {
+// `progress(done, total)` is told after each answer: a long list (a thousand pincodes take seconds)
+// shows how far it has come.
+async function lookupAll(pins, signal, progress = () => {}) {
   const answers = new Map();
   const queue = [...pins];
   const worker = async () => {
@@ -53,6 +55,7 @@ async function lookupAll(pins, signal) {
       } catch (error) {
         answers.set(pin, { error });
       }
+      if (!signal.aborted) progress(answers.size, pins.length);
     }
   };
   await Promise.all(Array.from({ length: Math.min(kConcurrency, pins.length) }, worker));
@@ -156,17 +159,31 @@ async function lookup() {
     return;
   }
   const unique = [...new Set(parsed.filter((p) => p.valid).map((p) => p.text))];
-  const answers = await lookupAll(unique, stop.signal);
+  // Said only for a list long enough to take a while to look up.
+  const kProgressFrom = 50;
+  const answers = await lookupAll(unique, stop.signal, (done, total) => {
+    if (total >= kProgressFrom && request === lookupRequest) {
+      show($('lookup-msg'), messageBox('info', `Looking up ${done} of ${total} pincodes…`));
+    }
+  });
   if (request !== lookupRequest) return;
   lookupStop = null;
+  show($('lookup-msg'));
   // A pincode already in the table keeps the clerk's choices: a list looked up again (one
   // pincode added) printed every row with its record's office, ticked, without a word.
   const kept = new Map(copies(rows).map((id, i) => [id, rows[i]]));
   const wasSelected = selectedRow >= 0 ? copies(rows)[selectedRow] : null;
   const ids = copies(parsed);
   rows = parsed.map((p, i) => {
-    const row = { ...p, ...(answers.get(p.text) || {}), include: true, office: null };
     const before = kept.get(ids[i]);
+    const answer = answers.get(p.text) || {};
+    // A server that could not be asked (down, busy) says nothing new about a pincode: a row it had
+    // answered stays as it was, choices and all. It went "not checked", and the next lookup then
+    // ticked it again with its record's office, so a batch printed labels the clerk had changed.
+    if (answer.error && ![400, 404].includes(answer.error.status) && before && before.record) {
+      return { ...before, ...p };
+    }
+    const row = { ...p, ...answer, include: true, office: null };
     if (before && before.record && before.record.status === 'active' && row.record && row.record.status === 'active') {
       row.include = before.include;
       if (before.office && (row.record.offices || []).some((o) => o.name === before.office)) row.office = before.office;
@@ -278,6 +295,10 @@ async function refreshPreview() {
   }
   const request = ++previewRequest;
   $('preview').setAttribute('aria-busy', 'true');
+  // The label shown until the new one comes is another row's, size's or plan's: dimmed, and its
+  // caption says which is coming, so that nobody prints what the picture shows by mistake.
+  const caption = $('preview').querySelector('figcaption');
+  if (caption) caption.textContent = `Loading the label for ${selected}…`;
   try {
     await plansLoaded;
     const blob = await api(`/api/v1/labels/${selected}.png${labelQuery({ dpi: kPreviewDpi, office: row.office })}`,
@@ -484,6 +505,10 @@ for (const input of document.querySelectorAll('input[name="size"]')) {
 }
 $('plan').addEventListener('change', refreshPreview);
 $('token').addEventListener('change', refreshPreview);
+// A whole token pasted shows the label at once, not when the field loses focus.
+$('token').addEventListener('input', () => {
+  if (isWholeToken(token())) refreshPreview();
+});
 
 // Previews and prints wait for the kept plan (plansLoaded).
 plansLoaded = keepPlan($('plan'), 'counter.plan');

@@ -2,7 +2,7 @@
 // so one admin's save never undoes another's), create, delete with an undo, and route a pincode
 // by the plan as saved. The server checks every plan; the page shows its problem as it says it.
 import {
-  api, el, show, problemBox, messageBox, busy, isPincode, asciiDigits, confirmBox, downloadBlob, serverRole,
+  api, el, show, problemBox, messageBox, busy, isPincode, pincodeFieldValue, confirmBox, downloadBlob, serverRole,
   replicaNote,
 } from './api.js';
 
@@ -284,6 +284,9 @@ export function setUpSortPlans({ token, needToken }) {
       } else {
         show($('plan-msg'), problemBox(error));
       }
+      // Someone else's save or delete is why: the list shows the plans as they are now (it said
+      // the old rule count beside the conflict).
+      if (error.status === 412) await listPlans();
     } finally {
       hold(false);
     }
@@ -315,6 +318,7 @@ export function setUpSortPlans({ token, needToken }) {
           close();
           show($('plan-msg'), problemBox(error, error.status === 412
             ? { hint: 'Someone saved this plan after you opened it, so it was not deleted. Open it again to see what is saved.' } : {}));
+          if (error.status === 412) await listPlans();
         }
       },
     });
@@ -346,7 +350,7 @@ export function setUpSortPlans({ token, needToken }) {
   }
 
   async function route() {
-    const pin = asciiDigits(fields.pincode.value.trim());
+    const pin = pincodeFieldValue(fields.pincode.value);
     if (!isPincode(pin)) {
       show($('plan-route-msg'), problemBox({ title: 'Not a pincode',
         message: `“${pin}” is not a pincode: a pincode is six digits, the first 1–9.` }));

@@ -1,7 +1,7 @@
 // Registry: search offices, look up pincodes and keys; admins add and retire pincodes, edit the
 // sort plans (plans.js) and manage the API tokens (tokens.js).
 import {
-  api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, asciiDigits, confirmBox,
+  api, query, el, show, problemBox, messageBox, badge, busy, bindToken, isPincode, pincodeFieldValue, confirmBox, utcMinute,
 } from './api.js';
 import { setUpSortPlans } from './plans.js';
 import { setUpTokens } from './tokens.js';
@@ -50,23 +50,34 @@ function refreshSearch() {
   if (search && !$('search-results').hidden) runSearch();
 }
 
-function showRecord(record, note) {
+// `clicked`: the office whose row of a search was clicked, when that is not the pincode's own
+// office (the one a label prints unless another is chosen): it is named first, and marked in the
+// list of offices, which is opened. The card showed only the pincode's own office, so a click on
+// Connaught Place showed Bengali Market.
+function showRecord(record, note, clicked = null) {
   // A search's refusal beside the Search button is old news once another record is shown.
   show($('search-msg'));
   const offices = record.offices || [];
+  const other = clicked && clicked !== record.office ? offices.find((o) => o.name === clicked) : null;
   show($('detail'),
     note ? messageBox('ok', note) : null,
     el('div', { class: 'row record-head' },
       el('span', { class: 'big-pin', id: 'detail-pincode' }, record.pincode), badge(record.status)),
     el('dl', { class: 'kv' },
-      [['Key', el('span', { id: 'detail-key', class: 'mono' }, String(record.key))], ['Office', record.office || '—'],
+      [['Key', el('span', { id: 'detail-key', class: 'mono' }, String(record.key))],
+        other ? ['Office chosen', el('span', { id: 'detail-chosen-office' }, el('bdi', {}, other.name), ', ',
+          el('bdi', {}, other.district), ', ', el('bdi', {}, other.state))] : null,
+        [other ? 'Main office' : 'Office', record.office || '—'],
         ['District', record.district || '—'], ['State', record.state || '—'], ['Division', record.division || '—'],
         ['Region', record.region || '—'], ['Circle', record.circle || '—'],
-        record.retired_at ? ['Retired', record.retired_at] : null]
+        record.retired_at ? ['Retired', utcMinute(record.retired_at)] : null]
         .filter(Boolean).map(([name, value]) => [el('dt', {}, name), el('dd', {}, value)])),
-    offices.length > 1 ? el('details', { class: 'more space-above-md' },
+    other ? el('p', { class: 'small muted' },
+      'A label for this pincode prints its main office unless the counter chooses another.') : null,
+    offices.length > 1 ? el('details', { class: 'more space-above-md', open: other ? true : null },
       el('summary', {}, `All ${offices.length} offices`),
-      el('ul', { class: 'small' }, offices.map((o) => el('li', {}, el('bdi', {}, o.name), ' — ', el('bdi', {}, o.district))))) : null);
+      el('ul', { class: 'small' }, offices.map((o) => el('li', { 'aria-current': o === other ? 'true' : null },
+        o === other ? el('strong', {}, el('bdi', {}, o.name)) : el('bdi', {}, o.name), ' — ', el('bdi', {}, o.district))))) : null);
 }
 
 // The details card is far below a long result list (thousands of pixels on a phone): bring it
@@ -88,11 +99,11 @@ function claimDetail() {
 // `besideSearch`: a pincode searched for, whose refusal is said beside the Search button (on a
 // phone the details card is far below it) and once: the card keeps a plain note, not a second
 // alert for a screen reader to announce.
-async function showPincode(pin, { besideSearch = false } = {}) {
+async function showPincode(pin, { besideSearch = false, office = null } = {}) {
   const latest = claimDetail();
   try {
     const record = await api(`/api/v1/pincodes/${pin}`);
-    if (latest()) showRecord(record);
+    if (latest()) showRecord(record, null, office);
   } catch (error) {
     if (!latest()) return;
     if (!besideSearch) {
@@ -120,7 +131,7 @@ async function runSearch() {
     const body = $('results-body');
     show(body, page.results.map((hit) => el('tr', {},
       el('td', { class: 'mono nowrap' },
-        el('button', { type: 'button', class: 'link', onclick: () => showPincode(hit.pincode).then(revealDetail),
+        el('button', { type: 'button', class: 'link', onclick: () => showPincode(hit.pincode, { office: hit.office.name }).then(revealDetail),
           'aria-label': `Details of ${hit.pincode}` }, hit.pincode)),
       el('td', {}, hit.office.name),
       el('td', {}, hit.office.district),
@@ -149,7 +160,8 @@ async function runSearch() {
 
 $('search-form').addEventListener('submit', (event) => {
   event.preventDefault();
-  const pin = asciiDigits($('s-pin').value.trim());  // "११०००१" typed on a Hindi keyboard
+  // "११०००१" typed on a Hindi keyboard, "110 001" as a label prints it
+  const pin = pincodeFieldValue($('s-pin').value);
   busy($('search'), async () => {
     if (pin) {
       if (!isPincode(pin)) {
@@ -238,7 +250,7 @@ $('add-form').addEventListener('submit', (event) => {
   busy($('add'), async () => {
     show($('add-msg'));
     markInvalid($('add-form'), $('add-msg'), []);
-    const value = (id) => (id === 'a-pin' ? asciiDigits($(id).value.trim()) : $(id).value.trim());
+    const value = (id) => (id === 'a-pin' ? pincodeFieldValue($(id).value) : $(id).value.trim());
     if (needToken($('add-msg'))) return;
     if (!isPincode(value('a-pin'))) {
       show($('add-msg'), problemBox(notAPincode(value('a-pin'))));
@@ -276,7 +288,7 @@ $('add-form').addEventListener('submit', (event) => {
 
 $('retire-form').addEventListener('submit', (event) => {
   event.preventDefault();
-  const pin = asciiDigits($('r-pin').value.trim());
+  const pin = pincodeFieldValue($('r-pin').value);
   show($('retire-msg'));
   show($('retire-confirm'));
   if (needToken($('retire-msg'))) return;

@@ -4,7 +4,7 @@
 // would bring the server's drawing in the same answer, but as the whole photo again in PNG,
 // megabytes per scan over a phone's connection, where the corners are a few hundred bytes.)
 import {
-  api, query, el, show, problemBox, badge, busy, bindToken, keepPlan, rememberSelect,
+  api, query, el, show, problemBox, badge, busy, bindToken, keepPlan, rememberSelect, isWholeToken,
 } from './api.js';
 import { exifFocalPixels } from './exif.js';
 
@@ -252,6 +252,28 @@ async function shrunkToFit(file, limits) {
   }
 }
 
+// Whether the file starts as a photo the server reads starts (detector/src/image_io.cpp, the
+// same signatures): JPEG, PNG, TIFF or BigTIFF, WebP.
+async function startsAsAPhoto(file) {
+  const b = new Uint8Array(await file.slice(0, 12).arrayBuffer());
+  const at = (offset, ...bytes) => bytes.every((v, i) => b[offset + i] === v);
+  const text = (offset, s) => at(offset, ...[...s].map((c) => c.charCodeAt(0)));
+  return at(0, 0xff, 0xd8, 0xff) || at(0, 0x89, 0x50, 0x4e, 0x47)
+    || text(0, 'II*\0') || text(0, 'MM\0*') || text(0, 'II+\0') || text(0, 'MM\0+')
+    || (text(0, 'RIFF') && text(8, 'WEBP'));
+}
+
+// A file over the body limit that the browser cannot draw smaller: when it is no photo at all,
+// that is what to say (the server refuses by size before it looks, so its 413 named only the
+// size, in bytes); null when it starts as a photo.
+async function notAPhotoOver(file, refusal) {
+  if (await startsAsAPhoto(file).catch(() => true)) return null;
+  const limit = refusal.numbers && refusal.numbers.max_body_bytes;
+  const mb = (bytes) => `${(bytes / 1_048_576).toFixed(bytes < 10_485_760 ? 1 : 0)} MB`;
+  return { title: 'Not a photo',
+    message: `“${file.name}” is not a JPEG, PNG, TIFF or WebP photo${limit ? `, and at ${mb(file.size)} it is over the server's ${mb(limit)} limit too` : ''}. Choose a photo of the label.` };
+}
+
 function megapixels(pixels) {
   return `${(pixels / 1e6).toFixed(pixels < 1e7 ? 1 : 0)} MP`;
 }
@@ -304,7 +326,7 @@ async function scan() {
         limits = round < kShrinkRounds ? limitsFrom(error, limits) : null;
         if (!limits) throw error;
         shrunk = await shrunkToFit(file, limits);
-        if (!shrunk) throw error;
+        if (!shrunk) throw await notAPhotoOver(file, error) || error;
         shrunk.focalPx = await exifFocalPixels(file, shrunk.fromWidth, shrunk.fromHeight, shrunk.width, shrunk.height);
         if (run !== scanCount) return;
         // What is read is what is shown: the outlines are in the smaller photo's pixels.
@@ -392,9 +414,7 @@ $('scan-photo').addEventListener('error', () => {
 // file again fires no change, and "Read tags" is below the fold on a phone.
 let waitingForToken = false;
 $('token').addEventListener('input', () => {
-  // A whole secret: pt_<id>_ and 43 characters (32 random bytes, base64url), so that typing one
-  // does not send it unfinished.
-  if (waitingForToken && $('photo').files.length && /^pt_\d+_[A-Za-z0-9_-]{43}$/.test(token())) {
+  if (waitingForToken && $('photo').files.length && isWholeToken(token())) {
     busy($('scan'), scan);
   }
 });

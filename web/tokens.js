@@ -2,7 +2,7 @@
 // dismissed), revoke one after a confirmation. Every call takes the admin token of the page's
 // admin section; Forget there takes the list and any secret shown with it.
 import {
-  api, el, show, problemBox, messageBox, busy, confirmBox, serverRole, replicaNote,
+  api, el, show, problemBox, messageBox, busy, confirmBox, serverRole, replicaNote, utcMinute,
 } from './api.js';
 
 const $ = (id) => document.getElementById(id);
@@ -60,7 +60,7 @@ export function setUpTokens({ token, needToken }) {
       el('td', { class: 'num mono' }, String(t.id)),
       el('td', {}, t.role),
       el('td', { class: 'token-label' }, t.label ? el('bdi', {}, t.label) : '—', t.id === mine ? el('span', { class: 'hint' }, ' (this page’s)') : null),
-      el('td', { class: 'hide-narrow nowrap' }, `${t.created_at.slice(0, 16).replace('T', ' ')} UTC`),
+      el('td', { class: 'hide-narrow nowrap' }, utcMinute(t.created_at)),
       el('td', {}, t.revoked_at ? el('span', { title: `revoked ${t.revoked_at}` }, 'revoked') : 'active'),
       el('td', {}, t.revoked_at || readOnlyServer ? null : el('button', { type: 'button', class: 'link', onclick: () => askToRevoke(t),
         'aria-label': `Revoke token ${t.id}` }, 'Revoke…')))));

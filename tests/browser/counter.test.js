@@ -537,6 +537,83 @@ test('a list looked up again keeps each listed row\'s office, tick and preview',
   assert.deepEqual(page.problems, []);
 });
 
+test('a lookup the server cannot answer keeps the rows it had, and the clerk\'s choices in them', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001 400001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  await page.getByLabel('Office printed on the label for 110001', { exact: true }).selectOption('Janpath');
+  await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).uncheck();
+  await page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).waitFor();
+
+  // The server out of reach for one lookup: the rows went "not checked", and the lookup after it
+  // ticked 400001 again and put back 110001's own office, without a word.
+  await page.route('**/api/v1/pincodes/*', (route) => route.abort());
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#lookup-msg [role="alert"]').waitFor();
+  await page.getByRole('button', { name: 'Look up' }).and(page.locator(':not([aria-busy])')).waitFor();
+  assert.equal(await page.locator('tr.is-error').count(), 0);
+  assert.equal(await page.getByLabel('Office printed on the label for 110001', { exact: true }).inputValue(), 'Janpath');
+  assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).isChecked(), false);
+  await page.unroute('**/api/v1/pincodes/*');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#lookup-msg [role="alert"]').waitFor({ state: 'detached' });
+  assert.equal(await page.getByLabel('Office printed on the label for 110001', { exact: true }).inputValue(), 'Janpath');
+  assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).isChecked(), false);
+  assert.equal(await page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).count(), 1);
+  assert.deepEqual(page.problems.filter((p) => !/net::ERR_FAILED/.test(p)), []);
+});
+
+test('a whole token pasted shows the label at once, and a label on its way says so over the old one', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#pins').fill('110001 560001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#preview').filter({ hasText: 'Paste a counter token above' }).waitFor();
+  // Pasted, the field keeping the focus: the label came only when the field lost it.
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#label-preview').waitFor();
+  assert.equal(await page.evaluate(() => document.activeElement?.id), 'token');
+
+  // Another row's label held on its way: the one shown is dimmed, and the caption names the
+  // pincode coming, where it named the old one while Download acted on the new.
+  let release;
+  const held = new Promise((resolve) => { release = resolve; });
+  await page.route('**/api/v1/labels/560001.png*', async (route) => { await held; await route.continue(); });
+  await page.getByRole('button', { name: 'Preview the label for 560001', exact: true }).click();
+  await page.locator('#preview figcaption').filter({ hasText: 'Loading the label for 560001' }).waitFor();
+  assert.equal(await page.locator('#preview').getAttribute('aria-busy'), 'true');
+  assert.equal(await page.locator('#label-preview').evaluate((img) => getComputedStyle(img).opacity), '0.35');
+  release();
+  await page.waitForFunction(() => /560001/.test(document.getElementById('label-preview')?.alt || ''));
+  await page.locator('#preview figcaption').filter({ hasText: /^560001/ }).waitFor();
+  assert.equal(await page.locator('#label-preview').evaluate((img) => getComputedStyle(img).opacity), '1');
+  assert.deepEqual(page.problems, []);
+});
+
+test('a long list says how far its lookup has come', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  const pins = Array.from({ length: 60 }, (_, i) => String(110001 + i));
+  await page.locator('#pins').fill(pins.join('\n'));
+  // Held after a few answers, so that the progress can be read before the lookup ends.
+  let release;
+  const held = new Promise((resolve) => { release = resolve; });
+  await page.route('**/api/v1/pincodes/*', async (route) => {
+    if (!route.request().url().endsWith('/110001')) await held;
+    await route.continue();
+  });
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#lookup-msg').filter({ hasText: /Looking up [1-9]\d* of 60 pincodes/ }).waitFor();
+  release();
+  await page.locator('#results-caption').filter({ hasText: /^60 pincodes/ }).waitFor();
+  assert.equal((await page.locator('#lookup-msg').textContent()).trim(), '');
+  assert.deepEqual(page.problems, []);
+});
+
 test('an empty lookup clears the table it replaced, and its Batch PDF', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);

@@ -56,6 +56,33 @@ test('registry search finds offices by district and pages through them', async (
   assert.deepEqual(page.problems, []);
 });
 
+test('a row of a search opens the office clicked, and a pincode written as a label prints it is found', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/registry.html`);
+  // An office of 110001 other than its own (Bengali Market): the card showed only the latter.
+  await page.locator('#s-q').fill('Janpath');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  const row = page.locator('#results-body tr').filter({ hasText: '110001' }).first();
+  await row.waitFor();
+  assert.match(await row.textContent(), /Janpath/);
+  await row.getByRole('button', { name: 'Details of 110001' }).click();
+  await page.locator('#detail-chosen-office').waitFor();
+  assert.match(await page.locator('#detail-chosen-office').textContent(), /^Janpath, /);
+  assert.match(await page.locator('#detail').textContent(), /Main office\s*Bengali Market/);
+  assert.equal(await page.locator('#detail details').getAttribute('open'), '');
+  assert.equal((await page.locator('#detail li[aria-current="true"]').textContent()).split(' — ')[0], 'Janpath');
+  await screenshot(page, 'registry-office-chosen');
+
+  // "110 001", as the label prints it, is 110001; so in the other pincode fields.
+  await page.locator('#s-pin').fill('110 001');
+  await page.getByRole('button', { name: 'Search', exact: true }).click();
+  await page.locator('#detail-pincode').filter({ hasText: '110001' }).waitFor();
+  assert.equal(await page.locator('#detail-chosen-office').count(), 0);
+  assert.match(await page.locator('#detail').textContent(), /Office\s*Bengali Market/);
+  assert.equal(await page.locator('#search-msg [role="alert"]').count(), 0);
+  assert.deepEqual(page.problems, []);
+});
+
 test('registry looks up a key, and shows the problem for an unknown one', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/registry.html`);
