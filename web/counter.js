@@ -510,6 +510,13 @@ $('token').addEventListener('input', () => {
   if (isWholeToken(token())) refreshPreview();
 });
 
+// Leaving or reloading the page asks first while the table holds choices the clerk made (an office
+// picked, a row unticked): they are not kept, and the list looked up again would print the
+// defaults. A list with none of them is looked up again as it is pasted.
+window.addEventListener('beforeunload', (event) => {
+  if (rows.some((row) => row.record && (row.office || !row.include))) event.preventDefault();
+});
+
 // Previews and prints wait for the kept plan (plansLoaded).
 plansLoaded = keepPlan($('plan'), 'counter.plan');
 updateButtons();

@@ -566,6 +566,40 @@ test('a lookup the server cannot answer keeps the rows it had, and the clerk\'s 
   assert.deepEqual(page.problems.filter((p) => !/net::ERR_FAILED/.test(p)), []);
 });
 
+test('leaving the page asks first while the table holds the clerk\'s choices', async () => {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  await page.locator('#token').fill(counterToken);
+  await page.locator('#pins').fill('110001 560001');
+  await page.getByRole('button', { name: 'Look up' }).click();
+  await page.locator('#label-preview').waitFor();
+  const asked = [];
+  page.on('dialog', (dialog) => {
+    asked.push(dialog.type());
+    dialog.dismiss();
+  });
+  // A pasted list alone is pasted again: no question.
+  const closed = page.waitForEvent('close');
+  await page.close({ runBeforeUnload: true });
+  await closed;
+  assert.deepEqual(asked, []);
+
+  const second = await newPage(browser);
+  await second.goto(`${server.url}/counter.html`);
+  await second.locator('#token').fill(counterToken);
+  await second.locator('#pins').fill('110001 560001');
+  await second.getByRole('button', { name: 'Look up' }).click();
+  await second.locator('#label-preview').waitFor();
+  await second.getByLabel('Office printed on the label for 110001', { exact: true }).selectOption('Janpath');
+  const question = second.waitForEvent('dialog');
+  await second.close({ runBeforeUnload: true });
+  const dialog = await question;
+  assert.equal(dialog.type(), 'beforeunload');
+  await dialog.dismiss();
+  assert.equal(second.isClosed(), false);
+  await second.close();
+});
+
 test('a whole token pasted shows the label at once, and a label on its way says so over the old one', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);
