@@ -1,6 +1,8 @@
 #include "pintag/db/database.hpp"
 
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 
@@ -47,6 +49,16 @@ std::optional<Error> RefuseForeignFile(const std::string& path, const FileSchema
                    "; give a PinTag database, or a new or empty file to create one in"};
 }
 
+/// Whether the file at `path` starts with SQLite's 16-byte header string. False when it cannot be
+/// read, which SQLite then says in its own words.
+bool StartsAsSqlite(const std::string& path) {
+  static constexpr char kHeader[] = "SQLite format 3";  // and its NUL: 16 bytes
+  std::ifstream in(path, std::ios::binary);
+  char head[sizeof kHeader] = {};
+  if (!in.read(head, sizeof head)) return !in.is_open();
+  return std::memcmp(head, kHeader, sizeof head) == 0;
+}
+
 }  // namespace
 
 Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& options) {
@@ -69,6 +81,18 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
                          "Put the database file back at " +
                          path + ", or move " + wal + " and " + path +
                          "-shm aside to start a new registry"};
+      }
+    }
+    // SQLite takes a file of one byte for an empty database and seeds over it; any other that does
+    // not start as an SQLite file is "not a database" in its words, which do not name the file.
+    if (exists) {
+      const auto bytes = std::filesystem::file_size(path, ignored);
+      if (!ignored && bytes > 0 && !StartsAsSqlite(path)) {
+        return Error{ErrorCode::kConflict,
+                     "database " + path + " is not an SQLite database (" + std::to_string(bytes) +
+                         (bytes == 1 ? " byte that does" : " bytes that do") +
+                         " not start as one); give a PinTag database, or a new or empty file to "
+                         "create one in"};
       }
     }
     OpenedDatabase opened{Connection(path, {.create = options.create,

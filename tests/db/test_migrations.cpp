@@ -155,7 +155,12 @@ TEST(Migrations, NotADatabaseAndMissingFilesAreErrors) {
   const std::string junk = test::WriteFile(dir.file("junk.db"), std::string(4096, 'x'));
   const auto opened = OpenDatabase(junk);
   ASSERT_FALSE(opened.ok());
-  EXPECT_EQ(opened.error().code, ErrorCode::kStorage);
+  // Told from its first bytes, and named (SQLite's "file is not a database" named no file).
+  EXPECT_EQ(opened.error().code, ErrorCode::kConflict);
+  EXPECT_NE(opened.error().message.find(junk + " is not an SQLite database (4096 bytes"),
+            std::string::npos)
+      << opened.error().message;
+  EXPECT_EQ(test::ReadFile(junk), std::string(4096, 'x'));
   const auto missing = OpenDatabase(dir.file("missing.db"), {.create = false});
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);

@@ -93,6 +93,36 @@ TEST(CliNewDb, TokenListAndRevokeNeedAnExistingDatabase) {
     EXPECT_NE(run.out.find("no database at " + db), std::string::npos) << run.out;
   }
   EXPECT_FALSE(std::filesystem::exists(db));
+  // An empty file is no database to list or revoke from: it was seeded (35 MB) to list nothing.
+  const std::string empty = WriteFile(dir.file("empty.db"), "");
+  for (const std::string& command : {"token revoke 1 --db " + empty, "token list --db " + empty}) {
+    const CommandResult run = RunPintag(command);
+    EXPECT_EQ(run.status, 1) << command << ": " << run.out;
+    EXPECT_NE(run.out.find(empty + " is empty: not a PinTag database"), std::string::npos)
+        << run.out;
+  }
+  EXPECT_EQ(std::filesystem::file_size(empty), 0U);
+}
+
+// A file that holds something other than an SQLite database is refused by every command and left
+// as it was. SQLite took a file of one byte for an empty database: it was seeded over.
+TEST(CliNewDb, AFileThatIsNoSqliteDatabaseIsRefusedAndLeftAsItWas) {
+  const TempDir dir;
+  for (const std::string& bytes :
+       {std::string("x"), std::string("notes\n"), std::string(600, 'z')}) {
+    const std::string db = WriteFile(dir.file("f.db"), bytes);
+    for (const std::string& command :
+         {"keys lookup 110001 --db " + db, "token create --role admin --db " + db}) {
+      const CommandResult run = RunPintag(command);
+      EXPECT_EQ(run.status, 1) << bytes.size() << " bytes, " << command << ": " << run.out;
+      EXPECT_NE(run.out.find("database " + db + " is not an SQLite database (" +
+                             std::to_string(bytes.size())),
+                std::string::npos)
+          << run.out;
+      EXPECT_EQ(ReadFile(db), bytes);
+      EXPECT_FALSE(std::filesystem::exists(db + "-wal"));
+    }
+  }
 }
 
 // An empty file at --db (`touch`, a mount's placeholder) is seeded as a new database and said

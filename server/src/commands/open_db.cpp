@@ -46,6 +46,13 @@ db::Connection OpenExistingDb(const std::string& path) {
         "no database at " + path +
         " (`pintag serve`, `pintag import` or `pintag token create` makes one)");
   }
+  // An empty file is a new database to OpenDb, which would seed 35 MB into it to list no tokens.
+  if (std::filesystem::is_regular_file(path, error) &&
+      std::filesystem::file_size(path, error) == 0) {
+    throw std::runtime_error(path +
+                             " is empty: not a PinTag database (`pintag serve`, `pintag import` or "
+                             "`pintag token create` makes one)");
+  }
   return OpenDb(path);
 }
 
