@@ -154,6 +154,9 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
                             ? " cannot be looked at: " + error.message()
                             : " does not exist"));
     }
+    // A directory, pipe or device at the path, or a directory this user cannot write in, is said
+    // now: the server started and then logged a failed publication every second.
+    CheckDirectoryWritable("--snapshot", CheckFileToReplace("--snapshot", args.snapshot));
     const std::filesystem::path snapshot = std::filesystem::weakly_canonical(args.snapshot, error);
     const std::filesystem::path db = std::filesystem::weakly_canonical(db_path, error);
     const bool same = snapshot == db || std::filesystem::equivalent(args.snapshot, db_path, error);
