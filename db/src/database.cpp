@@ -49,6 +49,30 @@ std::optional<Error> RefuseForeignFile(const std::string& path, const FileSchema
                    "; give a PinTag database, or a new or empty file to create one in"};
 }
 
+/// Why no database file can be at `path`, said before SQLite is asked (it said "unable to open
+/// database file" for a directory or a missing directory, and "disk I/O error" for /dev/null):
+/// a directory, device, pipe or socket there, or no directory to make the file in. Empty when
+/// none of these.
+std::string NoDatabaseFileAt(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (fs::exists(status)) {
+    if (fs::is_regular_file(status)) return {};
+    const char* what = fs::is_directory(status) ? "a directory"
+                       : fs::is_fifo(status)    ? "a pipe"
+                       : fs::is_socket(status)  ? "a socket"
+                                                : "a device";
+    return "database " + path + " is " + what + ", not a database file";
+  }
+  const fs::path directory = fs::absolute(path, error).parent_path();
+  if (!error && !fs::is_directory(directory, error)) {
+    return "database " + path + " cannot be made: its directory " + directory.string() +
+           " is not there";
+  }
+  return {};
+}
+
 /// Whether the file at `path` starts with SQLite's 16-byte header string. False when it cannot be
 /// read, which SQLite then says in its own words.
 bool StartsAsSqlite(const std::string& path) {
@@ -67,6 +91,9 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
     const bool exists = std::filesystem::exists(path, ignored);
     if (!options.create && !exists) {
       return Error{ErrorCode::kNotFound, "database " + path + " does not exist"};
+    }
+    if (const std::string problem = NoDatabaseFileAt(path); !problem.empty()) {
+      return Error{exists ? ErrorCode::kConflict : ErrorCode::kNotFound, problem};
     }
     if (!exists) {
       // A write-ahead log without its database holds writes of a file that was moved or deleted

@@ -238,7 +238,10 @@ bool InWalMode(const std::string& path) {
 Result<int> OpenWholeRegistry(const std::string& path, std::optional<Connection>& connection) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
-    return Error{ErrorCode::kNotFound, "snapshot " + path + " does not exist"};
+    // A directory or a device there is not "does not exist".
+    return Error{ErrorCode::kNotFound,
+                 "snapshot " + path +
+                     (std::filesystem::exists(path, error) ? " is not a file" : " does not exist")};
   }
   if (InWalMode(path)) {
     return Error{ErrorCode::kConflict,

@@ -138,6 +138,18 @@ TEST(CliNewDb, AFileThatIsNoSqliteDatabaseIsRefusedAndLeftAsItWas) {
       EXPECT_FALSE(std::filesystem::exists(db + "-wal"));
     }
   }
+  // What is at --db, or is not, said in these words: SQLite said "unable to open database file"
+  // or "disk I/O error", and the command named the file twice.
+  std::filesystem::create_directory(dir.file("a-directory"));
+  for (const auto& [db, says] : std::vector<std::pair<std::string, std::string>>{
+           {dir.file("a-directory"), " is a directory, not a database file"},
+           {"/dev/null", " is a device, not a database file"},
+           {dir.file("no-such-dir") + "/x.db", " cannot be made: its directory "}}) {
+    const CommandResult run = RunPintag("keys lookup 110001 --db " + db);
+    EXPECT_EQ(run.status, 1) << db << ": " << run.out;
+    EXPECT_EQ(run.out.rfind("pintag: database " + db + says, 0), 0U) << run.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("no-such-dir")));
 }
 
 // An empty file at --db (`touch`, a mount's placeholder) is seeded as a new database and said

@@ -24,7 +24,12 @@ db::Connection OpenDb(const std::string& path, const SayFunction& say) {
   if (!opened && opened.error().code == db::ErrorCode::kBusy) {
     throw std::runtime_error(LockedMessage(path, "it could not be opened"));
   }
-  if (!opened) throw std::runtime_error(path + ": " + opened.error().message);
+  if (!opened) {
+    // Named once: most of OpenDatabase's messages name the file already; SQLite's do not.
+    const std::string& message = opened.error().message;
+    throw std::runtime_error(message.find(path) != std::string::npos ? message
+                                                                     : path + ": " + message);
+  }
   if (opened->created) {
     // An empty file (`touch`, or a mount's placeholder) is a new database to SQLite.
     const std::string what = existed
