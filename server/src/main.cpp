@@ -52,16 +52,20 @@ bool OnCommandLine(std::string_view flag, int argc, char** argv) {
   return false;
 }
 
-/// CLI11 names the option a bad value was given to ("--threads: Value 0 not in range 1 to 256"),
-/// also when the value came from the option's environment variable, which is then named too: a
-/// container's PINTAG_THREADS is not on the command line the message points at.
+/// CLI11 names the option a bad value was given to ("--threads: Value 0 not in range 1 to 256",
+/// "Could not convert: --read-only = banana"), and so do the commands' own checks ("--web /x is
+/// not a directory"), also when the value came from the option's environment variable, which is
+/// then named too: a container's PINTAG_THREADS is not on the command line the message points at.
 std::string NamingTheEnvironment(const CLI::App& app, std::string message, int argc, char** argv) {
   const std::function<void(const CLI::App&)> visit = [&](const CLI::App& command) {
     for (const CLI::Option* option : command.get_options()) {
       const std::string& variable = option->get_envname();
       if (variable.empty() || std::getenv(variable.c_str()) == nullptr) continue;
       const std::string flag = option->get_name();
-      if (message.rfind(flag + ":", 0) != 0) continue;
+      const bool names_it = message.rfind(flag + ":", 0) == 0 ||
+                            message.rfind(flag + " ", 0) == 0 ||
+                            message.find(": " + flag + " = ") != std::string::npos;
+      if (!names_it) continue;
       // A value on the command line wins over the environment's.
       if (!OnCommandLine(flag, argc, argv))
         message += " (the value of the environment variable " + variable + ")";
@@ -164,10 +168,10 @@ int main(int argc, char** argv) {  // NOLINT(bugprone-exception-escape): CLI11's
     // CLI11 prints the message (or the help); its own codes (100 and up) mean a usage error too.
     return app.exit(e) == 0 ? StdoutStatus() : 2;
   } catch (const pintag::cli::UsageError& e) {
-    Report(app, e.what());
+    Report(app, NamingTheEnvironment(app, e.what(), argc, argv).c_str());
     return 2;
   } catch (const std::exception& e) {
-    Report(app, e.what());
+    Report(app, NamingTheEnvironment(app, e.what(), argc, argv).c_str());
     return 1;
   }
   // Not for serve, whose stdout is a banner and whose exit status says how it stopped.

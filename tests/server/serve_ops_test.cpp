@@ -162,6 +162,21 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
   EXPECT_EQ(refused.status, 2) << refused.out;
   EXPECT_NE(refused.out.find("--threads: Value 0"), std::string::npos) << refused.out;
   EXPECT_EQ(refused.out.find("PINTAG_THREADS"), std::string::npos) << refused.out;
+  // CLI11's conversion errors, and the server's own checks of a value, name the flag in other
+  // words: the variable was not named there.
+  for (const auto& [variable, says] : std::vector<std::pair<std::string, std::string>>{
+           {"PINTAG_READ_ONLY=banana", "--read-only = banana"},
+           {"PINTAG_TRUSTED_PROXY=foo", "--trusted-proxy 'foo' is not an IPv4 or IPv6 address"},
+           {"PINTAG_WEB=" + dir.file("no-such-web"), "--web " + dir.file("no-such-web")},
+           {"PINTAG_FOLLOW=notaurl", "--follow takes the primary's base URL"}}) {
+    refused = RunShell(variable + " " + serve + " 2>&1");
+    EXPECT_EQ(refused.status, 2) << variable << ": " << refused.out;
+    EXPECT_NE(refused.out.find(says), std::string::npos) << refused.out;
+    EXPECT_NE(refused.out.find("(the value of the environment variable " +
+                               variable.substr(0, variable.find('=')) + ")"),
+              std::string::npos)
+        << refused.out;
+  }
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 
