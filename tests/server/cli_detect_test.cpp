@@ -2,13 +2,20 @@
 // exit status and message on failure. The photo is a PinTag of the default label's size rendered
 // by the scene generator at a known pose.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <thread>
 
 #include "pintag/codec/label.hpp"
 #include "pintag/codec/mirror.hpp"
@@ -333,6 +340,52 @@ TEST(CliDetect, StageImagesNeverReplaceThePhotoOrTheOverlay) {
   EXPECT_EQ(both.status, 0) << both.out;
   EXPECT_TRUE(std::filesystem::is_regular_file(beside));
   EXPECT_TRUE(std::filesystem::is_regular_file(stages / "1_redness.png"));
+}
+
+// `detect - < /dev/zero` read standard input to its 1 GiB limit (2.2 GB at the peak) before it
+// said the input was no photo. Given bytes that are not a photo's start and then nothing more,
+// with the pipe left open, it now answers at once instead of waiting for the rest.
+TEST(CliDetect, InputThatDoesNotStartAsAPhotoIsRefusedFromItsFirstBytes) {
+  const test::TempDir dir;
+  int pipe_fds[2];
+  ASSERT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[0], STDIN_FILENO);
+  const std::string err = dir.file("err.txt");
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> words = {PintagExe(), "detect", "-"};
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned =
+      ::posix_spawn(&pid, words[0].c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(pipe_fds[0]);
+  ASSERT_EQ(spawned, 0);
+  // More than one read's worth (64 KiB) of zeros, and the pipe kept open.
+  const std::string zeros(70000, '\0');
+  ASSERT_EQ(::write(pipe_fds[1], zeros.data(), zeros.size()), static_cast<ssize_t>(zeros.size()));
+  int status = 0;
+  pid_t ended = 0;
+  // Not a time limit on the command: a bound on how long this test waits for one that is stuck.
+  for (int i = 0; i < 600 && ended == 0; ++i) {
+    ended = ::waitpid(pid, &status, WNOHANG);
+    if (ended == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  if (ended == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+  }
+  ::close(pipe_fds[1]);
+  ASSERT_NE(ended, 0) << "detect waited for more input after bytes that are no photo";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_NE(ReadFile(err).find("standard input: not a JPEG, PNG, TIFF or WebP image"),
+            std::string::npos)
+      << ReadFile(err);
 }
 
 }  // namespace
