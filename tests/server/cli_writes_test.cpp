@@ -499,6 +499,21 @@ TEST(CliWrites, AnyCommandWhoseOutputIsLostExitsOne) {
   }
   const CommandResult fine = RunPintagWithStdoutTo("keys lookup 110001 --db " + db, "/dev/null");
   EXPECT_EQ(fine.status, 0) << fine.out;
+
+  // An import whose summary is lost is still committed, and says so: a bare "cannot write to
+  // standard output" read as if it had failed.
+  const std::string csv = WriteFile(
+      dir.file("one.csv"),
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n"
+      "Delhi,Delhi,New Delhi,Somewhere,999871,BO,Delivery,Central Delhi,Delhi,NA,NA\n");
+  const CommandResult imported = RunPintagWithStdoutTo("import " + csv + " --db " + db, kFull);
+  EXPECT_EQ(imported.status, 1) << imported.out;
+  EXPECT_NE(imported.out.find("cannot write the summary to standard output; the import of " + csv +
+                              " into " + db + " is committed"),
+            std::string::npos)
+      << imported.out;
+  EXPECT_EQ(RunPintag("keys lookup 999871 --db " + db).status, 0);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "commands/commands.hpp"
 #include "commands/open_db.hpp"
 #include "commands/option_checks.hpp"
+#include "commands/standard_output.hpp"
 #include "pintag/db/database.hpp"
 #include "pintag/db/importer.hpp"
 
@@ -122,6 +123,14 @@ void Run(const ImportArgs& args) {
   if (report.pincodes_added.size() > kNewKeysShown) {
     std::cout << "... and " << report.pincodes_added.size() - kNewKeysShown
               << " more new pincodes (see `pintag keys export`)\n";
+  }
+  // The import is committed whatever became of its summary: a bare "cannot write to standard
+  // output" and exit 1 read as if it had failed, and running it again would change nothing.
+  std::cout << std::flush;
+  if (!std::cout && !StandardOutputReaderHasGone()) {
+    throw std::runtime_error("cannot write the summary to standard output; the import of " +
+                             args.file + " into " + args.db +
+                             " is committed (`pintag keys export` lists its keys)");
   }
 }
 
