@@ -180,6 +180,26 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 
+// A follower's token file that holds no token was answered "set PINTAG_FOLLOW_TOKEN or give
+// --follow-token-file", given; one that could not be read, with no reason.
+TEST(ServeStartRefusals, AFollowTokenFileThatGivesNoTokenSaysWhy) {
+  const TempDir dir;
+  const std::string serve = ServeOnANewDatabase(dir) + " --follow http://127.0.0.1:9";
+  const std::string empty = WriteFile(dir.file("empty.token"), "\n");
+  for (const auto& [file, says] : std::vector<std::pair<std::string, std::string>>{
+           {empty, "--follow-token-file " + empty + " holds no token"},
+           {dir.file("missing.token"), "cannot read --follow-token-file " +
+                                           dir.file("missing.token") +
+                                           ": No such file or directory"},
+           {dir.path().string(),
+            "--follow-token-file " + dir.path().string() + " is a directory"}}) {
+    const CommandResult refused = RunShell(serve + " --follow-token-file " + file + " 2>&1");
+    EXPECT_EQ(refused.status, 2) << file << ": " << refused.out;
+    EXPECT_NE(refused.out.find(says), std::string::npos) << refused.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
+}
+
 // CLI11 takes a variable set to "" as unset: `PINTAG_ADMIN_TOKEN_OUT=$UNSET_PATH` printed the first
 // admin secret to the log rather than writing it to a file. An empty variable is refused, before a
 // database is made; a value on the command line still wins over it, and --help still answers.

@@ -1,7 +1,9 @@
 #include "commands/serve_replication.hpp"
 
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -25,11 +27,24 @@ std::string ReadToken(const ReplicationArgs& args) {
   std::string token;
   if (!args.follow_token_file.empty()) {
     const std::optional<std::string> read = replica::ReadTokenFile(args.follow_token_file);
-    // Nothing read: a file that cannot be opened is said so; an empty one is "needs a token".
-    if (!read && !std::ifstream(args.follow_token_file)) {
-      throw UsageError("cannot read --follow-token-file " + args.follow_token_file);
+    if (!read) {
+      // Said with why: a file that cannot be opened, or one whose first line holds no token
+      // (which was told to "set PINTAG_FOLLOW_TOKEN or give --follow-token-file", given).
+      errno = 0;
+      std::error_code error;
+      if (std::filesystem::is_directory(args.follow_token_file, error)) {
+        throw UsageError("--follow-token-file " + args.follow_token_file + " is a directory");
+      }
+      if (!std::ifstream(args.follow_token_file)) {
+        const int why = errno;
+        throw UsageError("cannot read --follow-token-file " + args.follow_token_file +
+                         (why != 0 ? std::string(": ") + std::strerror(why) : std::string()));
+      }
+      throw UsageError("--follow-token-file " + args.follow_token_file +
+                       " holds no token (its first line is empty); write one there on the "
+                       "primary: pintag token create --role replica --out FILE");
     }
-    token = read.value_or("");
+    token = *read;
   } else if (const char* env = std::getenv("PINTAG_FOLLOW_TOKEN")) {
     token = env;
   }
