@@ -181,6 +181,31 @@ TEST(CliNewDb, AnEmptyFileIsSeededAndSaidToBeAndIsNoSnapshot) {
       << second.out;
 }
 
+// `pintag import -` read a file named "-" ("cannot read -: No such file or directory"), where
+// `pintag detect -` reads standard input: it reads standard input too, and names it so.
+TEST(CliNewDb, ImportReadsStandardInputForADash) {
+  const TempDir dir;
+  const std::string csv = WriteFile(
+      dir.file("one.csv"),
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n"
+      "Delhi,Delhi,New Delhi,Somewhere,999872,BO,Delivery,Central Delhi,Delhi,NA,NA\n");
+  const std::string db = dir.file("stdin.db");
+  const CommandResult imported =
+      RunShell(PintagExe() + " import - --db " + db + " < " + csv + " 2>&1");
+  EXPECT_EQ(imported.status, 0) << imported.out;
+  EXPECT_NE(imported.out.find("imported standard input ("), std::string::npos) << imported.out;
+  EXPECT_EQ(RunPintag("keys lookup 999872 --db " + db).status, 0);
+  const std::string junk = WriteFile(dir.file("junk.csv"), "not,a,directory\n1,2,3\n");
+  const CommandResult refused =
+      RunShell(PintagExe() + " import - --db " + dir.file("other.db") + " < " + junk + " 2>&1");
+  EXPECT_EQ(refused.status, 1) << refused.out;
+  EXPECT_NE(refused.out.find("pintag: standard input: line 1: not an All India Pincode Directory"),
+            std::string::npos)
+      << refused.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("other.db")));
+}
+
 TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
   const TempDir dir;
   const std::string header =

@@ -70,8 +70,18 @@ void PrintProblems(const std::string& file, const db::ImportReport& report) {
 void Run(const ImportArgs& args) {
   // Read and checked before the database is opened: a missing file, one that is not a directory
   // CSV, one whose rows are all bad or (--strict) any bad, must not leave a new, seeded database.
-  const db::Result<std::string> csv = db::ReadImportFile(args.file);
-  if (!csv) throw std::runtime_error(csv.error().message);
+  // `-` is standard input (`xzcat directory.csv.xz | pintag import -`), as for `pintag detect`.
+  const bool from_stdin = args.file == "-";
+  const std::string file = from_stdin ? "standard input" : args.file;
+  constexpr std::string_view kStdin = "/dev/stdin";
+  const db::Result<std::string> csv = db::ReadImportFile(from_stdin ? std::string(kStdin) : file);
+  if (!csv) {
+    std::string message = csv.error().message;
+    if (const std::size_t at = message.find(kStdin); from_stdin && at != std::string::npos) {
+      message.replace(at, kStdin.size(), file);
+    }
+    throw std::runtime_error(message);
+  }
   db::ImportOptions options;
   options.strict = args.strict;
   auto bar = std::make_shared<ProgressBar>();
@@ -83,17 +93,17 @@ void Run(const ImportArgs& args) {
   db::Result<db::ParsedImport> parsed = db::ParseDirectoryCsv(*csv, options);
   if (!parsed) {
     bar.reset();
-    throw std::runtime_error(args.file + ": " + parsed.error().message);
+    throw std::runtime_error(file + ": " + parsed.error().message);
   }
   const std::int64_t bad_rows = parsed->report.bad_rows;
   if (bad_rows > 0 && (args.strict || parsed->rows.empty())) {
     bar.reset();
-    PrintProblems(args.file, parsed->report);
+    PrintProblems(file, parsed->report);
     if (args.strict) {
       throw std::runtime_error("--strict: " + std::to_string(bad_rows) +
                                " bad rows, nothing imported");
     }
-    throw std::runtime_error(args.file + ": none of its " + std::to_string(parsed->report.rows) +
+    throw std::runtime_error(file + ": none of its " + std::to_string(parsed->report.rows) +
                              " rows could be imported");
   }
   bar->clear();  // OpenDb may say it created the database
@@ -103,12 +113,12 @@ void Run(const ImportArgs& args) {
   options.progress = nullptr;
   if (!result && result.error().code == db::ErrorCode::kBusy) {
     // SQLite's "database is locked" named the file being imported, as if it were at fault.
-    throw std::runtime_error(LockedMessage(args.db, "nothing of " + args.file + " was imported"));
+    throw std::runtime_error(LockedMessage(args.db, "nothing of " + file + " was imported"));
   }
-  if (!result) throw std::runtime_error(args.file + ": " + result.error().message);
+  if (!result) throw std::runtime_error(file + ": " + result.error().message);
   const db::ImportReport& report = *result;
-  PrintProblems(args.file, report);
-  std::cout << "imported " << args.file << " (" << db::ToString(report.layout)
+  PrintProblems(file, report);
+  std::cout << "imported " << file << " (" << db::ToString(report.layout)
             << " layout): " << report.rows << " rows, " << report.offices_added
             << " offices added, " << report.offices_updated << " updated, "
             << report.offices_unchanged << " unchanged, " << report.pincodes_added.size()
@@ -128,8 +138,8 @@ void Run(const ImportArgs& args) {
   // output" and exit 1 read as if it had failed, and running it again would change nothing.
   std::cout << std::flush;
   if (!std::cout && !StandardOutputReaderHasGone()) {
-    throw std::runtime_error("cannot write the summary to standard output; the import of " +
-                             args.file + " into " + args.db +
+    throw std::runtime_error("cannot write the summary to standard output; the import of " + file +
+                             " into " + args.db +
                              " is committed (`pintag keys export` lists its keys)");
   }
 }
@@ -138,7 +148,7 @@ void AddImportCommand(CLI::App& app) {
   auto args = std::make_shared<ImportArgs>();
   CLI::App* cmd = app.add_subcommand(
       "import", "Import India Post's All India Pincode Directory CSV (either layout)");
-  cmd->add_option("file", args->file, "CSV file")->required();
+  cmd->add_option("file", args->file, "CSV file, or - for standard input")->required();
   cmd->add_option("--db", args->db, "database file (created and seeded when missing)")
       ->check(DatabaseFileName())
       ->capture_default_str();
