@@ -121,6 +121,13 @@ TEST(CliKeys, RenderSaysWhyASizeInMillimetresIsRefusedInTheUsersNumbers) {
       RunPintag("render --key 5 --size-mm 2.5 --dpi 150 -o " + dir.file("tag.png"));
   EXPECT_NE(fraction.out.find("--size-mm 2.5 at 150 dpi"), std::string::npos) << fraction.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("tag.png")));
+  // An SVG has no resolution: a --dpi given for one was dropped without a word.
+  const CommandResult svg =
+      RunPintag("render --key 5 --size-px 256 --dpi 600 -o " + dir.file("tag.svg"));
+  EXPECT_EQ(svg.status, 2) << svg.out;
+  EXPECT_NE(svg.out.find("--dpi is for PNGs"), std::string::npos) << svg.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("tag.svg")));
+  EXPECT_EQ(RunPintag("render --key 5 --size-mm 20 -o " + dir.file("tag.svg")).status, 0);
 }
 
 TEST(CliKeys, NumbersThatAreNotFiniteAreRefusedLikeAnyOutOfRange) {

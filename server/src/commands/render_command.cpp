@@ -25,6 +25,7 @@ struct RenderArgs {
   std::optional<int> size_px;
   std::optional<double> size_mm;
   double dpi = 300;
+  bool dpi_given = false;  ///< --dpi was given (PINTAG has no variable for it): SVGs take none
   std::string output;
 };
 
@@ -54,6 +55,11 @@ void Run(const RenderArgs& args) {
   const TagKey key(static_cast<std::uint16_t>(args.key));
 
   if (ext == ".svg") {
+    // An SVG is sized in millimetres or pixels and has no resolution: a --dpi given for it was
+    // dropped without a word.
+    if (args.dpi_given) {
+      throw UsageError("--dpi is for PNGs; an SVG is sized by --size-mm or --size-px alone");
+    }
     const TagSvgOptions options = args.size_mm ? TagSvgOptions{*args.size_mm, "mm"}
                                                : TagSvgOptions{double(*args.size_px), "px"};
     // Written whole: the stream's flush was checked, its close not (WriteWholeFile).
@@ -87,12 +93,17 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--size-mm", args->size_mm, "black square side in millimetres (quiet zone added)")
       ->check(FiniteNumber())
       ->check(CLI::Range(1.0, kMaxSquareMm));
-  cmd->add_option("--dpi", args->dpi, "print resolution, recorded in PNGs and used with --size-mm")
-      ->check(FiniteNumber())
-      ->check(CLI::Range(50.0, 4800.0))
-      ->capture_default_str();
+  CLI::Option* dpi =
+      cmd->add_option("--dpi", args->dpi,
+                      "print resolution, recorded in PNGs and used with --size-mm (PNG only)")
+          ->check(FiniteNumber())
+          ->check(CLI::Range(50.0, 4800.0))
+          ->capture_default_str();
   cmd->add_option("-o,--output", args->output, "output file, .png or .svg")->required();
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, dpi] {
+    args->dpi_given = dpi->count() > 0;
+    Run(*args);
+  });
 }
 
 const CommandRegistration render_registration{"render", &AddRenderCommand};
