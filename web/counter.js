@@ -112,7 +112,7 @@ function renderTable() {
     const place = placeOf(row);
     const check = el('input', {
       type: 'checkbox', checked: row.include && !retired, disabled: retired, 'aria-label': `Print a label for ${which}`,
-      onchange: (event) => { row.include = event.target.checked; updateButtons(); },
+      onchange: (event) => { row.include = event.target.checked; row.edited = true; updateButtons(); },
     });
     const previewButton = el('button', {
       type: 'button', class: 'link', 'aria-label': `Preview the label for ${which}`, disabled: retired,
@@ -186,6 +186,7 @@ async function lookup() {
     const row = { ...p, ...answer, include: true, office: null };
     if (before && before.record && before.record.status === 'active' && row.record && row.record.status === 'active') {
       row.include = before.include;
+      row.edited = before.edited;
       if (before.office && (row.record.offices || []).some((o) => o.name === before.office)) row.office = before.office;
     }
     return row;
@@ -277,6 +278,7 @@ function officeCell(row, index, which, retired) {
     onchange: (event) => {
       event.target.title = event.target.value;
       row.office = event.target.value === r.office ? null : event.target.value;
+      row.edited = true;
       const tr = event.target.closest('tr');
       const place = placeOf(row);
       tr.querySelector('.district').textContent = place.district;
@@ -511,10 +513,10 @@ $('token').addEventListener('input', () => {
 });
 
 // Leaving or reloading the page asks first while the table holds choices the clerk made (an office
-// picked, a row unticked): they are not kept, and the list looked up again would print the
-// defaults. A list with none of them is looked up again as it is pasted.
+// picked, a row ticked or unticked by hand): they are not kept, and the list looked up again would
+// print the defaults. Rows the page unticked itself (retired, a batch part saved) ask nothing.
 window.addEventListener('beforeunload', (event) => {
-  if (rows.some((row) => row.record && (row.office || !row.include))) event.preventDefault();
+  if (rows.some((row) => row.edited && row.record && row.record.status === 'active')) event.preventDefault();
 });
 
 // Previews and prints wait for the kept plan (plansLoaded).

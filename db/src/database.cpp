@@ -65,8 +65,13 @@ std::string NoDatabaseFileAt(const std::string& path) {
                                                 : "a device";
     return "database " + path + " is " + what + ", not a database file";
   }
+  if (!path.empty() && path.back() == '/') {
+    return "database " + path + " names a directory (it ends in /), not a database file";
+  }
   const fs::path directory = fs::absolute(path, error).parent_path();
-  if (!error && !fs::is_directory(directory, error)) {
+  // Only a directory known not to be there; one that cannot be looked at is SQLite's to say.
+  if (!error && !fs::exists(fs::status(directory, error)) &&
+      (!error || error == std::errc::no_such_file_or_directory)) {
     return "database " + path + " cannot be made: its directory " + directory.string() +
            " is not there";
   }

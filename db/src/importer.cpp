@@ -525,6 +525,10 @@ Result<std::string> ReadImportFile(const std::string& path) {
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{ErrorCode::kNotFound, "cannot read " + path + ": " + std::strerror(errno)};
+  return ReadImportStream(in, path);
+}
+
+Result<std::string> ReadImportStream(std::istream& in, const std::string& path) {
   std::string text;
   std::array<char, 1 << 16> chunk{};
   while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {

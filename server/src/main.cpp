@@ -60,12 +60,14 @@ std::string NamingTheEnvironment(const CLI::App& app, std::string message, int a
   const std::function<void(const CLI::App&)> visit = [&](const CLI::App& command) {
     for (const CLI::Option* option : command.get_options()) {
       const std::string& variable = option->get_envname();
-      if (variable.empty() || std::getenv(variable.c_str()) == nullptr) continue;
+      const char* value = variable.empty() ? nullptr : std::getenv(variable.c_str());
+      if (value == nullptr) continue;
       const std::string flag = option->get_name();
       const bool names_it = message.rfind(flag + ":", 0) == 0 ||
                             message.rfind(flag + " ", 0) == 0 ||
                             message.find(": " + flag + " = ") != std::string::npos;
-      if (!names_it) continue;
+      // And about its value: "--follow needs a replica token" is no fault of PINTAG_FOLLOW's.
+      if (!names_it || message.find(value) == std::string::npos) continue;
       // A value on the command line wins over the environment's.
       if (!OnCommandLine(flag, argc, argv))
         message += " (the value of the environment variable " + variable + ")";

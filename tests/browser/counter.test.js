@@ -24,6 +24,17 @@ function pdfLines(path) {
   return execFileSync('pdftotext', [path, '-'], { encoding: 'utf8' }).split('\n').filter(Boolean);
 }
 
+// The counter page with `pins` looked up (and a counter token pasted first unless `token` is
+// empty): the steps most tests start with.
+async function counterWith(pins, { token = counterToken } = {}) {
+  const page = await newPage(browser);
+  await page.goto(`${server.url}/counter.html`);
+  if (token) await page.locator('#token').fill(token);
+  await page.locator('#pins').fill(pins);
+  await page.getByRole('button', { name: 'Look up' }).click();
+  return page;
+}
+
 test('counter looks up pincodes, previews a label and downloads single and batch PDFs', async () => {
   const page = await newPage(browser);
   await page.goto(`${server.url}/counter.html`);
@@ -502,11 +513,7 @@ for (const [width, options] of [[1280, {}], [390, { isMobile: true, hasTouch: tr
 }
 
 test('a list looked up again keeps each listed row\'s office, tick and preview', async () => {
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/counter.html`);
-  await page.locator('#token').fill(counterToken);
-  await page.locator('#pins').fill('110001 560001\n110001');
-  await page.getByRole('button', { name: 'Look up' }).click();
+  const page = await counterWith('110001 560001\n110001');
   await page.locator('#label-preview').waitFor();
   await page.getByLabel('Office printed on the label for 110001 (row 3)', { exact: true }).selectOption('Janpath');
   await page.getByRole('checkbox', { name: 'Print a label for 560001', exact: true }).uncheck();
@@ -538,11 +545,7 @@ test('a list looked up again keeps each listed row\'s office, tick and preview',
 });
 
 test('a lookup the server cannot answer keeps the rows it had, and the clerk\'s choices in them', async () => {
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/counter.html`);
-  await page.locator('#token').fill(counterToken);
-  await page.locator('#pins').fill('110001 560001 400001');
-  await page.getByRole('button', { name: 'Look up' }).click();
+  const page = await counterWith('110001 560001 400001');
   await page.locator('#label-preview').waitFor();
   await page.getByLabel('Office printed on the label for 110001', { exact: true }).selectOption('Janpath');
   await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).uncheck();
@@ -559,7 +562,9 @@ test('a lookup the server cannot answer keeps the rows it had, and the clerk\'s 
   assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).isChecked(), false);
   await page.unroute('**/api/v1/pincodes/*');
   await page.getByRole('button', { name: 'Look up' }).click();
-  await page.locator('#lookup-msg [role="alert"]').waitFor({ state: 'detached' });
+  // The lookup clears its message as it starts: done is the button free again.
+  await page.getByRole('button', { name: 'Look up' }).and(page.locator(':not([aria-busy])')).waitFor();
+  assert.equal(await page.locator('#lookup-msg [role="alert"]').count(), 0);
   assert.equal(await page.getByLabel('Office printed on the label for 110001', { exact: true }).inputValue(), 'Janpath');
   assert.equal(await page.getByRole('checkbox', { name: 'Print a label for 400001', exact: true }).isChecked(), false);
   assert.equal(await page.getByRole('button', { name: /Batch PDF \(2 labels\)/ }).count(), 1);
@@ -567,11 +572,7 @@ test('a lookup the server cannot answer keeps the rows it had, and the clerk\'s 
 });
 
 test('leaving the page asks first while the table holds the clerk\'s choices', async () => {
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/counter.html`);
-  await page.locator('#token').fill(counterToken);
-  await page.locator('#pins').fill('110001 560001');
-  await page.getByRole('button', { name: 'Look up' }).click();
+  const page = await counterWith('110001 560001');
   await page.locator('#label-preview').waitFor();
   const asked = [];
   page.on('dialog', (dialog) => {
@@ -584,11 +585,7 @@ test('leaving the page asks first while the table holds the clerk\'s choices', a
   await closed;
   assert.deepEqual(asked, []);
 
-  const second = await newPage(browser);
-  await second.goto(`${server.url}/counter.html`);
-  await second.locator('#token').fill(counterToken);
-  await second.locator('#pins').fill('110001 560001');
-  await second.getByRole('button', { name: 'Look up' }).click();
+  const second = await counterWith('110001 560001');
   await second.locator('#label-preview').waitFor();
   await second.getByLabel('Office printed on the label for 110001', { exact: true }).selectOption('Janpath');
   const question = second.waitForEvent('dialog');
@@ -601,10 +598,7 @@ test('leaving the page asks first while the table holds the clerk\'s choices', a
 });
 
 test('a whole token pasted shows the label at once, and a label on its way says so over the old one', async () => {
-  const page = await newPage(browser);
-  await page.goto(`${server.url}/counter.html`);
-  await page.locator('#pins').fill('110001 560001');
-  await page.getByRole('button', { name: 'Look up' }).click();
+  const page = await counterWith('110001 560001', { token: '' });
   await page.locator('#preview').filter({ hasText: 'Paste a counter token above' }).waitFor();
   // Pasted, the field keeping the focus: the label came only when the field lost it.
   await page.locator('#token').fill(counterToken);

@@ -297,7 +297,8 @@ TEST(CliWrites, ASecretFileIsNeverADatabase) {
            {dir.file("to-registry"), "is the database"},
            {dir.file("second-name.db"), "is the database"},
            {dir.path().string() + "/./registry.db", "is the database"},
-           {db + "-wal", "is the database's wal file"},
+           {db + "-wal", "is a file of the database " + db},
+           {other + "-shm", "is a file of the database " + other},
            {other, "holds an SQLite database"}}) {
     const CommandResult refused =
         RunPintag("token create --role replica --out " + out + " --db " + db);

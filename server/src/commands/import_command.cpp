@@ -73,15 +73,9 @@ void Run(const ImportArgs& args) {
   // `-` is standard input (`xzcat directory.csv.xz | pintag import -`), as for `pintag detect`.
   const bool from_stdin = args.file == "-";
   const std::string file = from_stdin ? "standard input" : args.file;
-  constexpr std::string_view kStdin = "/dev/stdin";
-  const db::Result<std::string> csv = db::ReadImportFile(from_stdin ? std::string(kStdin) : file);
-  if (!csv) {
-    std::string message = csv.error().message;
-    if (const std::size_t at = message.find(kStdin); from_stdin && at != std::string::npos) {
-      message.replace(at, kStdin.size(), file);
-    }
-    throw std::runtime_error(message);
-  }
+  const db::Result<std::string> csv =
+      from_stdin ? db::ReadImportStream(std::cin, file) : db::ReadImportFile(file);
+  if (!csv) throw std::runtime_error(csv.error().message);
   db::ImportOptions options;
   options.strict = args.strict;
   auto bar = std::make_shared<ProgressBar>();
@@ -115,7 +109,11 @@ void Run(const ImportArgs& args) {
     // SQLite's "database is locked" named the file being imported, as if it were at fault.
     throw std::runtime_error(LockedMessage(args.db, "nothing of " + file + " was imported"));
   }
-  if (!result) throw std::runtime_error(file + ": " + result.error().message);
+  if (!result) {
+    const std::string failure =
+        DatabaseWriteFailure(args.db, result.error(), "nothing of " + file + " was imported");
+    throw std::runtime_error(failure.empty() ? file + ": " + result.error().message : failure);
+  }
   const db::ImportReport& report = *result;
   PrintProblems(file, report);
   std::cout << "imported " << file << " (" << db::ToString(report.layout)

@@ -17,6 +17,24 @@ std::string LockedMessage(const std::string& path, const std::string& not_done) 
          not_done + ". Try again when it is done";
 }
 
+std::string DatabaseWriteFailure(const std::string& path, const db::Error& error,
+                                 const std::string& not_done) {
+  switch (error.code) {
+    case db::ErrorCode::kReadOnly:
+      return path + " cannot be written: the file or its directory is read-only to this user (" +
+             error.message + "); " + not_done;
+    case db::ErrorCode::kNoSpace:
+      return "the disk holding " + path + " is full (" + error.message + "); " + not_done;
+    case db::ErrorCode::kStorage:
+      return (error.message.find("database " + path) != std::string::npos
+                  ? error.message
+                  : path + ": " + error.message) +
+             "; " + not_done;
+    default:
+      return {};
+  }
+}
+
 db::Connection OpenDb(const std::string& path, const SayFunction& say) {
   std::error_code error;
   const bool existed = std::filesystem::exists(path, error);
@@ -27,8 +45,8 @@ db::Connection OpenDb(const std::string& path, const SayFunction& say) {
   if (!opened) {
     // Named once: most of OpenDatabase's messages name the file already; SQLite's do not.
     const std::string& message = opened.error().message;
-    throw std::runtime_error(message.find(path) != std::string::npos ? message
-                                                                     : path + ": " + message);
+    throw std::runtime_error(
+        message.find("database " + path) != std::string::npos ? message : path + ": " + message);
   }
   if (opened->created) {
     // An empty file (`touch`, or a mount's placeholder) is a new database to SQLite.

@@ -4,6 +4,7 @@
 #include <functional>
 #include <string>
 
+#include "pintag/db/result.hpp"
 #include "pintag/db/sqlite.hpp"
 
 namespace pintag::cli {
@@ -32,5 +33,13 @@ db::Connection OpenExistingDb(const std::string& path);
 /// keeps a rollback journal) is opened read-only and left as it is. Opened to be written, it was
 /// switched to WAL mode, and a replica then refused it as no snapshot.
 db::Connection OpenForReading(const std::string& path, bool must_exist = false);
+
+/// What to say when a write to the database at `path` failed in the database itself (a file or
+/// directory this user cannot write, a full disk, another SQLite failure), with what was left
+/// undone: SQLite's "step: attempt to write a readonly database" named no file, and an import
+/// put the CSV's name before it, as if the CSV were at fault. Empty for any other error, which
+/// is about the input and said in its own words.
+std::string DatabaseWriteFailure(const std::string& path, const db::Error& error,
+                                 const std::string& not_done);
 
 }  // namespace pintag::cli

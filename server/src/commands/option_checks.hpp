@@ -21,6 +21,7 @@
 #include "commands/commands.hpp"
 #include "pintag/codec/file_output.hpp"
 #include "pintag/codec/tag_key.hpp"
+#include "pintag/db/snapshot.hpp"
 
 namespace pintag::cli {
 
@@ -157,28 +158,32 @@ inline void CheckDirectoryWritable(const std::string& option, const std::string&
 
 /// A file a token's secret is written to (`token create --out`, `serve --admin-token-out`),
 /// checked before the database is opened: as CheckFileToReplace, in a directory this user can
-/// write (CheckDirectoryWritable), and never a database. Not `db` itself (through a link or a
-/// second name too), nor its -wal, -shm or -journal file, nor any file that holds an SQLite
-/// database (another registry, a snapshot, a scan log): the secret replaced the registry whole
-/// when `--out` named it, and the command said it had done well.
+/// write (CheckDirectoryWritable), and never a database or a database's file: not `db` itself
+/// (through a link or a second name too), nor the -wal, -shm or -journal file of it or of any
+/// other SQLite database (DatabaseOwningFile: a scan log's, a snapshot's), nor any file that holds
+/// an SQLite database. The secret replaced the registry whole when `--out` named it, and the
+/// command said it had done well.
 inline void CheckSecretFile(const std::string& option, const std::string& path,
                             const std::string& db) {
   const std::string target = CheckFileToReplace(option, path);
   namespace fs = std::filesystem;
   std::error_code error;
   const fs::path written = fs::weakly_canonical(fs::absolute(target, error), error);
-  for (const char* suffix : {"", "-wal", "-shm", "-journal"}) {
-    const std::string name = db + suffix;
-    std::error_code same_error;
-    const bool same =
-        fs::equivalent(target, name, same_error) ||
-        (!error && written == fs::weakly_canonical(fs::absolute(name, same_error), same_error));
-    if (same) {
-      throw UsageError(option + " " + path + " is " +
-                       (*suffix == '\0' ? "the database"
-                                        : std::string("the database's ") + (suffix + 1) + " file") +
-                       " (--db " + db +
-                       "), which the secret would replace; name a file of its own");
+  std::error_code db_error;
+  const fs::path database = fs::weakly_canonical(fs::absolute(db, db_error), db_error);
+  std::error_code same_error;
+  if (fs::equivalent(target, db, same_error) || (!error && !db_error && written == database)) {
+    throw UsageError(option + " " + path + " is the database (--db " + db +
+                     "), which the secret would replace; name a file of its own");
+  }
+  // SQLite names a database's files after the file its path resolves to: both names are asked.
+  for (const std::string& source : {db, database.string()}) {
+    for (const std::string& name : {target, written.string()}) {
+      if (const std::string owner = db::DatabaseOwningFile(name, source); !owner.empty()) {
+        throw UsageError(option + " " + path + " is a file of the database " + owner +
+                         " (its -wal, -shm or -journal), which the secret would corrupt; name a "
+                         "file of its own");
+      }
     }
   }
   // The first 16 bytes of every SQLite database file.

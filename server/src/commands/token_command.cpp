@@ -41,7 +41,10 @@ void Create(const TokenArgs& args) {
   if (!token && token.error().code == db::ErrorCode::kBusy) {
     throw std::runtime_error(LockedMessage(args.db, "no token was made"));
   }
-  if (!token) throw std::runtime_error(token.error().message);
+  if (!token) {
+    const std::string failure = DatabaseWriteFailure(args.db, token.error(), "no token was made");
+    throw std::runtime_error(failure.empty() ? token.error().message : failure);
+  }
   if (!args.out.empty()) {
     RevokeIfUnwritten(connection, token->info.id, args.out,
                       WriteSecretFile(args.out, token->secret));
@@ -79,7 +82,11 @@ void Revoke(const TokenArgs& args) {
   if (!token && token.error().code == db::ErrorCode::kBusy) {
     throw std::runtime_error(LockedMessage(args.db, "the token was not revoked"));
   }
-  if (!token) throw std::runtime_error(token.error().message);
+  if (!token) {
+    const std::string failure =
+        DatabaseWriteFailure(args.db, token.error(), "the token was not revoked");
+    throw std::runtime_error(failure.empty() ? token.error().message : failure);
+  }
   std::cout << "token " << token->id << " revoked at " << token->revoked_at.value_or("?") << "\n";
 }
 

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -103,6 +104,9 @@ inline constexpr std::size_t kMaxImportFileBytes = std::size_t{256} << 20;
 /// device that never ends, such as /dev/zero, is refused too), kStorage for a read error (the
 /// message gives the system's reason).
 Result<std::string> ReadImportFile(const std::string& path);
+/// As ReadImportFile, from a stream already open (`pintag import -`: standard input, read as it
+/// is, from where it stands); `name` names it in messages.
+Result<std::string> ReadImportStream(std::istream& in, const std::string& name);
 /// Reads the file (ReadImportFile) and imports it.
 Result<ImportReport> ImportDirectoryCsvFile(Connection& connection, const std::string& path,
                                             const ImportOptions& options = {});
