@@ -1,8 +1,6 @@
 #include "pintag/db/database.hpp"
 
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 
@@ -78,14 +76,20 @@ std::string NoDatabaseFileAt(const std::string& path) {
   return {};
 }
 
-/// Whether the file at `path` starts with SQLite's 16-byte header string. False when it cannot be
-/// read, which SQLite then says in its own words.
-bool StartsAsSqlite(const std::string& path) {
-  static constexpr char kHeader[] = "SQLite format 3";  // and its NUL: 16 bytes
-  std::ifstream in(path, std::ios::binary);
-  char head[sizeof kHeader] = {};
-  if (!in.read(head, sizeof head)) return !in.is_open();
-  return std::memcmp(head, kHeader, sizeof head) == 0;
+/// SQLite's smallest database file: one page of the smallest size. A file of 1 to 511 bytes is no
+/// database, told from its size alone (SQLite took a file of one byte for an empty database, and
+/// seeded over it). The file is not opened to read its header: closing any descriptor of a file
+/// drops every POSIX lock this process holds on it, the locks of SQLite's own connections
+/// included, and a server opens its database while other connections hold it.
+constexpr std::uintmax_t kSmallestDatabaseBytes = 512;
+
+/// SQLite's SQLITE_NOTADB: a file that does not start as a database, found on its first read.
+constexpr int kSqliteNotADatabase = 26;
+
+std::string NotADatabase(const std::string& path, std::uintmax_t bytes) {
+  return "database " + path + " is not an SQLite database (" + std::to_string(bytes) +
+         (bytes == 1 ? " byte that does" : " bytes that do") +
+         " not start as one); give a PinTag database, or a new or empty file to create one in";
 }
 
 }  // namespace
@@ -115,24 +119,31 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
                          "-shm aside to start a new registry"};
       }
     }
-    // SQLite takes a file of one byte for an empty database and seeds over it; any other that does
-    // not start as an SQLite file is "not a database" in its words, which do not name the file.
+    std::uintmax_t bytes = 0;
     if (exists) {
-      const auto bytes = std::filesystem::file_size(path, ignored);
-      if (!ignored && bytes > 0 && !StartsAsSqlite(path)) {
-        return Error{ErrorCode::kConflict,
-                     "database " + path + " is not an SQLite database (" + std::to_string(bytes) +
-                         (bytes == 1 ? " byte that does" : " bytes that do") +
-                         " not start as one); give a PinTag database, or a new or empty file to "
-                         "create one in"};
+      bytes = std::filesystem::file_size(path, ignored);
+      if (ignored) bytes = 0;
+      if (bytes > 0 && bytes < kSmallestDatabaseBytes) {
+        return Error{ErrorCode::kConflict, NotADatabase(path, bytes)};
       }
     }
-    OpenedDatabase opened{Connection(path, {.create = options.create,
-                                            .read_only = options.read_only,
-                                            .busy_timeout_ms = options.busy_timeout_ms,
-                                            .wal = false})};
+    // SQLite's "file is not a database" (from the connection's first statement) named no file.
+    std::optional<OpenedDatabase> made;
+    FileSchema schema;
+    try {
+      made.emplace(OpenedDatabase{Connection(path, {.create = options.create,
+                                                    .read_only = options.read_only,
+                                                    .busy_timeout_ms = options.busy_timeout_ms,
+                                                    .wal = false})});
+      schema = ReadFileSchema(made->connection);
+    } catch (const SqliteError& e) {
+      if (e.code() == kSqliteNotADatabase) {
+        return Error{ErrorCode::kConflict, NotADatabase(path, bytes)};
+      }
+      throw;
+    }
+    OpenedDatabase opened = std::move(*made);
     Connection& connection = opened.connection;
-    const FileSchema schema = ReadFileSchema(connection);
     if (auto foreign = RefuseForeignFile(path, schema)) return *foreign;
     const int version = schema.version;
     opened.upgraded_from = version;

@@ -63,20 +63,16 @@ TEST(CliNewDb, ASnapshotDirectoryThatIsNotThereIsRefusedBeforeTheDatabaseIsCreat
   EXPECT_NE(run.out.find("--snapshot " + snapshot + ": its directory"), std::string::npos)
       << run.out;
   EXPECT_FALSE(std::filesystem::exists(db));
-  // Nor a path no snapshot can be written to: a directory, a pipe, a directory this user cannot
-  // write in. The server started, and logged a failed publication every second.
-  std::filesystem::create_directory(dir.file("a-directory"));
+  // Nor a pipe at the path, which no snapshot can ever be: the server started, and logged a
+  // failed publication every second. (A directory there is a publication that fails until it is
+  // removed: ReplicaSetTest.APrimaryStartsWhenItsFirstSnapshotCannotBeWrittenAndPublishesLater.)
   ASSERT_EQ(::mkfifo(dir.file("a-pipe").c_str(), 0600), 0);
-  for (const auto& [path, says] : std::vector<std::pair<std::string, std::string>>{
-           {dir.file("a-directory"), " is a directory"},
-           {dir.file("a-pipe"), " is a pipe"},
-           {"/proc/pintag.snap", ": cannot write in /proc"}}) {
-    const CommandResult refused = RunShell("timeout 60 " + PintagExe() + " serve --port 0 --db " +
-                                           db + " --snapshot " + path + " 2>&1");
-    EXPECT_EQ(refused.status, 2) << path << ": " << refused.out;
-    EXPECT_NE(refused.out.find("--snapshot " + path + says), std::string::npos) << refused.out;
-    EXPECT_FALSE(std::filesystem::exists(db));
-  }
+  const CommandResult piped = RunShell("timeout 60 " + PintagExe() + " serve --port 0 --db " + db +
+                                       " --snapshot " + dir.file("a-pipe") + " 2>&1");
+  EXPECT_EQ(piped.status, 2) << piped.out;
+  EXPECT_NE(piped.out.find("--snapshot " + dir.file("a-pipe") + " is a pipe"), std::string::npos)
+      << piped.out;
+  EXPECT_FALSE(std::filesystem::exists(db));
   // A replica given one (a PINTAG_SNAPSHOT shared with the primary) is told it has none to give.
   const CommandResult replica = RunShell("timeout 60 " + PintagExe() + " serve --port 0 --db " +
                                          db + " --read-only --snapshot " + snapshot + " 2>&1");

@@ -169,9 +169,14 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
                             ? " cannot be looked at: " + error.message()
                             : " does not exist"));
     }
-    // A directory, pipe or device at the path, or a directory this user cannot write in, is said
-    // now: the server started and then logged a failed publication every second.
-    CheckDirectoryWritable("--snapshot", CheckFileToReplace("--snapshot", args.snapshot));
+    // A pipe, socket or device at the path is never a snapshot file: said now, where the server
+    // started and then logged a failed publication every second. What can be put right while
+    // the primary serves (a directory at the path removed, the directory made writable, a disk
+    // freed) stays a failed publication, logged and tried again: a primary serves without one.
+    if (const FileToReplace target = FileReplacedBy(args.snapshot);
+        !target.problem.empty() && !std::filesystem::is_directory(target.path, error)) {
+      throw UsageError("--snapshot " + target.problem);
+    }
     const std::filesystem::path snapshot = std::filesystem::weakly_canonical(args.snapshot, error);
     const std::filesystem::path db = std::filesystem::weakly_canonical(db_path, error);
     const bool same = snapshot == db || std::filesystem::equivalent(args.snapshot, db_path, error);
