@@ -186,7 +186,9 @@ inline void CheckSecretFile(const std::string& option, const std::string& path,
       }
     }
   }
-  // The first 16 bytes of every SQLite database file.
+  // The first 16 bytes of every SQLite database file. Read before this process opens any
+  // database: closing a descriptor drops the POSIX locks the process holds on that file, SQLite's
+  // connections' included (db/src/database.cpp).
   constexpr char kSqliteHeader[] = "SQLite format 3";
   char head[sizeof kSqliteHeader] = {};
   if (const int fd = ::open(target.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK); fd >= 0) {
