@@ -252,7 +252,7 @@ async function shrunkToFit(file, limits) {
   }
 }
 
-// Whether the file starts as a photo the server reads starts (detector/src/image_io.cpp, the
+// Whether the file starts as the photos the server reads do (detector/src/image_io.cpp, the
 // same signatures): JPEG, PNG, TIFF or BigTIFF, WebP.
 async function startsAsAPhoto(file) {
   const b = new Uint8Array(await file.slice(0, 12).arrayBuffer());
