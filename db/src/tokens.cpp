@@ -3,6 +3,8 @@
 #include <openssl/crypto.h>
 #include <sys/random.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -178,6 +180,20 @@ Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id, LastAdmin
     if (info) transaction.commit();
     return info;
   });
+}
+
+bool HasTokenForm(std::string_view secret) {
+  if (!secret.starts_with("pt_")) return false;
+  const std::size_t underscore = secret.find('_', 3);
+  if (underscore == std::string_view::npos || underscore == 3) return false;
+  const std::string_view id = secret.substr(3, underscore - 3);
+  const std::string_view random = secret.substr(underscore + 1);
+  const auto base64url = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_';
+  };
+  return std::all_of(id.begin(), id.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
+         random.size() == (kSecretBytes * 8 + 5) / 6 &&
+         std::all_of(random.begin(), random.end(), base64url);
 }
 
 Result<TokenInfo> VerifyToken(Connection& connection, std::string_view secret) {

@@ -65,6 +65,25 @@ std::string RandomPart(const std::string& secret) {
   return secret.substr(secret.find('_', 3) + 1);
 }
 
+// The form a follower's token is checked for at start: every secret CreateToken makes has it;
+// a secret cut short, lengthened, with a non-digit id or a character base64url has not, does not.
+TEST_F(Tokens, EverySecretMadeHasTheTokenFormAndMistypedOnesDoNot) {
+  for (int i = 0; i < 20; ++i) {
+    const auto made = CreateToken(db_, Role::kReplica);
+    ASSERT_TRUE(made.ok()) << made.error().message;
+    EXPECT_TRUE(HasTokenForm(made->secret)) << made->secret;
+  }
+  const std::string secret = CreateToken(db_, Role::kReplica).value().secret;
+  std::string odd_character = secret;
+  odd_character.back() = '+';  // base64, not base64url
+  for (const std::string& bad :
+       {secret.substr(0, secret.size() - 1), secret + "A", odd_character,
+        "pt__" + secret.substr(secret.rfind('_') + 1), "pt_x" + secret.substr(secret.rfind('_')),
+        " " + secret, secret.substr(3), std::string()}) {
+    EXPECT_FALSE(HasTokenForm(bad)) << bad;
+  }
+}
+
 TEST_F(Tokens, OnlyASaltedHashIsStored) {
   const auto a = CreateToken(db_, Role::kCounter).value();
   const auto b = CreateToken(db_, Role::kCounter).value();

@@ -80,9 +80,9 @@ TEST(CliNewDb, ASnapshotDirectoryThatIsNotThereIsRefusedBeforeTheDatabaseIsCreat
   EXPECT_NE(replica.out.find("a --read-only replica has none"), std::string::npos) << replica.out;
   // A follower whose --scan-log is its --db, not there yet: it was made a scan log, and every
   // snapshot was then refused while the follower waited for its first one.
-  const CommandResult same = RunShell("PINTAG_FOLLOW_TOKEN=pt_1_x timeout 60 " + PintagExe() +
-                                      " serve --port 0 --follow http://127.0.0.1:9 --db " + db +
-                                      " --scan-log " + db + " 2>&1");
+  const CommandResult same = RunShell(
+      "PINTAG_FOLLOW_TOKEN=pt_1_" + std::string(43, 'A') + " timeout 60 " + PintagExe() +
+      " serve --port 0 --follow http://127.0.0.1:9 --db " + db + " --scan-log " + db + " 2>&1");
   EXPECT_EQ(same.status, 2) << same.out;
   EXPECT_NE(same.out.find("is the replica's --db"), std::string::npos) << same.out;
   EXPECT_FALSE(std::filesystem::exists(db));

@@ -978,7 +978,7 @@ TEST_F(ReplicaSetTest, AScanLogNamingARegistrySnapshotIsRefusedAndTheSnapshotLef
   }
   // A follower says so at once, not once its primary (here none) has sent a first snapshot.
   const CommandResult follower =
-      RunShell("PINTAG_FOLLOW_TOKEN=pt_1_x timeout 30 " + PintagExe() +
+      RunShell("PINTAG_FOLLOW_TOKEN=pt_1_" + std::string(43, 'A') + " timeout 30 " + PintagExe() +
                " serve --port 0 --bind 127.0.0.1 --follow http://127.0.0.1:9 --db " +
                dir_.file("new.db") + " --scan-log " + theirs + " 2>&1");
   EXPECT_EQ(follower.status, 1) << follower.out;

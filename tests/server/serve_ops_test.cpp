@@ -197,6 +197,20 @@ TEST(ServeStartRefusals, AFollowTokenFileThatGivesNoTokenSaysWhy) {
     EXPECT_EQ(refused.status, 2) << file << ": " << refused.out;
     EXPECT_NE(refused.out.find(says), std::string::npos) << refused.out;
   }
+  // A token cut short or mistyped: said at start, where the follower logged the primary's 401
+  // at every poll.
+  const std::string cut = WriteFile(dir.file("cut.token"), "pt_3_" + std::string(40, 'Q') + "\n");
+  const CommandResult from_file = RunShell(serve + " --follow-token-file " + cut + " 2>&1");
+  EXPECT_EQ(from_file.status, 2) << from_file.out;
+  EXPECT_NE(from_file.out.find("the replica token in --follow-token-file " + cut +
+                               " is not a PinTag token's secret"),
+            std::string::npos)
+      << from_file.out;
+  const CommandResult from_env =
+      RunShell("PINTAG_FOLLOW_TOKEN=pt_x_" + std::string(43, 'Q') + " " + serve + " 2>&1");
+  EXPECT_EQ(from_env.status, 2) << from_env.out;
+  EXPECT_NE(from_env.out.find("the replica token in PINTAG_FOLLOW_TOKEN is not"), std::string::npos)
+      << from_env.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 
@@ -237,7 +251,8 @@ TEST(ServeStartRefusals, AnEmptyEnvironmentVariableIsRefusedBeforeAnythingIsMade
 TEST(ServeStartRefusals, OptionsThatContradictTheRoleAreUsageErrors) {
   const TempDir dir;
   const std::string db = dir.file("new.db");
-  const std::string token = WriteFile(dir.path() / "t", "pt_1_x\n");
+  // Of a token's form (pt_, id, _, 43 characters), so that the role is what is refused.
+  const std::string token = WriteFile(dir.path() / "t", "pt_1_" + std::string(43, 'A') + "\n");
   for (const std::string& options :
        {"--scan-log " + dir.file("scans.db"), std::string("--primary http://127.0.0.1:1"),
         "--follow-token-file " + token, "--snapshot " + db, "--snapshot " + db + "-wal",

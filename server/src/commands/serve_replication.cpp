@@ -12,6 +12,7 @@
 #include "commands/option_checks.hpp"
 #include "pintag/db/scan_log.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "pintag/db/tokens.hpp"
 #include "pintag/server/log.hpp"
 #include "replica/token_file.hpp"
 
@@ -54,6 +55,15 @@ std::string ReadToken(const ReplicationArgs& args) {
         "--follow needs a replica token: set PINTAG_FOLLOW_TOKEN or give "
         "--follow-token-file (make one on the primary: pintag token create --role "
         "replica)");
+  }
+  // A typo, or a secret cut short by a copy, is said now: it was the primary's 401 at every poll.
+  if (!db::HasTokenForm(token)) {
+    throw UsageError(
+        std::string("the replica token ") +
+        (args.follow_token_file.empty() ? "in PINTAG_FOLLOW_TOKEN"
+                                        : "in --follow-token-file " + args.follow_token_file) +
+        " is not a PinTag token's secret (pt_, its id, _ and 43 characters); make one on the "
+        "primary: pintag token create --role replica");
   }
   return token;
 }

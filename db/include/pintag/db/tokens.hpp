@@ -54,5 +54,9 @@ Result<TokenInfo> RevokeToken(Connection& connection, std::int64_t id,
 /// The token the secret belongs to; kUnauthorized (one message for every cause) when it is
 /// malformed, unknown, wrong or revoked.
 Result<TokenInfo> VerifyToken(Connection& connection, std::string_view secret);
+/// Whether `secret` has the form CreateToken gives one: pt_, the token's id, _, and 43 base64url
+/// characters (32 random bytes). For a secret handed to a command (a follower's), so that a typo
+/// is said at once rather than as the primary's 401 at every poll.
+bool HasTokenForm(std::string_view secret);
 
 }  // namespace pintag::db
