@@ -177,14 +177,16 @@ inline void CheckSecretFile(const std::string& option, const std::string& path,
                      "), which the secret would replace; name a file of its own");
   }
   // SQLite names a database's files after the file its path resolves to: both names are asked.
+  std::string owner;
   for (const std::string& source : {db, database.string()}) {
     for (const std::string& name : {target, written.string()}) {
-      if (const std::string owner = db::DatabaseOwningFile(name, source); !owner.empty()) {
-        throw UsageError(option + " " + path + " is a file of the database " + owner +
-                         " (its -wal, -shm or -journal), which the secret would corrupt; name a "
-                         "file of its own");
-      }
+      if (owner.empty()) owner = db::DatabaseOwningFile(name, source);
     }
+  }
+  if (!owner.empty()) {
+    throw UsageError(option + " " + path + " is a file of the database " + owner +
+                     " (its -wal, -shm or -journal), which the secret would corrupt; name a "
+                     "file of its own");
   }
   // The first 16 bytes of every SQLite database file. Read before this process opens any
   // database: closing a descriptor drops the POSIX locks the process holds on that file, SQLite's
