@@ -3,7 +3,6 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -394,35 +393,15 @@ struct PipeRun {
 
 /// Runs `pintag` with `words` and its stdout a pipe whose reader has gone (`... | head -c0`), with
 /// SIGPIPE at its default in the command, whatever this process does with it.
-PipeRun RunPintagIntoAClosedPipe(const TempDir& dir, std::vector<std::string> words) {
+PipeRun RunPintagIntoAClosedPipe(const TempDir& dir, const std::vector<std::string>& words) {
   int pipe_fds[2];
   EXPECT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
   ::close(pipe_fds[0]);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
   const std::string err = dir.file("err.txt");
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  sigset_t pipe_signal;
-  sigemptyset(&pipe_signal);
-  sigaddset(&pipe_signal, SIGPIPE);
-  posix_spawnattr_setsigdefault(&attributes, &pipe_signal);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
-  const std::string exe = PintagExe();
-  words.insert(words.begin(), exe);
-  std::vector<char*> argv;
-  for (std::string& word : words) argv.push_back(word.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawned = ::posix_spawn(&pid, exe.c_str(), &actions, &attributes, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attributes);
+  const pid_t pid = SpawnPintagWith(words, pipe_fds[1], STDOUT_FILENO, err);
   ::close(pipe_fds[1]);
-  EXPECT_EQ(spawned, 0);
-  if (spawned != 0) return {};
+  EXPECT_GT(pid, 0);
+  if (pid <= 0) return {};
   int status = 0;
   EXPECT_EQ(::waitpid(pid, &status, 0), pid);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(err)};

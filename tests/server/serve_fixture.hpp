@@ -71,6 +71,11 @@ CommandResult RunPintag(const std::string& arguments);
 CommandResult RunShell(const std::string& line);
 /// As RunPintag, with stdout sent to `stdout_path` instead (stderr alone is in `out`).
 CommandResult RunPintagWithStdoutTo(const std::string& arguments, const std::string& stdout_path);
+/// Starts `pintag <args>` with descriptor `fd` as its descriptor `as` (a pipe's end as its stdin
+/// or stdout) and its stderr written to `stderr_path`, SIGPIPE at its default whatever this
+/// process does with it. The child's pid, or -1 when it could not be started; the caller waits.
+pid_t SpawnPintagWith(std::vector<std::string> args, int fd, int as,
+                      const std::string& stderr_path);
 /// The path of a seeded database made once per build (do not modify it).
 const std::string& SeededTemplate();
 
