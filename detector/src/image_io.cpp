@@ -816,7 +816,6 @@ LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes, std::int64_t max_
 }
 
 LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels) {
-  constexpr std::size_t kSniffBytes = 16;  // SniffImageFormat needs 12 (a WebP's RIFF header)
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) {
     return Fail(ImageError::kUnreadable, path + " is a directory, not a photo");
@@ -844,7 +843,7 @@ LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels) {
   while (bytes.size() <= kMaxFileBytes && in.read(chunk.data(), chunk.size()).gcount() > 0) {
     bytes.insert(bytes.end(), chunk.data(), chunk.data() + in.gcount());
     // A stream that does not start as a photo is refused from its first bytes, not after 1 GiB.
-    if (bytes.size() >= kSniffBytes && SniffImageFormat(bytes) == ImageFormat::kUnknown) break;
+    if (bytes.size() >= kSniffImageBytes && SniffImageFormat(bytes) == ImageFormat::kUnknown) break;
   }
   if (bytes.size() > kMaxFileBytes) {
     return Fail(ImageError::kTooLarge, path + " is larger than 1 GiB, more than any photo");

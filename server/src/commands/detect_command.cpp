@@ -108,7 +108,7 @@ LoadResult LoadStandardInput(std::int64_t max_pixels) {
     bytes.insert(bytes.end(), chunk.data(), chunk.data() + std::cin.gcount());
     // Input that does not start as a photo (`detect - < /dev/zero`) is refused from its first
     // bytes: it was read to 1 GiB first, 2.2 GB at the peak.
-    if (bytes.size() >= 16 && SniffImageFormat(bytes) == ImageFormat::kUnknown) break;
+    if (bytes.size() >= kSniffImageBytes && SniffImageFormat(bytes) == ImageFormat::kUnknown) break;
   }
   if (bytes.size() > kMaxBytes) {
     LoadResult refused;
@@ -176,19 +176,14 @@ void CheckOptions(const DetectArgs& args) {
                      std::to_string(coefficients));
   }
   if (coefficients != 0 && given != 2) throw UsageError("--distortion needs --fx and --fy");
-  std::error_code ec;
-  if (!args.overlay.empty() && std::filesystem::equivalent(args.photo, args.overlay, ec)) {
-    throw UsageError("--overlay " + args.overlay + " is the photo itself; give another file");
-  }
-  // `detect - --overlay photo.png < photo.png`: the photo is standard input's file.
-  struct stat input {};
-  struct stat overlay {};
-  if (!args.overlay.empty() && args.photo == "-" && ::fstat(STDIN_FILENO, &input) == 0 &&
-      ::stat(args.overlay.c_str(), &overlay) == 0 && input.st_dev == overlay.st_dev &&
-      input.st_ino == overlay.st_ino) {
+  if (!args.overlay.empty() && SameFile(args.photo, args.overlay)) {
+    // `detect - --overlay photo.png < photo.png`: the photo is standard input's file.
     throw UsageError("--overlay " + args.overlay +
-                     " is the file on standard input, the photo itself; give another file");
+                     (args.photo == "-" ? " is the file on standard input, the photo itself"
+                                        : " is the photo itself") +
+                     "; give another file");
   }
+  std::error_code ec;
   if (!args.overlay.empty()) {
     // Where the overlay cannot go is known now, not after the photo is read and searched.
     CheckFileToWrite("--overlay", args.overlay);

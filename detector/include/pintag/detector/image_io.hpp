@@ -5,6 +5,7 @@
 // before any pixel is decoded; a truncated JPEG or PNG is refused rather than decoded with a grey
 // or missing bottom.
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <opencv2/core.hpp>
@@ -37,6 +38,8 @@ const char* ToString(ImageError error);
 enum class ImageFormat { kUnknown, kJpeg, kPng, kTiff, kWebp };
 
 /// From the first bytes alone; kUnknown for anything else.
+/// How many first bytes SniffImageFormat needs to tell every format (a WebP's RIFF header is 12).
+inline constexpr std::size_t kSniffImageBytes = 16;
 ImageFormat SniffImageFormat(std::span<const std::uint8_t> bytes);
 
 struct LoadOptions {
