@@ -108,6 +108,7 @@ pid_t SpawnPintagWith(std::vector<std::string> args, int fd, int as,
   posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
   args.insert(args.begin(), PintagExe());
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (std::string& word : args) argv.push_back(word.data());
   argv.push_back(nullptr);
   pid_t pid = -1;
