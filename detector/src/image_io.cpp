@@ -828,28 +828,36 @@ LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels) {
     return Fail(ImageError::kUnreadable,
                 "cannot open " + path + (why != 0 ? std::string(": ") + std::strerror(why) : ""));
   }
-  // Read up to one byte past the limit: a device or a pipe (/dev/zero) has no end to wait for.
-  // A 40 MP photo as an uncompressed float RGBA TIFF is 640 MB.
   constexpr std::size_t kMaxFileBytes = std::size_t{1} << 30;
-  std::vector<std::uint8_t> bytes;
-  std::array<char, 1 << 16> chunk{};
   const bool regular = std::filesystem::is_regular_file(path, error);
   const std::uintmax_t size = regular ? std::filesystem::file_size(path, error) : 0;
   if (regular && !error && size > kMaxFileBytes) {
     return Fail(ImageError::kTooLarge, path + " is larger than 1 GiB, more than any photo");
   }
-  // Grown once, not by doubling (which took reading /dev/zero to 2.2 GB).
-  bytes.reserve(regular && !error ? size : kMaxFileBytes + chunk.size());
-  while (bytes.size() <= kMaxFileBytes && in.read(chunk.data(), chunk.size()).gcount() > 0) {
+  return LoadImageStream(in, path, max_pixels, regular && !error ? size : 0);
+}
+
+LoadResult LoadImageStream(std::istream& in, const std::string& name, std::int64_t max_pixels,
+                           std::size_t expected_bytes) {
+  // Read up to one byte past the limit: a device or a pipe (/dev/zero) has no end to wait for.
+  // A 40 MP photo as an uncompressed float RGBA TIFF is 640 MB.
+  constexpr std::size_t kMaxBytes = std::size_t{1} << 30;
+  std::vector<std::uint8_t> bytes;
+  std::array<char, 1 << 16> chunk{};
+  // A file's known size is reserved once. A pipe's vector grows by doubling: a stream that is no
+  // photo stops at its first bytes (below), so only a photo's header followed by endless bytes
+  // doubles towards the limit.
+  bytes.reserve(expected_bytes > 0 ? std::min(expected_bytes, kMaxBytes + 1) : chunk.size());
+  while (bytes.size() <= kMaxBytes && in.read(chunk.data(), chunk.size()).gcount() > 0) {
     bytes.insert(bytes.end(), chunk.data(), chunk.data() + in.gcount());
     // A stream that does not start as a photo is refused from its first bytes, not after 1 GiB.
     if (bytes.size() >= kSniffImageBytes && SniffImageFormat(bytes) == ImageFormat::kUnknown) break;
   }
-  if (bytes.size() > kMaxFileBytes) {
-    return Fail(ImageError::kTooLarge, path + " is larger than 1 GiB, more than any photo");
+  if (bytes.size() > kMaxBytes) {
+    return Fail(ImageError::kTooLarge, name + " holds more than 1 GiB, more than any photo");
   }
   LoadResult result = LoadImageBytes(bytes, max_pixels);
-  if (!result.error.empty()) result.error = path + ": " + result.error;
+  if (!result.error.empty()) result.error = name + ": " + result.error;
   return result;
 }
 

@@ -7,12 +7,15 @@
 #include <turbojpeg.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <streambuf>
 
 #include "pintag/codec/tag_raster.hpp"
 #include "pintag/detector/detector.hpp"
@@ -992,6 +995,49 @@ TEST(ImageIo, AFileLargerThanAnyPhotoIsRefusedUnread) {
   EXPECT_EQ(r.kind, ImageError::kTooLarge);
   EXPECT_NE(r.error.find("larger than 1 GiB"), std::string::npos) << r.error;
   std::filesystem::remove(path);
+}
+
+/// An endless stream of one byte (a device such as /dev/zero), counting what it was asked for.
+class EndlessBytes : public std::streambuf {
+ public:
+  explicit EndlessBytes(char byte) { chunk_.fill(byte); }
+  std::size_t given() const { return given_; }
+
+ protected:
+  int_type underflow() override {
+    setg(chunk_.data(), chunk_.data(), chunk_.data() + chunk_.size());
+    given_ += chunk_.size();
+    return traits_type::to_int_type(chunk_[0]);
+  }
+
+ private:
+  std::array<char, 4096> chunk_{};
+  std::size_t given_ = 0;
+};
+
+// `pintag detect -` reads its photo through LoadImageStream: a photo on a pipe loads like the
+// same file, its errors name the stream, and a stream that is no photo is refused from its first
+// bytes, not read to the 1 GiB limit.
+TEST(ImageIo, APhotoOnAStreamLoadsAndAStreamThatIsNoPhotoIsRefusedAtOnce) {
+  const cv::Mat frame = PhoneLikeFrame(96, 64);
+  const std::vector<std::uint8_t> png = Encode(".png", frame);
+  std::istringstream photo(std::string(png.begin(), png.end()));
+  const LoadResult loaded = LoadImageStream(photo, "standard input");
+  ASSERT_TRUE(loaded.image) << loaded.error;
+  EXPECT_EQ(cv::norm(loaded.image->bgr, frame, cv::NORM_INF), 0.0);
+
+  std::istringstream cut(std::string(png.begin(), png.begin() + static_cast<long>(png.size() / 2)));
+  const LoadResult truncated = LoadImageStream(cut, "standard input");
+  EXPECT_FALSE(truncated.image);
+  EXPECT_EQ(truncated.kind, ImageError::kCorrupt);
+  EXPECT_EQ(truncated.error.rfind("standard input: ", 0), 0U) << truncated.error;
+
+  EndlessBytes zeros('\0');
+  std::istream endless(&zeros);
+  const LoadResult refused = LoadImageStream(endless, "standard input");
+  EXPECT_FALSE(refused.image);
+  EXPECT_EQ(refused.kind, ImageError::kUnsupported) << refused.error;
+  EXPECT_LE(zeros.given(), std::size_t{1} << 20);
 }
 
 /// `plain` (a simple WebP) rewrapped as an extended one with an EXIF chunk whose Orientation is

@@ -98,29 +98,6 @@ void WriteOverlay(const std::string& path, const cv::Mat& image) {
   if (!failure.empty()) throw std::runtime_error("cannot write overlay " + path + ": " + failure);
 }
 
-/// "-": the photo on standard input (a pipe, a file or a socket), read whole, at most 1 GiB as
-/// LoadImageFile reads a file.
-LoadResult LoadStandardInput(std::int64_t max_pixels) {
-  constexpr std::size_t kMaxBytes = std::size_t{1} << 30;
-  std::vector<std::uint8_t> bytes;
-  std::array<char, 1 << 16> chunk{};
-  while (bytes.size() <= kMaxBytes && std::cin.read(chunk.data(), chunk.size()).gcount() > 0) {
-    bytes.insert(bytes.end(), chunk.data(), chunk.data() + std::cin.gcount());
-    // Input that does not start as a photo (`detect - < /dev/zero`) is refused from its first
-    // bytes: it was read to 1 GiB first, 2.2 GB at the peak.
-    if (bytes.size() >= kSniffImageBytes && SniffImageFormat(bytes) == ImageFormat::kUnknown) break;
-  }
-  if (bytes.size() > kMaxBytes) {
-    LoadResult refused;
-    refused.kind = ImageError::kTooLarge;
-    refused.error = "standard input holds more than 1 GiB, more than any photo";
-    return refused;
-  }
-  LoadResult result = LoadImageBytes(bytes, max_pixels);
-  if (!result.image) result.error = "standard input: " + result.error;
-  return result;
-}
-
 /// What the command line alone can tell is wrong, checked before the photo is read: a usage error
 /// exits 2 whatever the photo (a missing one included). The intrinsics rules are the detect
 /// route's (server/src/app/detect_route.cpp).
@@ -215,8 +192,9 @@ void CheckOptions(const DetectArgs& args) {
 
 void Run(const DetectArgs& args) {
   CheckOptions(args);
-  const LoadResult loaded = args.photo == "-" ? LoadStandardInput(args.max_pixels)
-                                              : LoadImageFile(args.photo, args.max_pixels);
+  const LoadResult loaded = args.photo == "-"
+                                ? LoadImageStream(std::cin, "standard input", args.max_pixels)
+                                : LoadImageFile(args.photo, args.max_pixels);
   if (!loaded.image) throw std::runtime_error(loaded.error);
   // Made once the photo is read, so a photo that cannot be leaves no directory behind.
   if (!args.debug_dir.empty()) {

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <span>
@@ -79,6 +80,12 @@ LoadResult LoadImageBytes(std::span<const std::uint8_t> bytes,
                           std::int64_t max_pixels = kDefaultMaxPixels);
 /// A file of at most 1 GiB (a larger one, or a device that gives more, is kTooLarge unread).
 LoadResult LoadImageFile(const std::string& path, std::int64_t max_pixels = kDefaultMaxPixels);
+/// A photo read whole from `in` (standard input, a pipe), at most 1 GiB as LoadImageFile reads a
+/// file; `name` ("standard input") begins its errors. `expected_bytes`, when known (a regular
+/// file's size), is reserved at once.
+LoadResult LoadImageStream(std::istream& in, const std::string& name,
+                           std::int64_t max_pixels = kDefaultMaxPixels,
+                           std::size_t expected_bytes = 0);
 
 /// A JPEG's planes as stored, for a reader that wants full-resolution luma and the chroma at the
 /// resolution the file kept (4:2:0 phones: half in each direction). Not reoriented.
