@@ -45,8 +45,45 @@ Error At(std::string_view at, Error error) {
   return error;
 }
 
-Error UnknownPlan(std::string_view name) {
-  return {ErrorCode::kNotFound, "no sort plan named '" + std::string(name) + "'"};
+/// A stored plan's name that reads like `name` but is written with other code points, if any.
+std::optional<std::string> LookalikePlanName(Connection& connection, std::string_view name) {
+  const std::string canonical = CanonicalForm(name);
+  Statement names = connection.prepare("SELECT name FROM sort_plans");
+  while (names.step()) {
+    std::string stored = names.getText(0);
+    if (stored != name && CanonicalForm(stored) == canonical) return stored;
+  }
+  return std::nullopt;
+}
+
+/// "the plan 'X' reads the same but …", for a name that reads like the stored `lookalike`.
+std::string ReadsLike(std::string_view lookalike) {
+  return "the plan '" + std::string(lookalike) +
+         "' reads the same but is written with other Unicode code points (a letter and its accent "
+         "as one character or as two, say)";
+}
+
+/// `name` quoted for a message: a name asked for may be long (a URL's path), so it is cut after
+/// 100 bytes, at a character's start.
+std::string Quoted(std::string_view name) {
+  std::size_t end = std::min<std::size_t>(name.size(), 100);
+  while (end > 0 && end < name.size() && (static_cast<unsigned char>(name[end]) & 0xC0) == 0x80) {
+    --end;
+  }
+  std::string quoted(1, '\'');
+  quoted.append(name.substr(0, end));
+  if (end < name.size()) quoted += "…";
+  quoted += '\'';
+  return quoted;
+}
+
+Error UnknownPlan(Connection& connection, std::string_view name) {
+  std::string message = "no sort plan named " + Quoted(name);
+  if (const auto lookalike = LookalikePlanName(connection, name)) {
+    message += ": " + ReadsLike(*lookalike) +
+               "; ask for it by its name as stored (GET /api/v1/sortplans lists them)";
+  }
+  return {ErrorCode::kNotFound, message};
 }
 
 bool ByPrefix(const SortRule& a, const SortRule& b) {
@@ -130,6 +167,29 @@ std::optional<Error> UnmetCondition(std::string_view name, const std::optional<S
   return std::nullopt;
 }
 
+/// Two of the plan's bins that read alike but differ in code points: a sorter would take them for
+/// two bins while every screen and label shows one.
+std::optional<Error> BinsThatReadAlike(const SortPlan& plan) {
+  // Each distinct bin once, by its canonical form, with where it was first seen.
+  std::map<std::string, std::pair<std::string_view, std::string>> seen;
+  const auto check = [&](std::string_view bin, std::string where) -> std::optional<Error> {
+    const std::string canonical = CanonicalForm(bin);
+    const auto [first, inserted] = seen.try_emplace(canonical, bin, where);
+    if (inserted || first->second.first == bin) return std::nullopt;
+    return Error{ErrorCode::kInvalid,
+                 "the " + where + " '" + std::string(bin) + "' and the " + first->second.second +
+                     " '" + std::string(first->second.first) +
+                     "' read the same but are written with other Unicode code points (a letter "
+                     "and its accent as one character or as two, say): a sorter would take them "
+                     "for two bins; write them alike"};
+  };
+  if (auto error = check(plan.fallback_bin, "fallback bin")) return error;
+  for (const SortRule& rule : plan.rules) {
+    if (auto error = check(rule.bin, "bin for prefix " + rule.prefix)) return error;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<Error> CheckRule(const SortRule& rule) {
@@ -170,7 +230,7 @@ std::optional<Error> CheckPlan(const SortPlan& plan) {
       return Error{ErrorCode::kInvalid, "prefix " + rule.prefix + " appears twice"};
     }
   }
-  return std::nullopt;
+  return BinsThatReadAlike(plan);
 }
 
 Routing RouteWith(const SortPlan& plan, Pincode pincode) {
@@ -292,6 +352,17 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
         return *unmet;
       }
     }
+    const bool exists =
+        connection.prepare("SELECT 1 FROM sort_plans WHERE name = ?1").bind(1, plan.name).step();
+    if (!exists) {
+      if (const auto lookalike = LookalikePlanName(connection, plan.name)) {
+        return Error{ErrorCode::kConflict,
+                     "sort plan '" + plan.name +
+                         "' would be a second plan: " + ReadsLike(*lookalike) +
+                         "; name it as stored to change it, or choose a name that reads "
+                         "differently"};
+      }
+    }
     SavedPlan saved;
     saved.plan = WritePlan(connection, plan, &saved.replaced, description);
     transaction.commit();
@@ -303,7 +374,7 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
 Result<SortPlan> GetPlan(Connection& connection, std::string_view name) {
   return Guard([&]() -> Result<SortPlan> {
     std::optional<SortPlan> plan = ReadPlan(connection, name);
-    if (!plan) return UnknownPlan(name);
+    if (!plan) return UnknownPlan(connection, name);
     return std::move(*plan);
   });
 }
@@ -335,7 +406,7 @@ Result<SortPlan> DeletePlan(Connection& connection, std::string_view name,
     // Read under the write lock, as a save reads it: what is returned is what was deleted.
     std::optional<SortPlan> stored = ReadPlan(connection, name);
     if (auto unmet = UnmetCondition(name, stored, condition, "to delete")) return *unmet;
-    if (!stored) return UnknownPlan(name);
+    if (!stored) return UnknownPlan(connection, name);
     connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, name).run();
     transaction.commit();
     return std::move(*stored);
@@ -346,7 +417,7 @@ Result<Routing> Route(Connection& connection, Pincode pincode, std::string_view 
   return Guard([&]() -> Result<Routing> {
     Statement head = connection.prepare("SELECT id, fallback_bin FROM sort_plans WHERE name = ?1");
     head.bind(1, plan);
-    if (!head.step()) return UnknownPlan(plan);
+    if (!head.step()) return UnknownPlan(connection, plan);
     // The six prefixes of the pincode; the primary key (plan_id, prefix) finds each directly.
     const std::string digits = pincode.str();
     Statement rule = connection.prepare(

@@ -1,6 +1,10 @@
 #include "pintag/db/text.hpp"
 
+#include <glib.h>
+
+#include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "pintag/codec/utf8.hpp"
@@ -158,6 +162,20 @@ std::optional<Error> CheckShownName(std::string_view field, std::string_view val
     i += decoded.length;
   }
   return std::nullopt;
+}
+
+std::string CanonicalForm(std::string_view text) {
+  // ASCII is its own canonical form: most names never reach the normaliser.
+  if (std::all_of(text.begin(), text.end(), [](char c) { return (c & 0x80) == 0; })) {
+    return std::string(text);
+  }
+  const std::unique_ptr<gchar, decltype(&g_free)> composed(
+      g_utf8_normalize(text.data(), static_cast<gssize>(text.size()), G_NORMALIZE_NFC), g_free);
+  return composed ? std::string(composed.get()) : std::string(text);
+}
+
+bool ReadAlikeButDiffer(std::string_view a, std::string_view b) {
+  return a != b && CanonicalForm(a) == CanonicalForm(b);
 }
 
 }  // namespace pintag::db

@@ -7,6 +7,7 @@
 
 #include "db_test_util.hpp"
 #include "pintag/db/sort_plan.hpp"
+#include "pintag/db/text.hpp"
 
 namespace pintag::db {
 namespace {
@@ -243,6 +244,71 @@ TEST_F(SortPlans, NamesAndBinsMustReadAsWhatTheyAre) {
   EXPECT_EQ(from_csv.error().message.rfind("line 3: bin for prefix 11 '=cmd", 0), 0U)
       << from_csv.error().message;
   EXPECT_FALSE(ParsePlanCsv("x", "prefix,bin\n*,@floor\n").ok());
+}
+
+// "Café" with é as one character (U+00E9) or as e and U+0301, and a Devanagari consonant with
+// its nukta or in its precomposed form, read alike. Two bins or two plans so written would show as
+// one and be two, so the second is refused, naming the first; text is kept as written.
+TEST_F(SortPlans, NamesAndBinsThatReadAlikeButDifferInCodePointsAreNotTwo) {
+  const std::string composed = "caf\u00e9";     // é
+  const std::string decomposed = "cafe\u0301";  // e + combining acute
+  const std::string qa_precomposed = "\u0958";  // क़ (a composition exclusion)
+  const std::string qa_with_nukta = "\u0915\u093c";
+  ASSERT_NE(composed, decomposed);
+  EXPECT_EQ(CanonicalForm(decomposed), composed);
+  EXPECT_EQ(CanonicalForm(qa_precomposed), qa_with_nukta);
+  EXPECT_TRUE(ReadAlikeButDiffer(composed, decomposed));
+  EXPECT_FALSE(ReadAlikeButDiffer(composed, composed));
+  EXPECT_FALSE(ReadAlikeButDiffer("cafe", composed));
+  EXPECT_EQ(CanonicalForm("\xff\xfe"), "\xff\xfe");  // not UTF-8: unchanged
+
+  SortPlan bins = HubPlan();
+  bins.rules.push_back({"60", composed});
+  bins.rules.push_back({"61", decomposed});
+  const auto mixed = SavePlan(db_, bins);
+  ASSERT_FALSE(mixed.ok());
+  EXPECT_EQ(mixed.error().code, ErrorCode::kInvalid);
+  EXPECT_NE(mixed.error().message.find("bin for prefix 61 '" + decomposed +
+                                       "' and the bin for "
+                                       "prefix 60 '" +
+                                       composed + "' read the same"),
+            std::string::npos)
+      << mixed.error().message;
+  const auto from_csv =
+      ParsePlanCsv("x", "prefix,bin\n*," + qa_precomposed + "\n11," + qa_with_nukta + "\n");
+  ASSERT_FALSE(from_csv.ok());
+  EXPECT_NE(from_csv.error().message.find("fallback bin"), std::string::npos);
+  // One bin written the same way on every rule, in either form, is a plan.
+  bins.rules.back().bin = composed;
+  ASSERT_TRUE(SavePlan(db_, bins).ok());
+  SortPlan decomposed_bins = HubPlan();
+  decomposed_bins.name = "hub-nfd";
+  decomposed_bins.rules = {{"60", decomposed}, {"61", decomposed}};
+  ASSERT_TRUE(SavePlan(db_, decomposed_bins).ok());
+  EXPECT_EQ(GetPlan(db_, "hub-nfd")->rules[0].bin, decomposed);  // stored as written
+
+  SortPlan first = HubPlan();
+  first.name = "hub-" + composed;
+  ASSERT_TRUE(SavePlan(db_, first).ok());
+  SortPlan second = HubPlan();
+  second.name = "hub-" + decomposed;
+  const auto twin = SavePlan(db_, second);
+  ASSERT_FALSE(twin.ok());
+  EXPECT_EQ(twin.error().code, ErrorCode::kConflict);
+  EXPECT_NE(twin.error().message.find("the plan '" + first.name + "' reads the same"),
+            std::string::npos)
+      << twin.error().message;
+  EXPECT_FALSE(HasPlan(db_, second.name).value());
+  // The plan is changed under its stored name; asked for by the other, the answer names it.
+  EXPECT_TRUE(SavePlan(db_, first).value());
+  const auto asked = GetPlan(db_, second.name);
+  ASSERT_FALSE(asked.ok());
+  EXPECT_EQ(asked.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(asked.error().message.find("'" + first.name + "' reads the same"), std::string::npos)
+      << asked.error().message;
+  const auto routed = Route(db_, Pincode(110001), second.name);
+  ASSERT_FALSE(routed.ok());
+  EXPECT_NE(routed.error().message.find(first.name), std::string::npos);
 }
 
 TEST_F(SortPlans, CsvRoundTripsAndReportsLines) {

@@ -317,6 +317,41 @@ TEST_F(ServeTest, SortPlanFaultsAreNamedByLine) {
   ExpectProblem(client().Get("/api/v1/sortplans/bad"), 404);
 }
 
+// "café" with é as one character and as e + U+0301 read alike: a second plan or bin written the
+// other way is refused naming the first, and a plan asked for the other way is named.
+TEST_F(ServeTest, PlanNamesAndBinsThatReadAlikeAreNotTwo) {
+  const std::string composed = "caf\u00e9";
+  const std::string decomposed = "cafe\u0301";
+  const std::string plan_csv = "prefix,bin\n*,manual\n11," + composed + "\n";
+  ExpectJson(client().Put("/api/v1/sortplans/hub-" + composed, admin(), plan_csv, "text/csv"), 201);
+  const json twin = ExpectProblem(
+      client().Put("/api/v1/sortplans/hub-" + decomposed, admin(), plan_csv, "text/csv"), 409);
+  EXPECT_NE(
+      twin["detail"].get<std::string>().find("the plan 'hub-" + composed + "' reads the same"),
+      std::string::npos)
+      << twin.dump();
+  const json asked =
+      ExpectProblem(client().Get("/api/v1/route/110001?plan=" +
+                                 httplib::detail::encode_query_param("hub-" + decomposed)),
+                    404);
+  EXPECT_EQ(asked["title"], "Unknown Sort Plan");
+  EXPECT_NE(asked["detail"].get<std::string>().find("'hub-" + composed + "' reads the same"),
+            std::string::npos)
+      << asked.dump();
+  const json bins = ExpectProblem(
+      client().Put("/api/v1/sortplans/hub-" + composed, admin(),
+                   "prefix,bin\n*,manual\n11," + composed + "\n56," + decomposed + "\n",
+                   "text/csv"),
+      400);
+  EXPECT_EQ(bins["title"], "Bad Sort Plan");
+  EXPECT_NE(bins["detail"].get<std::string>().find("bin for prefix 56"), std::string::npos)
+      << bins.dump();
+  // The plan as first written still routes.
+  EXPECT_EQ(ExpectJson(client().Get("/api/v1/route/110001?plan=" +
+                                    httplib::detail::encode_query_param("hub-" + composed)))["bin"],
+            composed);
+}
+
 // A plan has at most 100,000 rules: one over is refused naming the limit, without saving.
 TEST_F(ServeTest, SortPlanRuleLimit) {
   std::string csv = "prefix,bin\n*,manual\n";

@@ -46,24 +46,29 @@ void ThrowDbError(const db::Error& error, std::string title) {
   throw HttpError(500, "the database failed to answer", "Database Error");
 }
 
-void ThrowUnknownPlan(std::string_view name) {
-  throw HttpError(404, "no sort plan named '" + std::string(name.substr(0, 100)) + "'",
-                  "Unknown Sort Plan");
+void ThrowUnknownPlan(const db::Error& not_found) {
+  throw HttpError(404, not_found.message, "Unknown Sort Plan");
 }
 
 db::SortPlan LoadPlan(db::Connection& connection, std::string_view name) {
   auto plan = db::GetPlan(connection, name);
-  if (!plan && plan.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(name);
+  if (!plan && plan.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(plan.error());
   return Unwrap(std::move(plan));
 }
 
 void RequirePlan(db::Connection& connection, std::string_view name) {
-  if (!Unwrap(db::HasPlan(connection, name))) ThrowUnknownPlan(name);
+  if (Unwrap(db::HasPlan(connection, name))) return;
+  // Read again for the error, which names a plan that reads like `name` (the plan itself would be
+  // up to db::kMaxPlanRules rules to read on every scan).
+  auto plan = db::GetPlan(connection, name);
+  if (!plan && plan.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(plan.error());
+  Unwrap(std::move(plan));
 }
 
 db::Routing RouteUnder(db::Connection& connection, Pincode pincode, std::string_view name) {
   auto routing = db::Route(connection, pincode, name);
-  if (!routing && routing.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(name);
+  if (!routing && routing.error().code == db::ErrorCode::kNotFound)
+    ThrowUnknownPlan(routing.error());
   return Unwrap(std::move(routing));
 }
 

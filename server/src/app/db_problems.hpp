@@ -28,8 +28,9 @@ inline void Unwrap(const db::Result<void>& result, std::string title = {}) {
   if (!result) ThrowDbError(result.error(), std::move(title));
 }
 
-/// 404 "Unknown Sort Plan" for the plan called `name`.
-[[noreturn]] void ThrowUnknownPlan(std::string_view name);
+/// 404 "Unknown Sort Plan" with the registry's kNotFound `not_found`, which names the plan asked
+/// for and a stored one that reads like it.
+[[noreturn]] void ThrowUnknownPlan(const db::Error& not_found);
 /// The sort plan called `name`, rules and all; 404 "Unknown Sort Plan" when there is none. For
 /// the plan's own routes and for work that routes many pincodes under one version of it.
 db::SortPlan LoadPlan(db::Connection& connection, std::string_view name);

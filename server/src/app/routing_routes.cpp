@@ -147,7 +147,7 @@ HttpResponse GetRoute(const AppContext& context, const HttpRequest& request) {
   // The six prefixes of the pincode looked up by index, not the whole plan read (a plan may
   // hold up to db::kMaxPlanRules rules).
   auto routed = db::Route(*connection, pincode, plan_name);
-  if (!routed && routed.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(plan_name);
+  if (!routed && routed.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(routed.error());
   const db::Routing routing = Unwrap(std::move(routed));
   auto record = db::LookupPincode(*connection, pincode);
   if (!record && record.error().code != db::ErrorCode::kNotFound) ThrowDbError(record.error());
@@ -243,7 +243,8 @@ HttpResponse DeleteSortPlan(const AppContext& context, const HttpRequest& reques
     throw HttpError(409, deleted.error().message, "Default Sort Plan");
   }
   // The title every other route gives an unknown plan.
-  if (!deleted && deleted.error().code == db::ErrorCode::kNotFound) ThrowUnknownPlan(name);
+  if (!deleted && deleted.error().code == db::ErrorCode::kNotFound)
+    ThrowUnknownPlan(deleted.error());
   if (!deleted) ThrowPlanError(deleted.error());
   // The plan as it was, so that a mistaken delete can be put back with PUT.
   return PlanResponse(PlanJson(*deleted).dump(), "application/json", db::PlanVersion(*deleted),

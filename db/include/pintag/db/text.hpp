@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "pintag/db/result.hpp"
@@ -61,5 +62,15 @@ const char* RefusedCodePoint(char32_t c);
 /// "del<U+200B>hi" print alike, so three plans of those names all read "delhi" in a list.
 std::optional<Error> CheckShownName(std::string_view field, std::string_view value,
                                     std::size_t max_bytes);
+
+/// `text` in Unicode's Normalization Form C (canonical composition): "e" + U+0301 and "é" (U+00E9)
+/// give the same bytes, as do a Devanagari consonant with U+093C nukta and its precomposed form.
+/// What two names that read alike are compared by; text is stored as it was written. Text that is
+/// not valid UTF-8 comes back unchanged.
+std::string CanonicalForm(std::string_view text);
+
+/// Whether `a` and `b` read alike but differ in their code points: different bytes, one
+/// CanonicalForm. Two bins or plan names like that would show as one and be two.
+bool ReadAlikeButDiffer(std::string_view a, std::string_view b);
 
 }  // namespace pintag::db
