@@ -1,5 +1,7 @@
 #include "pintag/codec/utf8.hpp"
 
+#include <algorithm>
+
 namespace pintag {
 
 Utf8CodePoint DecodeUtf8(std::string_view text, std::size_t offset) {
@@ -34,6 +36,20 @@ std::size_t Utf8CharacterCount(std::string_view text) {
     i += point.length > 0 ? point.length : 1;
   }
   return count;
+}
+
+std::string QuotedPrefix(std::string_view text, std::size_t max_bytes) {
+  std::size_t end = std::min(text.size(), max_bytes);
+  // Back to the start of the character the cut falls in: continuation bytes are 10xxxxxx.
+  while (end > 0 && end < text.size() && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) {
+    --end;
+  }
+  // Appended piece by piece: GCC 12 warns falsely on "'" + std::string (its bug 105329).
+  std::string quoted(1, '\'');
+  quoted.append(text.substr(0, end));
+  if (end < text.size()) quoted += "\u2026";
+  quoted += '\'';
+  return quoted;
 }
 
 void AppendUtf8(std::string& out, char32_t code_point) {

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "guard.hpp"
+#include "pintag/codec/utf8.hpp"
 #include "pintag/db/csv.hpp"
 #include "pintag/db/text.hpp"
 #include "sha256.hpp"
@@ -63,22 +64,9 @@ std::string ReadsLike(std::string_view lookalike) {
          "as one character or as two, say)";
 }
 
-/// `name` quoted for a message: a name asked for may be long (a URL's path), so it is cut after
-/// 100 bytes, at a character's start.
-std::string Quoted(std::string_view name) {
-  std::size_t end = std::min<std::size_t>(name.size(), 100);
-  while (end > 0 && end < name.size() && (static_cast<unsigned char>(name[end]) & 0xC0) == 0x80) {
-    --end;
-  }
-  std::string quoted(1, '\'');
-  quoted.append(name.substr(0, end));
-  if (end < name.size()) quoted += "…";
-  quoted += '\'';
-  return quoted;
-}
-
 Error UnknownPlan(Connection& connection, std::string_view name) {
-  std::string message = "no sort plan named " + Quoted(name);
+  // A name asked for may be long (a URL's path).
+  std::string message = "no sort plan named " + QuotedPrefix(name, 100);
   if (const auto lookalike = LookalikePlanName(connection, name)) {
     message += ": " + ReadsLike(*lookalike) +
                "; ask for it by its name as stored (GET /api/v1/sortplans lists them)";
@@ -147,7 +135,7 @@ void AppendField(std::string& out, std::string_view field) {
 /// meets it. `doing` ends the message for a plan that must exist ("to replace").
 std::optional<Error> UnmetCondition(std::string_view name, const std::optional<SortPlan>& stored,
                                     const PlanCondition& condition, std::string_view doing) {
-  const std::string quoted = "'" + std::string(name) + "'";
+  const std::string quoted = QuotedPrefix(name, 100);
   const std::string version = stored ? PlanVersion(*stored) : std::string();
   if (condition.match && !stored) {
     return Error{ErrorCode::kPrecondition,

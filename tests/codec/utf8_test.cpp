@@ -76,5 +76,27 @@ TEST(Utf8, RefusesWhatIsNotUtf8) {
   }
 }
 
+// A message quotes a long name cut short, never inside a character: a cut one would be invalid
+// UTF-8 in a JSON answer (shown as U+FFFD, or refused by a strict client).
+TEST(Utf8, QuotedPrefixCutsBetweenCharacters) {
+  EXPECT_EQ(QuotedPrefix("delhi", 40), "'delhi'");
+  EXPECT_EQ(QuotedPrefix("delhi", 5), "'delhi'");
+  EXPECT_EQ(QuotedPrefix("delhi", 3), "'del\u2026'");
+  EXPECT_EQ(QuotedPrefix("", 3), "''");
+  const std::string delhi = "\u0926\u093f\u0932\u094d\u0932\u0940";  // 6 letters of 3 bytes
+  for (std::size_t max_bytes = 0; max_bytes <= delhi.size() + 1; ++max_bytes) {
+    const std::string quoted = QuotedPrefix(delhi, max_bytes);
+    const std::size_t kept = max_bytes >= delhi.size() ? delhi.size() : max_bytes / 3 * 3;
+    const std::string expected =
+        "'" + delhi.substr(0, kept) + (kept < delhi.size() ? "\u2026" : "") + "'";
+    EXPECT_EQ(quoted, expected) << max_bytes;
+    for (std::size_t i = 0; i < quoted.size();) {
+      const Utf8CodePoint point = DecodeUtf8(quoted, i);
+      ASSERT_GT(point.length, 0U) << max_bytes << " at " << i;
+      i += point.length;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pintag

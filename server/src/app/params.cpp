@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pintag/codec/label.hpp"
+#include "pintag/codec/utf8.hpp"
 #include "pintag/db/sort_plan.hpp"
 #include "pintag/server/problem.hpp"
 
@@ -17,7 +18,7 @@ using server::HttpError;
 using server::HttpRequest;
 
 std::string Quoted(std::string_view text) {
-  return "'" + std::string(text.substr(0, 40)) + (text.size() > 40 ? "…'" : "'");
+  return QuotedPrefix(text, 40);
 }
 
 namespace {

@@ -19,8 +19,8 @@
 
 namespace pintag::app {
 
-/// Untrusted text quoted back in a problem ('…'), cut at 40 bytes so that a huge parameter does
-/// not make a huge answer.
+/// Untrusted text quoted back in a problem ('…'), cut after 40 bytes (at a character's start) so
+/// that a huge parameter does not make a huge answer.
 std::string Quoted(std::string_view text);
 
 // --- Path parameters -----------------------------------------------------------------------------

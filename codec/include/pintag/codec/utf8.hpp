@@ -22,6 +22,10 @@ Utf8CodePoint DecodeUtf8(std::string_view text, std::size_t offset);
 /// byte that is not valid UTF-8 counts as one.
 std::size_t Utf8CharacterCount(std::string_view text);
 
+/// `text` quoted for a message, 'like this', cut after at most `max_bytes` at a character's
+/// start (never inside one), with an ellipsis before the closing quote when it was cut.
+std::string QuotedPrefix(std::string_view text, std::size_t max_bytes);
+
 /// Appends `code_point` as UTF-8. Precondition: a Unicode scalar value (at most U+10FFFF, not a
 /// surrogate), e.g. one DecodeUtf8 returned.
 void AppendUtf8(std::string& out, char32_t code_point);
