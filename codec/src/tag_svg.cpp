@@ -45,16 +45,21 @@ std::string SectorPath(const Frame& f, geometry::Point c, double inner, double o
                        double to) {
   const std::string ro = Num(outer * f.side);
   const std::string ri = Num(inner * f.side);
-  return "M" + PointAt(f, c, outer, from) + " A" + ro + "," + ro + " 0 0 1 " +
-         PointAt(f, c, outer, to) + " L" + PointAt(f, c, inner, to) + " A" + ri + "," + ri +
-         " 0 0 0 " + PointAt(f, c, inner, from) + " Z";
+  // Appended piece by piece: GCC 12 warns falsely on "M" + std::string (its bug 105329).
+  std::string path = "M";
+  path += PointAt(f, c, outer, from) + " A" + ro + "," + ro + " 0 0 1 ";
+  path += PointAt(f, c, outer, to) + " L" + PointAt(f, c, inner, to);
+  path += " A" + ri + "," + ri + " 0 0 0 " + PointAt(f, c, inner, from) + " Z";
+  return path;
 }
 
 // A pie wedge (red quadrant) from the element's centre.
 std::string QuadrantPath(const Frame& f, geometry::Point c, double radius, double from, double to) {
   const std::string r = Num(radius * f.side);
-  return "M" + Num(f.x(c.x)) + "," + Num(f.y(c.y)) + " L" + PointAt(f, c, radius, from) + " A" + r +
-         "," + r + " 0 0 1 " + PointAt(f, c, radius, to) + " Z";
+  std::string path = "M";
+  path += Num(f.x(c.x)) + "," + Num(f.y(c.y)) + " L" + PointAt(f, c, radius, from);
+  path += " A" + r + "," + r + " 0 0 1 " + PointAt(f, c, radius, to) + " Z";
+  return path;
 }
 
 }  // namespace

@@ -2,7 +2,6 @@
 
 #include <pango/pangocairo.h>
 
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,7 +25,9 @@ constexpr const char* kArabicFamily = "Noto Naskh Arabic";
 /// their letter's script), so that a phrase is set in one face.
 std::vector<std::pair<std::size_t, std::size_t>> ArabicRuns(std::string_view text) {
   std::vector<std::pair<std::size_t, std::size_t>> runs;
-  std::optional<std::size_t> start;
+  // No run open: npos (a std::optional here drew GCC 12's false -Wmaybe-uninitialized).
+  constexpr std::size_t kNoRun = std::string_view::npos;
+  std::size_t start = kNoRun;
   std::size_t last_end = 0;  // the end of the run's last Arabic character
   for (std::size_t at = 0; at < text.size();) {
     const char* here = text.data() + at;
@@ -36,17 +37,18 @@ std::vector<std::pair<std::size_t, std::size_t>> ArabicRuns(std::string_view tex
     const GUnicodeScript script =
         c >= 0xFFFFFFFE ? G_UNICODE_SCRIPT_UNKNOWN : g_unichar_get_script(c);
     if (script == G_UNICODE_SCRIPT_ARABIC) {
-      if (!start) start = at;
+      if (start == kNoRun) start = at;
       last_end = next;
-    } else if (script == G_UNICODE_SCRIPT_INHERITED && start && last_end == at) {
+    } else if (script == G_UNICODE_SCRIPT_INHERITED && start != kNoRun && last_end == at) {
       last_end = next;  // a mark on the run's last letter
-    } else if (script != G_UNICODE_SCRIPT_COMMON && script != G_UNICODE_SCRIPT_INHERITED && start) {
-      runs.emplace_back(*start, last_end);
-      start.reset();
+    } else if (script != G_UNICODE_SCRIPT_COMMON && script != G_UNICODE_SCRIPT_INHERITED &&
+               start != kNoRun) {
+      runs.emplace_back(start, last_end);
+      start = kNoRun;
     }
     at = next;
   }
-  if (start) runs.emplace_back(*start, last_end);
+  if (start != kNoRun) runs.emplace_back(start, last_end);
   return runs;
 }
 

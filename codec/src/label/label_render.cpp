@@ -125,7 +125,7 @@ void SizeSvgInMillimetres(std::vector<std::uint8_t>& bytes, const LabelSize& siz
   if (const std::size_t group = text.find(kGroup); group != std::string::npos) {
     const std::size_t digits = group + kGroup.size();
     const std::size_t close = text.find('"', digits);
-    if (close != std::string::npos) text.replace(digits, close - digits, "1");
+    if (close != std::string::npos) text.replace(digits, close - digits, 1, '1');
   }
   bytes.assign(text.begin(), text.end());
 }
