@@ -528,20 +528,20 @@ Result<std::string> ReadImportFile(const std::string& path) {
   return ReadImportStream(in, path);
 }
 
-Result<std::string> ReadImportStream(std::istream& in, const std::string& path) {
+Result<std::string> ReadImportStream(std::istream& in, const std::string& name) {
   std::string text;
   std::array<char, 1 << 16> chunk{};
   while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
     if (text.size() + static_cast<std::size_t>(in.gcount()) > kMaxImportFileBytes) {
       return Error{ErrorCode::kTooLarge,
-                   path + " is larger than " + std::to_string(kMaxImportFileBytes >> 20) +
+                   name + " is larger than " + std::to_string(kMaxImportFileBytes >> 20) +
                        " MiB, more than any pincode directory (India Post's whole directory is "
                        "about 20 MB)"};
     }
     text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
   }
   if (in.bad()) {
-    return Error{ErrorCode::kStorage, "error reading " + path + ": " + std::strerror(errno)};
+    return Error{ErrorCode::kStorage, "error reading " + name + ": " + std::strerror(errno)};
   }
   return text;
 }

@@ -445,6 +445,12 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
       h.problem = "the PNG is truncated inside a chunk";
       return h;
     }
+    // A type of anything but four letters is libpng's "invalid chunk type", printed as above.
+    if (PngChunkName(&b[pos + 4]).size() != 4) {
+      h.problem = "the PNG is damaged: a chunk's type is " + PngChunkName(&b[pos + 4]) +
+                  ", not four letters";
+      return h;
+    }
     const bool critical = (b[pos + 4] & 0x20U) == 0;
     if (kCheckPngChecksums && critical &&
         crc32(0, &b[pos + 4], length + 4) != Be32(&b[pos + 8 + length])) {

@@ -905,6 +905,19 @@ TEST(ImageIo, APngChunkFailingItsChecksumIsCorruptAndNamed) {
   ASSERT_TRUE(read.image) << read.error;
   ASSERT_TRUE(want.image) << want.error;
   EXPECT_EQ(cv::norm(read.image->bgr, want.image->bgr, cv::NORM_INF), 0);
+
+  // The same chunk with a byte of its type no letter: libpng's "invalid chunk type", which it
+  // printed on stderr (a docs walkthrough, 2026-12-07), is refused before libpng runs.
+  std::vector<std::uint8_t> bad_type = with_text;
+  bad_type[33 + 4 + 3] = 0x8C;
+  testing::internal::CaptureStderr();
+  const LoadResult refused = LoadImageBytes(bad_type);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  EXPECT_FALSE(refused.image);
+  EXPECT_EQ(refused.kind, ImageError::kCorrupt) << refused.error;
+  EXPECT_NE(refused.error.find("a chunk's type is 0x7445588c, not four letters"),
+            std::string::npos)
+      << refused.error;
 }
 
 TEST(ImageIo, DegenerateSizes) {

@@ -21,7 +21,7 @@ int WhitePixels(const cv::Mat& image) {
   int white = 0;
   for (int y = 0; y < image.rows; ++y) {
     for (int x = 0; x < image.cols; ++x) {
-      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+      const cv::Vec3b& p = image.at<cv::Vec3b>(y, x);
       if (p[0] > 250 && p[1] > 250 && p[2] > 250) ++white;
     }
   }
