@@ -212,6 +212,8 @@ TEST(ServeStartRefusals, AFollowTokenFileThatGivesNoTokenSaysWhy) {
   EXPECT_NE(from_env.out.find("the replica token in PINTAG_FOLLOW_TOKEN is not"), std::string::npos)
       << from_env.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
+  // Nor a scan log beside it (the replica's own file, which a refused start made before).
+  EXPECT_FALSE(std::filesystem::exists(dir.file("new-scans.db")));
 }
 
 // CLI11 takes a variable set to "" as unset: `PINTAG_ADMIN_TOKEN_OUT=$UNSET_PATH` printed the first

@@ -275,6 +275,8 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
                              "--db FILE --out " +
                              db_path_ + "`, or give --follow URL to fetch one");
   }
+  // The token first: a start refused for it leaves no scan log file made.
+  if (!args_.follow.empty()) token_ = ReadToken(args_);
   // Before a follower waits for its first snapshot: a --scan-log given by mistake (another
   // replica's snapshot) is refused at once, not once the primary is up.
   const std::string scan_log =
@@ -283,7 +285,6 @@ Replication::Replication(const ReplicationArgs& args, app::AppConfig& config)
     throw std::runtime_error("scan log " + scan_log + ": " + opened.error().message);
   }
   if (!args_.follow.empty()) {
-    token_ = ReadToken(args_);
     follow_status_ = std::make_shared<replica::FollowStatus>();
     config.follow_status = follow_status_;
     // One follower from the first fetch on: it keeps the ETag of what it installed, so its first
