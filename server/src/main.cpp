@@ -66,11 +66,15 @@ std::string NamingTheEnvironment(const CLI::App& app, std::string message, int a
       const bool names_it = message.rfind(flag + ":", 0) == 0 ||
                             message.rfind(flag + " ", 0) == 0 ||
                             message.find(": " + flag + " = ") != std::string::npos;
-      // And about its value: "--follow needs a replica token" is no fault of PINTAG_FOLLOW's.
-      if (!names_it || message.find(value) == std::string::npos) continue;
+      // And about its value ("--follow needs a replica token" is no fault of PINTAG_FOLLOW's), or
+      // about its being given at all: "--scan-log is for a replica …".
+      const bool given_at_all = message.rfind(flag + " is ", 0) == 0;
+      if (!names_it || (message.find(value) == std::string::npos && !given_at_all)) continue;
       // A value on the command line wins over the environment's.
-      if (!OnCommandLine(flag, argc, argv))
-        message += " (the value of the environment variable " + variable + ")";
+      if (OnCommandLine(flag, argc, argv)) return;
+      message += message.find(value) == std::string::npos
+                     ? " (set by the environment variable " + variable + ")"
+                     : " (the value of the environment variable " + variable + ")";
       return;
     }
     for (const CLI::App* sub : command.get_subcommands()) visit(*sub);

@@ -177,6 +177,20 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
               std::string::npos)
         << refused.out;
   }
+  // A replica's option set in a primary's environment (a compose file's shared block) is refused
+  // for being given at all: the variable that gave it is named.
+  for (const auto& [variable, says] : std::vector<std::pair<std::string, std::string>>{
+           {"PINTAG_SCAN_LOG=" + dir.file("scans.db"), "--scan-log is for a replica"},
+           {"PINTAG_PRIMARY=http://127.0.0.1:9", "--primary is for a replica"}}) {
+    refused = RunShell(variable + " " + serve + " 2>&1");
+    EXPECT_EQ(refused.status, 2) << variable << ": " << refused.out;
+    EXPECT_NE(refused.out.find(says +
+                               " (--read-only or --follow); a primary has no use for it (set "
+                               "by the environment variable " +
+                               variable.substr(0, variable.find('=')) + ")"),
+              std::string::npos)
+        << refused.out;
+  }
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 
