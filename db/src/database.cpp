@@ -87,9 +87,12 @@ constexpr std::uintmax_t kSmallestDatabaseBytes = 512;
 constexpr int kSqliteNotADatabase = 26;
 
 std::string NotADatabase(const std::string& path, std::uintmax_t bytes) {
+  // "that do not start as one" was wrong for a file whose header is SQLite's and whose rest is
+  // damaged, which SQLite refuses the same way.
   return "database " + path + " is not an SQLite database (" + std::to_string(bytes) +
-         (bytes == 1 ? " byte that does" : " bytes that do") +
-         " not start as one); give a PinTag database, or a new or empty file to create one in";
+         (bytes == 1 ? " byte" : " bytes") +
+         " that SQLite cannot read as one); give a PinTag database, or a new or empty file to "
+         "create one in";
 }
 
 }  // namespace

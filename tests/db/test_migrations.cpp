@@ -161,6 +161,20 @@ TEST(Migrations, NotADatabaseAndMissingFilesAreErrors) {
             std::string::npos)
       << opened.error().message;
   EXPECT_EQ(test::ReadFile(junk), std::string(4096, 'x'));
+  // SQLite's header with nothing a database holds after it (a page size of 0): refused alike, and
+  // not said to "not start as one".
+  std::string damaged("SQLite format 3", 16);
+  damaged += std::string(600, '\xEE');
+  damaged[16] = damaged[17] = '\0';
+  const std::string header_only = test::WriteFile(dir.file("header.db"), damaged);
+  const auto refused = OpenDatabase(header_only);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find(header_only +
+                                         " is not an SQLite database (616 bytes that SQLite "
+                                         "cannot read as one)"),
+            std::string::npos)
+      << refused.error().message;
+  EXPECT_EQ(test::ReadFile(header_only), damaged);
   const auto missing = OpenDatabase(dir.file("missing.db"), {.create = false});
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().code, ErrorCode::kNotFound);
