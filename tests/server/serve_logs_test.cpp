@@ -169,6 +169,16 @@ TEST_F(ServeLogTest, AuthenticatedRequestsNameTheTokenIdNotItsSecret) {
   ASSERT_EQ(lines.size(), 1U);
   EXPECT_TRUE(std::regex_search(lines[0], std::regex(R"( token=\d+$)"))) << lines[0];
   EXPECT_EQ(lines[0].find(admin_token_), std::string::npos);
+  // A valid token refused for its role (403) is named too: which counter tried an admin route.
+  auto refused = client().Get("/api/v1/tokens", Auth(counter_token_));
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 403);
+  const auto refused_lines =
+      LogLines(stderrFile(), "id=" + refused->get_header_value("X-Request-Id"));
+  ASSERT_EQ(refused_lines.size(), 1U);
+  EXPECT_TRUE(std::regex_search(refused_lines[0], std::regex(R"( status=403 .* token=\d+$)")))
+      << refused_lines[0];
+  EXPECT_EQ(refused_lines[0].find(counter_token_), std::string::npos);
 }
 
 TEST_F(ServeLogTest, JsonFormatWritesOneObjectPerLine) {

@@ -198,6 +198,8 @@ Admission Api::admit(std::string_view method, std::string_view path, const Heade
                                    " token may not call this route; it needs " +
                                    std::string(ToString(route->access)) +
                                    (route->access == Access::kAdmin ? "" : " or admin"));
+      // Kept for the access line, which names the token refused (no handler runs).
+      admission.principal = std::move(principal);
       return admission;
     }
     admission.principal = std::move(principal);
