@@ -552,6 +552,8 @@ TEST_F(ReplicaSetTest, AFileThatIsNotASnapshotIsIgnoredAndTheOldOneServed) {
                 dir_.file("refused-scans.db"));
   EXPECT_NE(refused.status, 0);
   EXPECT_NE(refused.out.find("cannot serve " + junk_again + ":"), std::string::npos) << refused.out;
+  // Named by its path, not by the replica's own link to it (".serving-…").
+  EXPECT_EQ(refused.out.find(".serving-"), std::string::npos) << refused.out;
   EXPECT_EQ(ServingFiles(junk_again), before);
 }
 

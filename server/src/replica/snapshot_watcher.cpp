@@ -169,7 +169,17 @@ db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<FileId
   // What was linked, not what was at the path a moment before: a file renamed into place in
   // between is looked at once, now, and not taken for a change again.
   *linked = IdentifyFile(link);
-  return db::VerifySnapshot(link);
+  db::Result<db::SnapshotInfo> verified = db::VerifySnapshot(link);
+  if (!verified) {
+    // The link is the server's own name for the file; the operator knows the file by its path.
+    db::Error error = verified.error();
+    for (std::size_t at = error.message.find(link); at != std::string::npos;
+         at = error.message.find(link, at + path_.size())) {
+      error.message.replace(at, link.size(), path_);
+    }
+    return error;
+  }
+  return verified;
 }
 
 bool SnapshotWatcher::check() {
