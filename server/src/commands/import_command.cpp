@@ -7,6 +7,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -55,6 +56,14 @@ class ProgressBar {
   bool drawn_ = false;
 };
 
+/// "1 row", "4 rows": `count` and its noun, plural unless one.
+std::string Counted(std::int64_t count, std::string_view noun) {
+  std::string text = std::to_string(count) + " ";
+  text += noun;
+  if (count != 1) text += "s";
+  return text;
+}
+
 /// The bad rows, as FILE:LINE: reason, the first kProblemsShown of them.
 void PrintProblems(const std::string& file, const db::ImportReport& report) {
   const std::vector<db::RowProblem>& problems = report.problems;
@@ -63,7 +72,7 @@ void PrintProblems(const std::string& file, const db::ImportReport& report) {
   }
   const std::int64_t shown = static_cast<std::int64_t>(std::min(problems.size(), kProblemsShown));
   if (report.bad_rows > shown) {
-    std::cerr << "... and " << report.bad_rows - shown << " more bad rows\n";
+    std::cerr << "... and " << Counted(report.bad_rows - shown, "more bad row") << "\n";
   }
 }
 
@@ -94,11 +103,12 @@ void Run(const ImportArgs& args) {
     bar.reset();
     PrintProblems(file, parsed->report);
     if (args.strict) {
-      throw std::runtime_error("--strict: " + std::to_string(bad_rows) +
-                               " bad rows, nothing imported");
+      throw std::runtime_error("--strict: " + Counted(bad_rows, "bad row") + ", nothing imported");
     }
-    throw std::runtime_error(file + ": none of its " + std::to_string(parsed->report.rows) +
-                             " rows could be imported");
+    throw std::runtime_error(file + (parsed->report.rows == 1
+                                         ? std::string(": its one row could not be imported")
+                                         : ": none of its " + Counted(parsed->report.rows, "row") +
+                                               " could be imported"));
   }
   bar->clear();  // OpenDb may say it created the database
   db::Connection connection = OpenDb(args.db);
@@ -117,11 +127,12 @@ void Run(const ImportArgs& args) {
   const db::ImportReport& report = *result;
   PrintProblems(file, report);
   std::cout << "imported " << file << " (" << db::ToString(report.layout)
-            << " layout): " << report.rows << " rows, " << report.offices_added
-            << " offices added, " << report.offices_updated << " updated, "
-            << report.offices_unchanged << " unchanged, " << report.pincodes_added.size()
-            << " new pincodes, " << report.bad_rows << " bad rows skipped";
-  if (report.repeated_rows > 0) std::cout << ", " << report.repeated_rows << " repeated rows";
+            << " layout): " << Counted(report.rows, "row") << ", "
+            << Counted(report.offices_added, "office") << " added, " << report.offices_updated
+            << " updated, " << report.offices_unchanged << " unchanged, "
+            << Counted(static_cast<std::int64_t>(report.pincodes_added.size()), "new pincode")
+            << ", " << Counted(report.bad_rows, "bad row") << " skipped";
+  if (report.repeated_rows > 0) std::cout << ", " << Counted(report.repeated_rows, "repeated row");
   std::cout << "\n";
   constexpr std::size_t kNewKeysShown = 20;
   for (std::size_t i = 0; i < report.pincodes_added.size() && i < kNewKeysShown; ++i) {
