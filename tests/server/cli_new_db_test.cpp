@@ -230,7 +230,7 @@ TEST(CliNewDb, ABadImportFileLeavesNoNewDatabase) {
       {"header.csv", "pincode,name\n110001,x\n", "", "not an All India Pincode Directory header"},
       {"quote.csv", header + "\"Delhi,Delhi\n", "", "never closed"},
       {"all_bad.csv", header + bad_row + bad_row, "", "none of its 2 rows could be imported"},
-      {"strict.csv", header + bad_row, "--strict", "--strict: 1 bad rows, nothing imported"},
+      {"strict.csv", header + bad_row, "--strict", "--strict: 1 bad row, nothing imported"},
       {"header_only.csv", header + "\n", "",
        "header_only.csv: the file has a header and no data rows; nothing to import"},
       {"unknown_places.csv",
