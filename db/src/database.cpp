@@ -174,6 +174,7 @@ Result<OpenedDatabase> OpenDatabase(const std::string& path, const OpenOptions& 
       if (auto foreign = RefuseForeignFile(path, locked)) return *foreign;
       if (locked.version == 0) {
         detail::ApplyMigrations(connection, 0, kSchemaVersion);
+        if (options.before_seeding) options.before_seeding();
         SeedDatabase(connection);
         opened.created = true;
       }

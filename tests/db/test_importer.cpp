@@ -729,9 +729,13 @@ TEST_F(Importer, CommandLineImportOnATerminalSaysItCreatedTheDatabaseOnALineOfIt
                                       " --db " + db + "' /dev/null < /dev/null");
   EXPECT_EQ(shown.exit_code, 0) << shown.out;
   EXPECT_NE(shown.out.find("parse ["), std::string::npos) << shown.out;  // a terminal: a bar
-  EXPECT_NE(shown.out.find("\r\033[Kcreated " + db + " and seeded it"), std::string::npos)
+  // The seconds of seeding are said first, each line on its own (a terminal shows \r\n).
+  EXPECT_NE(shown.out.find("\r\033[Kseeding " + db + " from " + SeedSource() +
+                           " (a few seconds)...\r\ncreated " + db + " and seeded it"),
+            std::string::npos)
       << shown.out;
   EXPECT_EQ(shown.out.find("%created"), std::string::npos) << shown.out;
+  EXPECT_EQ(shown.out.find("%seeding"), std::string::npos) << shown.out;
 }
 
 // A file that cannot be read leaves no database behind, and says why it cannot be read.

@@ -38,7 +38,19 @@ std::string DatabaseWriteFailure(const std::string& path, const db::Error& error
 db::Connection OpenDb(const std::string& path, const SayFunction& say) {
   std::error_code error;
   const bool existed = std::filesystem::exists(path, error);
-  auto opened = db::OpenDatabase(path);
+  const auto tell = [&say](const std::string& what) {
+    if (say) {
+      say(what);
+    } else {
+      std::cerr << what << "\n";
+    }
+  };
+  db::OpenOptions options;
+  // Seeding takes seconds (about 10 on a busy machine), during which nothing else is said.
+  options.before_seeding = [&] {
+    tell("seeding " + path + " from " + db::SeedSource() + " (a few seconds)...");
+  };
+  auto opened = db::OpenDatabase(path, options);
   if (!opened && opened.error().code == db::ErrorCode::kBusy) {
     throw std::runtime_error(LockedMessage(path, "it could not be opened"));
   }
@@ -53,11 +65,7 @@ db::Connection OpenDb(const std::string& path, const SayFunction& say) {
     const std::string what = existed
                                  ? "seeded the empty file " + path + " from " + db::SeedSource()
                                  : "created " + path + " and seeded it from " + db::SeedSource();
-    if (say) {
-      say(what);
-    } else {
-      std::cerr << what << "\n";
-    }
+    tell(what);
   }
   return std::move(opened).value().connection;
 }

