@@ -166,7 +166,7 @@ void CheckOptions(const DetectArgs& args) {
     CheckFileToWrite("--overlay", args.overlay);
     if (!CanEncode(args.overlay)) {
       throw UsageError("--overlay " + args.overlay +
-                       ": no image format for its extension; name a .png or .jpg file");
+                       ": no image format for its extension; name a .png, .jpg, .webp or .tiff file");
     }
   }
   if (!args.debug_dir.empty() && std::filesystem::exists(args.debug_dir, ec) &&
