@@ -597,17 +597,17 @@ int Main(int argc, char** argv) {
   result.wall_seconds = std::chrono::duration<double>(Clock::now() - wall_start).count();
 
   const MarkerStats& pintag = result.markers[0];
+  std::array<char, 64> aruco{};
+  if (result.markers.size() > 1 && result.markers[1].name == "ArUco") {
+    std::snprintf(aruco.data(), aruco.size(), " (ArUco %.2f ms)",
+                  Mean(result.markers[1].time_ms_one_thread));
+  }
   char summary[256];
-  std::snprintf(
-      summary, sizeof summary,
-      "%zu frames; PinTag recall %.1f %%, misreads %d, off-tag detections %d, tagless false "
-      "positives %d, mean %.2f ms%s",
-      frames.size(), pintag.recall(-1, -1, -1).percent(), pintag.misreads, pintag.off_tag,
-      pintag.false_positives, Mean(pintag.time_ms_one_thread),
-      result.markers.size() > 1 && result.markers[1].name == "ArUco"
-          ? (" (ArUco " + std::to_string(Mean(result.markers[1].time_ms_one_thread)) + " ms)")
-                .c_str()
-          : "");
+  std::snprintf(summary, sizeof summary,
+                "%zu frames; PinTag recall %.1f %%, misreads %d, off-tag detections %d, tagless "
+                "false positives %d, mean %.2f ms%s",
+                frames.size(), pintag.recall(-1, -1, -1).percent(), pintag.misreads, pintag.off_tag,
+                pintag.false_positives, Mean(pintag.time_ms_one_thread), aruco.data());
   progress.finish(summary);
 
   std::string error;
