@@ -197,7 +197,7 @@ json ExpectNginxProblem(const httplib::Result& r, int status) {
   EXPECT_EQ(r->status, status) << r->body.substr(0, 300);
   EXPECT_EQ(r->get_header_value("Content-Type"), "application/problem+json");
   EXPECT_EQ(r->get_header_value("Server"), "nginx");  // without its version
-  const json body = Body(r);
+  json body = Body(r);
   EXPECT_EQ(body["status"], status) << r->body.substr(0, 300);
   EXPECT_TRUE(body["title"].is_string() && body["detail"].is_string()) << r->body.substr(0, 300);
   EXPECT_FALSE(r->get_header_value("X-Request-Id").empty());
