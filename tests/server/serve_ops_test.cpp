@@ -191,6 +191,18 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
               std::string::npos)
         << refused.out;
   }
+  // The follower's token, which only the environment gives, was silently unused where nothing
+  // follows: refused as --follow-token-file is.
+  const std::string token = "PINTAG_FOLLOW_TOKEN=pt_1_" + std::string(43, 'A') + " ";
+  refused = RunShell(token + serve + " 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("PINTAG_FOLLOW_TOKEN is a replica's token for --follow; a primary "
+                             "has no use for it"),
+            std::string::npos)
+      << refused.out;
+  refused = RunShell(token + serve + " --read-only 2>&1");
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_NE(refused.out.find("this replica follows no one"), std::string::npos) << refused.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.db")));
 }
 

@@ -141,7 +141,18 @@ void CheckReplicationArgs(const ReplicationArgs& args, const std::string& db_pat
             " is for a replica (--read-only or --follow); a primary has no use for it");
       }
     }
-  } else if (args.follow.empty()) {
+  }
+  // The token is read from the environment by ReadToken, not by CLI11, so it is checked here as
+  // --follow-token-file is: a secret set where nothing follows was silently unused.
+  if (const char* token = std::getenv("PINTAG_FOLLOW_TOKEN");
+      token != nullptr && *token != '\0' && args.follow.empty()) {
+    throw UsageError(
+        std::string("the environment variable PINTAG_FOLLOW_TOKEN is a replica's token "
+                    "for --follow; ") +
+        (replica ? "this replica follows no one" : "a primary has no use for it") +
+        ": unset it here");
+  }
+  if (replica && args.follow.empty()) {
     if (!args.follow_token_file.empty()) {
       throw UsageError(
           "--follow-token-file is the token for --follow; this replica follows no one");
