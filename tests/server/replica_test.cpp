@@ -965,9 +965,10 @@ TEST_F(ReplicaSetTest, AScanLogNamingARegistrySnapshotIsRefusedAndTheSnapshotLef
   const std::string bytes_before = ReadFile(theirs);
   for (const std::string& scan_log : {mine, theirs}) {
     // Under a timeout: a replica that took the file would serve on and never exit.
-    const CommandResult refused = RunShell("timeout 30 " + PintagExe() +
-                                           " serve --port 0 --bind 127.0.0.1 --read-only --db " +
-                                           mine + " --scan-log " + scan_log + " 2>&1");
+    std::string serve = "timeout 30 " + PintagExe();
+    serve += " serve --port 0 --bind 127.0.0.1 --read-only --db " + mine;
+    serve += " --scan-log " + scan_log + " 2>&1";
+    const CommandResult refused = RunShell(serve);
     // Its own --db is a usage error; another file is looked at, and refused for its tables.
     const bool own = scan_log == mine;
     EXPECT_EQ(refused.status, own ? 2 : 1) << refused.out;
