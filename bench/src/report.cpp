@@ -147,8 +147,7 @@ const char* WorldRole(scene::World world) {
     case scene::World::kHeldOut:
       return "backgrounds, seeds, camera and rendering path the tuning world does not use; a "
              "validation set, not a blind one (docs/BENCHMARKS.md, \"How held out the held-out "
-             "world "
-             "is\")";
+             "world is\")";
     case scene::World::kBlind:
       return "the held-out world's rendering path and phone on photographs, a camera and seeds of "
              "its own, run whole when an issue about the detector ends: no decision has looked at "

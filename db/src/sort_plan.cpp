@@ -1,6 +1,8 @@
 #include "pintag/db/sort_plan.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -57,21 +59,51 @@ std::optional<std::string> LookalikePlanName(Connection& connection, std::string
   return std::nullopt;
 }
 
-/// "the plan 'X' reads the same but …", for a name that reads like the stored `lookalike`.
-std::string ReadsLike(std::string_view lookalike) {
-  return "the plan '" + std::string(lookalike) +
-         "' reads the same but is written with other Unicode code points (a letter and its accent "
-         "as one character or as two, say)";
+/// `text` quoted, with its code points beyond ASCII after it ("'café' (U+00E9)"): two names that
+/// read alike print alike, and these say how they differ.
+std::string QuotedWithCodePoints(std::string_view text) {
+  std::string quoted = QuotedPrefix(text, 100);
+  std::string code_points;
+  for (std::size_t i = 0; i < text.size() && i < 100;) {
+    const Utf8CodePoint point = DecodeUtf8(text, i);
+    if (point.length == 0) break;
+    if (point.value >= 0x80) {
+      std::array<char, 16> code{};
+      std::snprintf(code.data(), code.size(), "%sU+%04X", code_points.empty() ? "" : " ",
+                    static_cast<unsigned>(point.value));
+      code_points += code.data();
+    }
+    i += point.length;
+  }
+  if (!code_points.empty()) quoted += " (" + code_points + ")";
+  return quoted;
 }
+
+/// Why `name` is not the stored `lookalike` though it reads the same.
+std::string ReadsLike(std::string_view name, std::string_view lookalike) {
+  return "the plan " + QuotedWithCodePoints(lookalike) + " reads the same as " +
+         QuotedWithCodePoints(name) +
+         " but is written with other Unicode code points (a letter and its accent as one "
+         "character or as two, say)";
+}
+
+/// `error` about the plan called `name`, with the stored plan that reads like it named, if any.
+Error NamingALookalike(Connection& connection, std::string_view name, Error error,
+                       std::string_view then) {
+  if (const auto lookalike = LookalikePlanName(connection, name)) {
+    error.message += ": " + ReadsLike(name, *lookalike) + "; " + std::string(then);
+  }
+  return error;
+}
+
+constexpr std::string_view kAskByStoredName =
+    "ask for it by its name as stored (GET /api/v1/sortplans lists them)";
 
 Error UnknownPlan(Connection& connection, std::string_view name) {
   // A name asked for may be long (a URL's path).
-  std::string message = "no sort plan named " + QuotedPrefix(name, 100);
-  if (const auto lookalike = LookalikePlanName(connection, name)) {
-    message += ": " + ReadsLike(*lookalike) +
-               "; ask for it by its name as stored (GET /api/v1/sortplans lists them)";
-  }
-  return {ErrorCode::kNotFound, message};
+  return NamingALookalike(connection, name,
+                          {ErrorCode::kNotFound, "no sort plan named " + QuotedPrefix(name, 100)},
+                          kAskByStoredName);
 }
 
 bool ByPrefix(const SortRule& a, const SortRule& b) {
@@ -158,22 +190,27 @@ std::optional<Error> UnmetCondition(std::string_view name, const std::optional<S
 /// Two of the plan's bins that read alike but differ in code points: a sorter would take them for
 /// two bins while every screen and label shows one.
 std::optional<Error> BinsThatReadAlike(const SortPlan& plan) {
-  // Each distinct bin once, by its canonical form, with where it was first seen.
-  std::map<std::string, std::pair<std::string_view, std::string>> seen;
-  const auto check = [&](std::string_view bin, std::string where) -> std::optional<Error> {
-    const std::string canonical = CanonicalForm(bin);
-    const auto [first, inserted] = seen.try_emplace(canonical, bin, where);
-    if (inserted || first->second.first == bin) return std::nullopt;
+  const auto where = [](const SortRule* rule) {
+    return rule == nullptr ? std::string("fallback bin") : "bin for prefix " + rule->prefix;
+  };
+  // Each distinct bin normalised once (a plan of 100,000 rules has a few dozen bins): by its
+  // bytes, then by its canonical form, with the rule it first came in (nullptr: the fallback).
+  std::map<std::string_view, const SortRule*> bins;
+  std::map<std::string, std::pair<std::string_view, const SortRule*>> canonical_bins;
+  const auto check = [&](std::string_view bin, const SortRule* rule) -> std::optional<Error> {
+    if (!bins.try_emplace(bin, rule).second) return std::nullopt;
+    const auto [first, inserted] = canonical_bins.try_emplace(CanonicalForm(bin), bin, rule);
+    if (inserted) return std::nullopt;
     return Error{ErrorCode::kInvalid,
-                 "the " + where + " '" + std::string(bin) + "' and the " + first->second.second +
-                     " '" + std::string(first->second.first) +
-                     "' read the same but are written with other Unicode code points (a letter "
+                 "the " + where(rule) + " " + QuotedWithCodePoints(bin) + " and the " +
+                     where(first->second.second) + " " + QuotedWithCodePoints(first->second.first) +
+                     " read the same but are written with other Unicode code points (a letter "
                      "and its accent as one character or as two, say): a sorter would take them "
                      "for two bins; write them alike"};
   };
-  if (auto error = check(plan.fallback_bin, "fallback bin")) return error;
+  if (auto error = check(plan.fallback_bin, nullptr)) return error;
   for (const SortRule& rule : plan.rules) {
-    if (auto error = check(rule.bin, "bin for prefix " + rule.prefix)) return error;
+    if (auto error = check(rule.bin, &rule)) return error;
   }
   return std::nullopt;
 }
@@ -183,7 +220,7 @@ std::optional<Error> BinsThatReadAlike(const SortPlan& plan) {
 std::optional<Error> CheckRule(const SortRule& rule) {
   if (!IsPrefix(rule.prefix)) {
     return Error{ErrorCode::kInvalid,
-                 "rule prefix '" + rule.prefix.substr(0, 40) + "' is not 1 to 6 digits"};
+                 "rule prefix " + QuotedPrefix(rule.prefix, 40) + " is not 1 to 6 digits"};
   }
   if (rule.prefix[0] == '0') {
     return Error{ErrorCode::kInvalid, "rule prefix '" + rule.prefix +
@@ -335,9 +372,9 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
     Transaction transaction(connection);
     if (condition.match || condition.none_match) {
       // Read under the write lock: no other writer can change the plan between here and commit.
-      if (auto unmet =
-              UnmetCondition(plan.name, ReadPlan(connection, plan.name), condition, "to replace")) {
-        return *unmet;
+      const std::optional<SortPlan> stored = ReadPlan(connection, plan.name);
+      if (auto unmet = UnmetCondition(plan.name, stored, condition, "to replace")) {
+        return stored ? *unmet : NamingALookalike(connection, plan.name, *unmet, kAskByStoredName);
       }
     }
     const bool exists =
@@ -345,8 +382,8 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
     if (!exists) {
       if (const auto lookalike = LookalikePlanName(connection, plan.name)) {
         return Error{ErrorCode::kConflict,
-                     "sort plan '" + plan.name +
-                         "' would be a second plan: " + ReadsLike(*lookalike) +
+                     "sort plan " + QuotedWithCodePoints(plan.name) +
+                         " would be a second plan: " + ReadsLike(plan.name, *lookalike) +
                          "; name it as stored to change it, or choose a name that reads "
                          "differently"};
       }
@@ -393,7 +430,9 @@ Result<SortPlan> DeletePlan(Connection& connection, std::string_view name,
     Transaction transaction(connection);
     // Read under the write lock, as a save reads it: what is returned is what was deleted.
     std::optional<SortPlan> stored = ReadPlan(connection, name);
-    if (auto unmet = UnmetCondition(name, stored, condition, "to delete")) return *unmet;
+    if (auto unmet = UnmetCondition(name, stored, condition, "to delete")) {
+      return stored ? *unmet : NamingALookalike(connection, name, *unmet, kAskByStoredName);
+    }
     if (!stored) return UnknownPlan(connection, name);
     connection.prepare("DELETE FROM sort_plans WHERE name = ?1").bind(1, name).run();
     transaction.commit();

@@ -169,13 +169,11 @@ std::string CanonicalForm(std::string_view text) {
   if (std::all_of(text.begin(), text.end(), [](char c) { return (c & 0x80) == 0; })) {
     return std::string(text);
   }
+  // GLib stops at a NUL whatever the length given: "café\0xyz" came back as "café".
+  if (text.find('\0') != std::string_view::npos) return std::string(text);
   const std::unique_ptr<gchar, decltype(&g_free)> composed(
       g_utf8_normalize(text.data(), static_cast<gssize>(text.size()), G_NORMALIZE_NFC), g_free);
   return composed ? std::string(composed.get()) : std::string(text);
-}
-
-bool ReadAlikeButDiffer(std::string_view a, std::string_view b) {
-  return a != b && CanonicalForm(a) == CanonicalForm(b);
 }
 
 }  // namespace pintag::db

@@ -410,13 +410,17 @@ constexpr bool kCheckPngChecksums = false;
 constexpr bool kCheckPngChecksums = true;
 #endif
 
+/// Whether a PNG chunk's four type bytes are letters, as the format (and libpng) requires.
+bool IsPngChunkType(const std::uint8_t* type) {
+  return std::all_of(type, type + 4, [](std::uint8_t c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+  });
+}
+
 /// The name of a PNG chunk's type for a message: its four letters, or their bytes in hex when
 /// damage has made them something else.
 std::string PngChunkName(const std::uint8_t* type) {
-  const bool letters = std::all_of(type, type + 4, [](std::uint8_t c) {
-    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
-  });
-  if (letters) return {reinterpret_cast<const char*>(type), 4};
+  if (IsPngChunkType(type)) return {reinterpret_cast<const char*>(type), 4};
   static constexpr char kHex[] = "0123456789abcdef";
   std::string hex = "0x";
   for (int i = 0; i < 4; ++i) {
@@ -446,7 +450,7 @@ HeaderSize InspectPng(std::span<const std::uint8_t> b) {
       return h;
     }
     // A type of anything but four letters is libpng's "invalid chunk type", printed as above.
-    if (PngChunkName(&b[pos + 4]).size() != 4) {
+    if (!IsPngChunkType(&b[pos + 4])) {
       h.problem = "the PNG is damaged: a chunk's type is " + PngChunkName(&b[pos + 4]) +
                   ", not four letters";
       return h;
@@ -850,10 +854,11 @@ LoadResult LoadImageStream(std::istream& in, const std::string& name, std::int64
   constexpr std::size_t kMaxBytes = std::size_t{1} << 30;
   std::vector<std::uint8_t> bytes;
   std::array<char, 1 << 16> chunk{};
-  // A file's known size is reserved once. A pipe's vector grows by doubling: a stream that is no
-  // photo stops at its first bytes (below), so only a photo's header followed by endless bytes
-  // doubles towards the limit.
-  bytes.reserve(expected_bytes > 0 ? std::min(expected_bytes, kMaxBytes + 1) : chunk.size());
+  // Reserved once, never grown by doubling: a copy at each doubling took a photo's header
+  // followed by endless bytes (a device) to 2.2 GB before the limit refused it. An unknown size
+  // reserves the limit, of which only the pages read into are ever used.
+  bytes.reserve(expected_bytes > 0 ? std::min(expected_bytes, kMaxBytes + 1)
+                                   : kMaxBytes + chunk.size());
   while (bytes.size() <= kMaxBytes && in.read(chunk.data(), chunk.size()).gcount() > 0) {
     bytes.insert(bytes.end(), chunk.data(), chunk.data() + in.gcount());
     // A stream that does not start as a photo is refused from its first bytes, not after 1 GiB.

@@ -72,9 +72,8 @@ std::string NamingTheEnvironment(const CLI::App& app, std::string message, int a
       if (!names_it || (message.find(value) == std::string::npos && !given_at_all)) continue;
       // A value on the command line wins over the environment's.
       if (OnCommandLine(flag, argc, argv)) return;
-      message += message.find(value) == std::string::npos
-                     ? " (set by the environment variable " + variable + ")"
-                     : " (the value of the environment variable " + variable + ")";
+      message += given_at_all ? " (set by the environment variable " + variable + ")"
+                              : " (the value of the environment variable " + variable + ")";
       return;
     }
     for (const CLI::App* sub : command.get_subcommands()) visit(*sub);

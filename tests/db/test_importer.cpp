@@ -681,6 +681,18 @@ TEST_F(Importer, CommandLineImportCreatesTheDatabaseAndLooksUp) {
       << imported.out;
   Connection fresh = test::OpenExisting(db);
   EXPECT_EQ(CountRegistry(fresh).value().pincodes_active, 19159 + 2);
+  // One of each is said in the singular ("1 rows, 1 offices added, 1 new pincodes" before).
+  const std::string one = test::WriteFile(
+      dir_.file("one.csv"),
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n"
+      "X Circle,X,X,Testpur S.O,999123,SO,Delivery,Testdist,Teststate,12.0,77.0\n");
+  const auto single = test::RunCommand(test::PintagExe() + " import " + one + " --db " + db);
+  EXPECT_EQ(single.exit_code, 0) << single.out;
+  EXPECT_NE(single.out.find(": 1 row, 1 office added, 0 updated, 0 unchanged, 1 new pincode, "
+                            "0 bad rows skipped\n"),
+            std::string::npos)
+      << single.out;
   const TagKey key = LookupPincode(fresh, Pincode(999011)).value().key;
   const auto by_key = test::RunCommand(test::PintagExe() + " keys lookup --key " +
                                        std::to_string(key.value()) + " --db " + db);

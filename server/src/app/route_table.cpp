@@ -108,7 +108,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"routing", "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv), with its version as ETag",
       {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}}},
     {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<PutSortPlan>,
-     {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new",
+     {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new; a new name that reads like a stored plan's but differs in Unicode code points is 409",
       {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}, {},
       {200, 201}}},
     {"DELETE", "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<DeleteSortPlan>,

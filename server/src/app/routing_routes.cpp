@@ -40,7 +40,9 @@ HttpError BadPlan(std::string detail) {
 /// A plan's fault as a problem: 400 "Bad Sort Plan" for what is wrong in it; the others (413 over
 /// the rule limit, 412, 503, …) keep their status's own title.
 [[noreturn]] void ThrowPlanError(const db::Error& error) {
-  ThrowDbError(error, error.code == db::ErrorCode::kInvalid ? "Bad Sort Plan" : "");
+  ThrowDbError(error, error.code == db::ErrorCode::kInvalid    ? "Bad Sort Plan"
+                      : error.code == db::ErrorCode::kConflict ? "Sort Plan Reads Alike"
+                                                               : "");
 }
 
 /// Refuses a field `object` has that `known` does not list (UnknownField), as a bad plan.

@@ -165,8 +165,9 @@ void CheckOptions(const DetectArgs& args) {
     // Where the overlay cannot go is known now, not after the photo is read and searched.
     CheckFileToWrite("--overlay", args.overlay);
     if (!CanEncode(args.overlay)) {
-      throw UsageError("--overlay " + args.overlay +
-                       ": no image format for its extension; name a .png, .jpg, .webp or .tiff file");
+      throw UsageError(
+          "--overlay " + args.overlay +
+          ": no image format for its extension; name a .png, .jpg, .webp or .tiff file");
     }
   }
   if (!args.debug_dir.empty() && std::filesystem::exists(args.debug_dir, ec) &&

@@ -44,6 +44,16 @@ int TryLock(const std::string& path) {
   return fd;
 }
 
+/// `message` with every `link` (the server's own hard link, "F.serving-…") said as `name`: the
+/// operator knows the file by its path.
+std::string NamedAs(std::string message, const std::string& link, const std::string& name) {
+  for (std::size_t at = message.find(link); at != std::string::npos;
+       at = message.find(link, at + name.size())) {
+    message.replace(at, link.size(), name);
+  }
+  return message;
+}
+
 }  // namespace
 
 SnapshotWatcher::SnapshotWatcher(std::string path, OnLoaded on_loaded)
@@ -171,13 +181,7 @@ db::Result<db::SnapshotInfo> SnapshotWatcher::linkAndVerify(std::optional<FileId
   *linked = IdentifyFile(link);
   db::Result<db::SnapshotInfo> verified = db::VerifySnapshot(link);
   if (!verified) {
-    // The link is the server's own name for the file; the operator knows the file by its path.
-    db::Error error = verified.error();
-    for (std::size_t at = error.message.find(link); at != std::string::npos;
-         at = error.message.find(link, at + path_.size())) {
-      error.message.replace(at, link.size(), path_);
-    }
-    return error;
+    return db::Error{verified.error().code, NamedAs(verified.error().message, link, path_)};
   }
   return verified;
 }
@@ -224,6 +228,10 @@ bool SnapshotWatcher::check() {
                      /*warning=*/true);
   } else {
     refusal = db::KeysNotKeptBy(verified->path, loaded_->path);
+    if (refusal) {
+      refusal->message = NamedAs(NamedAs(refusal->message, verified->path, path_ + " (new)"),
+                                 loaded_->path, "the registry served");
+    }
   }
   if (refusal) {
     const std::string kept = putBackServed(link);

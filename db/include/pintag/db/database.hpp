@@ -23,7 +23,7 @@ struct OpenOptions {
   int busy_timeout_ms = 5000;  ///< see ConnectionOptions
   /// Called once right before a new file is seeded, which takes seconds: a command can say what
   /// it is waiting for. Not called for a file that is not seeded.
-  std::function<void()> before_seeding;
+  std::function<void()> before_seeding = nullptr;
 };
 
 struct OpenedDatabase {

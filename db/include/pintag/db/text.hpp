@@ -65,12 +65,10 @@ std::optional<Error> CheckShownName(std::string_view field, std::string_view val
 
 /// `text` in Unicode's Normalization Form C (canonical composition): "e" + U+0301 and "é" (U+00E9)
 /// give the same bytes, as do a Devanagari consonant with U+093C nukta and its precomposed form.
-/// What two names that read alike are compared by; text is stored as it was written. Text that is
-/// not valid UTF-8 comes back unchanged.
+/// What two names that read alike are compared by (two bins or plan names that differ in bytes
+/// but not here would show as one and be two); text is stored as it was written. Text that is not
+/// valid UTF-8, or holds a NUL, comes back unchanged. Canonical equivalence only: letters of other
+/// scripts that look alike (Latin "a" and Cyrillic "а") stay apart.
 std::string CanonicalForm(std::string_view text);
-
-/// Whether `a` and `b` read alike but differ in their code points: different bytes, one
-/// CanonicalForm. Two bins or plan names like that would show as one and be two.
-bool ReadAlikeButDiffer(std::string_view a, std::string_view b);
 
 }  // namespace pintag::db

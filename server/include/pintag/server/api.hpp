@@ -33,9 +33,11 @@ struct ApiOptions {
 };
 
 /// The first stage of a request, from its method, path and headers only (before the body is
-/// read): the route, the verified principal, or the rejection to send instead.
+/// read): the route, the verified principal, and the rejection to send instead, if any.
 struct Admission {
   RouteMatch match;
+  /// The token's, once verified: also on a rejection that comes after (a 403 for its role, 411,
+  /// 413, 415), for the access line; no handler runs for a rejected request.
   std::optional<Principal> principal;
   std::optional<HttpResponse> rejection;  ///< 404, 405, 401, 403, 411, 413, 415 as problem+json
   std::string route_label;                ///< metrics label: the pattern, "static", "unmatched"
