@@ -200,19 +200,19 @@ TEST(CliDetect, RejectedCandidatesAreCountedApartFromTags) {
 // as the API reads it: no hexadecimal, no spaces.
 TEST(CliDetect, IntrinsicsOutsideTheApisRangesAreRefused) {
   const test::TempDir dir;
-  const std::string missing = dir.file("missing.jpg");
+  const std::string detect_missing = "detect " + dir.file("missing.jpg");
   for (const std::string& options :
        {std::string(" --fx 1e308 --fy 1e308"), std::string(" --fx 0 --fy 500"),
         std::string(" --fx 500 --fy 2e7"), std::string(" --fx 500 --fy 500 --cx 2e6"),
         std::string(" --fx 500 --fy 500 --distortion 1e300 1e300 0 0"),
         std::string(" --fx 0x1F4 --fy 500"), std::string(" --fx ' 500' --fy 500"),
         std::string(" --max-pixels 99999999999"), std::string(" --max-pixels 0")}) {
-    const CommandResult refused = RunPintag("detect " + missing + options);
+    const CommandResult refused = RunPintag(detect_missing + options);
     EXPECT_EQ(refused.status, 2) << options << ": " << refused.out;
     // Said in a sentence, not with DBL_MAX's 309 digits.
     EXPECT_LT(refused.out.size(), 400U) << options << ": " << refused.out;
   }
-  const CommandResult range = RunPintag("detect " + missing + " --fx 1e308 --fy 1e308");
+  const CommandResult range = RunPintag(detect_missing + " --fx 1e308 --fy 1e308");
   EXPECT_NE(range.out.find("must be a number from 0.001 to 1e+07, got '1e308'"), std::string::npos)
       << range.out;
   const CommandResult size = RunPintag("render --key 12 --size-mm 0x10 -o " + dir.file("t.png"));
@@ -312,13 +312,18 @@ TEST(CliDetect, StageImagesNeverReplaceThePhotoOrTheOverlay) {
   const std::string photo = (stages / "4_detections.png").string();
   std::filesystem::copy_file(rendered.path, photo);
   const std::string before = ReadFile(photo);
+  const std::string detect_photo = "detect " + photo + " --debug-dir ";
+  const std::string detect_stdin = PintagExe() + " detect - --debug-dir ";
+  const std::string from_photo = " < " + photo + " 2>&1";
   for (const std::string& debug : {stages.string(), (dir.path() / "." / "stages").string()}) {
-    const CommandResult refused = RunPintag("detect " + photo + " --debug-dir " + debug);
+    const CommandResult refused = RunPintag(detect_photo + debug);
     EXPECT_EQ(refused.status, 2) << refused.out;
     EXPECT_NE(refused.out.find("would write 4_detections.png over the photo"), std::string::npos)
         << refused.out;
-    const CommandResult piped =
-        RunShell(PintagExe() + " detect - --debug-dir " + debug + " < " + photo + " 2>&1");
+    std::string piped_line = detect_stdin;
+    piped_line += debug;
+    piped_line += from_photo;
+    const CommandResult piped = RunShell(piped_line);
     EXPECT_EQ(piped.status, 2) << piped.out;
     EXPECT_NE(piped.out.find("over the photo"), std::string::npos) << piped.out;
   }
