@@ -63,7 +63,7 @@ std::optional<TrustedProxies> TrustedProxies::Parse(const std::vector<std::strin
   for (const std::string& spec : specs) {
     const auto refuse = [&](const std::string& why) {
       if (error != nullptr) {
-        *error = "'";
+        error->assign(1, '\'');  // not = "'": GCC 12 warns falsely (its bug 105329)
         *error += spec;
         *error += "' ";
         *error += why;
