@@ -118,24 +118,32 @@ function pixelsPerMm(resolution, unit) {
 }
 
 /**
- * The focal length in pixels of `file` drawn at `width` × `height`, when its EXIF gives one the
- * server would take; `fromWidth` × `fromHeight` is the photo's own size (either way up: only its
- * diagonal counts). null when the file has no lens in its EXIF, or none that is plausible.
+ * The lens fields of `file`'s EXIF (none: {}), read once per photo however often it is drawn
+ * smaller; null when the file cannot be read again or its EXIF block is cut short.
  */
-export async function exifFocalPixels(file, fromWidth, fromHeight, width, height) {
-  let fields;
+export async function exifLens(file) {
   try {
     const block = exifBlock(new Uint8Array(await file.arrayBuffer()));
-    fields = block ? lensFields(block) : {};
+    return block ? lensFields(block) : {};
   } catch {
-    return null;  // a file that cannot be read again, or a block cut short: no lens
+    return null;
   }
+}
+
+/**
+ * The focal length in pixels of a photo whose EXIF lens is `lens` (exifLens) drawn at `width` ×
+ * `height`, when the lens is one the server would take; `fromWidth` × `fromHeight` is the photo's
+ * own size (either way up: only its diagonal counts). null when there is no lens, or none that is
+ * plausible.
+ */
+export function focalPixelsOf(lens, fromWidth, fromHeight, width, height) {
+  if (!lens) return null;
   const fromDiagonal = Math.hypot(fromWidth, fromHeight);
-  let equivalentMm = fields.equivalentMm > 0 ? fields.equivalentMm : undefined;
-  if (!equivalentMm && fields.focalMm > 0 && fields.planeXResolution > 0) {
+  let equivalentMm = lens.equivalentMm > 0 ? lens.equivalentMm : undefined;
+  if (!equivalentMm && lens.focalMm > 0 && lens.planeXResolution > 0) {
     // As the server: a unit missing or 0 is inches.
-    const perMm = pixelsPerMm(fields.planeXResolution, fields.planeUnit > 0 ? fields.planeUnit : 2);
-    if (perMm) equivalentMm = (fields.focalMm * perMm * kFullFrameDiagonalMm) / fromDiagonal;
+    const perMm = pixelsPerMm(lens.planeXResolution, lens.planeUnit > 0 ? lens.planeUnit : 2);
+    if (perMm) equivalentMm = (lens.focalMm * perMm * kFullFrameDiagonalMm) / fromDiagonal;
   }
   if (!(equivalentMm >= kMinEquivalentMm && equivalentMm <= kMaxEquivalentMm)) return null;
   return (equivalentMm * Math.hypot(width, height)) / kFullFrameDiagonalMm;

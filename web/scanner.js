@@ -6,7 +6,7 @@
 import {
   api, query, el, show, problemBox, badge, busy, bindToken, keepPlan, rememberSelect, isWholeToken,
 } from './api.js';
-import { exifFocalPixels } from './exif.js';
+import { exifLens, focalPixelsOf } from './exif.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -312,6 +312,7 @@ async function scan() {
   $('summary').textContent = 'Reading the photo…';
   let answer;
   let shrunk = null;
+  let fileLens;  // the photo's EXIF lens, read at the first shrink and kept for the rounds after
   try {
     let limits = {};
     for (let round = 0; ; ++round) {
@@ -327,7 +328,8 @@ async function scan() {
         if (!limits) throw error;
         shrunk = await shrunkToFit(file, limits);
         if (!shrunk) throw await notAPhotoOver(file, error) || error;
-        shrunk.focalPx = await exifFocalPixels(file, shrunk.fromWidth, shrunk.fromHeight, shrunk.width, shrunk.height);
+        if (fileLens === undefined) fileLens = await exifLens(file);
+        shrunk.focalPx = focalPixelsOf(fileLens, shrunk.fromWidth, shrunk.fromHeight, shrunk.width, shrunk.height);
         if (run !== scanCount) return;
         // What is read is what is shown: the outlines are in the smaller photo's pixels.
         URL.revokeObjectURL(photoUrl);

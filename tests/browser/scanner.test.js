@@ -438,9 +438,9 @@ test('the page reads a photo\'s lens from its EXIF as the server does', async ()
     assert.equal(answer.tag_count, 1, name);
     assert.equal(answer.intrinsics.source, source, name);
     const pageFocal = await page.evaluate(async ({ base64, w, h }) => {
-      const { exifFocalPixels } = await import('/exif.js');
+      const { exifLens, focalPixelsOf } = await import('/exif.js');
       const file = new File([Uint8Array.from(atob(base64), (c) => c.charCodeAt(0))], 'photo');
-      return exifFocalPixels(file, w, h, w, h);
+      return focalPixelsOf(await exifLens(file), w, h, w, h);
     }, { base64: bytes.toString('base64'), w: answer.image.width, h: answer.image.height });
     if (source === 'exif') {
       assert.ok(Math.abs(pageFocal - answer.intrinsics.fx) < 1e-6 * answer.intrinsics.fx,
