@@ -915,8 +915,7 @@ TEST(ImageIo, APngChunkFailingItsChecksumIsCorruptAndNamed) {
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
   EXPECT_FALSE(refused.image);
   EXPECT_EQ(refused.kind, ImageError::kCorrupt) << refused.error;
-  EXPECT_NE(refused.error.find("a chunk's type is 0x7445588c, not four letters"),
-            std::string::npos)
+  EXPECT_NE(refused.error.find("a chunk's type is 0x7445588c, not four letters"), std::string::npos)
       << refused.error;
 }
 
