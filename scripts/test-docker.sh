@@ -178,6 +178,9 @@ check "the stopped replica exited 0" test \
 "${compose[@]}" up -d replica-1 >/dev/null 2>&1
 check "replica-1 is ready again" wait_ready "$PINTAG_REPLICA1_PORT" 60
 check "nginx's HEALTHCHECK reports it healthy" healthy nginx
+# nginx sends the pages to the replicas: each must serve them (they had no --web until 2026-12-08).
+check "the counter, scanner and registry pages answer 200 through nginx" bash -c \
+  "for page in counter.html scanner.html registry.html; do [[ \$(curl -s -o /dev/null -w '%{http_code}' $front/\$page) == 200 ]] || exit 1; done"
 check "nginx answers its own 413 as problem+json" bash -c \
   "head -c 26214401 /dev/zero | curl -s -D - -o /dev/null -H 'Content-Type: image/jpeg' \
      --data-binary @- $front/api/v1/detect | grep -qi '^content-type: application/problem+json'"
