@@ -188,6 +188,39 @@ TEST_F(ReplicaSetTest, AReplicaLogsScansInItsOwnFileAndTheSnapshotStaysUntouched
   EXPECT_EQ(CountRows(primary_db_, "scan_log"), 0);
 }
 
+// `pintag import --db` a running replica's snapshot changed that replica's registry alone (a key
+// the primary does not have, given out again there) and stuck it: it refused every snapshot after,
+// since its file was now in WAL mode. Every command that writes refuses such a file, unchanged.
+TEST_F(ReplicaSetTest, CommandsThatWriteRefuseTheSnapshotARunningReplicaServes) {
+  const std::string snapshot = publishTo("served.db");
+  ServerProcess& replica = startReadOnly(0, snapshot);
+  ASSERT_TRUE(replica.ok());
+  const std::string before = ReadFile(snapshot);
+  const std::string csv = WriteFile(
+      dir_.file("one.csv"),
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n"
+      "X Circle,X,X,Testpur S.O,799996,SO,Delivery,Testdist,Teststate,12.0,77.0\n");
+  for (const std::string& command :
+       {"import " + csv + " --db " + snapshot, "token create --role counter --db " + snapshot,
+        "token revoke 1 --db " + snapshot}) {
+    const CommandResult refused = RunPintag(command);
+    EXPECT_EQ(refused.status, 1) << command << ": " << refused.out;
+    EXPECT_NE(refused.out.find(snapshot + " is the snapshot a running replica serves"),
+              std::string::npos)
+        << refused.out;
+  }
+  EXPECT_EQ(ReadFile(snapshot), before);
+  EXPECT_FALSE(std::filesystem::exists(snapshot + "-wal"));
+  EXPECT_EQ(StatusOf(LoopbackClient(replica.port()).Get("/readyz")), 200);
+  // Reading it is no harm (`keys lookup` opens it read-only). Once the replica has stopped, the
+  // file is anyone's again: a restore copies a replica's file to a primary.
+  EXPECT_EQ(RunPintag("keys lookup 110001 --db " + snapshot).status, 0);
+  EXPECT_EQ(replica.stop(SIGTERM, 30), 0);
+  const CommandResult imported = RunPintag("import " + csv + " --db " + snapshot);
+  EXPECT_EQ(imported.status, 0) << imported.out;
+}
+
 // A scan log that cannot be written loses scans while every answer stays 200: the count says so.
 TEST_F(ReplicaSetTest, ScansTheLogCannotKeepAreCounted) {
   const std::string snapshot = publishTo("served.db");

@@ -7,6 +7,7 @@
 
 #include "pintag/db/database.hpp"
 #include "pintag/db/snapshot.hpp"
+#include "replica/snapshot_watcher.hpp"
 
 namespace pintag::cli {
 
@@ -35,7 +36,23 @@ std::string DatabaseWriteFailure(const std::string& path, const db::Error& error
   }
 }
 
+namespace {
+
+/// Refuses a file a running replica serves: opened read-write, it is switched to WAL and written.
+void RefuseAReplicasSnapshot(const std::string& path) {
+  if (replica::AReplicaServes(path)) {
+    throw std::runtime_error(
+        path +
+        " is the snapshot a running replica serves: a change written there would be that "
+        "replica's alone, with keys the primary does not have. Give the primary's "
+        "database; its replicas take the change with their next snapshot");
+  }
+}
+
+}  // namespace
+
 db::Connection OpenDb(const std::string& path, const SayFunction& say) {
+  RefuseAReplicasSnapshot(path);
   std::error_code error;
   const bool existed = std::filesystem::exists(path, error);
   const auto tell = [&say](const std::string& what) {
@@ -71,6 +88,7 @@ db::Connection OpenDb(const std::string& path, const SayFunction& say) {
 }
 
 db::Connection OpenExistingDb(const std::string& path) {
+  RefuseAReplicasSnapshot(path);
   std::error_code error;
   if (!std::filesystem::exists(path, error)) {
     throw std::runtime_error(

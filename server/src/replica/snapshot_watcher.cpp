@@ -304,4 +304,24 @@ std::optional<std::int64_t> SnapshotWatcher::servedVersion() const {
   return loaded_->registry_version;
 }
 
+bool AReplicaServes(const std::string& path) {
+  const std::filesystem::path target(path);
+  const std::string prefix = target.filename().string() + ".serving-";
+  const std::filesystem::path directory =
+      target.parent_path().empty() ? std::filesystem::path(".") : target.parent_path();
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(directory, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.starts_with(prefix) || !name.ends_with(kLockSuffix)) continue;
+    // flock, on the lock file: the database's own POSIX locks are not touched.
+    const int fd = TryLock(entry.path().string());
+    if (fd >= 0) {
+      ::close(fd);  // an ended run's lock, nobody's now
+    } else if (std::filesystem::exists(entry.path(), error)) {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace pintag::replica

@@ -95,4 +95,9 @@ class SnapshotWatcher {
   PeriodicThread thread_;  // last: stopped before the members it uses go
 };
 
+/// Whether a running replica serves the file at `path` (a SnapshotWatcher holds the lock of its
+/// run beside it). Writing to such a file (`pintag import --db` a replica's snapshot) changed that
+/// replica's registry alone, with keys the primary does not have, and stuck it there.
+bool AReplicaServes(const std::string& path);
+
 }  // namespace pintag::replica
