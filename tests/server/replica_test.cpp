@@ -221,6 +221,41 @@ TEST_F(ReplicaSetTest, CommandsThatWriteRefuseTheSnapshotARunningReplicaServes) 
   EXPECT_EQ(imported.status, 0) << imported.out;
 }
 
+// A primary restored as SCALING.md says, from a replica's file, but over a database that stopped
+// uncleanly: the write-ahead log left beside it was applied by SQLite to the copied-in file
+// (undoing the restore, or damaging the file while /readyz said ready). Refused until it is gone.
+TEST_F(ReplicaSetTest, ARestoredFileIsNotOpenedUnderTheLogOfTheDatabaseItReplaced) {
+  const std::string snapshot = publishTo("served.db");
+  const std::string live = dir_.file("restored.db");
+  std::filesystem::copy_file(snapshot, live);
+  const std::string copied = ReadFile(live);
+  // The replaced database's log: its contents are not looked at, only that it is there.
+  WriteFile(live + "-wal", std::string(4096, 'w'));
+  const std::string csv = WriteFile(
+      dir_.file("one.csv"),
+      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+      "statename,latitude,longitude\n"
+      "X Circle,X,X,Testpur S.O,799996,SO,Delivery,Testdist,Teststate,12.0,77.0\n");
+  for (const std::string& command :
+       {"token create --role counter --db " + live, "import " + csv + " --db " + live,
+        "serve --port 0 --bind 127.0.0.1 --db " + live}) {
+    const CommandResult refused = RunShell("timeout 30 " + PintagExe() + " " + command + " 2>&1");
+    EXPECT_EQ(refused.status, 1) << command << ": " << refused.out;
+    EXPECT_NE(refused.out.find("database " + live +
+                               " is in rollback-journal mode (a snapshot or backup copied in), "
+                               "but " +
+                               live + "-wal"),
+              std::string::npos)
+        << refused.out;
+  }
+  EXPECT_EQ(ReadFile(live), copied);
+  EXPECT_EQ(ReadFile(live + "-wal"), std::string(4096, 'w'));
+  std::filesystem::remove(live + "-wal");
+  std::filesystem::remove(live + "-shm");
+  const CommandResult made = RunPintag("token create --role counter --db " + live);
+  EXPECT_EQ(made.status, 0) << made.out;
+}
+
 // A scan log that cannot be written loses scans while every answer stays 200: the count says so.
 TEST_F(ReplicaSetTest, ScansTheLogCannotKeepAreCounted) {
   const std::string snapshot = publishTo("served.db");

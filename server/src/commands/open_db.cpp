@@ -1,8 +1,11 @@
 #include "commands/open_db.hpp"
 
+#include <array>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
+#include <string_view>
 #include <utility>
 
 #include "pintag/db/database.hpp"
@@ -49,10 +52,38 @@ void RefuseAReplicasSnapshot(const std::string& path) {
   }
 }
 
+/// Refuses a database in rollback-journal mode (a snapshot or backup copied in to restore a
+/// primary) with a non-empty write-ahead log beside it: that log is the replaced database's, left
+/// by an unclean stop, and SQLite takes a -wal file it finds as the file's own, applying it at the
+/// first read: the restore undone without a word, or the file damaged while the server said ready
+/// (an operator walkthrough, 2026-12-08). The header is read with a descriptor of this function's
+/// own, so it runs before the process opens any connection to the file (closing a descriptor
+/// drops every POSIX lock the process holds on it): each command opens its database here, first.
+void RefuseAStaleWriteAheadLog(const std::string& path) {
+  std::error_code error;
+  const std::string wal = path + "-wal";
+  const std::uintmax_t wal_bytes = std::filesystem::file_size(wal, error);
+  if (error || wal_bytes == 0 || !std::filesystem::is_regular_file(path, error)) return;
+  std::array<char, 20> header{};
+  std::ifstream file(path, std::ios::binary);
+  if (!file.read(header.data(), header.size())) return;
+  const bool sqlite =
+      std::string_view(header.data(), 16) == std::string_view("SQLite format 3", 16);
+  // Bytes 18 and 19, the write and read versions: 1 for a rollback journal, 2 for WAL.
+  if (!sqlite || header[18] != 1 || header[19] != 1) return;
+  throw std::runtime_error(
+      "database " + path + " is in rollback-journal mode (a snapshot or backup copied in), but " +
+      wal + " (" + std::to_string(wal_bytes) +
+      " bytes), a write-ahead log left by the database it replaced, is beside it: SQLite would "
+      "apply that log to it, undoing the copy or damaging it. With no server running on " +
+      path + ", delete " + wal + " and " + path + "-shm, then start again");
+}
+
 }  // namespace
 
 db::Connection OpenDb(const std::string& path, const SayFunction& say) {
   RefuseAReplicasSnapshot(path);
+  RefuseAStaleWriteAheadLog(path);
   std::error_code error;
   const bool existed = std::filesystem::exists(path, error);
   const auto tell = [&say](const std::string& what) {
@@ -89,6 +120,7 @@ db::Connection OpenDb(const std::string& path, const SayFunction& say) {
 
 db::Connection OpenExistingDb(const std::string& path) {
   RefuseAReplicasSnapshot(path);
+  RefuseAStaleWriteAheadLog(path);
   std::error_code error;
   if (!std::filesystem::exists(path, error)) {
     throw std::runtime_error(
