@@ -163,7 +163,8 @@ TEST(Migrations, NotADatabaseAndMissingFilesAreErrors) {
   EXPECT_EQ(test::ReadFile(junk), std::string(4096, 'x'));
   // SQLite's header with nothing a database holds after it (a page size of 0): refused alike, and
   // not said to "not start as one".
-  std::string damaged("SQLite format 3", 16);
+  std::string damaged = "SQLite format 3";
+  damaged += '\0';  // the header's 16 bytes end with a NUL
   damaged += std::string(600, '\xEE');
   damaged[16] = damaged[17] = '\0';
   const std::string header_only = test::WriteFile(dir.file("header.db"), damaged);

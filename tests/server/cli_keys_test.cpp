@@ -12,7 +12,7 @@ namespace {
 
 // A copy of the seeded registry in `dir`, for a command to read; its path.
 std::string SeededCopy(const TempDir& dir) {
-  const std::string db = dir.file("copy.db");
+  std::string db = dir.file("copy.db");
   std::filesystem::copy_file(SeededTemplate(), db);
   return db;
 }

@@ -143,7 +143,10 @@ TEST(CliNewDb, AFileThatIsNoSqliteDatabaseIsRefusedAndLeftAsItWas) {
            {dir.file("no-such-dir") + "/x.db", " cannot be made: its directory "}}) {
     const CommandResult run = RunPintag("keys lookup 110001 --db " + db);
     EXPECT_EQ(run.status, 1) << db << ": " << run.out;
-    EXPECT_EQ(run.out.rfind("pintag: database " + db + says, 0), 0U) << run.out;
+    std::string expected = "pintag: database ";
+    expected += db;
+    expected += says;
+    EXPECT_EQ(run.out.rfind(expected, 0), 0U) << run.out;
   }
   EXPECT_FALSE(std::filesystem::exists(dir.file("no-such-dir")));
 }

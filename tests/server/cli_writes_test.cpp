@@ -267,8 +267,10 @@ TEST(CliWrites, TokenAndSnapshotFilesAreWrittenThroughLinksAndNeverReplaceAPipe)
   const std::string pipe = dir.file("pipe");
   ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
   const std::int64_t before = token_count();
-  for (const std::string& command : {"token create --role replica --out " + pipe + " --db " + db,
-                                     "snapshot --db " + db + " --out " + pipe}) {
+  const std::vector<std::string> to_the_pipe = {
+      "token create --role replica --out " + pipe + " --db " + db,
+      "snapshot --db " + db + " --out " + pipe};
+  for (const std::string& command : to_the_pipe) {
     const CommandResult refused = RunPintag(command);
     EXPECT_EQ(refused.status, 2) << command << "\n" << refused.out;
     EXPECT_NE(refused.out.find(pipe + " is a pipe, not a file"), std::string::npos) << refused.out;
@@ -299,10 +301,13 @@ TEST(CliWrites, ASecretFileIsNeverADatabase) {
            {db + "-wal", "is a file of the database " + db},
            {other + "-shm", "is a file of the database " + other},
            {other, "holds an SQLite database"}}) {
-    const CommandResult refused =
-        RunPintag("token create --role replica --out " + out + " --db " + db);
+    std::string command = "token create --role replica --out ";
+    command.append(out).append(" --db ").append(db);
+    const CommandResult refused = RunPintag(command);
     EXPECT_EQ(refused.status, 2) << out << "\n" << refused.out;
-    EXPECT_NE(refused.out.find("--out " + out + " " + says), std::string::npos) << refused.out;
+    std::string said = "--out ";
+    said.append(out).append(" ").append(says);
+    EXPECT_NE(refused.out.find(said), std::string::npos) << refused.out;
   }
   EXPECT_EQ(ReadFile(db), before);
   EXPECT_EQ(ReadFile(other), other_before);

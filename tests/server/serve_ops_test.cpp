@@ -148,6 +148,7 @@ std::string ServeOnANewDatabase(const TempDir& dir) {
 TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
   const TempDir dir;
   const std::string serve = ServeOnANewDatabase(dir);
+  const std::string serve_with_stderr = " " + serve + " 2>&1";  // after a variable's assignment
   CommandResult refused = RunShell("PINTAG_THREADS=0 " + serve + " 2>&1");
   EXPECT_EQ(refused.status, 2) << refused.out;
   EXPECT_NE(refused.out.find("--threads: Value 0 not in range 1 to 256 (the value of the "
@@ -169,27 +170,26 @@ TEST(ServeStartRefusals, ABadValueFromTheEnvironmentNamesItsVariable) {
            {"PINTAG_TRUSTED_PROXY=foo", "--trusted-proxy 'foo' is not an IPv4 or IPv6 address"},
            {"PINTAG_WEB=" + dir.file("no-such-web"), "--web " + dir.file("no-such-web")},
            {"PINTAG_FOLLOW=notaurl", "--follow takes the primary's base URL"}}) {
-    refused = RunShell(variable + " " + serve + " 2>&1");
+    refused = RunShell(variable + serve_with_stderr);
     EXPECT_EQ(refused.status, 2) << variable << ": " << refused.out;
     EXPECT_NE(refused.out.find(says), std::string::npos) << refused.out;
-    EXPECT_NE(refused.out.find("(the value of the environment variable " +
-                               variable.substr(0, variable.find('=')) + ")"),
-              std::string::npos)
-        << refused.out;
+    std::string named = "(the value of the environment variable ";
+    named.append(variable.substr(0, variable.find('='))).append(")");
+    EXPECT_NE(refused.out.find(named), std::string::npos) << refused.out;
   }
   // A replica's option set in a primary's environment (a compose file's shared block) is refused
   // for being given at all: the variable that gave it is named.
   for (const auto& [variable, says] : std::vector<std::pair<std::string, std::string>>{
            {"PINTAG_SCAN_LOG=" + dir.file("scans.db"), "--scan-log is for a replica"},
            {"PINTAG_PRIMARY=http://127.0.0.1:9", "--primary is for a replica"}}) {
-    refused = RunShell(variable + " " + serve + " 2>&1");
+    refused = RunShell(variable + serve_with_stderr);
     EXPECT_EQ(refused.status, 2) << variable << ": " << refused.out;
-    EXPECT_NE(refused.out.find(says +
-                               " (--read-only or --follow); a primary has no use for it (set "
-                               "by the environment variable " +
-                               variable.substr(0, variable.find('=')) + ")"),
-              std::string::npos)
-        << refused.out;
+    std::string named = says;
+    named.append(" (--read-only or --follow); a primary has no use for it (set by the environment ")
+        .append("variable ")
+        .append(variable.substr(0, variable.find('=')))
+        .append(")");
+    EXPECT_NE(refused.out.find(named), std::string::npos) << refused.out;
   }
   // The follower's token, which only the environment gives, was silently unused where nothing
   // follows: refused as --follow-token-file is.
@@ -219,7 +219,9 @@ TEST(ServeStartRefusals, AFollowTokenFileThatGivesNoTokenSaysWhy) {
                                            ": No such file or directory"},
            {dir.path().string(),
             "--follow-token-file " + dir.path().string() + " is a directory"}}) {
-    const CommandResult refused = RunShell(serve + " --follow-token-file " + file + " 2>&1");
+    std::string line = serve;
+    line.append(" --follow-token-file ").append(file).append(" 2>&1");
+    const CommandResult refused = RunShell(line);
     EXPECT_EQ(refused.status, 2) << file << ": " << refused.out;
     EXPECT_NE(refused.out.find(says), std::string::npos) << refused.out;
   }
