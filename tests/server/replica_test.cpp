@@ -188,6 +188,12 @@ TEST_F(ReplicaSetTest, AReplicaLogsScansInItsOwnFileAndTheSnapshotStaysUntouched
   EXPECT_EQ(CountRows(primary_db_, "scan_log"), 0);
 }
 
+// A directory CSV of one new office and pincode (799996), for `pintag import`.
+constexpr const char* kOneNewOfficeCsv =
+    "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
+    "statename,latitude,longitude\n"
+    "X Circle,X,X,Testpur S.O,799996,SO,Delivery,Testdist,Teststate,12.0,77.0\n";
+
 // `pintag import --db` a running replica's snapshot changed that replica's registry alone (a key
 // the primary does not have, given out again there) and stuck it: it refused every snapshot after,
 // since its file was now in WAL mode. Every command that writes refuses such a file, unchanged.
@@ -196,14 +202,11 @@ TEST_F(ReplicaSetTest, CommandsThatWriteRefuseTheSnapshotARunningReplicaServes) 
   ServerProcess& replica = startReadOnly(0, snapshot);
   ASSERT_TRUE(replica.ok());
   const std::string before = ReadFile(snapshot);
-  const std::string csv = WriteFile(
-      dir_.file("one.csv"),
-      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
-      "statename,latitude,longitude\n"
-      "X Circle,X,X,Testpur S.O,799996,SO,Delivery,Testdist,Teststate,12.0,77.0\n");
-  for (const std::string& command :
-       {"import " + csv + " --db " + snapshot, "token create --role counter --db " + snapshot,
-        "token revoke 1 --db " + snapshot}) {
+  const std::string csv = WriteFile(dir_.file("one.csv"), kOneNewOfficeCsv);
+  const std::vector<std::string> writes = {"import " + csv + " --db " + snapshot,
+                                           "token create --role counter --db " + snapshot,
+                                           "token revoke 1 --db " + snapshot};
+  for (const std::string& command : writes) {
     const CommandResult refused = RunPintag(command);
     EXPECT_EQ(refused.status, 1) << command << ": " << refused.out;
     EXPECT_NE(refused.out.find(snapshot + " is the snapshot a running replica serves"),
@@ -231,22 +234,20 @@ TEST_F(ReplicaSetTest, ARestoredFileIsNotOpenedUnderTheLogOfTheDatabaseItReplace
   const std::string copied = ReadFile(live);
   // The replaced database's log: its contents are not looked at, only that it is there.
   WriteFile(live + "-wal", std::string(4096, 'w'));
-  const std::string csv = WriteFile(
-      dir_.file("one.csv"),
-      "circlename,regionname,divisionname,officename,pincode,officetype,delivery,district,"
-      "statename,latitude,longitude\n"
-      "X Circle,X,X,Testpur S.O,799996,SO,Delivery,Testdist,Teststate,12.0,77.0\n");
-  for (const std::string& command :
-       {"token create --role counter --db " + live, "import " + csv + " --db " + live,
-        "serve --port 0 --bind 127.0.0.1 --db " + live}) {
-    const CommandResult refused = RunShell("timeout 30 " + PintagExe() + " " + command + " 2>&1");
+  const std::string csv = WriteFile(dir_.file("one.csv"), kOneNewOfficeCsv);
+  const std::vector<std::string> opens = {"token create --role counter --db " + live,
+                                          "import " + csv + " --db " + live,
+                                          "serve --port 0 --bind 127.0.0.1 --db " + live};
+  const std::string says = "database " + live +
+                           " is in rollback-journal mode (a snapshot or backup copied in), but " +
+                           live + "-wal";
+  const std::string pintag = "timeout 30 " + PintagExe() + " ";
+  for (const std::string& command : opens) {
+    std::string line = pintag;
+    line.append(command).append(" 2>&1");
+    const CommandResult refused = RunShell(line);
     EXPECT_EQ(refused.status, 1) << command << ": " << refused.out;
-    EXPECT_NE(refused.out.find("database " + live +
-                               " is in rollback-journal mode (a snapshot or backup copied in), "
-                               "but " +
-                               live + "-wal"),
-              std::string::npos)
-        << refused.out;
+    EXPECT_NE(refused.out.find(says), std::string::npos) << refused.out;
   }
   EXPECT_EQ(ReadFile(live), copied);
   EXPECT_EQ(ReadFile(live + "-wal"), std::string(4096, 'w'));

@@ -68,7 +68,7 @@ void RefuseAStaleWriteAheadLog(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
   if (!file.read(header.data(), header.size())) return;
   const bool sqlite =
-      std::string_view(header.data(), 16) == std::string_view("SQLite format 3", 16);
+      std::string_view(header.data(), 16) == std::string_view("SQLite format 3\0", 16);
   // Bytes 18 and 19, the write and read versions: 1 for a rollback journal, 2 for WAL.
   if (!sqlite || header[18] != 1 || header[19] != 1) return;
   throw std::runtime_error(
