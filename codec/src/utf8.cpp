@@ -1,6 +1,8 @@
 #include "pintag/codec/utf8.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
 
 namespace pintag {
 
@@ -36,6 +38,12 @@ std::size_t Utf8CharacterCount(std::string_view text) {
     i += point.length > 0 ? point.length : 1;
   }
   return count;
+}
+
+std::string CodePointName(char32_t code_point) {
+  std::array<char, 16> name{};
+  std::snprintf(name.data(), name.size(), "U+%04X", static_cast<unsigned>(code_point));
+  return name.data();
 }
 
 std::string QuotedPrefix(std::string_view text, std::size_t max_bytes) {

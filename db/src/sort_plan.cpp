@@ -1,8 +1,6 @@
 #include "pintag/db/sort_plan.hpp"
 
 #include <algorithm>
-#include <array>
-#include <cstdio>
 #include <map>
 #include <set>
 
@@ -68,10 +66,8 @@ std::string QuotedWithCodePoints(std::string_view text) {
     const Utf8CodePoint point = DecodeUtf8(text, i);
     if (point.length == 0) break;
     if (point.value >= 0x80) {
-      std::array<char, 16> code{};
-      std::snprintf(code.data(), code.size(), "%sU+%04X", code_points.empty() ? "" : " ",
-                    static_cast<unsigned>(point.value));
-      code_points += code.data();
+      if (!code_points.empty()) code_points += ' ';
+      code_points += CodePointName(point.value);
     }
     i += point.length;
   }
@@ -79,12 +75,15 @@ std::string QuotedWithCodePoints(std::string_view text) {
   return quoted;
 }
 
+/// How two strings that read alike differ, for a message.
+constexpr std::string_view kOtherCodePoints =
+    "written with other Unicode code points (a letter and its accent as one character or as two, "
+    "say)";
+
 /// Why `name` is not the stored `lookalike` though it reads the same.
 std::string ReadsLike(std::string_view name, std::string_view lookalike) {
   return "the plan " + QuotedWithCodePoints(lookalike) + " reads the same as " +
-         QuotedWithCodePoints(name) +
-         " but is written with other Unicode code points (a letter and its accent as one "
-         "character or as two, say)";
+         QuotedWithCodePoints(name) + " but is " + std::string(kOtherCodePoints);
 }
 
 /// `error` about the plan called `name`, with the stored plan that reads like it named, if any.
@@ -140,6 +139,11 @@ SortPlan WritePlan(Connection& connection, const SortPlan& plan, bool* replaced 
   }
   std::sort(stored.rules.begin(), stored.rules.end(), ByPrefix);
   return stored;
+}
+
+/// Whether a plan called `name` is stored (its rules unread).
+bool HasPlanNamed(Connection& connection, std::string_view name) {
+  return connection.prepare("SELECT 1 FROM sort_plans WHERE name = ?1").bind(1, name).step();
 }
 
 /// The stored plan called `name`, if there is one.
@@ -204,9 +208,8 @@ std::optional<Error> BinsThatReadAlike(const SortPlan& plan) {
     return Error{ErrorCode::kInvalid,
                  "the " + where(rule) + " " + QuotedWithCodePoints(bin) + " and the " +
                      where(first->second.second) + " " + QuotedWithCodePoints(first->second.first) +
-                     " read the same but are written with other Unicode code points (a letter "
-                     "and its accent as one character or as two, say): a sorter would take them "
-                     "for two bins; write them alike"};
+                     " read the same but are " + std::string(kOtherCodePoints) +
+                     ": a sorter would take them for two bins; write them alike"};
   };
   if (auto error = check(plan.fallback_bin, nullptr)) return error;
   for (const SortRule& rule : plan.rules) {
@@ -377,9 +380,7 @@ Result<SavedPlan> SavePlanIf(Connection& connection, const SortPlan& plan,
         return stored ? *unmet : NamingALookalike(connection, plan.name, *unmet, kAskByStoredName);
       }
     }
-    const bool exists =
-        connection.prepare("SELECT 1 FROM sort_plans WHERE name = ?1").bind(1, plan.name).step();
-    if (!exists) {
+    if (!HasPlanNamed(connection, plan.name)) {
       if (const auto lookalike = LookalikePlanName(connection, plan.name)) {
         return Error{ErrorCode::kConflict,
                      "sort plan " + QuotedWithCodePoints(plan.name) +
@@ -405,9 +406,7 @@ Result<SortPlan> GetPlan(Connection& connection, std::string_view name) {
 }
 
 Result<bool> HasPlan(Connection& connection, std::string_view name) {
-  return Guard([&]() -> Result<bool> {
-    return connection.prepare("SELECT 1 FROM sort_plans WHERE name = ?1").bind(1, name).step();
-  });
+  return Guard([&]() -> Result<bool> { return HasPlanNamed(connection, name); });
 }
 
 Result<std::vector<std::string>> ListPlans(Connection& connection) {

@@ -117,10 +117,8 @@ std::optional<Error> CheckTextAs(std::string_view field, std::string_view value,
     const Utf8CodePoint decoded = DecodeUtf8(value, i);
     if (decoded.length == 0) return invalid("is not valid UTF-8 at byte " + std::to_string(i));
     if (const char* what = stored ? RefusedCodePoint(decoded.value) : nullptr) {
-      char code[16];
-      std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(decoded.value));
-      return invalid("contains " + std::string(what) + " " + code + " at byte " +
-                     std::to_string(i));
+      return invalid("contains " + std::string(what) + " " + CodePointName(decoded.value) +
+                     " at byte " + std::to_string(i));
     }
     i += decoded.length;
   }
@@ -150,8 +148,7 @@ std::optional<Error> CheckShownName(std::string_view field, std::string_view val
     const bool joiner = decoded.value == 0x200C || decoded.value == 0x200D;
     const bool kept = joiner ? !at_start : decoded.value == U' ' && !at_an_end;
     if (IsInvisible(decoded.value) && !kept) {
-      char code[16];
-      std::snprintf(code, sizeof code, "U+%04X", static_cast<unsigned>(decoded.value));
+      const std::string code = CodePointName(decoded.value);
       return Error{ErrorCode::kInvalid,
                    std::string(field) + " '" + std::string(value.substr(0, 64)) + "' " +
                        (at_an_end ? "starts or ends with a space or an invisible character ("

@@ -22,6 +22,9 @@ Utf8CodePoint DecodeUtf8(std::string_view text, std::size_t offset);
 /// byte that is not valid UTF-8 counts as one.
 std::size_t Utf8CharacterCount(std::string_view text);
 
+/// A code point as a message names it: "U+00E9", "U+1F600".
+std::string CodePointName(char32_t code_point);
+
 /// `text` quoted for a message, 'like this', cut after at most `max_bytes` at a character's
 /// start (never inside one), with an ellipsis before the closing quote when it was cut.
 std::string QuotedPrefix(std::string_view text, std::size_t max_bytes);
