@@ -232,6 +232,40 @@ bool InWalMode(const std::string& path) {
          header[19] == 2;
 }
 
+/// What SQLite's quick_check finds wrong with the database open on `connection`, or empty when
+/// it finds nothing: the first two findings and how many more (a damaged page alone can list a
+/// hundred, one per cell, and the whole list once filled a terminal).
+std::string QuickCheckFindings(Connection& connection) {
+  Statement check = connection.prepare("PRAGMA quick_check");
+  std::vector<std::string> findings;
+  while (check.step()) {
+    const std::string row = check.getText(0);
+    std::size_t start = 0;
+    while (start <= row.size()) {
+      const std::size_t end = std::min(row.find('\n', start), row.size());
+      const std::string line = row.substr(start, end - start);
+      // SQLite heads the findings of each attached database with its name.
+      if (!line.empty() && !line.starts_with("*** in database")) findings.push_back(line);
+      start = end + 1;
+    }
+  }
+  if (findings.size() == 1 && findings.front() == "ok") return {};
+  if (findings.empty()) return "quick_check gave no answer";
+  constexpr std::size_t kShown = 2;
+  constexpr std::size_t kQuickCheckLimit = 100;  // SQLite stops counting there
+  std::string text = findings.front();
+  for (std::size_t i = 1; i < std::min(findings.size(), kShown); ++i) {
+    text += "; ";
+    text += findings[i];
+  }
+  if (findings.size() > kShown) {
+    text += " (and ";
+    text += findings.size() >= kQuickCheckLimit ? "at least " : "";
+    text += std::to_string(findings.size() - kShown) + " more)";
+  }
+  return text;
+}
+
 /// VerifySnapshot's checks but the schema version's: a regular file, not in WAL mode (opened
 /// read-only it would miss what its log holds), of a PinTag schema version, whole (quick_check).
 /// Its schema version, with `connection` open on it; throws SqliteError when SQLite cannot open it.
@@ -256,10 +290,8 @@ Result<int> OpenWholeRegistry(const std::string& path, std::optional<Connection>
                                            " holds no PinTag registry (it is empty, or another "
                                            "application's SQLite database)"};
   }
-  Statement check = connection->prepare("PRAGMA quick_check");
-  const std::string verdict = check.step() ? check.getText(0) : "no answer";
-  if (verdict != "ok") {
-    return Error{ErrorCode::kStorage, "snapshot " + path + " is damaged: " + verdict};
+  if (const std::string findings = QuickCheckFindings(*connection); !findings.empty()) {
+    return Error{ErrorCode::kStorage, "snapshot " + path + " is damaged: " + findings};
   }
   return version;
 }
@@ -358,6 +390,18 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
     {
       Connection copy(temporary.path(), {.create = false});
       source.backupInto(copy);
+      // The backup copies pages as they are, so a damaged source gives a damaged copy, which
+      // replicas refuse and a restore would bring back. Checked before the scan log's VACUUM,
+      // which rewrites the pages it can read and could hide what the source lost.
+      if (const std::string findings = QuickCheckFindings(copy); !findings.empty()) {
+        return Error{ErrorCode::kStorage,
+                     "the database " + source.path() +
+                         " is damaged, so no snapshot of it was written (SQLite's quick_check "
+                         "of the copy found: " +
+                         findings +
+                         "); restore it from the newest snapshot a replica holds "
+                         "(docs/SCALING.md, Snapshots)"};
+      }
       // A rollback journal keeps the snapshot one file, which read-only servers open without
       // needing to create -wal and -shm files beside it.
       copy.execute("PRAGMA journal_mode=DELETE");

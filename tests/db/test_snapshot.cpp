@@ -14,6 +14,7 @@
 #include <chrono>
 #include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 #include <vector>
 
@@ -205,6 +206,54 @@ TEST(Snapshot, AnUnwritableTargetIsAnErrorAndLeavesNothingBehind) {
   EXPECT_EQ(taken.error().code, ErrorCode::kStorage);
   for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+/// Overwrites 64 KiB a tenth of the way into `path` (16 pages of a seeded registry's tables and
+/// indexes) with bytes no page holds, as a failing disk or a stray write would.
+void DamagePagesPastTheFirst(const std::string& path) {
+  const auto size = std::filesystem::file_size(path);
+  ASSERT_GT(size, 8U << 20) << "a seeded registry";
+  std::fstream in_place(path, std::ios::binary | std::ios::in | std::ios::out);
+  in_place.seekp(static_cast<std::streamoff>(size / 10));
+  in_place << std::string(64 << 10, '\xFF');
+}
+
+// The backup API copies pages as they are: a snapshot of a damaged database was written and
+// reported as taken (exit 0), replicas then refused it, and as a backup it kept the damage.
+TEST(Snapshot, OfADamagedDatabaseIsRefusedAndNothingIsWritten) {
+  TempDir dir;
+  const std::string damaged = test::CopyOfSeeded(dir);
+  DamagePagesPastTheFirst(damaged);
+  const std::string out = dir.file("snapshot.db");
+  {
+    Connection live = test::OpenExisting(damaged);
+    const auto written = WriteSnapshot(live, out);
+    ASSERT_FALSE(written.ok());
+    EXPECT_EQ(written.error().code, ErrorCode::kStorage);
+    const std::string& message = written.error().message;
+    EXPECT_NE(message.find("the database " + damaged + " is damaged"), std::string::npos)
+        << message;
+    // A hundred findings, one per cell, filled a terminal: the first two and a count.
+    EXPECT_NE(message.find(" more)"), std::string::npos) << message;
+    EXPECT_LT(message.size(), 600U) << message;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+
+  // A snapshot damaged after it was written is refused by --verify in the same few lines.
+  const std::string sound = test::CopyOfSeeded(dir, "sound.db");
+  {
+    Connection live = test::OpenExisting(sound);
+    ASSERT_TRUE(WriteSnapshot(live, out).ok());
+  }
+  DamagePagesPastTheFirst(out);
+  const auto verified = VerifySnapshot(out);
+  ASSERT_FALSE(verified.ok());
+  EXPECT_EQ(verified.error().code, ErrorCode::kStorage);
+  EXPECT_NE(verified.error().message.find("snapshot " + out + " is damaged: "), std::string::npos)
+      << verified.error().message;
+  EXPECT_LT(verified.error().message.size(), 600U) << verified.error().message;
 }
 
 TEST(Snapshot, NeverReplacesALiveDatabase) {

@@ -35,7 +35,9 @@ std::string LiveDatabaseAt(const std::string& path);
 std::string DatabaseOwningFile(const std::string& path, const std::string& source = {});
 
 /// Copies `source` to `out_path` with SQLite's online backup API (writers on other connections
-/// go on meanwhile). The copy is made in a temporary file beside `out_path`, left without the
+/// go on meanwhile). kStorage, nothing written, when the copy fails PRAGMA quick_check: the
+/// backup copies pages as they are, so the source is damaged (the message names it and the
+/// first two findings). The copy is made in a temporary file beside `out_path`, left without the
 /// scan log (each server keeps its own), switched to a rollback journal (a single file that
 /// opens read-only anywhere), fsynced and renamed into place, and the directory fsynced: a
 /// reader of `out_path` sees the old file or the new one, never part of one. kStorage when the
