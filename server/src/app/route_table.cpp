@@ -29,6 +29,7 @@ struct AppRoute {
   Access role = Access::kAdmin;
   RouteHandler handler = nullptr;
   RouteDoc doc;
+  std::vector<int> routine_statuses = {};  ///< answers whose access lines are throttled
 };
 
 /// A handler that writes the database: it runs holding a write gate permit (WriteGate), or the
@@ -118,7 +119,8 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"replication", "Which registry version this server serves, and whether it is the primary or a replica"}},
     {"GET",    "/api/v1/registry/snapshot",         Access::kReplica, GetRegistrySnapshot,
      {"replication", "The registry as an SQLite snapshot for read-only replicas (ETag: its registry version and the primary run)",
-      {}, {}, {"application/vnd.sqlite3"}}},
+      {}, {}, {"application/vnd.sqlite3"}},
+     {304}},  // a replica's poll, once a second, with nothing new: one access line a minute
 
     {"POST",   "/api/v1/tokens",                    Access::kAdmin,   Writing<PostToken>,
      {"tokens", R"(Create a token {"role", "label"}; the answer holds its secret, once)", {},
@@ -144,6 +146,7 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
     route.consumes = row.doc.consumes;
     route.produces = row.doc.produces;
     route.success = row.doc.success;
+    route.routine_statuses = row.routine_statuses;
     router.add(std::move(route));
   }
   return router;

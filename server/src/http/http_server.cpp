@@ -790,6 +790,10 @@ struct HttpServer::Impl {
     api->metrics().observeRequest(label, req.method, res.status, seconds);
     const std::string principal =
         t_state.admission.principal ? t_state.admission.principal->id : "";
+    const Route* route = t_state.active ? t_state.admission.match.route : nullptr;
+    const bool routine =
+        route != nullptr &&
+        std::ranges::find(route->routine_statuses, res.status) != route->routine_statuses.end();
     LogAccess({.request_id = t_state.request_id,
                .client = client.address,
                .proxy = client.forwarded ? peer : std::string(),
@@ -800,7 +804,8 @@ struct HttpServer::Impl {
                .bytes = req.method == "HEAD" ? 0 : res.body.size(),
                .seconds = seconds,
                .principal = principal,
-               .cut_off = t_connection != nullptr && t_connection->writeFailed()});
+               .cut_off = t_connection != nullptr && t_connection->writeFailed(),
+               .routine = routine});
     t_state = RequestState{};
   }
 };

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "pintag/server/routine_access_throttle.hpp"
+
 namespace pintag::server {
 namespace {
 
@@ -106,6 +108,19 @@ void SetAccessLogEnabled(bool enabled) {
 
 void LogAccess(const AccessRecord& r) {
   if (!g_access_enabled) return;
+  std::size_t left_out = 0;
+  if (r.routine) {
+    static RoutineAccessThrottle throttle;
+    std::string kind;
+    for (const std::string_view part : {r.client, r.principal, r.method, r.path}) {
+      kind += part;
+      kind += '\n';
+    }
+    kind += std::to_string(r.status);
+    const std::optional<std::size_t> admitted = throttle.admit(kind);
+    if (!admitted) return;
+    left_out = *admitted;
+  }
   std::vector<Field> fields = {{"id", std::string(r.request_id)},
                                {"client", std::string(r.client)},
                                {"method", std::string(r.method)},
@@ -117,6 +132,8 @@ void LogAccess(const AccessRecord& r) {
   if (!r.proxy.empty()) fields.emplace_back("proxy", std::string(r.proxy));
   // The status is what the server answered; the client may not have received it.
   if (r.cut_off) fields.emplace_back("cut_off", true);
+  // Routine answers of this kind whose lines were left out since its last one.
+  if (left_out > 0) fields.emplace_back("left_out", left_out);
   Logger().info(Render("access", fields));
 }
 

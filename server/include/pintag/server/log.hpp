@@ -39,6 +39,7 @@ struct AccessRecord {
   double seconds = 0;          ///< from the request's head having arrived to its answer written
   std::string_view principal;  ///< the token id, or empty for open routes
   bool cut_off = false;        ///< the answer did not all reach the client (it went away)
+  bool routine = false;        ///< one of the route's routine_statuses: throttled per client
 };
 void LogAccess(const AccessRecord& record);
 

@@ -36,6 +36,10 @@ struct Route {
   /// The handler answers from the method and path alone, at admission: before a token is asked
   /// for or a byte of the body is read (a replica's refusal of a write, whatever it carries).
   bool answers_before_body = false;
+  /// Statuses whose answers are routine, asked for over and over with nothing new (a replica's
+  /// poll answered 304): their access lines are written at most once a minute for each client
+  /// and token (RoutineAccessThrottle).
+  std::vector<int> routine_statuses;
 };
 
 /// A route with the fields every route sets; set produces, query and consumes on the result.
