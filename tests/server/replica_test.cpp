@@ -286,6 +286,17 @@ TEST_F(ReplicaSetTest, ScansTheLogCannotKeepAreCounted) {
   EXPECT_NE(stderrOf("replica-0").find("scan log: "), std::string::npos);
 }
 
+/// The value of the gauge `name` (no labels) on the server's /metrics, or -1 when it is not there.
+double GaugeAt(httplib::Client& client, const std::string& name) {
+  const auto page = client.Get("/metrics");
+  if (!page || page->status != 200) return -1;
+  const std::string line_start = "\n" + name + " ";
+  const std::size_t at = page->body.find(line_start);
+  return at == std::string::npos ? -1 : std::stod(page->body.substr(at + line_start.size()));
+}
+
+// The registry version each server serves is a gauge (since 2026-12-08), so that an alert can
+// compare a replica's with its primary's: before, only GET /api/v1/registry said it.
 TEST_F(ReplicaSetTest, AFollowerServesAPincodeAddedOnThePrimary) {
   ServerProcess& replica = startFollower(0);
   ASSERT_TRUE(replica.ok());
@@ -294,9 +305,18 @@ TEST_F(ReplicaSetTest, AFollowerServesAPincodeAddedOnThePrimary) {
   EXPECT_EQ(StatusOf(client.Get("/api/v1/pincodes/999123")), 404);
   httplib::Client primary("127.0.0.1", primary_->port());
   primary.set_read_timeout(30, 0);
+  const std::int64_t before = RegistryVersionAt(primary_->port());
+  EXPECT_EQ(GaugeAt(client, "pintag_registry_version"), static_cast<double>(before));
   addPincode(primary, "999123");
   ASSERT_EQ(WaitForStatus(client, "/api/v1/pincodes/999123", 200), 200) << stderrOf("replica-0");
-  EXPECT_EQ(RegistryVersionAt(replica.port()), RegistryVersionAt(primary_->port()));
+  const std::int64_t after = RegistryVersionAt(primary_->port());
+  EXPECT_GT(after, before);
+  EXPECT_EQ(RegistryVersionAt(replica.port()), after);
+  EXPECT_EQ(GaugeAt(client, "pintag_registry_version"), static_cast<double>(after));
+  EXPECT_EQ(GaugeAt(primary, "pintag_registry_version"), static_cast<double>(after));
+  // The replica has it, so the primary published it.
+  EXPECT_EQ(GaugeAt(primary, "pintag_snapshot_published_version"), static_cast<double>(after));
+  EXPECT_EQ(GaugeAt(client, "pintag_snapshot_published_version"), -1) << "a replica publishes none";
 }
 
 TEST_F(ReplicaSetTest, AFollowerWaitingForItsFirstSnapshotOutlivesSigHup) {
