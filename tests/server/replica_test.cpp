@@ -599,9 +599,16 @@ TEST_F(ReplicaSetTest, ANewerSnapshotRenamedIntoPlaceIsServedWithoutDroppingRequ
 
   // SIGHUP asks for a look now; the process goes on serving and then stops cleanly on SIGTERM.
   // Had SIGHUP kept its default action, it would have ended the process (exit 128 + 1, or gone
-  // before the lookup), however the two signals' delivery interleaves.
+  // before the lookup), however the two signals' delivery interleaves. It says it looked (a
+  // SIGHUP that found nothing new wrote nothing, so an operator could not tell it arrived).
   replica.signal(SIGHUP);
   EXPECT_EQ(RegistryVersionAt(replica.port()), published_version);
+  EXPECT_TRUE(WaitUntil([&] {
+    return stderrOf("replica-0")
+               .find("SIGHUP: no new snapshot taken from " + snapshot +
+                     " (serving registry version " + std::to_string(published_version) + ")") !=
+           std::string::npos;
+  })) << stderrOf("replica-0");
   EXPECT_EQ(replica.stop(SIGTERM, 30), 0);
 }
 
@@ -1393,6 +1400,14 @@ TEST_F(ReplicaSetTest, AFollowersStatusShowsItsPollsAndSigHupTakesARotatedToken)
   ASSERT_TRUE(made["secret"].is_string()) << made.dump();
   WriteFile(dir_.file("replica.token"), made["secret"].get<std::string>() + "\n");
   follower.signal(SIGHUP);
+  // Taken by the signal, or by the poll before it (which looks at the file): said either way.
+  EXPECT_TRUE(WaitUntil([&] {
+    const std::string log = stderrOf("replica-0");
+    return log.find("took a new replica token from " + dir_.file("replica.token")) !=
+               std::string::npos ||
+           log.find("the replica token in " + dir_.file("replica.token") + " is the one in use") !=
+               std::string::npos;
+  })) << stderrOf("replica-0");
   addPincode(primary, "999126");
   EXPECT_EQ(WaitForStatus(replica, "/api/v1/pincodes/999126", 200), 200) << stderrOf("replica-0");
   // The watcher may serve the renamed file while the follower still syncs its directory, before

@@ -356,15 +356,28 @@ void Replication::reload() {
     server::LogEvent("SIGHUP: nothing to reload (a primary reads its database as it changes)");
     return;
   }
-  if (watcher_) watcher_->check();
-  if (!follower_) return;
-  // A rotated replica token: written to --follow-token-file, then SIGHUP.
-  try {
-    follower_->setToken(ReadToken(args_));
-  } catch (const std::exception& e) {
-    server::LogEvent(std::string("SIGHUP: keeping the replica token: ") + e.what(),
-                     /*warning=*/true);
+  // Said whatever it finds, so that an operator who sent it sees it arrived (a new file is
+  // logged by the watcher as it is taken).
+  std::string done;
+  if (watcher_ && !watcher_->check()) {
+    done = "no new snapshot taken from " + db_path_ + " (serving registry version " +
+           std::to_string(watcher_->loaded().registry_version) + ")";
   }
+  if (follower_) {
+    // A rotated replica token: written to --follow-token-file, then SIGHUP.
+    try {
+      const bool changed = follower_->setToken(ReadToken(args_));
+      const std::string source =
+          args_.follow_token_file.empty() ? "PINTAG_FOLLOW_TOKEN" : args_.follow_token_file;
+      if (!done.empty()) done += "; ";
+      done += changed ? "took a new replica token from " + source + " for the next poll"
+                      : "the replica token in " + source + " is the one in use";
+    } catch (const std::exception& e) {
+      server::LogEvent(std::string("SIGHUP: keeping the replica token: ") + e.what(),
+                       /*warning=*/true);
+    }
+  }
+  if (!done.empty()) server::LogEvent("SIGHUP: " + done);
 }
 
 std::string Replication::describe() const {

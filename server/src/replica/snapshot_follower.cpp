@@ -187,11 +187,13 @@ db::Error SnapshotFollower::downloadWasted(db::Error error) {
   return error;
 }
 
-void SnapshotFollower::setToken(std::string token) {
+bool SnapshotFollower::setToken(std::string token) {
   const std::lock_guard lock(client_mutex_);
+  const bool changed = token != options_.token;
   options_.token = std::move(token);
   // The file may have changed since it was read: the next poll looks at it (stat, then read).
   token_file_seen_.reset();
+  return changed;
 }
 
 std::string SnapshotFollower::pollToken() {

@@ -67,8 +67,9 @@ class SnapshotFollower {
   /// poll went (may be null).
   void start(Have have, std::chrono::milliseconds interval,
              std::shared_ptr<FollowStatus> status = nullptr);
-  /// The token for the next poll (SIGHUP re-reads --follow-token-file).
-  void setToken(std::string token);
+  /// The token for the next poll (SIGHUP re-reads --follow-token-file); true when it differs
+  /// from the one in use.
+  bool setToken(std::string token);
   /// The token for a poll: options_.token, read again from `token_file` when the file changed.
   std::string pollToken();
 
