@@ -512,6 +512,13 @@ TEST_F(ServeTest, ATagLimitUnderTheDefaultSizeIsTheDefault) {
   r = client().Get("/api/v1/tags/110001.png?px=64", counter());
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200) << r->body;
+  // And /openapi.json says that default (it said 256 whatever the limit).
+  const json doc = ExpectJson(client().Get("/openapi.json"));
+  std::string px;
+  for (const json& parameter : doc["paths"]["/api/v1/tags/{pin}.png"]["get"]["parameters"]) {
+    if (parameter["name"] == "px") px = parameter["description"];
+  }
+  EXPECT_NE(px.find("64 to 128 (default 128)"), std::string::npos) << px;
 }
 
 }  // namespace

@@ -608,6 +608,38 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
   }
   const json& put_plan = doc["paths"]["/api/v1/sortplans/{name}"]["put"]["responses"];
   EXPECT_TRUE(put_plan.contains("200") && put_plan.contains("201")) << put_plan;
+  // Every success was described as "Error" (the problem titles' fallback).
+  for (const auto& [path, item] : doc["paths"].items()) {
+    for (const auto& [method, operation] : item.items()) {
+      for (const auto& [status, response] : operation["responses"].items()) {
+        EXPECT_NE(response["description"], "Error") << method << " " << path << " " << status;
+      }
+    }
+  }
+  EXPECT_EQ(put_plan["201"]["description"], "Created");
+  // The conditional requests a client needs: 304 (no body) where If-None-Match can bring one, the
+  // headers to send, and the ETag to send back; the Location of a new pincode.
+  const json& get_plan = doc["paths"]["/api/v1/sortplans/{name}"]["get"];
+  const json& get_snapshot = doc["paths"]["/api/v1/registry/snapshot"]["get"];
+  for (const json* operation : {&get_plan, &get_snapshot}) {
+    ASSERT_TRUE((*operation)["responses"].contains("304")) << *operation;
+    EXPECT_FALSE((*operation)["responses"]["304"].contains("content")) << *operation;
+    EXPECT_TRUE((*operation)["responses"]["200"]["headers"].contains("ETag")) << *operation;
+  }
+  const auto reads_header = [](const json& operation, const std::string& name) {
+    for (const json& parameter : operation["parameters"]) {
+      if (parameter["in"] == "header" && parameter["name"] == name) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(reads_header(get_plan, "If-None-Match"));
+  EXPECT_TRUE(reads_header(get_snapshot, "If-None-Match"));
+  const json& put_plan_operation = doc["paths"]["/api/v1/sortplans/{name}"]["put"];
+  EXPECT_TRUE(reads_header(put_plan_operation, "If-Match"));
+  EXPECT_TRUE(reads_header(put_plan_operation, "If-None-Match"));
+  EXPECT_TRUE(reads_header(doc["paths"]["/api/v1/sortplans/{name}"]["delete"], "If-Match"));
+  EXPECT_TRUE(doc["paths"]["/api/v1/pincodes"]["post"]["responses"]["201"]["headers"].contains(
+      "Location"));
   EXPECT_NE(doc["info"]["description"].get<std::string>().find("replica ("), std::string::npos);
   for (const char* route : {"GET /api/v1/pincodes/{pin}",
                             "GET /api/v1/pincodes",

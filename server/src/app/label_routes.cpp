@@ -22,7 +22,6 @@
 namespace pintag::app {
 namespace {
 
-constexpr int kDefaultTagPx = 256;
 constexpr double kDefaultTagMm = 50;
 constexpr double kMinTagMm = 5;
 constexpr double kMaxTagMm = 500;
@@ -127,11 +126,16 @@ TagKey ActiveKey(const AppContext& context, const HttpRequest& request) {
 
 }  // namespace
 
+int DefaultTagPx(const AppContext& context) {
+  constexpr int kDefaultTagPx = 256;
+  return std::min(kDefaultTagPx, context.max_tag_px);
+}
+
 HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request) {
   // A server whose --max-tag-px is under the default renders its largest by default: the default
   // is not a size the server would refuse if it were asked for.
-  const long long px = IntegerQuery(request, "px", std::min(kDefaultTagPx, context.max_tag_px),
-                                    kMinTagSquarePx, context.max_tag_px);
+  const long long px =
+      IntegerQuery(request, "px", DefaultTagPx(context), kMinTagSquarePx, context.max_tag_px);
   const double dpi = DpiQuery(request);
   const TagKey key = ActiveKey(context, request);
   const long long side = px + 2LL * QuietZonePx(static_cast<int>(px));  // the PNG's side

@@ -10,7 +10,21 @@ namespace pintag::app {
 namespace {
 
 using server::Access;
+using server::HeaderDoc;
 using server::QueryParamDoc;
+
+/// The headers of a sort plan's conditional requests (docs/API.md, "Sort plans").
+HeaderDoc PlanIfMatchDoc() {
+  return {"If-Match", "the plan's ETag as read: only if the plan is unchanged since (else 412)"};
+}
+HeaderDoc PlanIfNoneMatchDoc(bool put) {
+  return {"If-None-Match", put ? "*: only if no plan has this name (else 412)"
+                               : "the ETag held: 304 with no body while the plan is unchanged"};
+}
+HeaderDoc PlanETagDoc() {
+  return {"ETag", "the plan's version (JSON and CSV forms differ: \"…-csv\"); send it back in "
+                  "If-Match to change only this version"};
+}
 
 /// What /openapi.json says about a route beyond its method, path and role.
 struct RouteDoc {
@@ -20,6 +34,8 @@ struct RouteDoc {
   std::vector<std::string> consumes = {};  ///< request body media types; none: no body
   std::vector<std::string> produces = {};  ///< success media types; none: application/json
   std::vector<int> success = {200};        ///< the statuses a success answers with
+  std::vector<server::HeaderDoc> request_headers = {};   ///< headers it reads (If-Match, …)
+  std::vector<server::HeaderDoc> response_headers = {};  ///< headers its successes carry
 };
 
 /// One row of the table.
@@ -44,6 +60,7 @@ HttpResponse Writing(const AppContext& context, const HttpRequest& request) {
 
 server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
   const std::string max_tag_px = std::to_string(context->max_tag_px);
+  const std::string default_tag_px = std::to_string(DefaultTagPx(*context));
   const std::vector<std::string> photo_types = {"image/jpeg",          "image/png",
                                                 "image/tiff",          "image/webp",
                                                 "multipart/form-data", "application/octet-stream"};
@@ -63,13 +80,14 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"registry", "The pincode a tag key belongs to (retired ones included)"}},
     {"POST",   "/api/v1/pincodes",                  Access::kAdmin,   Writing<PostPincode>,
      {"registry", "Add a pincode (and its offices); answers 201 with the allocated key", {},
-      {"application/json"}, {}, {201}}},
+      {"application/json"}, {}, {201}, {},
+      {{"Location", "the new pincode's URL (/api/v1/pincodes/{pin})"}}}},
     {"POST",   "/api/v1/pincodes/{pin}/retire",     Access::kAdmin,   Writing<PostRetirePincode>,
      {"registry", "Retire a pincode: it keeps its key, labels are no longer issued"}},
 
     {"GET",    "/api/v1/tags/{pin}.png",            Access::kCounter, GetTagPng,
      {"labels", "The pincode's PinTag as a PNG (quiet zone included)",
-      {{"px", "black square side in pixels, 64 to " + max_tag_px + " (default 256)", "integer"},
+      {{"px", "black square side in pixels, 64 to " + max_tag_px + " (default " + default_tag_px + ")", "integer"},
        DpiQueryDoc()},
       {}, {"image/png"}}},
     {"GET",    "/api/v1/tags/{pin}.svg",            Access::kCounter, GetTagSvg,
@@ -107,19 +125,23 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
      {"routing", "Every sort plan with its fallback bin and rule count"}},
     {"GET",    "/api/v1/sortplans/{name}",          Access::kOpen,    GetSortPlan,
      {"routing", "A sort plan's rules as JSON, or CSV (?format=csv or Accept: text/csv), with its version as ETag",
-      {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}}},
+      {{"format", "json (default) or csv"}}, {}, {"application/json", "text/csv"}, {200, 304},
+      {PlanIfNoneMatchDoc(false)}, {PlanETagDoc()}}},
     {"PUT",    "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<PutSortPlan>,
      {"routing", "Create or replace a sort plan from CSV (prefix,bin with one * row) or JSON; with If-Match: its ETag, only if unchanged since read (else 412), with If-None-Match: *, only if new; a new name that reads like a stored plan's but differs in Unicode code points is 409",
       {{"description", "plan description (CSV bodies)"}}, {"text/csv", "application/json"}, {},
-      {200, 201}}},
+      {200, 201}, {PlanIfMatchDoc(), PlanIfNoneMatchDoc(true)}, {PlanETagDoc()}}},
     {"DELETE", "/api/v1/sortplans/{name}",          Access::kAdmin,   Writing<DeleteSortPlan>,
-     {"routing", "Delete a sort plan (not the default one, 409) and answer it as it was; with If-Match: its ETag, only if unchanged since read (else 412)"}},
+     {"routing", "Delete a sort plan (not the default one, 409) and answer it as it was; with If-Match: its ETag, only if unchanged since read (else 412)",
+      {}, {}, {}, {200}, {PlanIfMatchDoc()}, {PlanETagDoc()}}},
 
     {"GET",    "/api/v1/registry",                  Access::kOpen,    GetRegistryStatus,
      {"replication", "Which registry version this server serves, and whether it is the primary or a replica"}},
     {"GET",    "/api/v1/registry/snapshot",         Access::kReplica, GetRegistrySnapshot,
      {"replication", "The registry as an SQLite snapshot for read-only replicas (ETag: its registry version and the primary run)",
-      {}, {}, {"application/vnd.sqlite3"}},
+      {}, {}, {"application/vnd.sqlite3"}, {200, 304},
+      {{"If-None-Match", "the ETag of the snapshot held: 304 with no body while it is current"}},
+      {{"ETag", "the registry version and the primary's run (\"<version>-<epoch>\")"}}},
      {304}},  // a replica's poll, once a second, with nothing new: one access line a minute
 
     {"POST",   "/api/v1/tokens",                    Access::kAdmin,   Writing<PostToken>,
@@ -146,6 +168,8 @@ server::Router AppRouter(const std::shared_ptr<const AppContext>& context) {
     route.consumes = row.doc.consumes;
     route.produces = row.doc.produces;
     route.success = row.doc.success;
+    route.request_headers = row.doc.request_headers;
+    route.response_headers = row.doc.response_headers;
     route.routine_statuses = row.routine_statuses;
     router.add(std::move(route));
   }

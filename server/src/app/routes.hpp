@@ -26,6 +26,8 @@ HttpResponse PostPincode(const AppContext& context, const HttpRequest& request);
 HttpResponse PostRetirePincode(const AppContext& context, const HttpRequest& request);
 
 // label_routes.cpp: tags and printable labels.
+/// A tag PNG's black square side when `px` is not given: 256, or --max-tag-px when smaller.
+int DefaultTagPx(const AppContext& context);
 HttpResponse GetTagPng(const AppContext& context, const HttpRequest& request);
 HttpResponse GetTagSvg(const AppContext& context, const HttpRequest& request);
 HttpResponse GetLabelPdf(const AppContext& context, const HttpRequest& request);

@@ -44,6 +44,22 @@ std::string OperationId(const Route& route) {
   return id;
 }
 
+/// A success's reason phrase, as its response's description (StatusTitle names errors).
+std::string SuccessDescription(int status) {
+  switch (status) {
+    case 200:
+      return "OK";
+    case 201:
+      return "Created";
+    case 204:
+      return "No Content";
+    case 304:
+      return "Not Modified: If-None-Match named the current version (no body)";
+    default:
+      return "Success";
+  }
+}
+
 bool IsBinary(const std::string& media_type) {
   return media_type.rfind("image/", 0) == 0 || media_type == "application/pdf" ||
          media_type == "application/octet-stream";
@@ -74,6 +90,13 @@ std::string OpenApiJson(const Router& router, const ApiInfo& info) {
                             {"description", q.description},
                             {"schema", {{"type", q.type}}}});
     }
+    for (const HeaderDoc& header : route.request_headers) {
+      parameters.push_back({{"name", header.name},
+                            {"in", "header"},
+                            {"required", false},
+                            {"description", header.description},
+                            {"schema", {{"type", "string"}}}});
+    }
     if (!parameters.empty()) op["parameters"] = parameters;
     if (!route.consumes.empty()) {
       json content = json::object();
@@ -93,9 +116,16 @@ std::string OpenApiJson(const Router& router, const ApiInfo& info) {
                           : json{{"schema", json::object()}};
     }
     json responses = json::object();
+    json headers = json::object();
+    for (const HeaderDoc& header : route.response_headers) {
+      headers[header.name] = {{"description", header.description},
+                              {"schema", {{"type", "string"}}}};
+    }
     for (const int status : route.success) {
-      responses[std::to_string(status)] = {{"description", std::string(StatusTitle(status))},
-                                           {"content", content}};
+      json& response = responses[std::to_string(status)];
+      response = {{"description", SuccessDescription(status)}};
+      if (status != 304 && status != 204) response["content"] = content;
+      if (!headers.empty()) response["headers"] = headers;
     }
     responses["4XX"] = ProblemRef("client error (problem details, RFC 9457)");
     responses["5XX"] = ProblemRef("server error (problem details, RFC 9457)");

@@ -21,6 +21,12 @@ struct QueryParamDoc {
   bool required = false;
 };
 
+/// A header a route reads or answers with, as OpenAPI describes it.
+struct HeaderDoc {
+  std::string name;
+  std::string description;
+};
+
 struct Route {
   std::string method;   ///< "GET", "POST", "PUT", "DELETE", "PATCH"
   std::string pattern;  ///< see the header comment
@@ -30,9 +36,11 @@ struct Route {
   std::vector<std::string> produces;  ///< success media types; empty = application/json
   std::vector<int> success = {200};   ///< the statuses a success answers with (201 Created, …)
   std::vector<QueryParamDoc> query;   ///< documented query parameters
-  std::vector<std::string> consumes;  ///< request body media types; empty = no body
-  std::string tag = "api";            ///< OpenAPI tag grouping the route
-  bool hidden = false;                ///< left out of OpenAPI (static files)
+  std::vector<HeaderDoc> request_headers;   ///< documented headers it reads (If-Match, …)
+  std::vector<HeaderDoc> response_headers;  ///< documented headers of its successes (ETag, …)
+  std::vector<std::string> consumes;        ///< request body media types; empty = no body
+  std::string tag = "api";                  ///< OpenAPI tag grouping the route
+  bool hidden = false;                      ///< left out of OpenAPI (static files)
   /// The handler answers from the method and path alone, at admission: before a token is asked
   /// for or a byte of the body is read (a replica's refusal of a write, whatever it carries).
   bool answers_before_body = false;
