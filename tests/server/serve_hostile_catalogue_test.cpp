@@ -868,6 +868,15 @@ TEST_F(HostileCatalogue, ExpectContinueIsRefusedBeforeTheBodyIsAskedFor) {
   const std::string refused = test::ReceiveUntil(fd, 10, test::HasWholeResponse);
   ::close(fd);
   EXPECT_EQ(refused.rfind("HTTP/1.1 401", 0), 0U) << refused.substr(0, 200);
+  // Framed like every other answer: it had no Content-Length (its body ended only as the
+  // connection closed), and said Keep-Alive beside Connection: close.
+  const Answer refusal = Parse(refused);
+  EXPECT_NE(refusal.head.find("\r\nContent-Length: " + std::to_string(refusal.body.size())),
+            std::string::npos)
+      << refused;
+  EXPECT_NE(refusal.head.find("\r\nConnection: close"), std::string::npos) << refused;
+  EXPECT_EQ(refusal.head.find("Keep-Alive"), std::string::npos) << refused;
+  EXPECT_EQ(json::parse(refusal.body, nullptr, false).value("status", 0), 401) << refused;
   // With a token the body is asked for, and read.
   const std::string photo = Encoded(".jpg");
   const int ok_fd = test::ConnectLoopback(server_->port());

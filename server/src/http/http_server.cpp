@@ -408,7 +408,14 @@ struct HttpServer::Impl {
   /// (no token, a replica's write, a body over the limit) is sent instead of "100 Continue" and
   /// the client never sends its body.
   int expectContinue(const httplib::Request& req, httplib::Response& res) {
-    if (preRoute(req, res) == httplib::Server::HandlerResponse::Handled) return res.status;
+    if (preRoute(req, res) == httplib::Server::HandlerResponse::Handled) {
+      // cpp-httplib writes this answer without the Content-Length it gives routed ones, so its
+      // body ended only when the connection closed; and the body was never read, so the
+      // connection closes.
+      res.set_header("Content-Length", std::to_string(res.body.size()));
+      CloseAfterAnswer(res);
+      return res.status;
+    }
     t_state.admitted_before_continue = true;
     return 100;
   }
@@ -866,10 +873,10 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
   // at SIGTERM) closes its connection: a client that took it as kept alive would send its next
   // request into a socket about to close, and an upload is not retried by clients or proxies.
   s.set_post_routing_handler([impl](const httplib::Request& /*req*/, httplib::Response& res) {
-    if (impl->stopping && res.get_header_value("Connection") != "close") {
-      res.headers.erase("Keep-Alive");
-      res.set_header("Connection", "close");
-    }
+    if (impl->stopping) CloseAfterAnswer(res);
+    // cpp-httplib adds Keep-Alive to an answer whose connection it keeps, which it decides before
+    // a handler asks for the close: an answer said both.
+    if (res.get_header_value("Connection") == "close") res.headers.erase("Keep-Alive");
   });
   s.set_error_handler(httplib::Server::HandlerWithResponse(
       [impl](const httplib::Request& req, httplib::Response& res) {
