@@ -621,6 +621,50 @@ TEST_F(HostileCatalogue, SlowlorisHeadersAreCutOffByTheReadTimeout) {
   }
   expectHealthy();
 }
+// A head over 32 KiB is handed to a worker unfinished, and the worker waited a read timeout for
+// each byte: four clients adding a header byte every half second (under the 1 s timeout) held all
+// four workers for as long as the 96 KiB head budget lasted (a review: lookups timed out for the
+// whole run). The worker now gives such a head one read timeout in all.
+TEST_F(HostileCatalogue, SlowlorisHeadsOverThirtyTwoKiBAreCutOffByTheReadTimeout) {
+  startServer({"--read-timeout", "1"});
+  std::string padding;
+  for (int i = 0; i < 9; ++i)
+    padding += "X-Pad-" + std::to_string(i) + ": " + std::string(4000, 'a') + "\r\n";
+  std::vector<int> slow;
+  for (int i = 0; i < 4; ++i) {
+    const int fd = test::ConnectLoopback(server_->port());
+    ASSERT_GE(fd, 0);
+    ASSERT_TRUE(test::SendAll(fd, "GET /livez HTTP/1.1\r\nHost: x\r\n" + padding + "X-Slow: "));
+    slow.push_back(fd);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> answers(slow.size());
+  std::size_t answered = 0;
+  while (answered < slow.size() &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(10)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    for (std::size_t i = 0; i < slow.size(); ++i) {
+      if (!answers[i].empty()) continue;
+      char buffer[4096];
+      const ssize_t got = ::recv(slow[i], buffer, sizeof buffer, MSG_DONTWAIT);
+      if (got > 0) {
+        answers[i] = test::ReceiveUntil(slow[i], 5, test::HasWholeResponse)
+                         .insert(0, buffer, static_cast<std::size_t>(got));
+        ++answered;
+      } else {
+        test::SendAll(slow[i], "a");
+      }
+    }
+  }
+  // The idle wait hands each on at once (32 KiB are there); a worker then gives it 1 s.
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  for (std::size_t i = 0; i < slow.size(); ++i) {
+    ::close(slow[i]);
+    EXPECT_EQ(answers[i].rfind("HTTP/1.1 408", 0), 0U) << answers[i].substr(0, 300);
+    EXPECT_NE(answers[i].find("came too slowly"), std::string::npos) << answers[i];
+  }
+  expectHealthy();
+}
 TEST_F(HostileCatalogue, ABodyTrickledUnderTheMinimumRateIsCutOffAndFreesItsWorker) {
   startServer({"--read-timeout", "1", "--min-body-rate", "2000"});
   const std::string photo = Encoded(".jpg", 96, 72);

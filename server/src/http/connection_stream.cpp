@@ -80,6 +80,15 @@ int ConnectionStream::bodyWaitMs() const {
   return static_cast<int>(std::min<double>(left_ms, read_timeout_ms_));
 }
 
+int ConnectionStream::headWaitMs() const {
+  const auto deadline = created_ + std::chrono::milliseconds(read_timeout_ms_);
+  const double left_ms = std::ceil(
+      std::chrono::duration<double, std::milli>(deadline - std::chrono::steady_clock::now())
+          .count());
+  if (left_ms <= 0) return -1;
+  return static_cast<int>(std::min<double>(left_ms, read_timeout_ms_));
+}
+
 bool ConnectionStream::is_readable() const {
   return buffered_begin_ < buffered_end_ || Wait(fd_, POLLIN, read_timeout_ms_) > 0;
 }
@@ -111,7 +120,7 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
     // (under load) is not the client's fault.
     // The end is named by the wait chosen here: a read timeout is one whatever the clock says
     // after it.
-    const int wait_ms = head_read_ ? bodyWaitMs() : read_timeout_ms_;
+    const int wait_ms = head_read_ ? bodyWaitMs() : headWaitMs();
     const auto wait_began = std::chrono::steady_clock::now();
     const int ready = Wait(fd_, POLLIN, std::max(wait_ms, 0));
     if (head_read_) {

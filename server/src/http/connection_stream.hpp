@@ -25,6 +25,13 @@
 // at most as long as it was asked to be: a server that stops reading (busy, or stopped and
 // continued) holds the client back by flow control, and that time is not the client's.
 //
+// And it bounds how long a worker reads a head: one read timeout from when the stream was made,
+// whatever the pace. A head over kWorkerTakesHeadBytes is handed to a worker unfinished
+// (IdleConnections waits for smaller ones without one), and with a read timeout for each read, a
+// client adding a header byte every few seconds held the worker for as long as the head budget
+// lasted (a review: 72 s for 36 KiB, days for 96 KiB; four such connections stopped a server).
+// A read that would wait past it fails, and `headTooSlow` says so (answered 408).
+//
 // Otherwise it behaves as cpp-httplib's: a read or write waits at most its timeout; the head is
 // read through a 4 KiB buffer (cpp-httplib reads it one byte at a time); a write first checks
 // that the peer can still read. The buffer lives as long as the stream, one request, so no read
@@ -71,6 +78,9 @@ class ConnectionStream final : public httplib::Stream {
   void headRead() { head_read_ = true; }
   /// True once a read was refused because the head ran past `head_budget`.
   bool overBudget() const { return over_budget_; }
+  /// True once a read of the head failed because it was not whole a read timeout after the
+  /// stream was made.
+  bool headTooSlow() const { return !head_read_ && read_end_ == ReadEnd::kTooSlow; }
   /// Set once a read was refused because the head broke a rule of its syntax.
   const std::optional<RequestHeadCheck::Refusal>& headRefusal() const {
     return head_check_.refusal();
@@ -119,6 +129,9 @@ class ConnectionStream final : public httplib::Stream {
   /// How long a read of the body may wait for its next byte: the read timeout, or less when the
   /// body's pace would fall under `min_body_rate` sooner; negative once it has (see above).
   int bodyWaitMs() const;
+  /// How long a read of the head may wait: what is left of one read timeout since `created_`;
+  /// negative once it has run out.
+  int headWaitMs() const;
 
   int fd_;
   int read_timeout_ms_;

@@ -141,7 +141,18 @@ HttpResponse HeadRefusal(const ConnectionStream& stream) {
   if (const auto& refusal = stream.headRefusal()) {
     return ProblemResponse(refusal->status, refusal->detail);
   }
+  if (stream.headTooSlow()) {
+    return ProblemResponse(408, "the request line and headers came too slowly: a head over " +
+                                    std::to_string(kWorkerTakesHeadBytes / 1024) +
+                                    " KiB must be whole within the read timeout of a worker "
+                                    "starting to read it");
+  }
   return HeadTooLarge();
+}
+
+/// The head was refused as it was read (past the budget, its syntax, too slow).
+bool HeadRefused(const ConnectionStream& stream) {
+  return stream.overBudget() || stream.headRefusal().has_value() || stream.headTooSlow();
 }
 
 std::chrono::microseconds Microseconds(time_t seconds, time_t microseconds) {
@@ -201,7 +212,7 @@ class Server : public httplib::Server {
       bool closed = false;
       const bool ok = process_request(stream, left == 1, closed, nullptr);
       t_connection = nullptr;
-      const bool head_refused = stream.overBudget() || stream.headRefusal().has_value();
+      const bool head_refused = HeadRefused(stream);
       if (head_refused && !stream.wasAnswered() && answer_unended_head) {
         answer_unended_head(stream);
       }
@@ -667,7 +678,7 @@ struct HttpServer::Impl {
                                              : std::nullopt);
       res.set_header("X-Request-Id", t_state.request_id);
     }
-    if (t_connection != nullptr && (t_connection->overBudget() || t_connection->headRefusal())) {
+    if (t_connection != nullptr && HeadRefused(*t_connection)) {
       // A head refused while it was read: cpp-httplib saw a failed read (400).
       Apply(HeadRefusal(*t_connection), res);
       res.set_header("Connection", "close");
