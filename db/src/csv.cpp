@@ -91,7 +91,9 @@ std::optional<CsvRecord> CsvReader::next(std::string* error) {
 }
 
 std::string CsvField(std::string_view text) {
-  if (text.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(text);
+  // A semicolon too: spreadsheets in much of Europe split cells at it, and a bin "a;=1+1" left
+  // bare became a cell "=1+1", run as a formula. Quoted, it stays one cell.
+  if (text.find_first_of(",;\"\r\n") == std::string_view::npos) return std::string(text);
   std::string out = "\"";
   for (const char c : text) {
     if (c == '"') out += '"';

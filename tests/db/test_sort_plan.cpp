@@ -236,6 +236,18 @@ TEST_F(SortPlans, NamesAndBinsMustReadAsWhatTheyAre) {
     EXPECT_NE(refusal("hub-f", bin).find("runs as a formula"), std::string::npos) << bin;
   }
   EXPECT_EQ(refusal("hub-f", "a=b+c-d@e"), "");
+  // A spreadsheet whose list separator is ';' split a bare "a;=1+1" into a cell "=1+1", which it
+  // ran: a bin holding one is quoted in the CSV, so it stays one cell, and reads back whole.
+  SortPlan semicolons = HubPlan();
+  semicolons.name = "hub-g";
+  semicolons.rules.front().bin = "a;=1+1";
+  const std::string csv = PlanToCsv(semicolons);
+  EXPECT_NE(csv.find("," + std::string("\"a;=1+1\"") + "\n"), std::string::npos) << csv;
+  const auto read_back = ParsePlanCsv("hub-g", csv);
+  ASSERT_TRUE(read_back.ok()) << read_back.error().message;
+  EXPECT_EQ(PlanToCsv(*read_back), csv);
+  ASSERT_EQ(read_back->rules.size(), semicolons.rules.size());
+  EXPECT_EQ(read_back->rules.front().bin, "a;=1+1");
   SortPlan formula_fallback = HubPlan();
   formula_fallback.fallback_bin = "=1+1";
   EXPECT_FALSE(SavePlan(db_, formula_fallback).ok());

@@ -47,7 +47,8 @@ class CsvReader {
   std::int64_t line_ = 1;
 };
 
-/// Quotes a field when it holds a comma, quote, CR or LF.
+/// Quotes a field when it holds a comma, semicolon (a list separator in many locales'
+/// spreadsheets), quote, CR or LF.
 std::string CsvField(std::string_view text);
 
 /// CsvField for free text in a file that is only read, never imported again (the token list): a
