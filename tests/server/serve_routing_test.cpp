@@ -45,6 +45,14 @@ TEST_F(ServeTest, SortPlansReadAndWrite) {
   csv = client().Get("/api/v1/sortplans/default", {{"Accept", "text/csv"}});
   ASSERT_TRUE(csv);
   EXPECT_EQ(csv->body.rfind("prefix,bin", 0), 0U);
+  // By the weights the client gives (a substring test got all three wrong).
+  for (const auto& [accept, wants_csv] :
+       {std::pair{"text/csv;q=0", false}, std::pair{"application/json;q=0.1, text/csv;q=0.5", true},
+        std::pair{"TEXT/CSV", true}, std::pair{"text/csv;q=0.5, */*;q=0.8", false}}) {
+    const auto negotiated = client().Get("/api/v1/sortplans/default", {{"Accept", accept}});
+    ASSERT_TRUE(negotiated);
+    EXPECT_EQ(negotiated->body.rfind("prefix,bin", 0) == 0, wants_csv) << accept;
+  }
   ExpectProblem(client().Get("/api/v1/sortplans/nope"), 404);
 
   // PUT as CSV (admin only), then as JSON replacing it.

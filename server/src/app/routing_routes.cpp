@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
+#include <string>
 
+#include "app/accept_header.hpp"
 #include "app/db_problems.hpp"
 #include "app/entity_tags.hpp"
 #include "app/params.hpp"
@@ -28,9 +31,11 @@ bool WantsCsv(const HttpRequest& request) {
     if (*format == "json") return false;
     throw HttpError(400, "format must be csv or json");
   }
-  const std::string accept = request.header("Accept").value_or("");
-  return accept.find("text/csv") != std::string::npos &&
-         accept.find("application/json") == std::string::npos;
+  // By the weights, as RFC 9110 reads the header: a substring test answered CSV to
+  // "text/csv;q=0" and JSON to "application/json;q=0.1, text/csv". JSON unless CSV weighs more.
+  const std::optional<std::string> accept = request.header("Accept");
+  if (!accept) return false;
+  return AcceptQuality(*accept, "text/csv") > AcceptQuality(*accept, "application/json");
 }
 
 HttpError BadPlan(std::string detail) {
