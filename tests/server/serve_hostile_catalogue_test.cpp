@@ -593,6 +593,37 @@ TEST_F(HostileCatalogue, TwoContentLengthsAreRefused) {
   // Neither was taken as a request to add the pincode.
   EXPECT_EQ(client().Get("/api/v1/pincodes/999021")->status, 404);
 }
+// cpp-httplib decompresses gzip and deflate bodies; a brotli one was refused as a broken body
+// (400) and any other coding passed to the route undecoded, as if it were the content.
+TEST_F(HostileCatalogue, ABodyInAContentCodingTheServerDoesNotReadIs415) {
+  const std::string body = R"({"role": "scanner", "label": "compressed"})";
+  std::string deflated(compressBound(body.size()), '\0');
+  uLongf deflated_size = deflated.size();
+  ASSERT_EQ(compress2(reinterpret_cast<Bytef*>(deflated.data()), &deflated_size,
+                      reinterpret_cast<const Bytef*>(body.data()), body.size(), 6),
+            Z_OK);
+  deflated.resize(deflated_size);
+  const Answer taken =
+      Send(server_->port(),
+           Request("POST", "/api/v1/tokens",
+                   {adminAuth(), "Content-Type: application/json", "Content-Encoding: deflate"},
+                   deflated));
+  EXPECT_EQ(taken.status, 201) << taken.head << "\n" << taken.body.substr(0, 300);
+  for (const char* coding : {"br", "zstd", "gzip, br", "x-custom"}) {
+    const Answer refused =
+        Send(server_->port(), Request("POST", "/api/v1/tokens",
+                                      {adminAuth(), "Content-Type: application/json",
+                                       std::string("Content-Encoding: ") + coding},
+                                      deflated));
+    EXPECT_EQ(refused.status, 415) << coding << "\n" << refused.head << "\n" << refused.body;
+    EXPECT_NE(refused.body.find("Content-Encoding (" + std::string(coding) + ")"),
+              std::string::npos)
+        << refused.body;
+    EXPECT_NE(refused.head.find("\r\nAccept-Encoding: gzip, deflate"), std::string::npos)
+        << refused.head;
+  }
+  expectHealthy();
+}
 TEST_F(HostileCatalogue, GetWithABody) {
   expectRefused(Request("GET", "/api/v1/pincodes/110001", {}, "unexpected"), 400);
 }

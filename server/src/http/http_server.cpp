@@ -288,6 +288,20 @@ bool UnknownTransferCoding(const httplib::Request& req) {
   return begin == std::string::npos || coding.substr(begin, end - begin + 1) != "chunked";
 }
 
+/// A Content-Encoding other than gzip, deflate or identity alone: cpp-httplib decompresses gzip
+/// and deflate bodies, failed a brotli one as a broken body (400), and passed any other coding
+/// (zstd, say) to the route undecoded, as if it were the content.
+bool UnknownContentCoding(const httplib::Request& req) {
+  if (!req.has_header("Content-Encoding")) return false;
+  if (req.get_header_value_count("Content-Encoding") > 1) return true;
+  const std::string coding = Lower(req.get_header_value("Content-Encoding"));
+  const std::size_t begin = coding.find_first_not_of(" \t");
+  const std::size_t end = coding.find_last_not_of(" \t");
+  if (begin == std::string::npos) return true;
+  const std::string name = coding.substr(begin, end - begin + 1);
+  return name != "gzip" && name != "deflate" && name != "identity";
+}
+
 bool AmbiguousLength(const httplib::Request& req) {
   const std::size_t lengths = req.get_header_value_count("Content-Length");
   return lengths > 1 || (lengths == 1 && req.has_header("Transfer-Encoding"));
@@ -484,6 +498,14 @@ struct HttpServer::Impl {
                    codings.substr(0, 100) +
                    ") this server does not read; send it with Content-Length, or with one "
                    "Transfer-Encoding: chunked");
+    }
+    if (!t_state.admission.rejection && AnnouncesBody(req) && UnknownContentCoding(req)) {
+      HttpResponse refusal = ProblemResponse(
+          415, "the request body's Content-Encoding (" +
+                   req.get_header_value("Content-Encoding").substr(0, 100) +
+                   ") is not one this server reads: send it as gzip, deflate or uncompressed");
+      refusal.headers.emplace_back("Accept-Encoding", "gzip, deflate");
+      t_state.admission.rejection = std::move(refusal);
     }
     if (!t_state.admission.rejection && AnnouncesBody(req) &&
         (req.method == "GET" || req.method == "HEAD" || req.method == "OPTIONS")) {
