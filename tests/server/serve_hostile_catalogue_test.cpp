@@ -624,6 +624,21 @@ TEST_F(HostileCatalogue, ABodyInAContentCodingTheServerDoesNotReadIs415) {
   }
   expectHealthy();
 }
+// RFC 9112, section 3.2: an HTTP/1.1 request without Host, or any request with two, is 400. Both
+// were answered as if they had one.
+TEST_F(HostileCatalogue, ARequestWithoutOneHostIs400) {
+  const Answer none = Send(server_->port(), "GET /livez HTTP/1.1\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(none.status, 400) << none.head;
+  EXPECT_NE(none.body.find("must carry a Host header"), std::string::npos) << none.body;
+  const Answer two = Send(server_->port(),
+                          "GET /livez HTTP/1.1\r\nHost: a\r\nHost: b\r\nConnection: close\r\n\r\n");
+  EXPECT_EQ(two.status, 400) << two.head;
+  EXPECT_NE(two.body.find("2 Host headers"), std::string::npos) << two.body;
+  // HTTP/1.0 has no Host to require.
+  const Answer old = Send(server_->port(), "GET /livez HTTP/1.0\r\n\r\n");
+  EXPECT_EQ(old.status, 200) << old.head;
+  expectHealthy();
+}
 TEST_F(HostileCatalogue, GetWithABody) {
   expectRefused(Request("GET", "/api/v1/pincodes/110001", {}, "unexpected"), 400);
 }

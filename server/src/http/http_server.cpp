@@ -477,6 +477,15 @@ struct HttpServer::Impl {
       }
     }
     t_state.admission = api->admit(req.method, req.path, Headers(req), t_state.request_id);
+    if (const std::size_t hosts = req.get_header_value_count("Host");
+        hosts > 1 || (hosts == 0 && req.version == "HTTP/1.1")) {
+      // RFC 9112, section 3.2: a server answers 400 to an HTTP/1.1 request without a Host, or
+      // with more than one (they were answered as if it had one).
+      t_state.admission.rejection =
+          ProblemResponse(400, hosts == 0 ? "an HTTP/1.1 request must carry a Host header"
+                                          : "the request carries " + std::to_string(hosts) +
+                                                " Host headers; it must carry one");
+    }
     if (!t_state.admission.rejection && AmbiguousLength(req)) {
       // Two lengths (or a length and chunked coding) let a proxy and this server split the
       // stream into different requests: refuse, and close, whichever was meant.
