@@ -64,6 +64,10 @@ TEST_F(ServeTest, LabelsAndTagsComeAtTheAskedSizeAndResolution) {
   ASSERT_EQ(r->status, 200) << r->body;
   EXPECT_EQ(r->get_header_value("Content-Type"), "image/svg+xml");
   EXPECT_NE(r->body.find("width=\"101.6000mm\""), std::string::npos);
+  // Opened in a tab an SVG is a document: it may run and load nothing; and no answer is sniffed.
+  EXPECT_EQ(r->get_header_value("Content-Security-Policy"),
+            "default-src 'none'; style-src 'unsafe-inline'; img-src data:");
+  EXPECT_EQ(r->get_header_value("X-Content-Type-Options"), "nosniff");
 
   r = client().Get("/api/v1/tags/110001.png?px=128&dpi=600", counter());
   ASSERT_TRUE(r);
@@ -75,6 +79,14 @@ TEST_F(ServeTest, LabelsAndTagsComeAtTheAskedSizeAndResolution) {
   ASSERT_TRUE(r);
   ASSERT_EQ(r->status, 200) << r->body;
   EXPECT_NE(r->body.find("key 11684"), std::string::npos);  // 110001's key in the seed
+  EXPECT_NE(r->get_header_value("Content-Security-Policy").find("default-src 'none'"),
+            std::string::npos);
+  for (const char* path : {"/livez", "/api/v1/nothing", "/api/v1/pincodes/110001"}) {
+    const auto answer = client().Get(path);
+    ASSERT_TRUE(answer);
+    EXPECT_EQ(answer->get_header_value("X-Content-Type-Options"), "nosniff") << path;
+    EXPECT_EQ(answer->get_header_value_count("X-Content-Type-Options"), 1U) << path;
+  }
 
   const std::string metrics = client().Get("/metrics")->body;
   EXPECT_EQ(MetricLine(metrics, "pintag_labels_rendered_total"), "pintag_labels_rendered_total 3");

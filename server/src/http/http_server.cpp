@@ -915,6 +915,17 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
   // at SIGTERM) closes its connection: a client that took it as kept alive would send its next
   // request into a socket about to close, and an upload is not retried by clients or proxies.
   s.set_post_routing_handler([impl](const httplib::Request& /*req*/, httplib::Response& res) {
+    // Every answer is read as the type it names: a browser that sniffed a problem echoing a path,
+    // or a text answer, could take it for a page. A tag or label SVG opened in a tab is a
+    // document: it may run nothing and load nothing (cairo's own output needs neither).
+    if (!res.has_header("X-Content-Type-Options")) {
+      res.set_header("X-Content-Type-Options", "nosniff");
+    }
+    if (res.get_header_value("Content-Type").starts_with("image/svg+xml") &&
+        !res.has_header("Content-Security-Policy")) {
+      res.set_header("Content-Security-Policy",
+                     "default-src 'none'; style-src 'unsafe-inline'; img-src data:");
+    }
     if (impl->stopping) CloseAfterAnswer(res);
     // cpp-httplib adds Keep-Alive to an answer whose connection it keeps, which it decides before
     // a handler asks for the close: an answer said both.
