@@ -186,6 +186,25 @@ Result<RegistryCounts> CountRegistry(Connection& connection) {
   });
 }
 
+namespace {
+
+/// Offices `first` and `second` (0-based) of one request name one office.
+Error OfficesNamedAlike(std::size_t first, std::size_t second, std::string_view first_name,
+                        std::string_view second_name) {
+  std::string message =
+      "offices " + std::to_string(first + 1) + " and " + std::to_string(second + 1);
+  if (first_name == second_name) {
+    message += " are both named '" + std::string(first_name) + "'";
+  } else {
+    message += " are named alike ('" + std::string(first_name) + "' and '" +
+               std::string(second_name) + "' are the same letters in other Unicode code points)";
+  }
+  message += "; give each office of a pincode once";
+  return Error{ErrorCode::kInvalid, std::move(message)};
+}
+
+}  // namespace
+
 Result<PincodeRecord> AddPincode(Connection& connection, Pincode pincode,
                                  const std::vector<PostOffice>& offices) {
   for (std::size_t i = 0; i < offices.size(); ++i) {
@@ -194,17 +213,25 @@ Result<PincodeRecord> AddPincode(Connection& connection, Pincode pincode,
       return *error;
     }
   }
-  // A name is one office of a pincode (compared without the spaces at either end, as stored
-  // offices are matched): two entries under it would be merged into one mixing both.
-  std::map<std::string_view, std::size_t> first_named;
+  // A name is shown on labels and chosen by clerks, so it may hold no invisible character but a
+  // space between words ('Janpath' + U+200B was stored beside 'Janpath' and printed as the
+  // head office). The import takes India Post's file as it is; a name typed here is held to
+  // what a plan name is.
   for (std::size_t i = 0; i < offices.size(); ++i) {
-    const auto [first, inserted] = first_named.try_emplace(TrimSpaces(offices[i].name), i);
-    if (!inserted) {
-      return Error{ErrorCode::kInvalid, "offices " + std::to_string(first->second + 1) + " and " +
-                                            std::to_string(i + 1) + " are both named '" +
-                                            std::string(first->first) +
-                                            "'; give each office of a pincode once"};
+    if (auto error = CheckShownName("office name", TrimSpaces(offices[i].name), kMaxNameBytes)) {
+      error->message = "office " + std::to_string(i + 1) + ": " + error->message;
+      return *error;
     }
+  }
+  // A name is one office of a pincode (compared without the spaces at either end, as stored
+  // offices are matched, and in one Unicode form): two entries under it would be merged into one
+  // mixing both, or shown as two offices that read alike.
+  std::map<std::string, std::size_t> first_named;
+  for (std::size_t i = 0; i < offices.size(); ++i) {
+    const std::string_view name = TrimSpaces(offices[i].name);
+    const auto [first, inserted] = first_named.try_emplace(CanonicalForm(name), i);
+    if (inserted) continue;
+    return OfficesNamedAlike(first->second, i, TrimSpaces(offices[first->second].name), name);
   }
   return Guard([&]() -> Result<PincodeRecord> {
     Transaction transaction(connection);

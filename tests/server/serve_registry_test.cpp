@@ -250,6 +250,26 @@ TEST_F(ServeTest, AddKeepsEveryOfficeFieldOrRefusesSayingWhichIsWrong) {
   refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", " Beta"}}) + "," +
               office_with({{"name", "Beta"}}) + "]}",
           "both named 'Beta'");
+  // A security review stored 'Janpath', 'Janpath' + U+200B and 'Janpath' + U+00A0 as three
+  // offices of one pincode, and the zero-width one was printed as its head office.
+  for (const std::string& name : {std::string("Janpath\u200b"), std::string("Jan\u200bpath"),
+                                  std::string("Janpath\u00a0"), std::string("\u2060Janpath")}) {
+    refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", name}}) + "]}",
+            "office 1: office name");
+  }
+  // The same letters in two Unicode forms (é as one code point, or e and U+0301).
+  refused(R"({"pincode": "999012", "offices": [)" + office_with({{"name", "Caf\u00e9"}}) + "," +
+              office_with({{"name", "Cafe\u0301"}}) + "]}",
+          "offices 1 and 2 are named alike");
+  EXPECT_EQ(client().Get("/api/v1/pincodes/999012")->status, 404);
+  // Spaces between words, and the joiners Indic words are written with, are names as they read.
+  const auto added = client().Post(
+      "/api/v1/pincodes", admin(),
+      R"({"pincode": "999012", "offices": [)" + office_with({{"name", "Janpath Road"}}) + "," +
+          office_with({{"name", "\u0926\u093f\u200d\u0932\u094d\u0932\u0940"}}) + "]}",
+      "application/json");
+  ASSERT_TRUE(added);
+  EXPECT_EQ(added->status, 201) << added->body;
 }
 
 // With every key taken, adding a pincode is 507 titled as docs/API.md says: the reason phrase.
