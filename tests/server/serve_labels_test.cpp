@@ -124,6 +124,24 @@ TEST_F(ServeTest, PngsLargerThanThePixelBudgetWaitTheirTurnAndComeWhole) {
   EXPECT_GE(waits(), after_labels + 1);
 }
 
+// A form's blank size field sends "size=" (or "size": ""), which was 400 "empty label size"
+// where a blank plan or office is the default: the default size now, as theirs.
+TEST_F(ServeTest, ABlankLabelSizeIsTheDefault) {
+  const auto width_of = [&](const std::string& path) {
+    const auto r = client().Get(path, counter());
+    EXPECT_TRUE(r && r->status == 200) << path << (r ? r->body : "");
+    return r && r->status == 200 ? PngSpec(r->body).width : -1;
+  };
+  const int default_width = width_of("/api/v1/labels/110001.png?dpi=100");
+  EXPECT_GT(default_width, 0);
+  EXPECT_EQ(width_of("/api/v1/labels/110001.png?dpi=100&size="), default_width);
+  EXPECT_NE(width_of("/api/v1/labels/110001.png?dpi=100&size=a6"), default_width);
+  const auto batch = client().Post("/api/v1/labels", counter(),
+                                   R"({"pincodes": ["110001"], "size": ""})", "application/json");
+  ASSERT_TRUE(batch);
+  EXPECT_EQ(batch->status, 200) << batch->body.substr(0, 300);
+}
+
 TEST_F(ServeTest, LabelProblemsSayWhatIsWrong) {
   const auto expect = [&](const std::string& path, int status, const std::string& fragment) {
     const json problem = ExpectProblem(client().Get(path, counter()), status);

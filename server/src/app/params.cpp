@@ -93,6 +93,8 @@ server::QueryParamDoc PlanQueryDoc() {
 }
 
 LabelSize LabelSizeValue(std::string_view text) {
+  // Empty is the default, as an empty plan or office is: a form's blank field sends it.
+  if (text.empty()) return kLabel100x150;
   const ParsedLabelSize parsed = ParseLabelSize(text);
   if (!parsed) throw HttpError(400, parsed.error, "Bad Label Size");
   return *parsed.size;

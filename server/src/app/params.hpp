@@ -81,7 +81,7 @@ std::optional<std::string> UnknownField(const nlohmann::json& object,
                                         std::initializer_list<std::string_view> known);
 /// A pincode given as a JSON string or number; `where` names it in the problem ("pincodes[3]").
 Pincode PincodeValue(const nlohmann::json& value, std::string_view where);
-/// A label size from its text; 400 "Bad Label Size".
+/// A label size from its text (empty: the default, 100x150mm); 400 "Bad Label Size".
 LabelSize LabelSizeValue(std::string_view text);
 /// A sort plan name from a query or a body; empty: the default plan.
 std::string PlanNameValue(std::string_view text);
