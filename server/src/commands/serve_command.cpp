@@ -201,7 +201,8 @@ void Run(const ServeArgs& args) {
             << " threads" << (any ? ", all interfaces" : "") << ")\n";
   if (const std::string role = replication.describe(); !role.empty())
     std::cout << "  " << role << "\n";
-  std::cout << "  API: " << url << "/api/v1/   OpenAPI: " << url
+  // A URL that answers: the API's prefix alone is no route (a reviewer opened it and got 404).
+  std::cout << "  a lookup: " << url << "/api/v1/pincodes/110001   OpenAPI: " << url
             << "/openapi.json   health: " << url << "/readyz\n";
   if (first_admin && !args.admin_token_out.empty()) {
     // A container's stdout is kept in its log, where a working secret must not sit.
