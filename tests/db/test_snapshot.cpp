@@ -126,6 +126,42 @@ TEST(Snapshot, HoldsTheRegistryAndItsVersionAndOpensReadOnly) {
   const auto verified = VerifySnapshot(out);
   ASSERT_TRUE(verified.ok()) << verified.error().message;
   EXPECT_EQ(verified->registry_version, written->registry_version);
+  // Every table, index and trigger of the source, and its schema version.
+  const auto schema = [](Connection& connection) {
+    std::string listed;
+    Statement objects = connection.prepare(
+        "SELECT type || ' ' || name || ': ' || coalesce(sql, '') FROM sqlite_master ORDER BY "
+        "type, name");
+    while (objects.step()) listed += objects.getText(0) + "\n";
+    return listed + "user_version " + std::to_string(connection.queryInt64("PRAGMA user_version"));
+  };
+  EXPECT_EQ(schema(copy), schema(live));
+  // The live database is still in WAL mode (the copy's journal mode is set on its own file).
+  Statement live_mode = live.prepare("PRAGMA journal_mode");
+  ASSERT_TRUE(live_mode.step());
+  EXPECT_EQ(live_mode.getText(0), "wal");
+}
+
+// The snapshot was the backup API's copy of every page, the scan log's too, then deleted and
+// vacuumed: a primary's publication took time and room in proportion to its scan log (5.4 s
+// against 0.4 s at a million scans). It is built from the registry's rows alone now: the same
+// file whatever the scan log holds.
+TEST(Snapshot, IsTheSameFileWhateverTheScanLogHolds) {
+  TempDir dir;
+  Connection live = test::OpenExisting(test::CopyOfSeeded(dir));
+  const auto before = WriteSnapshot(live, dir.file("before.db"));
+  ASSERT_TRUE(before.ok()) << before.error().message;
+  std::vector<ScanRecord> scans(20'000, ScanRecord{.image_bytes = 500'000,
+                                                   .result_json = R"({"tags": [], "note": ")" +
+                                                                  std::string(400, 'x') + "\"}"});
+  const auto appended = AppendScans(live, scans);
+  ASSERT_TRUE(appended.ok()) << appended.error().message;
+  ASSERT_EQ(appended->written, scans.size());
+  const auto after = WriteSnapshot(live, dir.file("after.db"));
+  ASSERT_TRUE(after.ok()) << after.error().message;
+  EXPECT_EQ(after->registry_version, before->registry_version);  // scans are not the registry
+  EXPECT_EQ(after->bytes, before->bytes);
+  EXPECT_EQ(test::ReadFile(dir.file("after.db")), test::ReadFile(dir.file("before.db")));
 }
 
 TEST(Snapshot, ReplacesTheTargetAtomicallyWhileAReaderHoldsTheOldOne) {

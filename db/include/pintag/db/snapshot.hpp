@@ -34,15 +34,16 @@ std::string LiveDatabaseAt(const std::string& path);
 /// of an SQLite database named like it. Replacing one corrupts the database it belongs to.
 std::string DatabaseOwningFile(const std::string& path, const std::string& source = {});
 
-/// Copies `source` to `out_path` with SQLite's online backup API (writers on other connections
-/// go on meanwhile). kStorage, nothing written, when the copy fails PRAGMA quick_check: the
-/// backup copies pages as they are, so the source is damaged (the message names it and the
-/// first two findings). The copy is made in a temporary file beside `out_path`, left without the
-/// scan log (each server keeps its own), switched to a rollback journal (a single file that
-/// opens read-only anywhere), fsynced and renamed into place, and the directory fsynced: a
-/// reader of `out_path` sees the old file or the new one, never part of one. kStorage when the
-/// directory cannot be written; the temporary file is removed on every failure. kConflict, with
-/// nothing written, when `out_path` is the source database itself, any other live database (a
+/// Copies the registry of `source` to `out_path`: its schema, and the rows of every table but the
+/// scan log (each server keeps its own; the table is there, empty), read in one transaction, so
+/// one instant's state while writers on other connections go on, and in time and room that do
+/// not grow with the scan log. kStorage, nothing written, when PRAGMA quick_check finds the
+/// source's copied tables or their indexes damaged (the message names it and the first two
+/// findings). The copy is made in a temporary file beside `out_path` in rollback-journal mode (a
+/// single file that opens read-only anywhere), fsynced and renamed into place, and the directory
+/// fsynced: a reader of `out_path` sees the old file or the new one, never part of one. kStorage
+/// when the directory cannot be written; the temporary file is removed on every failure. kConflict,
+/// with nothing written, when `out_path` is the source database itself, any other live database (a
 /// write-ahead log beside it), or a database's -wal, -shm or -journal file (DatabaseOwningFile).
 /// Temporary files beside `out_path` that no process is writing (left by one killed with SIGKILL)
 /// are removed: a temporary file holds a flock while it is written. The same holds for
