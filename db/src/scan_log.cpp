@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "guard.hpp"
+#include "pintag/codec/utf8.hpp"
 #include "pintag/db/text.hpp"
 
 namespace pintag::db {
@@ -13,6 +14,16 @@ namespace {
 // ScanTime's form, digit for digit: "2026-12-06T16:20:01.123Z".
 bool IsScanTime(std::string_view text) {
   constexpr std::string_view kForm = "dddd-dd-ddTdd:dd:dd.dddZ";
+  if (text.size() != kForm.size()) return false;
+  for (std::size_t i = 0; i < kForm.size(); ++i) {
+    const bool ok = kForm[i] == 'd' ? (text[i] >= '0' && text[i] <= '9') : text[i] == kForm[i];
+    if (!ok) return false;
+  }
+  return true;
+}
+
+bool IsDate(std::string_view text) {
+  constexpr std::string_view kForm = "dddd-dd-dd";
   if (text.size() != kForm.size()) return false;
   for (std::size_t i = 0; i < kForm.size(); ++i) {
     const bool ok = kForm[i] == 'd' ? (text[i] >= '0' && text[i] <= '9') : text[i] == kForm[i];
@@ -127,6 +138,45 @@ Result<AppendedScans> AppendScans(Connection& connection, std::span<const ScanRe
     }
     transaction.commit();
     return appended;
+  });
+}
+
+Result<std::uint64_t> PruneScans(Connection& connection, std::string_view before,
+                                 std::size_t batch) {
+  std::string cutoff(before);
+  if (IsDate(before)) {
+    cutoff += "T00:00:00.000Z";
+  } else if (!IsScanTime(before)) {
+    return Error{ErrorCode::kInvalid, QuotedPrefix(before, 40) +
+                                          " is not a date (YYYY-MM-DD) or a scan time "
+                                          "(YYYY-MM-DDTHH:MM:SS.mmmZ)"};
+  }
+  if (batch == 0) return Error{ErrorCode::kInvalid, "a batch removes at least one scan"};
+  return detail::Guard([&]() -> Result<std::uint64_t> {
+    // Scan times follow ids closely but not exactly (a batch of scans is written at once), so
+    // each removal is bounded by ids and still asks for the time.
+    Statement find = connection.prepare(
+        "SELECT min(id), max(id), count(*) FROM (SELECT id FROM scan_log WHERE id > ?1 AND "
+        "scanned_at < ?2 ORDER BY id LIMIT ?3)");
+    Statement remove =
+        connection.prepare("DELETE FROM scan_log WHERE id BETWEEN ?1 AND ?2 AND scanned_at < ?3");
+    std::uint64_t removed = 0;
+    std::int64_t after = 0;  // ids start at 1
+    for (;;) {
+      find.reset();
+      find.bind(1, after).bind(2, cutoff).bind(3, static_cast<std::int64_t>(batch));
+      if (!find.step() || find.getInt64(2) == 0) break;
+      const std::int64_t first = find.getInt64(0);
+      const std::int64_t last = find.getInt64(1);
+      find.reset();  // its read ends before the batch's write begins
+      Transaction transaction(connection);
+      remove.reset();
+      removed +=
+          static_cast<std::uint64_t>(remove.bind(1, first).bind(2, last).bind(3, cutoff).run());
+      transaction.commit();
+      after = last;
+    }
+    return removed;
   });
 }
 

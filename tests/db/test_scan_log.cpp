@@ -122,5 +122,38 @@ TEST_F(ScanLog, ABatchThatCannotTakeTheLockWritesNothingAndSaysBusy) {
   EXPECT_TRUE(RecentScans(db_, 10).value().empty());
 }
 
+// A hub's scan log grows by every scan; pruning takes the old ones away in batches, in time
+// order, and leaves the rest (and scans whose time is later than a newer neighbour's) alone.
+TEST_F(ScanLog, PruneRemovesScansTakenBeforeACutoffInBatches) {
+  // Times mostly ascending by id, as a server writes them, with one written out of order.
+  const std::vector<std::string> times = {"2026-01-01T00:00:00.000Z", "2026-01-15T12:00:00.000Z",
+                                          "2026-03-01T00:00:00.000Z", "2026-01-20T08:00:00.000Z",
+                                          "2026-02-28T23:59:59.999Z", "2026-06-01T00:00:00.000Z",
+                                          "2026-02-01T00:00:00.000Z"};
+  for (const std::string& time : times) {
+    ASSERT_TRUE(AppendScan(db_, {.scanned_at = time, .result_json = "{}"}).ok()) << time;
+  }
+  // Batches of two: several transactions, the last partly empty.
+  const auto removed = PruneScans(db_, "2026-03-01", 2);
+  ASSERT_TRUE(removed.ok()) << removed.error().message;
+  EXPECT_EQ(*removed, 5U);
+  const std::vector<ScanRecord> recent = RecentScans(db_, 100).value();
+  std::vector<std::string> left;
+  for (const ScanRecord& scan : recent) left.push_back(scan.scanned_at);
+  EXPECT_EQ(left,
+            (std::vector<std::string>{"2026-06-01T00:00:00.000Z", "2026-03-01T00:00:00.000Z"}));
+  // Nothing older is left: again removes none; a scan time as the cutoff is taken to the ms.
+  EXPECT_EQ(PruneScans(db_, "2026-03-01").value(), 0U);
+  EXPECT_EQ(PruneScans(db_, "2026-03-01T00:00:00.001Z").value(), 1U);
+  EXPECT_EQ(RecentScans(db_, 100).value().size(), 1U);
+  for (const char* bad : {"2026-3-1", "yesterday", "2026-03-01T00:00:00Z", ""}) {
+    const auto refused = PruneScans(db_, bad);
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_EQ(refused.error().code, ErrorCode::kInvalid) << bad;
+  }
+  EXPECT_EQ(PruneScans(db_, "2026-03-01", 0).error().code, ErrorCode::kInvalid);
+  EXPECT_FALSE(db_.inTransaction());
+}
+
 }  // namespace
 }  // namespace pintag::db

@@ -52,6 +52,14 @@ struct AppendedScans {
 /// cannot be locked or written (the error: kBusy after the busy timeout, kStorage, kNoSpace).
 /// A scan AppendScan would refuse is left out and its error listed; the others are written.
 Result<AppendedScans> AppendScans(Connection& connection, std::span<const ScanRecord> scans);
+/// Removes the scans taken before `before` (ScanTime's form, or a date "YYYY-MM-DD": its midnight
+/// UTC); how many. Found in one pass in id order without a write lock, removed `batch` at a time
+/// each in a transaction of its own, so a server writing its scan log waits for one batch at
+/// most, never for the whole. The file keeps its size: later scans reuse the room. kInvalid for a
+/// `before` in neither form or a `batch` of 0.
+Result<std::uint64_t> PruneScans(Connection& connection, std::string_view before,
+                                 std::size_t batch = 5000);
+
 /// The newest scans first; `limit` 1–1000; only that token's when `token_id` is given.
 Result<std::vector<ScanRecord>> RecentScans(Connection& connection, int limit = 50,
                                             std::optional<std::int64_t> token_id = std::nullopt);
