@@ -288,12 +288,13 @@ std::string QuotedIdentifier(std::string_view name) {
 /// is copied then). Throws SqliteError.
 ///
 /// The backup API copied every page, the scan log's too, which was then deleted and the copy
-/// vacuumed: a primary's snapshot took time and room in proportion to its scan log (5.4 s at a
+/// vacuumed: a primary's snapshot took time and room in proportion to its scan log (6.1 s at a
 /// million scans against 0.4 s, measured 2026-12-08), and it grows by every scan.
 std::string CopyRegistryInto(Connection& copy, const std::string& source_path) {
-  // `main.`: a journal mode set without a schema applies to every attached database, and would
-  // take the live database out of WAL.
+  // The copy's own journal mode (`main.`, so that no attached database is ever in question).
   copy.execute("PRAGMA main.journal_mode=DELETE; PRAGMA foreign_keys=OFF");
+  // Closing, this connection may be the last on the source; its log stays the source's to write.
+  copy.leaveWriteAheadLogsOnClose();
   copy.prepare("ATTACH DATABASE ?1 AS source").bind(1, source_path).run();
   copy.execute("BEGIN");
   struct SchemaObject {
@@ -326,6 +327,9 @@ std::string CopyRegistryInto(Connection& copy, const std::string& source_path) {
   }
   if (copy.queryInt64("SELECT count(*) FROM source.sqlite_master WHERE name = 'sqlite_sequence'") >
       0) {
+    // The rows copied set each AUTOINCREMENT table's sequence to its largest id; the source's
+    // may be larger (ids deleted), and a second row per table would not be read.
+    copy.execute("DELETE FROM main.sqlite_sequence");
     copy.prepare(
             "INSERT INTO main.sqlite_sequence SELECT * FROM source.sqlite_sequence WHERE "
             "name != ?1")
@@ -467,9 +471,21 @@ Result<SnapshotInfo> WriteSnapshot(Connection& source, const std::string& out_pa
       // A rollback journal keeps the snapshot one file, which read-only servers open without
       // needing to create -wal and -shm files beside it.
       Connection copy(temporary.path(), {.create = false, .wal = false});
+      // The copy reads the file at the source's path, on a connection of its own: another file
+      // put there (a restore copied in while a primary serves) would be read with the source's
+      // write-ahead log, and the snapshot would be of neither. Looked at before and after.
+      const auto moved = [&] {
+        return Error{ErrorCode::kConflict,
+                     source.path() +
+                         " is no longer the database open here (moved, removed or replaced); no "
+                         "snapshot is taken of another file (restart the server to use it)"};
+      };
+      if (!source.fileIsAtPath()) return moved();
       // A damaged source would give a snapshot that replicas refuse, or one that lacks rows,
       // and a restore from it would bring the damage back.
-      if (const std::string findings = CopyRegistryInto(copy, source.path()); !findings.empty()) {
+      const std::string findings = CopyRegistryInto(copy, source.path());
+      if (!source.fileIsAtPath()) return moved();
+      if (!findings.empty()) {
         return Error{ErrorCode::kStorage,
                      "the database " + source.path() +
                          " is damaged, so no snapshot of it was written (SQLite's quick_check "

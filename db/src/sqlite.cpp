@@ -1,6 +1,7 @@
 #include "pintag/db/sqlite.hpp"
 
 #include <sqlite3.h>
+#include <sys/stat.h>
 
 #include <unordered_map>
 
@@ -150,6 +151,9 @@ Connection::Connection(const std::string& path, const ConnectionOptions& options
   db_.reset(raw);
   if (code != SQLITE_OK) Throw(raw, code, "cannot open database " + path);
   sqlite3_busy_timeout(raw, options.busy_timeout_ms);
+  if (struct stat opened{}; ::stat(path.c_str(), &opened) == 0) {
+    file_.emplace(opened.st_dev, opened.st_ino);
+  }
   if (!options.read_only && options.wal) execute("PRAGMA journal_mode=WAL");
   // Statement journals in memory: a statement that fires the registry-version triggers (one per
   // row written) would otherwise write a temporary file per row, which made seeding 2x slower.
@@ -163,6 +167,7 @@ Connection& Connection::operator=(Connection&& other) noexcept {
   db_ = std::move(other.db_);
   statements_ = std::move(other.statements_);
   path_ = std::move(other.path_);
+  file_ = other.file_;
   return *this;
 }
 Connection::~Connection() = default;
@@ -230,6 +235,17 @@ std::int64_t Connection::lastInsertRowid() const {
 int Connection::changes() const {
   return sqlite3_changes(db_.get());
 }
+bool Connection::fileIsAtPath() const {
+  struct stat now {};
+  return file_ && ::stat(path_.c_str(), &now) == 0 && now.st_dev == file_->first &&
+         now.st_ino == file_->second;
+}
+
+void Connection::leaveWriteAheadLogsOnClose() {
+  const int code = sqlite3_db_config(db_.get(), SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
+  if (code != SQLITE_OK) Throw(db_.get(), code, "no checkpoint on close");
+}
+
 bool Connection::inTransaction() const {
   return sqlite3_get_autocommit(db_.get()) == 0;
 }

@@ -292,6 +292,35 @@ TEST(Snapshot, OfADamagedDatabaseIsRefusedAndNothingIsWritten) {
   EXPECT_LT(verified.error().message.size(), 600U) << verified.error().message;
 }
 
+// The copy reads the file at the source's path on a connection of its own. A review renamed a
+// live database away and copied another file to its path: a snapshot then read the other file
+// with the live one's write-ahead log, and closing checkpointed that log into it (the restore
+// undone) and deleted the log under the live connections. Refused now, both files left alone.
+TEST(Snapshot, OfADatabaseReplacedAtItsPathIsRefusedAndTouchesNeither) {
+  TempDir dir;
+  const std::string path = test::CopyOfSeeded(dir);
+  const std::string restored = test::CopyOfSeeded(dir, "restored.db");
+  Connection live = test::OpenExisting(path);
+  live.execute("PRAGMA wal_autocheckpoint=0");  // the pincode below stays in the log
+  ASSERT_TRUE(AddPincode(live, Pincode(999031), {TestOffice("Moved Nagar")}).ok());
+  ASSERT_GT(std::filesystem::file_size(path + "-wal"), 0U);
+  std::filesystem::rename(path, dir.file("moved-away.db"));
+  std::filesystem::copy_file(restored, path);
+  const std::string restored_bytes = test::ReadFile(path);
+
+  const auto refused = WriteSnapshot(live, dir.file("snapshot.db"));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
+  EXPECT_NE(refused.error().message.find("is no longer the database open here"),
+            std::string::npos)
+      << refused.error().message;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("snapshot.db")));
+  EXPECT_EQ(test::ReadFile(path), restored_bytes);
+  EXPECT_GT(std::filesystem::file_size(path + "-wal"), 0U);
+  // The live connection still reads its own file, log and all.
+  EXPECT_TRUE(LookupPincode(live, Pincode(999031)).ok());
+}
+
 TEST(Snapshot, NeverReplacesALiveDatabase) {
   TempDir dir;
   const std::string live_path = test::CopyOfSeeded(dir);

@@ -12,6 +12,8 @@
 // unbound; two live Statements with the same SQL get separate compiled copies. A Connection must
 // outlive its Statements.
 
+#include <sys/types.h>
+
 #include <cerrno>
 #include <cstdint>
 #include <memory>
@@ -19,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 struct sqlite3;
 struct sqlite3_stmt;
@@ -149,6 +152,15 @@ class Connection {
   bool inTransaction() const;
   const std::string& path() const { return path_; }
 
+  /// Whether the file at path() is the one this connection opened (its device and inode, taken
+  /// at open): false once it was moved, removed or replaced. Another connection opened by the
+  /// path then opens the other file, which would take this file's write-ahead log as its own.
+  bool fileIsAtPath() const;
+  /// This connection's closing checkpoints no write-ahead log, the attached databases' included
+  /// (SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE): a connection that only reads another database must not
+  /// be the one that writes its log into it, and deletes the log, when it closes last.
+  void leaveWriteAheadLogsOnClose();
+
  private:
   friend class Statement;
   sqlite3* handle() const { return db_.get(); }
@@ -160,6 +172,7 @@ class Connection {
   // Declared after db_, so its statements are finalized before the connection closes.
   std::unique_ptr<StatementCache> statements_;
   std::string path_;
+  std::optional<std::pair<dev_t, ino_t>> file_;  ///< the opened file's device and inode
 };
 
 /// BEGIN IMMEDIATE in the constructor (takes the write lock up front, so a transaction never
