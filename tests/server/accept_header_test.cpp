@@ -25,6 +25,7 @@ TEST(AcceptQuality, TheMostSpecificRangeThatNamesATypeGivesItsWeight) {
   EXPECT_EQ(AcceptQuality("text/csv;charset=utf-8;q=0.6", "text/csv"), 0.6);
   EXPECT_EQ(AcceptQuality("text/csv;q=high", "text/csv"), 1.0);
   EXPECT_EQ(AcceptQuality("text/csv;q=2", "text/csv"), 1.0);
+  EXPECT_EQ(AcceptQuality("text/csv;q=nan", "text/csv"), 1.0);
   EXPECT_EQ(AcceptQuality("", "text/csv"), 0.0);
   EXPECT_EQ(AcceptQuality(",,;", "text/csv"), 0.0);
 }

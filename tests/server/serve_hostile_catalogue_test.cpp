@@ -609,7 +609,8 @@ TEST_F(HostileCatalogue, ABodyInAContentCodingTheServerDoesNotReadIs415) {
                    {adminAuth(), "Content-Type: application/json", "Content-Encoding: deflate"},
                    deflated));
   EXPECT_EQ(taken.status, 201) << taken.head << "\n" << taken.body.substr(0, 300);
-  for (const char* coding : {"br", "zstd", "gzip, br", "x-custom"}) {
+  // cpp-httplib decodes "gzip" and "deflate" spelt so alone: "GZIP" reached the route undecoded.
+  for (const char* coding : {"br", "zstd", "gzip, br", "x-custom", "GZIP", "Deflate"}) {
     const Answer refused =
         Send(server_->port(), Request("POST", "/api/v1/tokens",
                                       {adminAuth(), "Content-Type: application/json",
@@ -677,6 +678,8 @@ TEST_F(HostileCatalogue, SlowlorisHeadsOverThirtyTwoKiBAreCutOffByTheReadTimeout
   for (int i = 0; i < 9; ++i)
     padding += "X-Pad-" + std::to_string(i) + ": " + std::string(4000, 'a') + "\r\n";
   std::vector<int> slow;
+  // Three that drip a byte every half second, and one that stops (400 "could not be read" when
+  // the worker's first wait, a whole read timeout, ran out).
   for (int i = 0; i < 4; ++i) {
     const int fd = test::ConnectLoopback(server_->port());
     ASSERT_GE(fd, 0);
@@ -697,7 +700,7 @@ TEST_F(HostileCatalogue, SlowlorisHeadsOverThirtyTwoKiBAreCutOffByTheReadTimeout
         answers[i] = test::ReceiveUntil(slow[i], 5, test::HasWholeResponse)
                          .insert(0, buffer, static_cast<std::size_t>(got));
         ++answered;
-      } else {
+      } else if (i != 3) {
         test::SendAll(slow[i], "a");
       }
     }

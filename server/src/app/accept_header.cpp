@@ -35,7 +35,9 @@ double Weight(std::string_view parameters) {
     const std::string_view value = Trimmed(parameter.substr(2));
     double weight = 1;
     const auto [next, error] = std::from_chars(value.data(), value.data() + value.size(), weight);
-    if (error != std::errc() || next != value.data() + value.size() || weight < 0 || weight > 1) {
+    // "nan" reads as a number, and fails every comparison: asked as a range, not as its edges.
+    if (error != std::errc() || next != value.data() + value.size() ||
+        !(weight >= 0 && weight <= 1)) {
       return 1;
     }
     return weight;

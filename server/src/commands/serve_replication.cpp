@@ -360,8 +360,11 @@ void Replication::reload() {
   // logged by the watcher as it is taken).
   std::string done;
   if (watcher_ && !watcher_->check()) {
-    done = "no new snapshot taken from " + db_path_ + " (serving registry version " +
-           std::to_string(watcher_->loaded().registry_version) + ")";
+    const std::optional<std::string> damage = watcher_->servedDamage();
+    done = "no new snapshot taken from " + db_path_ +
+           (damage ? " (not ready: " + *damage + ")"
+                   : " (serving registry version " +
+                         std::to_string(watcher_->loaded().registry_version) + ")");
   }
   if (follower_) {
     // A rotated replica token: written to --follow-token-file, then SIGHUP.

@@ -131,7 +131,10 @@ ssize_t ConnectionStream::read(char* ptr, size_t size) {
           std::chrono::milliseconds(std::max(wait_ms, 0)));
     }
     if (ready <= 0) {
-      read_end_ = wait_ms < read_timeout_ms_ ? ReadEnd::kTooSlow : ReadEnd::kTimedOut;
+      // A head's wait can end only at its deadline (the first one lasts a whole read timeout,
+      // rounded up): too slow, answered 408, whichever wait it was.
+      read_end_ =
+          !head_read_ || wait_ms < read_timeout_ms_ ? ReadEnd::kTooSlow : ReadEnd::kTimedOut;
       return -1;
     }
     ssize_t got = 0;

@@ -290,16 +290,17 @@ bool UnknownTransferCoding(const httplib::Request& req) {
 
 /// A Content-Encoding other than gzip, deflate or identity alone: cpp-httplib decompresses gzip
 /// and deflate bodies, failed a brotli one as a broken body (400), and passed any other coding
-/// (zstd, say) to the route undecoded, as if it were the content.
+/// (zstd, say) to the route undecoded, as if it were the content. It compares the name exactly,
+/// so "GZIP" is one it passes on undecoded too.
 bool UnknownContentCoding(const httplib::Request& req) {
   if (!req.has_header("Content-Encoding")) return false;
   if (req.get_header_value_count("Content-Encoding") > 1) return true;
-  const std::string coding = Lower(req.get_header_value("Content-Encoding"));
+  const std::string coding = req.get_header_value("Content-Encoding");
   const std::size_t begin = coding.find_first_not_of(" \t");
   const std::size_t end = coding.find_last_not_of(" \t");
   if (begin == std::string::npos) return true;
   const std::string name = coding.substr(begin, end - begin + 1);
-  return name != "gzip" && name != "deflate" && name != "identity";
+  return name != "gzip" && name != "deflate" && Lower(name) != "identity";
 }
 
 bool AmbiguousLength(const httplib::Request& req) {
@@ -435,10 +436,9 @@ struct HttpServer::Impl {
   int expectContinue(const httplib::Request& req, httplib::Response& res) {
     if (preRoute(req, res) == httplib::Server::HandlerResponse::Handled) {
       // cpp-httplib writes this answer without the Content-Length it gives routed ones, so its
-      // body ended only when the connection closed; and the body was never read, so the
-      // connection closes.
+      // body ended only when the connection closed. (A refusal that leaves a body unread has
+      // asked to close the connection already.)
       res.set_header("Content-Length", std::to_string(res.body.size()));
-      CloseAfterAnswer(res);
       return res.status;
     }
     t_state.admitted_before_continue = true;
@@ -512,7 +512,8 @@ struct HttpServer::Impl {
       HttpResponse refusal = ProblemResponse(
           415, "the request body's Content-Encoding (" +
                    req.get_header_value("Content-Encoding").substr(0, 100) +
-                   ") is not one this server reads: send it as gzip, deflate or uncompressed");
+                   ") is not one this server reads: send it as gzip or deflate (in lower case) or "
+                   "uncompressed");
       refusal.headers.emplace_back("Accept-Encoding", "gzip, deflate");
       t_state.admission.rejection = std::move(refusal);
     }
@@ -780,8 +781,9 @@ struct HttpServer::Impl {
     const std::string answer = "HTTP/1.1 " + std::to_string(problem.status) + " " +
                                std::string(reason) + "\r\nContent-Type: " + problem.content_type +
                                "\r\nContent-Length: " + std::to_string(problem.body.size()) +
-                               "\r\nConnection: close\r\nX-Request-Id: " + id + "\r\n\r\n" +
-                               problem.body;
+                               "\r\nConnection: close\r\nX-Content-Type-Options: nosniff"
+                               "\r\nX-Request-Id: " +
+                               id + "\r\n\r\n" + problem.body;
     for (std::size_t sent = 0; sent < answer.size();) {
       const ssize_t n = wait ? stream.write(answer.data() + sent, answer.size() - sent)
                              : ::send(stream.socket(), answer.data() + sent, answer.size() - sent,

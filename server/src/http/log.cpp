@@ -110,7 +110,8 @@ void LogAccess(const AccessRecord& r) {
   if (!g_access_enabled) return;
   std::size_t left_out = 0;
   if (r.routine) {
-    static RoutineAccessThrottle throttle;
+    // Never destroyed: a worker may still log while the process exits.
+    static RoutineAccessThrottle& throttle = *new RoutineAccessThrottle;
     std::string kind;
     for (const std::string_view part : {r.client, r.principal, r.method, r.path}) {
       kind += part;
