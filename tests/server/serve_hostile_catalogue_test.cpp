@@ -635,6 +635,19 @@ TEST_F(HostileCatalogue, ARequestWithoutOneHostIs400) {
                           "GET /livez HTTP/1.1\r\nHost: a\r\nHost: b\r\nConnection: close\r\n\r\n");
   EXPECT_EQ(two.status, 400) << two.head;
   EXPECT_NE(two.body.find("2 Host headers"), std::string::npos) << two.body;
+  // A refusal that leaves a body unread asks to close, as the request did: said once (the
+  // line came twice, the refusal's and cpp-httplib's).
+  const Answer with_body =
+      Send(server_->port(),
+           "POST /api/v1/tokens HTTP/1.1\r\nConnection: close\r\nContent-Type: "
+           "application/json\r\nContent-Length: 2\r\n\r\n{}");
+  EXPECT_EQ(with_body.status, 400) << with_body.head;
+  std::size_t connection_lines = 0;
+  for (std::size_t at = with_body.head.find("\r\nConnection:"); at != std::string::npos;
+       at = with_body.head.find("\r\nConnection:", at + 1)) {
+    ++connection_lines;
+  }
+  EXPECT_EQ(connection_lines, 1U) << with_body.head;
   // HTTP/1.0 has no Host to require.
   const Answer old = Send(server_->port(), "GET /livez HTTP/1.0\r\n\r\n");
   EXPECT_EQ(old.status, 200) << old.head;

@@ -930,8 +930,15 @@ HttpServer::HttpServer(std::shared_ptr<const Api> api, ServerOptions options)
     }
     if (impl->stopping) CloseAfterAnswer(res);
     // cpp-httplib adds Keep-Alive to an answer whose connection it keeps, which it decides before
-    // a handler asks for the close: an answer said both.
-    if (res.get_header_value("Connection") == "close") res.headers.erase("Keep-Alive");
+    // a handler asks for the close (an answer said both), and adds its own "Connection: close"
+    // beside one a refusal set when the request asked to close (the line came twice).
+    if (res.get_header_value("Connection") == "close") {
+      res.headers.erase("Keep-Alive");
+      if (res.get_header_value_count("Connection") > 1) {
+        res.headers.erase("Connection");
+        res.set_header("Connection", "close");
+      }
+    }
   });
   s.set_error_handler(httplib::Server::HandlerWithResponse(
       [impl](const httplib::Request& req, httplib::Response& res) {
