@@ -9,6 +9,7 @@
 #include <chrono>
 #include <csignal>
 #include <fstream>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
@@ -183,6 +184,33 @@ std::size_t AnswersIn(const std::string& received) {
 /// The whole answer: the connection is asked to close, so it ends when the server closes it.
 Answer Send(int port, const std::string& request, int quiet_s = 10) {
   return Parse(test::SendRaw(port, request, quiet_s));
+}
+
+/// Sends `drip(i)` on each connection of `fds` every `every` until each has an answer (read
+/// whole) or `limit` has passed; the answers, "" for a connection that got none.
+std::vector<std::string> DripUntilAnswered(const std::vector<int>& fds,
+                                           std::chrono::milliseconds every,
+                                           std::chrono::seconds limit,
+                                           const std::function<std::string(std::size_t)>& drip) {
+  std::vector<std::string> answers(fds.size());
+  std::size_t answered = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (answered < fds.size() && std::chrono::steady_clock::now() - start < limit) {
+    std::this_thread::sleep_for(every);
+    for (std::size_t i = 0; i < fds.size(); ++i) {
+      if (!answers[i].empty()) continue;
+      char buffer[4096];
+      const ssize_t got = ::recv(fds[i], buffer, sizeof buffer, MSG_DONTWAIT);
+      if (got > 0) {
+        answers[i] = test::ReceiveUntil(fds[i], 5, test::HasWholeResponse)
+                         .insert(0, buffer, static_cast<std::size_t>(got));
+        ++answered;
+      } else if (const std::string bytes = drip(i); !bytes.empty()) {
+        test::SendAll(fds[i], bytes);
+      }
+    }
+  }
+  return answers;
 }
 
 /// A request with Connection: close and, for a body, its Content-Length (unless `length` says
@@ -700,24 +728,9 @@ TEST_F(HostileCatalogue, SlowlorisHeadsOverThirtyTwoKiBAreCutOffByTheReadTimeout
     slow.push_back(fd);
   }
   const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> answers(slow.size());
-  std::size_t answered = 0;
-  while (answered < slow.size() &&
-         std::chrono::steady_clock::now() - start < std::chrono::seconds(10)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    for (std::size_t i = 0; i < slow.size(); ++i) {
-      if (!answers[i].empty()) continue;
-      char buffer[4096];
-      const ssize_t got = ::recv(slow[i], buffer, sizeof buffer, MSG_DONTWAIT);
-      if (got > 0) {
-        answers[i] = test::ReceiveUntil(slow[i], 5, test::HasWholeResponse)
-                         .insert(0, buffer, static_cast<std::size_t>(got));
-        ++answered;
-      } else if (i != 3) {
-        test::SendAll(slow[i], "a");
-      }
-    }
-  }
+  const std::vector<std::string> answers =
+      DripUntilAnswered(slow, std::chrono::milliseconds(500), std::chrono::seconds(10),
+                        [](std::size_t i) { return i != 3 ? std::string("a") : std::string(); });
   // The idle wait hands each on at once (32 KiB are there); a worker then gives it 1 s.
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
   for (std::size_t i = 0; i < slow.size(); ++i) {
@@ -735,7 +748,6 @@ TEST_F(HostileCatalogue, ABodyTrickledUnderTheMinimumRateIsCutOffAndFreesItsWork
   // read comes well within the read timeout, at 200 bytes a second. Before --min-body-rate each
   // held its worker for as long as its body lasted, and nothing else was served meanwhile.
   std::vector<int> slow;
-  std::vector<std::string> answers(4);
   for (int i = 0; i < 4; ++i) {
     const int fd = test::ConnectLoopback(server_->port());
     ASSERT_GE(fd, 0);
@@ -744,23 +756,9 @@ TEST_F(HostileCatalogue, ABodyTrickledUnderTheMinimumRateIsCutOffAndFreesItsWork
     slow.push_back(fd);
   }
   const auto start = std::chrono::steady_clock::now();
-  std::size_t answered = 0;
-  while (answered < slow.size() &&
-         std::chrono::steady_clock::now() - start < std::chrono::seconds(12)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    for (std::size_t i = 0; i < slow.size(); ++i) {
-      if (!answers[i].empty()) continue;
-      char buffer[4096];
-      const ssize_t got = ::recv(slow[i], buffer, sizeof buffer, MSG_DONTWAIT);
-      if (got > 0) {
-        answers[i] = test::ReceiveUntil(slow[i], 5, test::HasWholeResponse)
-                         .insert(0, buffer, static_cast<std::size_t>(got));
-        ++answered;
-      } else {
-        test::SendAll(slow[i], std::string(40, 'x'));
-      }
-    }
-  }
+  const std::vector<std::string> answers =
+      DripUntilAnswered(slow, std::chrono::milliseconds(200), std::chrono::seconds(12),
+                        [](std::size_t) { return std::string(40, 'x'); });
   // The budget: four read timeouts of waiting, plus a second per 2000 bytes: about 4.4 s at 200
   // bytes a second.
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(8));
