@@ -311,8 +311,7 @@ TEST(Snapshot, OfADatabaseReplacedAtItsPathIsRefusedAndTouchesNeither) {
   const auto refused = WriteSnapshot(live, dir.file("snapshot.db"));
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.error().code, ErrorCode::kConflict);
-  EXPECT_NE(refused.error().message.find("is no longer the database open here"),
-            std::string::npos)
+  EXPECT_NE(refused.error().message.find("is no longer the database open here"), std::string::npos)
       << refused.error().message;
   EXPECT_FALSE(std::filesystem::exists(dir.file("snapshot.db")));
   EXPECT_EQ(test::ReadFile(path), restored_bytes);

@@ -638,8 +638,8 @@ TEST_F(ServeTest, OpenApiListsEveryRouteAndEachAnswers) {
   EXPECT_TRUE(reads_header(put_plan_operation, "If-Match"));
   EXPECT_TRUE(reads_header(put_plan_operation, "If-None-Match"));
   EXPECT_TRUE(reads_header(doc["paths"]["/api/v1/sortplans/{name}"]["delete"], "If-Match"));
-  EXPECT_TRUE(doc["paths"]["/api/v1/pincodes"]["post"]["responses"]["201"]["headers"].contains(
-      "Location"));
+  EXPECT_TRUE(
+      doc["paths"]["/api/v1/pincodes"]["post"]["responses"]["201"]["headers"].contains("Location"));
   EXPECT_NE(doc["info"]["description"].get<std::string>().find("replica ("), std::string::npos);
   for (const char* route : {"GET /api/v1/pincodes/{pin}",
                             "GET /api/v1/pincodes",

@@ -22,8 +22,9 @@ HeaderDoc PlanIfNoneMatchDoc(bool put) {
                                : "the ETag held: 304 with no body while the plan is unchanged"};
 }
 HeaderDoc PlanETagDoc() {
-  return {"ETag", "the plan's version (JSON and CSV forms differ: \"…-csv\"); send it back in "
-                  "If-Match to change only this version"};
+  return {"ETag",
+          "the plan's version (JSON and CSV forms differ: \"…-csv\"); send it back in "
+          "If-Match to change only this version"};
 }
 
 /// What /openapi.json says about a route beyond its method, path and role.
