@@ -170,7 +170,7 @@ TEST(CliKeys, AMistypedSubcommandIsNamedAndTheVersionIsShown) {
   const CommandResult mistyped = RunPintag("serv --db x.db");
   EXPECT_EQ(mistyped.status, 2) << mistyped.out;
   EXPECT_NE(mistyped.out.find("'serv' is not a subcommand; the subcommands are detect, import, "
-                              "keys, render, serve, snapshot, token"),
+                              "keys, render, scans, serve, snapshot, token"),
             std::string::npos)
       << mistyped.out;
   const CommandResult version = RunPintag("--version");
