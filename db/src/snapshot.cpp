@@ -310,7 +310,7 @@ std::string CopyRegistryInto(Connection& copy, const std::string& source_path) {
   }
   for (const SchemaObject& object : objects) {
     if (object.type != "table" || object.name == kScanLogTable) continue;
-    const std::string findings = QuickCheckFindings(
+    std::string findings = QuickCheckFindings(
         copy, "PRAGMA source.quick_check(" + QuotedIdentifier(object.name) + ")");
     if (!findings.empty()) {
       copy.execute("ROLLBACK");
@@ -323,7 +323,11 @@ std::string CopyRegistryInto(Connection& copy, const std::string& source_path) {
   for (const SchemaObject& object : objects) {
     if (object.type != "table" || object.name == kScanLogTable) continue;
     const std::string table = QuotedIdentifier(object.name);
-    copy.execute("INSERT INTO main." + table + " SELECT * FROM source." + table);
+    std::string insert = "INSERT INTO main.";
+    insert += table;
+    insert += " SELECT * FROM source.";
+    insert += table;
+    copy.execute(insert);
   }
   if (copy.queryInt64("SELECT count(*) FROM source.sqlite_master WHERE name = 'sqlite_sequence'") >
       0) {

@@ -139,6 +139,7 @@ TEST_F(ScanLog, PruneRemovesScansTakenBeforeACutoffInBatches) {
   EXPECT_EQ(*removed, 5U);
   const std::vector<ScanRecord> recent = RecentScans(db_, 100).value();
   std::vector<std::string> left;
+  left.reserve(recent.size());
   for (const ScanRecord& scan : recent) left.push_back(scan.scanned_at);
   EXPECT_EQ(left,
             (std::vector<std::string>{"2026-06-01T00:00:00.000Z", "2026-03-01T00:00:00.000Z"}));

@@ -60,11 +60,12 @@ TEST(CliScans, PruneRemovesTheScansTakenBeforeADate) {
 
   // Said, and nothing removed: a date in another form, both or neither of the paths or the
   // cutoffs; a path that is not there is not made.
-  for (const std::string& usage :
-       {"--db " + registry + " --before yesterday", "--db " + registry,
-        std::string("--before 2100-01-01"),
-        "--db " + registry + " --scan-log " + replica_log + " --before 2100-01-01",
-        "--db " + registry + " --before 2100-01-01 --older-than-days 3"}) {
+  const std::string db = "--db " + registry;
+  const std::vector<std::string> usages = {
+      db + " --before yesterday", db, "--before 2100-01-01",
+      db + " --scan-log " + replica_log + " --before 2100-01-01",
+      db + " --before 2100-01-01 --older-than-days 3"};
+  for (const std::string& usage : usages) {
     const CommandResult refused = RunPintag("scans prune " + usage);
     EXPECT_EQ(refused.status, 2) << usage << ": " << refused.out;
   }
