@@ -16,6 +16,7 @@
 #include "label_photo.hpp"
 #include "nginx_process.hpp"
 #include "pintag/db/sqlite.hpp"
+#include "pintag/test/loopback_socket.hpp"
 #include "replica_fixture.hpp"
 
 namespace pintag::serve_test {
@@ -216,6 +217,10 @@ TEST_F(ReplicaSetTest, NginxAnswersItsOwnRefusalsAsProblemsAndCarriesOneRequestI
   const auto looked_up = front.Get("/api/v1/pincodes/110001");
   ASSERT_TRUE(looked_up);
   ASSERT_EQ(looked_up->status, 200);
+  // An HTTP/1.0 request names no host (the nginx image's HEALTHCHECK sends one): nginx still
+  // passes the servers one, who refuse an HTTP/1.1 request without it.
+  const std::string health = test::SendRaw(nginx.port(), "GET /readyz HTTP/1.0\r\n\r\n", 10);
+  EXPECT_EQ(health.rfind("HTTP/1.1 200", 0), 0U) << health.substr(0, 300);
   const std::string id = looked_up->get_header_value("X-Request-Id");
   EXPECT_EQ(id.size(), 32U) << id;
   const auto own = front.Get("/api/v1/pincodes/560001", {{"X-Request-Id", "scanner-7-0042"}});
