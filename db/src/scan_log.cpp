@@ -11,25 +11,24 @@
 namespace pintag::db {
 namespace {
 
-// ScanTime's form, digit for digit: "2026-12-06T16:20:01.123Z".
-bool IsScanTime(std::string_view text) {
-  constexpr std::string_view kForm = "dddd-dd-ddTdd:dd:dd.dddZ";
-  if (text.size() != kForm.size()) return false;
-  for (std::size_t i = 0; i < kForm.size(); ++i) {
-    const bool ok = kForm[i] == 'd' ? (text[i] >= '0' && text[i] <= '9') : text[i] == kForm[i];
+/// Whether `text` is written in `form`, where 'd' stands for any digit and every other character
+/// for itself.
+bool HasForm(std::string_view text, std::string_view form) {
+  if (text.size() != form.size()) return false;
+  for (std::size_t i = 0; i < form.size(); ++i) {
+    const bool ok = form[i] == 'd' ? (text[i] >= '0' && text[i] <= '9') : text[i] == form[i];
     if (!ok) return false;
   }
   return true;
 }
 
+// ScanTime's form, digit for digit: "2026-12-06T16:20:01.123Z".
+bool IsScanTime(std::string_view text) {
+  return HasForm(text, "dddd-dd-ddTdd:dd:dd.dddZ");
+}
+
 bool IsDate(std::string_view text) {
-  constexpr std::string_view kForm = "dddd-dd-dd";
-  if (text.size() != kForm.size()) return false;
-  for (std::size_t i = 0; i < kForm.size(); ++i) {
-    const bool ok = kForm[i] == 'd' ? (text[i] >= '0' && text[i] <= '9') : text[i] == kForm[i];
-    if (!ok) return false;
-  }
-  return true;
+  return HasForm(text, "dddd-dd-dd");
 }
 
 std::optional<Error> CheckScan(const ScanRecord& scan) {

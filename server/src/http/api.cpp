@@ -5,7 +5,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 
-#include "header_text.hpp"
+#include "pintag/server/header_text.hpp"
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
 #include "process_metrics.hpp"

@@ -37,8 +37,8 @@
 #include <thread>
 
 #include "connection_stream.hpp"
-#include "header_text.hpp"
 #include "idle_connections.hpp"
+#include "pintag/server/header_text.hpp"
 #include "pintag/server/listen_check.hpp"
 #include "pintag/server/log.hpp"
 #include "pintag/server/problem.hpp"
@@ -280,12 +280,7 @@ bool UnknownTransferCoding(const httplib::Request& req) {
   if (!req.has_header("Transfer-Encoding")) return false;
   // Two of them ("chunked", then "gzip") name a coding besides chunked: refused as one would be.
   if (req.get_header_value_count("Transfer-Encoding") > 1) return true;
-  std::string coding = req.get_header_value("Transfer-Encoding");
-  std::transform(coding.begin(), coding.end(), coding.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  const std::size_t begin = coding.find_first_not_of(" \t");
-  const std::size_t end = coding.find_last_not_of(" \t");
-  return begin == std::string::npos || coding.substr(begin, end - begin + 1) != "chunked";
+  return Lower(Trim(req.get_header_value("Transfer-Encoding"))) != "chunked";
 }
 
 /// A Content-Encoding other than gzip, deflate or identity alone: cpp-httplib decompresses gzip
@@ -296,10 +291,7 @@ bool UnknownContentCoding(const httplib::Request& req) {
   if (!req.has_header("Content-Encoding")) return false;
   if (req.get_header_value_count("Content-Encoding") > 1) return true;
   const std::string coding = req.get_header_value("Content-Encoding");
-  const std::size_t begin = coding.find_first_not_of(" \t");
-  const std::size_t end = coding.find_last_not_of(" \t");
-  if (begin == std::string::npos) return true;
-  const std::string name = coding.substr(begin, end - begin + 1);
+  const std::string_view name = Trim(coding);
   return name != "gzip" && name != "deflate" && Lower(name) != "identity";
 }
 

@@ -51,8 +51,6 @@ std::string SuccessDescription(int status) {
       return "OK";
     case 201:
       return "Created";
-    case 204:
-      return "No Content";
     case 304:
       return "Not Modified: If-None-Match named the current version (no body)";
     default:
@@ -124,7 +122,7 @@ std::string OpenApiJson(const Router& router, const ApiInfo& info) {
     for (const int status : route.success) {
       json& response = responses[std::to_string(status)];
       response = {{"description", SuccessDescription(status)}};
-      if (status != 304 && status != 204) response["content"] = content;
+      if (status != 304) response["content"] = content;
       if (!headers.empty()) response["headers"] = headers;
     }
     responses["4XX"] = ProblemRef("client error (problem details, RFC 9457)");

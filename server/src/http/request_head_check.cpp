@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "header_text.hpp"
+#include "pintag/server/header_text.hpp"
 
 namespace pintag::server {
 namespace {

@@ -1,6 +1,7 @@
 #pragma once
 // Header values as HTTP compares them: names and media types case-insensitively, around optional
-// whitespace. Shared by admission (api.cpp) and the cpp-httplib adapter (http_server.cpp).
+// whitespace. Shared by admission (api.cpp), the cpp-httplib adapter (http_server.cpp) and the
+// application's content negotiation (app/accept_header.cpp).
 
 #include <algorithm>
 #include <cctype>
